@@ -1,0 +1,23 @@
+// lumistage: the command line of the studio (rig files now; run, record, replay, render,
+// calibrate, synth, eval and bench join as they are built).
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <exception>
+
+#include "app/cli/rig_commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"Lumistage: live free-viewpoint video of people from a calibrated camera stage"};
+  app.require_subcommand(1);
+  lumistage::addRigCommands(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "lumistage: error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}

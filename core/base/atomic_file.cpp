@@ -1,0 +1,65 @@
+#include "core/base/atomic_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <system_error>
+
+#include "core/base/error.h"
+
+namespace lumistage {
+
+std::string readFile(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw Error(path.string() + ": is a folder, expected a file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path.string() + ": cannot open: " + std::strerror(errno));
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw Error(path.string() + ": read error");
+  return buffer.str();
+}
+
+void writeFileAtomically(const std::filesystem::path& path, std::string_view contents) {
+  const std::string target = path.string();
+  std::string temp = target + ".tmp-XXXXXX";
+  const int fd = ::mkstemp(temp.data());
+  if (fd < 0)
+    throw Error(target + ": cannot create a temporary file beside it: " + std::strerror(errno));
+  auto fail = [&](const char* step) {
+    const int saved = errno;
+    ::close(fd);
+    ::unlink(temp.c_str());
+    throw Error(target + ": " + step + " failed: " + std::strerror(saved));
+  };
+  size_t written = 0;
+  while (written < contents.size()) {
+    const ssize_t n = ::write(fd, contents.data() + written, contents.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("write");
+    }
+    written += static_cast<size_t>(n);
+  }
+  if (::fchmod(fd, 0644) != 0) fail("chmod");
+  if (::fsync(fd) != 0) fail("fsync");
+  if (::close(fd) != 0) {
+    const int saved = errno;
+    ::unlink(temp.c_str());
+    throw Error(target + ": close failed: " + std::strerror(saved));
+  }
+  if (::rename(temp.c_str(), target.c_str()) != 0) {
+    const int saved = errno;
+    ::unlink(temp.c_str());
+    throw Error(target + ": rename into place failed: " + std::strerror(saved));
+  }
+}
+
+}  // namespace lumistage

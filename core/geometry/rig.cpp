@@ -1,0 +1,80 @@
+#include "core/geometry/rig.h"
+
+#include <stdexcept>
+#include <unordered_set>
+
+namespace lumistage {
+
+Rig::Rig(std::vector<Camera> cameras, std::vector<RigNode> nodes)
+    : cameras_(std::move(cameras)), nodes_(std::move(nodes)) {
+  std::unordered_set<std::string> names;
+  for (const Camera& camera : cameras_) {
+    if (!names.insert(camera.name()).second) {
+      throw std::invalid_argument("camera '" + camera.name() + "' is defined twice");
+    }
+  }
+  names.clear();
+  node_of_camera_.assign(cameras_.size(), -1);
+  for (int n = 0; n < static_cast<int>(nodes_.size()); ++n) {
+    const RigNode& node = nodes_[n];
+    if (!isValidName(node.name)) {
+      throw std::invalid_argument("node '" + node.name +
+                                  "': invalid name: expected 1-64 characters of A-Z a-z 0-9 _ . -");
+    }
+    if (!names.insert(node.name).second) {
+      throw std::invalid_argument("node '" + node.name + "' is defined twice");
+    }
+    for (int c : node.cameras) {
+      if (c < 0 || c >= static_cast<int>(cameras_.size())) {
+        throw std::invalid_argument("node '" + node.name + "' refers to camera index " +
+                                    std::to_string(c) + ", but the rig has " +
+                                    std::to_string(cameras_.size()) + " cameras");
+      }
+      if (node_of_camera_[c] >= 0) {
+        throw std::invalid_argument("camera '" + cameras_[c].name() + "' belongs to both node '" +
+                                    nodes_[node_of_camera_[c]].name + "' and node '" + node.name +
+                                    "'");
+      }
+      node_of_camera_[c] = n;
+      cameras_[c].setNode(node.name);
+    }
+  }
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    if (node_of_camera_[c] < 0) {
+      throw std::invalid_argument("camera '" + cameras_[c].name() +
+                                  "' belongs to no node; every camera must be listed by one node");
+    }
+  }
+}
+
+std::optional<int> Rig::findCamera(std::string_view name) const {
+  for (int i = 0; i < cameraCount(); ++i) {
+    if (cameras_[i].name() == name) return i;
+  }
+  return std::nullopt;
+}
+
+std::optional<int> Rig::findNode(std::string_view name) const {
+  for (int i = 0; i < nodeCount(); ++i) {
+    if (nodes_[i].name == name) return i;
+  }
+  return std::nullopt;
+}
+
+}  // namespace lumistage
+
+namespace lumistage {
+
+std::vector<RigNode> dealCamerasToNodes(int camera_count, int cameras_per_node) {
+  if (camera_count < 0 || cameras_per_node <= 0) {
+    throw std::invalid_argument("cameras per node must be positive, got " +
+                                std::to_string(cameras_per_node));
+  }
+  const int node_count = (camera_count + cameras_per_node - 1) / cameras_per_node;
+  std::vector<RigNode> nodes(node_count);
+  for (int n = 0; n < node_count; ++n) nodes[n].name = "node" + std::to_string(n + 1);
+  for (int c = 0; c < camera_count; ++c) nodes[c % node_count].cameras.push_back(c);
+  return nodes;
+}
+
+}  // namespace lumistage

@@ -1,0 +1,58 @@
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/geometry/camera.h"
+
+namespace lumistage {
+
+// A camera-node PC and the cameras it owns.
+struct RigNode {
+  std::string name;
+  std::string host;          // where the node runs (name or address); empty: not yet assigned
+  std::vector<int> cameras;  // indices into Rig::cameras()
+
+  bool operator==(const RigNode&) const = default;
+};
+
+// The calibrated cameras of a stage and the nodes that own them. Every camera belongs to exactly
+// one node; names are unique.
+class Rig {
+ public:
+  Rig() = default;
+  // Throws std::invalid_argument naming the offending camera or node: duplicate or invalid names,
+  // a node referring to a camera index out of range, a camera in no node or in two nodes.
+  Rig(std::vector<Camera> cameras, std::vector<RigNode> nodes);
+
+  const std::vector<Camera>& cameras() const { return cameras_; }
+  const Camera& camera(int index) const { return cameras_.at(index); }
+  int cameraCount() const { return static_cast<int>(cameras_.size()); }
+  std::optional<int> findCamera(std::string_view name) const;
+
+  const std::vector<RigNode>& nodes() const { return nodes_; }
+  int nodeCount() const { return static_cast<int>(nodes_.size()); }
+  std::optional<int> findNode(std::string_view name) const;
+  int nodeOfCamera(int camera_index) const { return node_of_camera_.at(camera_index); }
+
+  bool operator==(const Rig&) const = default;
+
+ private:
+  std::vector<Camera> cameras_;
+  std::vector<RigNode> nodes_;
+  std::vector<int> node_of_camera_;
+};
+
+}  // namespace lumistage
+
+namespace lumistage {
+
+// Nodes named node1..nodeN for cameras that come without an assignment (imports, generated rigs):
+// N = ceil(camera_count / cameras_per_node), camera i to node i mod N. Dealing in turn rather than
+// in blocks gives every node cameras all around the stage, so each node's partial render covers
+// the whole view and any virtual camera loads the nodes evenly.
+std::vector<RigNode> dealCamerasToNodes(int camera_count, int cameras_per_node);
+
+}  // namespace lumistage

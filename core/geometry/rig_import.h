@@ -1,0 +1,42 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/geometry/rig.h"
+
+namespace lumistage {
+
+// What an import produced, with notes for the user (e.g. how well a distortion model converted).
+struct RigImport {
+  Rig rig;
+  std::vector<std::string> notes;
+};
+
+struct RigImportOptions {
+  // Imported formats do not say which PC owns which camera. Cameras are dealt to nodes named
+  // node1, node2, ... in turn (camera i to node i mod N, N = ceil(cameras / cameras_per_node)),
+  // so that every node sees the actor from all around: its partial lumigraph image then covers
+  // the whole view and the nodes share any view's work evenly.
+  int cameras_per_node = 3;
+  // Svoboda's output has no image size; it must be given (OpenCV files carry their own).
+  int width = 0;
+  int height = 0;
+};
+
+// An OpenCV FileStorage file (YAML or XML, as cv::FileStorage writes them). Either one camera at
+// the top level or a sequence `cameras` of them; each with camera_matrix (3x3),
+// distortion_coefficients (4, 5, or more with the rest zero), image_width, image_height, an
+// optional name, and extrinsics as R (3x3) or rvec (Rodrigues), with T or tvec (world to camera).
+// Throws Error naming the file, the camera and the missing or malformed key.
+RigImport importOpenCvRig(const std::filesystem::path& file, const RigImportOptions& options);
+
+// The output folder of Svoboda's MultiCamSelfCal: one `<name>N.Pmat.cal` (a 3x4 projection matrix
+// as text) per camera, optionally `<name>N.rad` beside it (K11..K33, kc1..kc4[,kc5], as written by
+// the toolbox and BlueCCal). P is split into K, R, t. MultiCamSelfCal's P maps to *undistorted*
+// pixels of the .rad's own K; where that K differs from P's, the distortion is refitted to P's K
+// by least squares over the image and the residual is reported in the notes.
+RigImport importSvobodaRig(const std::filesystem::path& folder, const RigImportOptions& options);
+
+}  // namespace lumistage

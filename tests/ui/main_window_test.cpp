@@ -1,0 +1,95 @@
+// The studio's main window under Qt's offscreen platform.
+#include "ui/main_window.h"
+
+#include <QDockWidget>
+#include <QImage>
+#include <QTableWidget>
+#include <QTemporaryDir>
+#include <QtTest>
+
+#include "ui/rig_panel.h"
+#include "ui/stage_plan_view.h"
+
+using lumistage::MainWindow;
+
+class MainWindowTest : public QObject {
+  Q_OBJECT
+
+ private:
+  const QString reference_ = QString(LUMISTAGE_TEST_RESOURCE_DIR) + "/rigs/reference.yaml";
+
+  // Pixels of a node's colour in the stage plan: cameras and their fields of view.
+  static int pixelsNear(const QImage& image, const QColor& colour) {
+    int count = 0;
+    for (int y = 0; y < image.height(); ++y) {
+      for (int x = 0; x < image.width(); ++x) {
+        const QColor c = image.pixelColor(x, y);
+        if (std::abs(c.red() - colour.red()) + std::abs(c.green() - colour.green()) +
+                std::abs(c.blue() - colour.blue()) <
+            30) {
+          ++count;
+        }
+      }
+    }
+    return count;
+  }
+
+ private slots:
+  void opensTheReferenceRig() {
+    MainWindow window;
+    window.resize(1000, 800);
+    window.show();
+    QCOMPARE(window.openRig(reference_), QString());
+    QVERIFY(window.rig() != nullptr);
+    QCOMPARE(window.rig()->cameraCount(), 12);
+    QTableWidget* table = window.rigPanel()->table();
+    QCOMPARE(table->rowCount(), 12);
+    QCOMPARE(table->item(0, 0)->text(), QString("cam01"));
+    QCOMPARE(table->item(1, 1)->text(), QString("node2"));
+    QCOMPARE(table->item(0, 11)->text(), QString("2.300"));
+  }
+
+  void stagePlanDrawsEveryNode() {
+    MainWindow window;
+    window.resize(1000, 800);
+    window.show();
+    const QImage empty = window.stagePlan()->grab().toImage();
+    QCOMPARE(pixelsNear(empty, lumistage::StagePlanView::nodeColour(0)), 0);
+    QCOMPARE(window.openRig(reference_), QString());
+    const QImage plan = window.stagePlan()->grab().toImage();
+    for (int node = 0; node < 4; ++node) {
+      QVERIFY2(pixelsNear(plan, lumistage::StagePlanView::nodeColour(node)) > 100,
+               qPrintable(QString("node %1 not drawn").arg(node)));
+    }
+  }
+
+  void selectingACameraHighlightsIt() {
+    MainWindow window;
+    window.resize(1000, 800);
+    window.show();
+    QCOMPARE(window.openRig(reference_), QString());
+    const QImage before = window.stagePlan()->grab().toImage();
+    window.rigPanel()->table()->selectRow(4);
+    const QImage after = window.stagePlan()->grab().toImage();
+    const QColor node1 = lumistage::StagePlanView::nodeColour(0);  // cam05 is on node1
+    QVERIFY(pixelsNear(after, node1) > pixelsNear(before, node1));
+  }
+
+  void badRigKeepsThePreviousOneAndSaysWhy() {
+    QTemporaryDir dir;
+    const QString bad = dir.filePath("bad.yaml");
+    QFile file(bad);
+    QVERIFY(file.open(QIODevice::WriteOnly));
+    file.write("format: lumistage-rig\nversion: 1\ncameras: [\n");
+    file.close();
+    MainWindow window;
+    QCOMPARE(window.openRig(reference_), QString());
+    const QString error = window.openRig(bad);
+    QVERIFY2(error.contains("bad.yaml") && error.contains("YAML syntax error"), qPrintable(error));
+    QCOMPARE(window.rig()->cameraCount(), 12);
+    QCOMPARE(window.rigPanel()->table()->rowCount(), 12);
+  }
+};
+
+QTEST_MAIN(MainWindowTest)
+#include "main_window_test.moc"

@@ -1,0 +1,36 @@
+#pragma once
+
+#include <QWidget>
+
+#include "core/geometry/rig.h"
+
+namespace lumistage {
+
+// The stage seen from above: the floor, every camera at its place with its horizontal field of
+// view, coloured by node, so that a technician sees at a glance where each camera stands and
+// which PC owns it. A camera can be highlighted (selected in the camera list).
+class StagePlanView : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit StagePlanView(QWidget* parent = nullptr);
+
+  void setRig(const Rig* rig);  // not owned; nullptr for none
+  void setStageSize(double width_m, double depth_m);
+  void setHighlightedCamera(int camera_index);  // -1 for none
+
+  QSize sizeHint() const override { return {640, 560}; }
+  // A node's colour, shared with the camera list.
+  static QColor nodeColour(int node_index);
+
+ protected:
+  void paintEvent(QPaintEvent* event) override;
+
+ private:
+  const Rig* rig_ = nullptr;
+  double stage_width_m_ = 3.0;
+  double stage_depth_m_ = 3.0;
+  int highlighted_ = -1;
+};
+
+}  // namespace lumistage
