@@ -106,6 +106,7 @@ void StagePlanView::paintEvent(QPaintEvent*) {
     QColor fill = colour;
     fill.setAlpha(highlighted ? 90 : 35);
     p.fillPath(wedge, fill);
+    p.setBrush(Qt::NoBrush);
     p.setPen(QPen(colour, highlighted ? 2.5 : 1.2));
     p.drawPath(wedge);
 
@@ -117,7 +118,8 @@ void StagePlanView::paintEvent(QPaintEvent*) {
     // Label outside the ring, with the camera's height.
     const QPointF outward(std::cos(heading + std::numbers::pi),
                           -std::sin(heading + std::numbers::pi));
-    const QPointF label_at = at + outward * 22;
+    // Beside the dot, away from the stage: further out sideways, where the text's width lies.
+    const QPointF label_at = at + outward * 24 + QPointF(outward.x() * 36, 0);
     const QString label =
         QString("%1  %2 m").arg(QString::fromStdString(c.name())).arg(centre.z(), 0, 'f', 1);
     const QRectF box(label_at.x() - 50, label_at.y() - 9, 100, 18);
