@@ -1,0 +1,52 @@
+#pragma once
+
+#include "core/body/skeleton.h"
+
+namespace lumistage {
+
+// Proportions of a human body. The defaults are the generic human: 1.75 m tall.
+struct BodyShape {
+  double height_m = 1.75;         // scales everything
+  double arm_length_scale = 1.0;  // upper arm, forearm and hand
+  double leg_length_scale = 1.0;  // thigh and shin (moves the pelvis up or down)
+  double shoulder_width_scale = 1.0;
+  double hip_width_scale = 1.0;
+  double girth_scale = 1.0;  // every radius of the body's surface
+  double belly_scale = 1.0;  // the torso's depth and width at the waist
+};
+
+// The 24 joints of the human skeleton, in order (parents first).
+enum HumanJoint : int {
+  kPelvis,
+  kSpine1,
+  kSpine2,
+  kSpine3,
+  kNeck,
+  kHead,
+  kRightClavicle,
+  kRightShoulder,
+  kRightElbow,
+  kRightWrist,
+  kRightHand,
+  kLeftClavicle,
+  kLeftShoulder,
+  kLeftElbow,
+  kLeftWrist,
+  kLeftHand,
+  kRightHip,
+  kRightKnee,
+  kRightAnkle,
+  kRightFoot,
+  kLeftHip,
+  kLeftKnee,
+  kLeftAnkle,
+  kLeftFoot,
+  kHumanJointCount
+};
+
+// The human skeleton in a T-pose (arms level, to the sides), with physiological joint limits;
+// hands and feet are end joints (no freedom). Joint names: pelvis, spine1..3, neck, head,
+// {right,left}_{clavicle,shoulder,elbow,wrist,hand,hip,knee,ankle,foot}.
+Skeleton makeHumanSkeleton(const BodyShape& shape = {});
+
+}  // namespace lumistage
