@@ -1,0 +1,27 @@
+#pragma once
+
+#include "core/body/human_skeleton.h"
+#include "core/body/skinned_mesh.h"
+
+namespace lumistage {
+
+// Surface materials of a human model, stored per vertex in SkinnedMesh::materials.
+enum class Material : uint8_t { kSkin = 0, kShirt = 1, kTrousers = 2, kHair = 3, kShoes = 4 };
+
+struct HumanModelSpec {
+  BodyShape shape;
+  // Clothing-like volume over the body: a loose shirt with short sleeves, trousers flaring at the
+  // ankles, hair and shoes. Off for the generic human, on for the virtual studio's actor.
+  bool clothing = false;
+  // The mesh is resized toward this many vertices (surface nets over a grid whose cell is
+  // chosen for it); the result lands within a few percent.
+  int target_vertices = 2000;
+};
+
+// A closed, manifold human mesh in the T-pose, generated from a smooth union of tapered capsules
+// and ellipsoids around the bones of makeHumanSkeleton(spec.shape), with smooth skinning weights
+// (nearest bones, limited to a bone's neighbours so that legs never pull on each other, then
+// smoothed over the mesh) and per-vertex materials. Deterministic.
+SkinnedMesh makeHumanModel(const HumanModelSpec& spec = {});
+
+}  // namespace lumistage

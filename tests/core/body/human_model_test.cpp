@@ -1,0 +1,85 @@
+#include "core/body/human_model.h"
+
+#include <gtest/gtest.h>
+
+#include <numbers>
+#include <random>
+
+namespace lumistage {
+namespace {
+
+TEST(HumanModel, GenericHumanIsClosedManifoldWithAbout2000Vertices) {
+  const SkinnedMesh human = makeHumanModel();
+  EXPECT_GT(human.rest.vertexCount(), 1800);
+  EXPECT_LT(human.rest.vertexCount(), 2300);
+  EXPECT_EQ(checkClosedManifold(human.rest), "");
+  // Closed and outward: the signed volume is positive and near a person's (~65 litres).
+  double volume = 0;
+  for (const Eigen::Vector3i& t : human.rest.triangles) {
+    const Eigen::Vector3d a = human.rest.positions.col(t[0]).cast<double>();
+    const Eigen::Vector3d b = human.rest.positions.col(t[1]).cast<double>();
+    const Eigen::Vector3d c = human.rest.positions.col(t[2]).cast<double>();
+    volume += a.dot(b.cross(c)) / 6;
+  }
+  EXPECT_GT(volume, 0.045);
+  EXPECT_LT(volume, 0.1);
+  // About 1.75 m tall, standing on the floor.
+  EXPECT_NEAR(human.rest.positions.row(2).maxCoeff(), 1.75, 0.04);
+  EXPECT_NEAR(human.rest.positions.row(2).minCoeff(), 0.0, 0.03);
+}
+
+TEST(HumanModel, WeightsAreSmoothAndLegsDoNotPullOnEachOther) {
+  const SkinnedMesh human = makeHumanModel();
+  human.validate();
+  for (int v = 0; v < human.rest.vertexCount(); ++v) {
+    const Eigen::Vector3f p = human.rest.positions.col(v);
+    if (p.z() > 0.8f) continue;  // below the crotch: one leg only
+    for (int k = 0; k < kMaxInfluences; ++k) {
+      if (human.skin.weights[v][k] < 0.01f) continue;
+      const int joint = human.skin.joints[v][k];
+      const bool right_leg = joint >= kRightHip && joint <= kRightFoot;
+      const bool left_leg = joint >= kLeftHip && joint <= kLeftFoot;
+      if (p.x() > 0.03f) {
+        EXPECT_FALSE(left_leg) << "vertex " << v;
+      }
+      if (p.x() < -0.03f) {
+        EXPECT_FALSE(right_leg) << "vertex " << v;
+      }
+    }
+  }
+  // Posing the elbow moves the hand's vertices with the forearm and leaves the other arm alone.
+  Pose pose = Pose::rest(human.skeleton.jointCount());
+  pose.angles_rad[kRightElbow] = Eigen::Vector3d(0, 0, std::numbers::pi / 2);
+  std::vector<Eigen::Affine3f> transforms;
+  human.skeleton.skinningTransforms(pose, transforms);
+  Eigen::Matrix3Xf posed, normals;
+  skinMesh(human, transforms, posed, normals);
+  const Eigen::Vector3f elbow = human.skeleton.restPositions()[kRightElbow].cast<float>();
+  for (int v = 0; v < human.rest.vertexCount(); ++v) {
+    const Eigen::Vector3f p = human.rest.positions.col(v);
+    if (p.x() > elbow.x() + 0.12f) {  // forearm and hand: swung to point forward
+      EXPECT_GT(posed(1, v), 0.08f) << "vertex " << v;
+      EXPECT_LT(posed(0, v), elbow.x() + 0.1f) << "vertex " << v;
+    }
+    if (p.x() < 0) {
+      EXPECT_LT((posed.col(v) - p).norm(), 1e-5f);
+    }
+  }
+}
+
+TEST(HumanModel, ActorDiffersFromTheGenericHuman) {
+  HumanModelSpec actor;
+  actor.shape.height_m = 1.82;
+  actor.shape.girth_scale = 1.1;
+  actor.clothing = true;
+  actor.target_vertices = 6000;
+  const SkinnedMesh m = makeHumanModel(actor);
+  EXPECT_EQ(checkClosedManifold(m.rest), "");
+  EXPECT_NEAR(m.rest.positions.row(2).maxCoeff(), 1.82 + 0.01, 0.05);
+  int counts[5] = {};
+  for (uint8_t material : m.materials) ++counts[material];
+  for (int material = 0; material < 5; ++material) EXPECT_GT(counts[material], 50) << material;
+}
+
+}  // namespace
+}  // namespace lumistage
