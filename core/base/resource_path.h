@@ -10,4 +10,8 @@ namespace lumistage {
 // package), the source tree the build came from. Throws Error naming every place it looked.
 std::filesystem::path resourcePath(std::string_view relative);
 
+// The same for a GLSL file under shaders/ ($LUMISTAGE_SHADER_DIR, <executable>/../share/
+// lumistage/shaders, the source tree).
+std::filesystem::path shaderPath(std::string_view relative);
+
 }  // namespace lumistage

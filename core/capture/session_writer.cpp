@@ -1,0 +1,156 @@
+#include "core/capture/session_writer.h"
+
+#include <fmt/format.h>
+
+#include <cstring>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/base/atomic_file.h"
+#include "core/base/error.h"
+#include "core/geometry/rig_file.h"
+
+namespace lumistage {
+
+namespace fs = std::filesystem;
+
+const char* pixelFormatName(PixelFormat format) {
+  return format == PixelFormat::kRgb8 ? "rgb8" : "bayer_rggb8";
+}
+
+void rgbaToBayerRggb(const uint8_t* rgba, int width, int height, uint8_t* bayer) {
+  for (int y = 0; y < height; ++y) {
+    const uint8_t* row = rgba + size_t(y) * width * 4;
+    uint8_t* out = bayer + size_t(y) * width;
+    for (int x = 0; x < width; ++x) {
+      // Channel: R at (even, even), B at (odd, odd), G elsewhere.
+      const int channel = (y & 1) ? ((x & 1) ? 2 : 1) : ((x & 1) ? 1 : 0);
+      out[x] = row[4 * x + channel];
+    }
+  }
+}
+
+namespace {
+
+void writeImageAtomically(const fs::path& path, const cv::Mat& image) {
+  const fs::path temp = path.parent_path() / (path.stem().string() + ".partial.png");
+  // Fast PNG: the session is written while capturing; compression level 1 is lossless too.
+  const std::vector<int> options = {cv::IMWRITE_PNG_COMPRESSION, 1};
+  bool ok = false;
+  try {
+    ok = cv::imwrite(temp.string(), image, options);
+  } catch (const cv::Exception& e) {
+    throw Error(path.string() + ": cannot write image: " + e.err);
+  }
+  if (!ok) throw Error(path.string() + ": cannot write image (disk full or no permission?)");
+  std::error_code ec;
+  fs::rename(temp, path, ec);
+  if (ec) throw Error(path.string() + ": cannot rename into place: " + ec.message());
+}
+
+void writePly(const fs::path& path, const TriangleMesh& mesh) {
+  std::string data = fmt::format(
+      "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float "
+      "y\n"
+      "property float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+      mesh.vertexCount(), mesh.triangles.size());
+  const size_t header = data.size();
+  data.resize(header + size_t(mesh.vertexCount()) * 12 + mesh.triangles.size() * 13);
+  char* out = data.data() + header;
+  for (int v = 0; v < mesh.vertexCount(); ++v, out += 12)
+    std::memcpy(out, mesh.positions.col(v).data(), 12);
+  for (const Eigen::Vector3i& t : mesh.triangles) {
+    *out++ = 3;
+    std::memcpy(out, t.data(), 12);
+    out += 12;
+  }
+  writeFileAtomically(path, data);
+}
+
+}  // namespace
+
+SessionWriter::SessionWriter(const fs::path& folder, const Rig& rig, PixelFormat format, double fps,
+                             const std::string& source, const std::vector<std::string>& joint_names)
+    : folder_(folder), rig_(rig), format_(format), joint_names_(joint_names) {
+  std::error_code ec;
+  if (fs::exists(folder_, ec) && !fs::is_empty(folder_, ec)) {
+    throw Error(folder_.string() +
+                ": already exists and is not empty; a session is never written over another");
+  }
+  fs::create_directories(folder_, ec);
+  if (ec) throw Error(folder_.string() + ": cannot create: " + ec.message());
+  const bool truth = !joint_names_.empty();
+  for (const Camera& camera : rig_.cameras()) {
+    fs::create_directories(folder_ / camera.name(), ec);
+    if (truth) fs::create_directories(folder_ / "truth" / "masks" / camera.name(), ec);
+    if (ec) throw Error(folder_.string() + ": cannot create camera folders: " + ec.message());
+  }
+  if (truth) fs::create_directories(folder_ / "truth" / "surface", ec);
+  saveRig(rig_, folder_ / "rig.yaml");
+  std::string cameras;
+  for (const Camera& c : rig_.cameras()) cameras += (cameras.empty() ? "" : ", ") + c.name();
+  writeFileAtomically(
+      folder_ / "session.yaml",
+      fmt::format("# Lumistage recorded session: see docs/session-format.md.\n"
+                  "format: lumistage-session\nversion: 1\nsource: {}\nrig: rig.yaml\n"
+                  "fps: {}\npixel_format: {}\nimage_files: png\ncameras: [{}]\n"
+                  "truth: {}\n",
+                  source, fps, pixelFormatName(format_), cameras, truth ? "true" : "false"));
+  index_.open(folder_ / "index.csv");
+  index_ << "frame,timestamp_ns\n";
+  if (truth) {
+    joints_.open(folder_ / "truth" / "joints.csv");
+    joints_ << "frame";
+    for (const std::string& name : joint_names_)
+      joints_ << "," << name << "_x," << name << "_y," << name << "_z";
+    joints_ << "\n";
+  }
+  if (!index_ || (truth && !joints_))
+    throw Error(folder_.string() + ": cannot create index.csv or truth/joints.csv");
+}
+
+SessionWriter::~SessionWriter() = default;
+
+void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
+                               const std::vector<const uint8_t*>& rgba, const FrameTruth* truth) {
+  if (rgba.size() != static_cast<size_t>(rig_.cameraCount())) {
+    throw Error(fmt::format("{}: frame {} has {} images for {} cameras", folder_.string(), frame_id,
+                            rgba.size(), rig_.cameraCount()));
+  }
+  const std::string name = fmt::format("{:06}.png", frame_id);
+  for (int c = 0; c < rig_.cameraCount(); ++c) {
+    const Camera& camera = rig_.camera(c);
+    const cv::Mat source(camera.height(), camera.width(), CV_8UC4, const_cast<uint8_t*>(rgba[c]));
+    cv::Mat image;
+    if (format_ == PixelFormat::kRgb8) {
+      cv::cvtColor(source, image, cv::COLOR_RGBA2BGR);  // OpenCV writes BGR order as RGB PNG
+    } else {
+      image.create(camera.height(), camera.width(), CV_8UC1);
+      rgbaToBayerRggb(rgba[c], camera.width(), camera.height(), image.data);
+    }
+    writeImageAtomically(folder_ / camera.name() / name, image);
+    if (truth && truth->masks) {
+      const cv::Mat mask(camera.height(), camera.width(), CV_8UC1,
+                         const_cast<uint8_t*>((*truth->masks)[c].data()));
+      writeImageAtomically(folder_ / "truth" / "masks" / camera.name() / name, mask);
+    }
+  }
+  if (truth) {
+    if (truth->surface)
+      writePly(folder_ / "truth" / "surface" / fmt::format("{:06}.ply", frame_id), *truth->surface);
+    joints_ << frame_id;
+    for (const Eigen::Vector3d& j : truth->joints)
+      joints_ << fmt::format(",{},{},{}", j.x(), j.y(), j.z());
+    joints_ << "\n";
+    joints_.flush();
+  }
+  // Last: the frame exists for readers only once its line is complete.
+  index_ << frame_id << "," << timestamp_ns << "\n";
+  index_.flush();
+  if (!index_ || (truth && !joints_))
+    throw Error(folder_.string() + ": cannot append to index.csv (disk full?)");
+  ++frames_;
+}
+
+}  // namespace lumistage
