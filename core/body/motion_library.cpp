@@ -192,7 +192,9 @@ void crouchPose(const ClipContext& c, double t, Pose& pose) {
   const double u = std::clamp((t - kStart) / span, 0.0, 1.0);
   const double d = 0.5 * (1 - std::cos(2 * kTwoPi * u));  // depth 0..1, down and up twice
   // The feet stay flat: pelvis pitch + hip + knee + ankle flexion sum to zero.
-  const double pitch = -0.35 * d, knee = -2.0 * d, ankle = 0.45 * d;
+  // The pelvis tips forward so that the torso leans over the feet: the hips go back behind the
+  // heels, the shoulders come forward.
+  const double pitch = -0.55 * d, knee = -1.85 * d, ankle = 0.45 * d;
   const double hip = -(pitch + knee + ankle);
   for (int side = 0; side < 2; ++side) {
     at(pose, side == 0 ? kRightHip : kLeftHip).x() = hip;
@@ -201,8 +203,8 @@ void crouchPose(const ClipContext& c, double t, Pose& pose) {
   }
   at(pose, kSpine1).x() = -0.1 * d;
   at(pose, kSpine2).x() = -0.05 * d;
-  at(pose, kNeck).x() = 0.2 * d;  // keeps looking ahead
-  at(pose, kHead).x() = 0.1 * d;
+  at(pose, kNeck).x() = 0.4 * d;  // keeps looking ahead
+  at(pose, kHead).x() = 0.3 * d;
   // Arms reach forward for balance as the body goes down.
   lowerArms(pose, 1.0, a * kArmsDown + 0.25 * d);
   at(pose, kRightShoulder).x() = 1.35 * d;

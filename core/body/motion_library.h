@@ -16,12 +16,14 @@ namespace lumistage {
 // into its motion within about 0.5 s, keeps every angle inside the joint limits, keeps the root
 // within 1 m of the stage centre, and stands on the floor: each frame's root height puts the lowest
 // point of either sole at z = 0.
-//   walk         a circle of radius 0.6 m around the stage centre, entered by a half circle from
-//                the centre; gait cycle 1.1 s, step 0.6 m (stride 1.2 m) for a 1.75 m body.
+//   walk         clockwise (seen from above) round a circle of radius 0.6 m about the stage centre,
+//                entered by a half circle from the centre; for a 1.75 m body a gait cycle of 1.1 s
+//                and 0.9 m (two steps of 0.45 m): 0.8 m/s. Longer legs take longer, slower steps.
 //   arm_wave     standing, right arm raised waving hello, left arm down; slow weight shift.
 //   turn         turning on the spot through a full 360 degrees (counter-clockwise seen from
 //                above) with small steps, arms in an A-pose.
-//   crouch       squatting down and up twice (pelvis about 0.4 m lower), arms reaching forward.
+//   crouch       squatting down and up twice (pelvis about 0.4 m lower), feet flat and in place,
+//                torso leaning forward, arms reaching forward.
 //   a_pose_hold  lowering the arms from the T-pose to an A-pose (0.75 rad below level) over 1 s,
 //                then holding it and breathing.
 std::vector<std::string> builtinClipNames();
