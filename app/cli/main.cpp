@@ -6,11 +6,13 @@
 #include <exception>
 
 #include "app/cli/rig_commands.h"
+#include "app/cli/synth_command.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"Lumistage: live free-viewpoint video of people from a calibrated camera stage"};
   app.require_subcommand(1);
   lumistage::addRigCommands(app);
+  lumistage::addSynthCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -119,22 +119,34 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
                             rgba.size(), rig_.cameraCount()));
   }
   const std::string name = fmt::format("{:06}.png", frame_id);
-  for (int c = 0; c < rig_.cameraCount(); ++c) {
-    const Camera& camera = rig_.camera(c);
-    const cv::Mat source(camera.height(), camera.width(), CV_8UC4, const_cast<uint8_t*>(rgba[c]));
-    cv::Mat image;
-    if (format_ == PixelFormat::kRgb8) {
-      cv::cvtColor(source, image, cv::COLOR_RGBA2BGR);  // OpenCV writes BGR order as RGB PNG
-    } else {
-      image.create(camera.height(), camera.width(), CV_8UC1);
-      rgbaToBayerRggb(rgba[c], camera.width(), camera.height(), image.data);
+  // PNG encoding dominates a frame's writing: cameras in parallel, errors carried out.
+  std::vector<std::string> errors(rig_.cameraCount());
+  cv::parallel_for_(cv::Range(0, rig_.cameraCount()), [&](const cv::Range& range) {
+    for (int c = range.start; c < range.end; ++c) {
+      try {
+        const Camera& camera = rig_.camera(c);
+        const cv::Mat source(camera.height(), camera.width(), CV_8UC4,
+                             const_cast<uint8_t*>(rgba[c]));
+        cv::Mat image;
+        if (format_ == PixelFormat::kRgb8) {
+          cv::cvtColor(source, image, cv::COLOR_RGBA2BGR);  // OpenCV writes BGR order as RGB PNG
+        } else {
+          image.create(camera.height(), camera.width(), CV_8UC1);
+          rgbaToBayerRggb(rgba[c], camera.width(), camera.height(), image.data);
+        }
+        writeImageAtomically(folder_ / camera.name() / name, image);
+        if (truth && truth->masks) {
+          const cv::Mat mask(camera.height(), camera.width(), CV_8UC1,
+                             const_cast<uint8_t*>((*truth->masks)[c].data()));
+          writeImageAtomically(folder_ / "truth" / "masks" / camera.name() / name, mask);
+        }
+      } catch (const std::exception& e) {
+        errors[c] = e.what();
+      }
     }
-    writeImageAtomically(folder_ / camera.name() / name, image);
-    if (truth && truth->masks) {
-      const cv::Mat mask(camera.height(), camera.width(), CV_8UC1,
-                         const_cast<uint8_t*>((*truth->masks)[c].data()));
-      writeImageAtomically(folder_ / "truth" / "masks" / camera.name() / name, mask);
-    }
+  });
+  for (const std::string& error : errors) {
+    if (!error.empty()) throw Error(error);
   }
   if (truth) {
     if (truth->surface)

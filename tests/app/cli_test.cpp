@@ -117,3 +117,52 @@ TEST(Cli, NodeChecksItsPlaceInTheRig) {
 
 }  // namespace
 }  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+TEST(Cli, SynthWritesACompleteSession) {
+  // A small stage: 4 cameras at 320x240, 3 frames, Bayer.
+  const fs::path folder = tempPath("synth");
+  fs::create_directories(folder);
+  Result r = run(kCli + " rig ring --cameras 4 --width 320 --height 240 --out " +
+                 (folder / "rig.yaml").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ofstream(folder / "studio.yaml")
+      << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
+         "actor:\n  clothing: true\n  vertices: 2500\nmotion:\n  clip: crouch\n";
+  const fs::path session = folder / "session";
+  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() +
+          " --frames 3 --bayer --out " + session.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("wrote 3 frames"), std::string::npos) << r.output;
+  const Rig rig = loadRig(session / "rig.yaml");
+  EXPECT_EQ(rig.cameraCount(), 4);
+  std::ifstream index(session / "index.csv");
+  std::string line;
+  int lines = 0;
+  while (std::getline(index, line)) ++lines;
+  EXPECT_EQ(lines, 4);  // header and three frames
+  for (const char* file :
+       {"session.yaml", "contact_sheet.png", "cam01/000000.png", "cam04/000002.png",
+        "truth/joints.csv", "truth/masks/cam02/000001.png", "truth/surface/000002.ply"}) {
+    EXPECT_TRUE(fs::exists(session / file)) << file;
+  }
+  // Bayer: one channel of the camera's size (checked from the PNG header: width, height, grey).
+  std::ifstream png(session / "cam01" / "000000.png", std::ios::binary);
+  unsigned char header[26];
+  png.read(reinterpret_cast<char*>(header), 26);
+  EXPECT_EQ((header[16] << 24) | (header[17] << 16) | (header[18] << 8) | header[19], 320);
+  EXPECT_EQ((header[20] << 24) | (header[21] << 16) | (header[22] << 8) | header[23], 240);
+  EXPECT_EQ(header[25], 0);  // colour type 0: greyscale
+
+  // Never over an existing session.
+  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " --frames 1 --out " +
+          session.string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("already exists and is not empty"), std::string::npos) << r.output;
+  fs::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace lumistage

@@ -1,0 +1,118 @@
+#include "core/sim/studio_config.h"
+
+#include <fmt/format.h>
+
+#include "core/base/atomic_file.h"
+#include "core/base/error.h"
+#include "core/base/yaml_reader.h"
+#include "core/body/motion_library.h"
+#include "core/geometry/rig_file.h"
+
+namespace lumistage {
+
+StudioConfig loadStudioConfig(const std::filesystem::path& path) {
+  const YamlReader in(path.string());
+  const YAML::Node root = in.parseDocument(readFile(path));
+  in.requireMap(root, "");
+  in.checkKeys(root, "", {"format", "version", "rig", "actor", "motion", "look", "seed"});
+  const YAML::Node format = in.required(root, "", "format", "'lumistage-studio'");
+  if (in.string(format, "format") != "lumistage-studio") {
+    in.fail(format, "format", "expected 'lumistage-studio': not a Lumistage studio config");
+  }
+  if (in.integer(in.required(root, "", "version", "1"), "version") != 1) {
+    in.fail(root["version"], "version", "this Lumistage reads studio configs of version 1");
+  }
+  StudioConfig config;
+  const YAML::Node rig =
+      in.required(root, "", "rig", "the rig file's path (relative to this file)");
+  config.rig_file = path.parent_path() / in.string(rig, "rig");
+  config.rig = loadRig(config.rig_file);
+
+  if (const YAML::Node actor = root["actor"]) {
+    in.requireMap(actor, "actor");
+    in.checkKeys(actor, "actor",
+                 {"height_m", "arm_length_scale", "leg_length_scale", "shoulder_width_scale",
+                  "hip_width_scale", "girth_scale", "belly_scale", "clothing", "vertices"});
+    BodyShape& shape = config.actor.shape;
+    auto positive = [&](const char* key, double& value) {
+      if (!actor[key]) return;
+      value = in.number(actor[key], YamlReader::child("actor", key));
+      if (!(value > 0))
+        in.fail(actor[key], YamlReader::child("actor", key), "expected a positive number");
+    };
+    positive("height_m", shape.height_m);
+    positive("arm_length_scale", shape.arm_length_scale);
+    positive("leg_length_scale", shape.leg_length_scale);
+    positive("shoulder_width_scale", shape.shoulder_width_scale);
+    positive("hip_width_scale", shape.hip_width_scale);
+    positive("girth_scale", shape.girth_scale);
+    positive("belly_scale", shape.belly_scale);
+    if (actor["clothing"]) {
+      const std::string value = in.string(actor["clothing"], "actor.clothing");
+      if (value != "true" && value != "false")
+        in.fail(actor["clothing"], "actor.clothing", "expected true or false");
+      config.actor.clothing = value == "true";
+    }
+    if (actor["vertices"]) {
+      config.actor.target_vertices = in.integer(actor["vertices"], "actor.vertices");
+      if (config.actor.target_vertices < 200 || config.actor.target_vertices > 200000) {
+        in.fail(actor["vertices"], "actor.vertices", "expected between 200 and 200000");
+      }
+    }
+  }
+  if (const YAML::Node motion = root["motion"]) {
+    in.requireMap(motion, "motion");
+    in.checkKeys(motion, "motion", {"clip", "bvh", "fps"});
+    if (motion["clip"]) {
+      config.clip = in.string(motion["clip"], "motion.clip");
+      bool known = false;
+      std::string names;
+      for (const std::string& name : builtinClipNames()) {
+        known = known || name == config.clip;
+        names += (names.empty() ? "" : ", ") + name;
+      }
+      if (!known)
+        in.fail(motion["clip"], "motion.clip",
+                "unknown clip '" + config.clip + "'; expected one of: " + names);
+    }
+    if (motion["bvh"])
+      config.bvh_file = path.parent_path() / in.string(motion["bvh"], "motion.bvh");
+    if (motion["fps"]) {
+      config.fps = in.number(motion["fps"], "motion.fps");
+      if (!(config.fps > 0 && config.fps <= 240))
+        in.fail(motion["fps"], "motion.fps", "expected frames per second in (0, 240]");
+    }
+  }
+  if (const YAML::Node look = root["look"]) {
+    in.requireMap(look, "look");
+    in.checkKeys(look, "look",
+                 {"screen_green", "unevenness", "spill", "noise_sigma", "pixel_format"});
+    if (const YAML::Node g = look["screen_green"]) {
+      in.requireSequence(g, "look.screen_green", 3);
+      for (int i = 0; i < 3; ++i) {
+        config.look.screen_green[i] =
+            float(in.number(g[i], YamlReader::item("look.screen_green", i)));
+      }
+    }
+    if (look["unevenness"])
+      config.look.unevenness = float(in.number(look["unevenness"], "look.unevenness"));
+    if (look["spill"]) config.look.spill = float(in.number(look["spill"], "look.spill"));
+    if (look["noise_sigma"])
+      config.look.noise_sigma = float(in.number(look["noise_sigma"], "look.noise_sigma") / 255.0);
+    if (look["pixel_format"]) {
+      const std::string f = in.string(look["pixel_format"], "look.pixel_format");
+      if (f == "rgb8") {
+        config.pixel_format = PixelFormat::kRgb8;
+      } else if (f == "bayer_rggb8") {
+        config.pixel_format = PixelFormat::kBayerRggb8;
+      } else {
+        in.fail(look["pixel_format"], "look.pixel_format",
+                "expected rgb8 or bayer_rggb8, got '" + f + "'");
+      }
+    }
+  }
+  if (root["seed"]) config.seed = static_cast<uint32_t>(in.integer(root["seed"], "seed"));
+  return config;
+}
+
+}  // namespace lumistage

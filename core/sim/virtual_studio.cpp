@@ -1,0 +1,47 @@
+#include "core/sim/virtual_studio.h"
+
+#include <algorithm>
+
+#include "core/body/motion_library.h"
+
+namespace lumistage {
+
+VirtualStudio::VirtualStudio(StudioConfig config, int frame_count)
+    : config_(std::move(config)), actor_(makeHumanModel(config_.actor)) {
+  const double duration_s = std::max(1.0, frame_count / config_.fps);
+  clip_ = makeBuiltinClip(config_.clip, actor_.skeleton, config_.fps, duration_s);
+  gl_ = std::make_unique<EglContext>();
+  renderer_ = std::make_unique<StudioRenderer>(actor_);
+}
+
+VirtualStudio::~VirtualStudio() {
+  renderer_.reset();  // its GL objects go while the context still exists
+}
+
+void VirtualStudio::renderFrame(int index, StudioFrame& frame) {
+  frame.index = index;
+  frame.time_s = index / config_.fps;
+  frame.pose = clip_.sample(frame.time_s);
+  actor_.skeleton.jointPositions(frame.pose, frame.joints);
+  actor_.skeleton.skinningTransforms(frame.pose, transforms_);
+  if (frame.surface.triangles.size() != actor_.rest.triangles.size())
+    frame.surface.triangles = actor_.rest.triangles;
+  skinMesh(actor_, transforms_, frame.surface.positions, frame.surface.normals);
+  renderer_->setSurface(frame.surface.positions, frame.surface.normals);
+
+  const int cameras = config_.rig.cameraCount();
+  frame.images.resize(cameras);
+  frame.masks.resize(cameras);
+  for (int c = 0; c < cameras; ++c) {
+    const Camera& camera = config_.rig.camera(c);
+    const uint32_t seed =
+        config_.seed * 1000003u + static_cast<uint32_t>(index) * 131u + static_cast<uint32_t>(c);
+    renderer_->render(camera, config_.look, seed, frame.images[c]);
+    const size_t pixels = size_t(camera.width()) * camera.height();
+    frame.masks[c].resize(pixels);
+    const uint8_t* rgba = frame.images[c].data();
+    for (size_t p = 0; p < pixels; ++p) frame.masks[c][p] = rgba[4 * p + 3];
+  }
+}
+
+}  // namespace lumistage

@@ -1,0 +1,52 @@
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "core/body/motion_clip.h"
+#include "core/render/egl_context.h"
+#include "core/sim/studio_config.h"
+#include "core/sim/studio_renderer.h"
+
+namespace lumistage {
+
+// One frame of the virtual studio with its ground truth.
+struct StudioFrame {
+  int index = 0;
+  double time_s = 0;
+  Pose pose;
+  std::vector<Eigen::Vector3d> joints;       // the actor's joints, metres
+  TriangleMesh surface;                      // the posed actor surface
+  std::vector<std::vector<uint8_t>> images;  // per camera, RGBA8, rows top first
+  std::vector<std::vector<uint8_t>> masks;   // per camera, 255 where the actor is
+};
+
+// The synthetic stage: an actor (not the generic human) moved by a motion clip and filmed by a
+// calibrated rig against a green screen, with everything a real stage cannot give: the true
+// joints, surface and silhouettes. Owns a headless OpenGL context (EglContext).
+class VirtualStudio {
+ public:
+  // Builds the actor and the motion (long enough for `frame_count` frames) and the renderer.
+  // Throws Error when the motion or the GL context cannot be had.
+  VirtualStudio(StudioConfig config, int frame_count);
+  ~VirtualStudio();
+
+  const StudioConfig& config() const { return config_; }
+  const Rig& rig() const { return config_.rig; }
+  const SkinnedMesh& actor() const { return actor_; }
+  const MotionClip& clip() const { return clip_; }
+  const std::string& rendererDescription() const { return gl_->description(); }
+
+  // Poses the actor for frame `index` and renders every camera. Reuses `frame`'s buffers.
+  void renderFrame(int index, StudioFrame& frame);
+
+ private:
+  StudioConfig config_;
+  SkinnedMesh actor_;
+  MotionClip clip_;
+  std::unique_ptr<EglContext> gl_;
+  std::unique_ptr<StudioRenderer> renderer_;
+  std::vector<Eigen::Affine3f> transforms_;
+};
+
+}  // namespace lumistage
