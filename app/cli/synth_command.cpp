@@ -100,7 +100,8 @@ void addSynthCommand(CLI::App& app) {
     SessionWriter writer(args->out, studio.rig(), studio.config().pixel_format, studio.config().fps,
                          "virtual-studio", joint_names);
     StudioFrame frame;
-    std::vector<const uint8_t*> images;
+    std::vector<Image> images(studio.rig().cameraCount());
+    std::vector<ImageView> views(images.size());
     double render_ms = 0, write_ms = 0;
     const auto start = Clock::now();
     for (int f = 0; f < args->frames; ++f) {
@@ -108,10 +109,14 @@ void addSynthCommand(CLI::App& app) {
       studio.renderFrame(f, frame);
       render_ms += millisecondsSince(t0);
       t0 = Clock::now();
-      images.clear();
-      for (const auto& image : frame.images) images.push_back(image.data());
+      for (size_t c = 0; c < images.size(); ++c) {
+        const Camera& camera = studio.rig().camera(static_cast<int>(c));
+        rgbaToImage(frame.images[c].data(), camera.width(), camera.height(),
+                    studio.config().pixel_format, images[c]);
+        views[c] = images[c].view();
+      }
       FrameTruth truth{frame.joints, &frame.surface, &frame.masks};
-      writer.writeFrame(f, static_cast<int64_t>(frame.time_s * 1e9 + 0.5), images, &truth);
+      writer.writeFrame(f, static_cast<int64_t>(frame.time_s * 1e9 + 0.5), views, &truth);
       write_ms += millisecondsSince(t0);
       if (f == args->frames / 2) {  // mid-motion: more telling than the T-pose of frame 0
         const cv::Mat sheet = contactSheet(studio.rig(), frame);

@@ -15,22 +15,6 @@ namespace lumistage {
 
 namespace fs = std::filesystem;
 
-const char* pixelFormatName(PixelFormat format) {
-  return format == PixelFormat::kRgb8 ? "rgb8" : "bayer_rggb8";
-}
-
-void rgbaToBayerRggb(const uint8_t* rgba, int width, int height, uint8_t* bayer) {
-  for (int y = 0; y < height; ++y) {
-    const uint8_t* row = rgba + size_t(y) * width * 4;
-    uint8_t* out = bayer + size_t(y) * width;
-    for (int x = 0; x < width; ++x) {
-      // Channel: R at (even, even), B at (odd, odd), G elsewhere.
-      const int channel = (y & 1) ? ((x & 1) ? 2 : 1) : ((x & 1) ? 1 : 0);
-      out[x] = row[4 * x + channel];
-    }
-  }
-}
-
 namespace {
 
 void writeImageAtomically(const fs::path& path, const cv::Mat& image) {
@@ -113,10 +97,21 @@ SessionWriter::SessionWriter(const fs::path& folder, const Rig& rig, PixelFormat
 SessionWriter::~SessionWriter() = default;
 
 void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
-                               const std::vector<const uint8_t*>& rgba, const FrameTruth* truth) {
-  if (rgba.size() != static_cast<size_t>(rig_.cameraCount())) {
+                               const std::vector<ImageView>& images, const FrameTruth* truth) {
+  if (images.size() != static_cast<size_t>(rig_.cameraCount())) {
     throw Error(fmt::format("{}: frame {} has {} images for {} cameras", folder_.string(), frame_id,
-                            rgba.size(), rig_.cameraCount()));
+                            images.size(), rig_.cameraCount()));
+  }
+  for (int c = 0; c < rig_.cameraCount(); ++c) {
+    const Camera& camera = rig_.camera(c);
+    const ImageView& view = images[c];
+    if (view.format != format_ || view.width != camera.width() || view.height != camera.height() ||
+        !view.data) {
+      throw Error(fmt::format(
+          "{}: frame {}, camera {}: got a {}x{} {} image, the session holds {}x{} {}",
+          folder_.string(), frame_id, camera.name(), view.width, view.height,
+          pixelFormatName(view.format), camera.width(), camera.height(), pixelFormatName(format_)));
+    }
   }
   const std::string name = fmt::format("{:06}.png", frame_id);
   // PNG encoding dominates a frame's writing: cameras in parallel, errors carried out.
@@ -125,15 +120,13 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
     for (int c = range.start; c < range.end; ++c) {
       try {
         const Camera& camera = rig_.camera(c);
-        const cv::Mat source(camera.height(), camera.width(), CV_8UC4,
-                             const_cast<uint8_t*>(rgba[c]));
-        cv::Mat image;
-        if (format_ == PixelFormat::kRgb8) {
-          cv::cvtColor(source, image, cv::COLOR_RGBA2BGR);  // OpenCV writes BGR order as RGB PNG
-        } else {
-          image.create(camera.height(), camera.width(), CV_8UC1);
-          rgbaToBayerRggb(rgba[c], camera.width(), camera.height(), image.data);
-        }
+        const ImageView& view = images[c];
+        const cv::Mat source(view.height, view.width,
+                             view.format == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1,
+                             const_cast<uint8_t*>(view.data));
+        cv::Mat image = source;
+        if (view.format == PixelFormat::kRgb8)
+          cv::cvtColor(source, image, cv::COLOR_RGB2BGR);  // imwrite takes BGR
         writeImageAtomically(folder_ / camera.name() / name, image);
         if (truth && truth->masks) {
           const cv::Mat mask(camera.height(), camera.width(), CV_8UC1,

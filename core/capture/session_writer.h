@@ -8,13 +8,10 @@
 #include <vector>
 
 #include "core/body/skinned_mesh.h"
+#include "core/capture/image.h"
 #include "core/geometry/rig.h"
 
 namespace lumistage {
-
-// Pixel layouts a session stores. Bayer is what GigE Vision cameras deliver: one byte a pixel.
-enum class PixelFormat { kRgb8, kBayerRggb8 };
-const char* pixelFormatName(PixelFormat format);  // "rgb8", "bayer_rggb8"
 
 // Ground truth of one frame of the virtual studio.
 struct FrameTruth {
@@ -34,9 +31,10 @@ class SessionWriter {
                 const std::string& source, const std::vector<std::string>& joint_names = {});
   ~SessionWriter();
 
-  // One frame: per camera an image, RGBA8 (alpha ignored) of the camera's size, rows top first.
-  // Converted to the session's pixel format. Throws Error on a write failure.
-  void writeFrame(int64_t frame_id, int64_t timestamp_ns, const std::vector<const uint8_t*>& rgba,
+  // One frame: per camera an image of the camera's size in the session's pixel format. Throws
+  // Error naming the file on a write failure (disk full...), or on a wrong size or format; the
+  // frame is then not in the index and the session stays valid.
+  void writeFrame(int64_t frame_id, int64_t timestamp_ns, const std::vector<ImageView>& images,
                   const FrameTruth* truth = nullptr);
   int framesWritten() const { return frames_; }
   const std::filesystem::path& folder() const { return folder_; }
@@ -50,8 +48,5 @@ class SessionWriter {
   std::ofstream joints_;
   int frames_ = 0;
 };
-
-// Converts RGBA8 to Bayer RGGB8: even rows R G R G..., odd rows G B G B...
-void rgbaToBayerRggb(const uint8_t* rgba, int width, int height, uint8_t* bayer);
 
 }  // namespace lumistage

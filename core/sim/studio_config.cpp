@@ -101,14 +101,12 @@ StudioConfig loadStudioConfig(const std::filesystem::path& path) {
       config.look.noise_sigma = float(in.number(look["noise_sigma"], "look.noise_sigma") / 255.0);
     if (look["pixel_format"]) {
       const std::string f = in.string(look["pixel_format"], "look.pixel_format");
-      if (f == "rgb8") {
-        config.pixel_format = PixelFormat::kRgb8;
-      } else if (f == "bayer_rggb8") {
-        config.pixel_format = PixelFormat::kBayerRggb8;
-      } else {
+      const std::optional<PixelFormat> format = parsePixelFormat(f);
+      if (!format) {
         in.fail(look["pixel_format"], "look.pixel_format",
-                "expected rgb8 or bayer_rggb8, got '" + f + "'");
+                "expected rgb8, bayer_rggb8 or mono8, got '" + f + "'");
       }
+      config.pixel_format = *format;
     }
   }
   if (root["seed"]) config.seed = static_cast<uint32_t>(in.integer(root["seed"], "seed"));
