@@ -479,7 +479,8 @@ void saveBvh(const MotionClip& clip, const Skeleton& skeleton, const std::filesy
   for (const auto& p : skeleton.restPositions()) lowest = std::min(lowest, p.z());
   const Eigen::Vector3d floor_shift(0, 0, -lowest);
   auto vec = [](const Eigen::Vector3d& v) {
-    return fmt::format("{:.10g} {:.10g} {:.10g}", v.x(), v.y(), v.z());
+    // + 0.0 turns -0 into 0: tidier files.
+    return fmt::format("{:.10g} {:.10g} {:.10g}", v.x() + 0.0, v.y() + 0.0, v.z() + 0.0);
   };
 
   std::vector<std::vector<int>> children(n);

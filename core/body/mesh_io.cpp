@@ -1,5 +1,6 @@
 #include "core/body/mesh_io.h"
 
+#include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
@@ -267,6 +268,9 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) fail(path, "no such file, expected a mesh file");
   Assimp::Importer importer;
+  // FBX pivots would otherwise become helper nodes ("Hips_$AssimpFbx$_Rotation") between bones,
+  // and so joints of ours.
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
   const aiScene* scene =
       importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_Triangulate |
                                            aiProcess_GenSmoothNormals | aiProcess_SortByPType);

@@ -1,9 +1,11 @@
 #include "core/body/mesh_io.h"
 
+#include <assimp/scene.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <assimp/Exporter.hpp>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -112,6 +114,55 @@ SkinnedMesh makeHumanMesh() {
   }
   mesh.rest.computeNormals();
   return mesh;
+}
+
+// A triangle rigged to `bones` joints hanging off one root node, written as Assimp's own binary
+// format (which keeps any number of weights): vertex 0 is weighted by every bone, vertex 1 by the
+// first, vertex 2 by none unless `weight_all`.
+void writeRiggedTriangle(const fs::path& path, int bones, bool weight_all) {
+  aiScene scene;
+  scene.mRootNode = new aiNode("root");
+  auto* armature = new aiNode("armature");
+  armature->mParent = scene.mRootNode;
+  scene.mRootNode->mNumChildren = 1;
+  scene.mRootNode->mChildren = new aiNode* [1] { armature };
+  scene.mRootNode->mNumMeshes = 1;
+  scene.mRootNode->mMeshes = new unsigned[1]{0};
+  armature->mNumChildren = bones;
+  armature->mChildren = new aiNode*[bones];
+  for (int b = 0; b < bones; ++b) {
+    armature->mChildren[b] = new aiNode("bone" + std::to_string(b));
+    armature->mChildren[b]->mParent = armature;
+  }
+  scene.mNumMaterials = 1;
+  scene.mMaterials = new aiMaterial* [1] { new aiMaterial };
+  auto* mesh = new aiMesh;
+  scene.mNumMeshes = 1;
+  scene.mMeshes = new aiMesh* [1] { mesh };
+  mesh->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+  mesh->mNumVertices = 3;
+  mesh->mVertices = new aiVector3D[3]{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh->mNormals = new aiVector3D[3]{{0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+  mesh->mNumFaces = 1;
+  mesh->mFaces = new aiFace[1];
+  mesh->mFaces[0].mNumIndices = 3;
+  mesh->mFaces[0].mIndices = new unsigned[3]{0, 1, 2};
+  mesh->mNumBones = bones;
+  mesh->mBones = new aiBone*[bones];
+  for (int b = 0; b < bones; ++b) {
+    auto* bone = new aiBone;
+    bone->mName = "bone" + std::to_string(b);
+    std::vector<aiVertexWeight> weights{{0, 1.0f / bones}};
+    if (b == 0) weights.emplace_back(1, 1.0f);
+    if (b == 0 && weight_all) weights.emplace_back(2, 1.0f);
+    bone->mNumWeights = static_cast<unsigned>(weights.size());
+    bone->mWeights = new aiVertexWeight[weights.size()];
+    std::copy(weights.begin(), weights.end(), bone->mWeights);
+    mesh->mBones[b] = bone;
+  }
+  Assimp::Exporter exporter;
+  ASSERT_EQ(exporter.Export(&scene, "assbin", path.string()), AI_SUCCESS)
+      << exporter.GetErrorString();
 }
 
 // A random pose within limits (root: any turn, a small translation).
@@ -257,6 +308,26 @@ TEST(MeshIo, BadFilesGiveClearErrors) {
   m = messageOf([&] { saveSkinnedMeshGltf(makeChainMesh(), folder / "chain.fbx"); });
   EXPECT_NE(m.find("chain.fbx"), std::string::npos) << m;
   EXPECT_NE(m.find("expected .glb or .gltf"), std::string::npos) << m;
+  fs::remove_all(folder);
+}
+
+TEST(MeshIo, BadWeightsGiveClearErrors) {
+  const fs::path folder = testFolder();
+  writeRiggedTriangle(folder / "crowded.assbin", 6, true);
+  std::string m = messageOf([&] { loadSkinnedMesh(folder / "crowded.assbin"); });
+  EXPECT_NE(m.find("crowded.assbin"), std::string::npos) << m;
+  EXPECT_NE(m.find("1 vertices have more than 4 bone influences (up to 6)"), std::string::npos)
+      << m;
+  writeRiggedTriangle(folder / "unweighted.assbin", 2, false);
+  m = messageOf([&] { loadSkinnedMesh(folder / "unweighted.assbin"); });
+  EXPECT_NE(m.find("1 of 3 vertices have no bone weights"), std::string::npos) << m;
+  // Well-formed: the skeleton is the bones and their common ancestor, weights normalised.
+  writeRiggedTriangle(folder / "good.assbin", 3, true);
+  const SkinnedMesh mesh = loadSkinnedMesh(folder / "good.assbin");
+  ASSERT_EQ(mesh.skeleton.jointCount(), 4);
+  EXPECT_EQ(mesh.skeleton.joint(0).name, "armature");
+  EXPECT_EQ(mesh.skeleton.joint(3).name, "bone2");
+  EXPECT_EQ(mesh.skeleton.joint(3).limits.upper_rad, Eigen::Vector3d::Constant(kPi));
   fs::remove_all(folder);
 }
 
