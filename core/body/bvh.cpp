@@ -47,7 +47,7 @@ struct BvhJoint {
 
 struct BvhFile {
   std::vector<BvhJoint> joints;
-  std::vector<Eigen::Vector3d> end_sites;  // rest positions relative to the root's OFFSET origin
+  std::vector<std::pair<int, Eigen::Vector3d>> end_sites;  // joint, OFFSET
   double frame_time_s = 0;
   int value_count = 0;
   std::vector<std::vector<double>> frames;
@@ -196,7 +196,7 @@ class Parser {
         ++pos_;
         expect("Site");
         expect("{");
-        end_site_offsets_.push_back({index, offset()});
+        out.end_sites.push_back({index, offset()});
         expect("}");
       } else {
         fail(t.line, fmt::format("expected JOINT, End Site or '}}' in joint '{}', found '{}'",
@@ -276,10 +276,6 @@ class Parser {
     }
   }
 
- public:
-  std::vector<std::pair<int, Eigen::Vector3d>> end_site_offsets_;
-
- private:
   std::string file_;
   std::vector<std::string_view> lines_;
   std::vector<Token> tokens_;
@@ -368,8 +364,7 @@ std::optional<std::string> humanJointNameFor(std::string_view name, bool cmu_spi
 MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
   const std::string file = path.string();
   const std::string text = readFile(path);
-  Parser parser(file, text);
-  const BvhFile bvh = parser.parse();
+  const BvhFile bvh = Parser(file, text).parse();
   const int source_count = static_cast<int>(bvh.joints.size());
 
   // Rest positions in the file's frame (the root at its OFFSET), for the root height.
@@ -379,7 +374,7 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
     rest[j] = joint.parent < 0 ? joint.offset : rest[joint.parent] + joint.offset;
   }
   std::vector<Eigen::Vector3d> rest_with_ends = rest;
-  for (const auto& [joint, offset] : parser.end_site_offsets_) {
+  for (const auto& [joint, offset] : bvh.end_sites) {
     rest_with_ends.push_back(rest[joint] + offset);
   }
 

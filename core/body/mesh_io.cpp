@@ -224,6 +224,11 @@ void saveSkinnedMeshGltf(const SkinnedMesh& mesh, const fs::path& path) {
     const int fd = ::mkstemp(temp.data());
     if (fd < 0) fail(path, "cannot create a temporary file beside it");
     ::close(fd);
+    // mkstemp makes it private; a mesh file is for everyone to read, like writeFileAtomically's.
+    fs::permissions(temp,
+                    fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                        fs::perms::others_read,
+                    ec);
     try {
       exportScene(*scene, "glb2", path, temp);
     } catch (...) {
@@ -266,7 +271,8 @@ void saveSkinnedMeshGltf(const SkinnedMesh& mesh, const fs::path& path) {
 
 SkinnedMesh loadSkinnedMesh(const fs::path& path) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) fail(path, "no such file, expected a mesh file");
+  if (!fs::is_regular_file(path, ec))
+    fail(path, "no such file (or not a regular file), expected a mesh file");
   Assimp::Importer importer;
   // FBX pivots would otherwise become helper nodes ("Hips_$AssimpFbx$_Rotation") between bones,
   // and so joints of ours.
