@@ -1,0 +1,538 @@
+#include "core/body/bvh.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <numbers>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "core/base/atomic_file.h"
+#include "core/base/error.h"
+
+namespace lumistage {
+
+namespace {
+
+// BVH (Y up, facing +Z, +X left) to ours (z up, facing +y, +x right): x = -X, y = Z, z = Y. A
+// proper rotation and its own inverse, so the same matrix converts back.
+Eigen::Matrix3d bvhToOurs() {
+  Eigen::Matrix3d c;
+  c << -1, 0, 0,  //
+      0, 0, 1,    //
+      0, 1, 0;
+  return c;
+}
+
+bool equalsIgnoreCase(std::string_view a, std::string_view b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) ==
+                  std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+// Channel kinds: 0..2 position x/y/z, 3..5 rotation x/y/z.
+struct BvhJoint {
+  std::string name;
+  int parent = -1;
+  int line = 0;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  std::vector<int> channels;
+  int first_value = 0;  // index of its first channel in a frame line
+};
+
+struct BvhFile {
+  std::vector<BvhJoint> joints;
+  std::vector<std::pair<int, Eigen::Vector3d>> end_sites;  // joint, OFFSET
+  double frame_time_s = 0;
+  int value_count = 0;
+  std::vector<std::vector<double>> frames;
+};
+
+struct Token {
+  std::string_view text;
+  int line;
+};
+
+class Parser {
+ public:
+  Parser(std::string file, std::string_view text) : file_(std::move(file)) {
+    // Split into lines (CR LF tolerated), then hierarchy tokens until MOTION.
+    size_t start = 0;
+    while (start <= text.size()) {
+      size_t end = text.find('\n', start);
+      if (end == std::string_view::npos) end = text.size();
+      std::string_view line = text.substr(start, end - start);
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      lines_.push_back(line);
+      if (end == text.size()) break;
+      start = end + 1;
+    }
+  }
+
+  BvhFile parse() {
+    BvhFile out;
+    tokenizeHierarchy();
+    expect("HIERARCHY");
+    expect("ROOT");
+    parseJoint(out, -1);
+    if (pos_ >= tokens_.size() || tokens_[pos_].text != "MOTION") {
+      fail(pos_ < tokens_.size() ? tokens_[pos_].line : lastLine(),
+           "expected MOTION after the hierarchy" + found());
+    }
+    parseMotion(out, tokens_[pos_].line);
+    return out;
+  }
+
+ private:
+  [[noreturn]] void fail(int line, const std::string& message) const {
+    throw Error(locate(file_, line, "", message));
+  }
+  int lastLine() const { return static_cast<int>(lines_.size()); }
+  std::string found() const {
+    if (pos_ >= tokens_.size()) return ", found the end of the file (truncated?)";
+    return fmt::format(", found '{}'", tokens_[pos_].text);
+  }
+
+  void tokenizeHierarchy() {
+    for (size_t l = 0; l < lines_.size(); ++l) {
+      std::string_view line = lines_[l];
+      size_t i = 0;
+      while (i < line.size()) {
+        while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+        size_t j = i;
+        while (j < line.size() && !std::isspace(static_cast<unsigned char>(line[j]))) ++j;
+        if (j > i) tokens_.push_back({line.substr(i, j - i), static_cast<int>(l) + 1});
+        if (line.substr(i, j - i) == "MOTION") {
+          return;
+        }
+        i = j;
+      }
+    }
+  }
+
+  const Token& next(const char* what) {
+    if (pos_ >= tokens_.size()) fail(lastLine(), std::string("expected ") + what + found());
+    return tokens_[pos_++];
+  }
+  void expect(std::string_view keyword) {
+    if (pos_ >= tokens_.size() || tokens_[pos_].text != keyword) {
+      fail(pos_ < tokens_.size() ? tokens_[pos_].line : lastLine(),
+           fmt::format("expected '{}'{}", keyword, found()));
+    }
+    ++pos_;
+  }
+  double number(const Token& t, const char* what) const {
+    double value = 0;
+    const char* end = t.text.data() + t.text.size();
+    auto [ptr, ec] = std::from_chars(t.text.data(), end, value);
+    if (ec != std::errc() || ptr != end || !std::isfinite(value)) {
+      fail(t.line, fmt::format("expected a number for {}, found '{}'", what, t.text));
+    }
+    return value;
+  }
+  Eigen::Vector3d offset() {
+    expect("OFFSET");
+    Eigen::Vector3d v;
+    for (int k = 0; k < 3; ++k) v[k] = number(next("an OFFSET value"), "OFFSET");
+    return v;
+  }
+
+  void parseJoint(BvhFile& out, int parent) {
+    const Token& name = next("a joint name");
+    if (name.text == "{") fail(name.line, "expected a joint name before '{'");
+    BvhJoint joint;
+    joint.name = std::string(name.text);
+    joint.parent = parent;
+    joint.line = name.line;
+    expect("{");
+    joint.offset = offset();
+    expect("CHANNELS");
+    const Token& count_token = next("a channel count");
+    const double count = number(count_token, "the channel count");
+    if (count < 0 || count > 6 || count != std::floor(count)) {
+      fail(count_token.line,
+           fmt::format("expected a channel count from 0 to 6, found '{}'", count_token.text));
+    }
+    static constexpr std::string_view kNames[] = {"Xposition", "Yposition", "Zposition",
+                                                  "Xrotation", "Yrotation", "Zrotation"};
+    for (int c = 0; c < static_cast<int>(count); ++c) {
+      const Token& t = next("a channel name");
+      const auto* it = std::find(std::begin(kNames), std::end(kNames), t.text);
+      if (it == std::end(kNames)) {
+        fail(t.line, fmt::format("unknown channel '{}' of joint '{}', expected one of Xposition, "
+                                 "Yposition, Zposition, Xrotation, Yrotation, Zrotation",
+                                 t.text, joint.name));
+      }
+      joint.channels.push_back(static_cast<int>(it - std::begin(kNames)));
+    }
+    joint.first_value = out.value_count;
+    out.value_count += static_cast<int>(joint.channels.size());
+    const int index = static_cast<int>(out.joints.size());
+    out.joints.push_back(std::move(joint));
+    while (true) {
+      if (pos_ >= tokens_.size()) {
+        fail(lastLine(), fmt::format("expected '}}' closing joint '{}' (line {}), found the end "
+                                     "of the file (truncated?)",
+                                     out.joints[index].name, out.joints[index].line));
+      }
+      const Token& t = tokens_[pos_];
+      if (t.text == "}") {
+        ++pos_;
+        return;
+      }
+      if (t.text == "MOTION") {
+        fail(t.line, fmt::format("expected '}}' closing joint '{}' (line {}) before MOTION",
+                                 out.joints[index].name, out.joints[index].line));
+      }
+      if (t.text == "JOINT") {
+        ++pos_;
+        parseJoint(out, index);
+      } else if (t.text == "End") {
+        ++pos_;
+        expect("Site");
+        expect("{");
+        out.end_sites.push_back({index, offset()});
+        expect("}");
+      } else {
+        fail(t.line, fmt::format("expected JOINT, End Site or '}}' in joint '{}', found '{}'",
+                                 out.joints[index].name, t.text));
+      }
+    }
+  }
+
+  // The motion section, line by line: a frame line must hold exactly one value per channel.
+  void parseMotion(BvhFile& out, int motion_line) {
+    size_t l = static_cast<size_t>(motion_line);  // index of the line after MOTION
+    auto nextLine = [&](const char* what) -> std::pair<std::string_view, int> {
+      while (l < lines_.size()) {
+        std::string_view line = lines_[l++];
+        if (line.find_first_not_of(" \t") != std::string_view::npos) {
+          return {line, static_cast<int>(l)};
+        }
+      }
+      fail(lastLine(),
+           std::string("expected ") + what + ", found the end of the file (truncated?)");
+    };
+    auto split = [](std::string_view line) {
+      std::vector<std::string_view> words;
+      size_t i = 0;
+      while (i < line.size()) {
+        while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+        size_t j = i;
+        while (j < line.size() && !std::isspace(static_cast<unsigned char>(line[j]))) ++j;
+        if (j > i) words.push_back(line.substr(i, j - i));
+        i = j;
+      }
+      return words;
+    };
+    {
+      auto [line, number_] = nextLine("'Frames: N'");
+      auto words = split(line);
+      if (words.size() != 2 || words[0] != "Frames:") {
+        fail(number_, fmt::format("expected 'Frames: N', found '{}'", line));
+      }
+      const double n = number({words[1], number_}, "Frames");
+      if (n < 0 || n != std::floor(n)) fail(number_, "expected a whole number of frames");
+      out.frames.resize(static_cast<size_t>(n));
+    }
+    {
+      auto [line, number_] = nextLine("'Frame Time: seconds'");
+      auto words = split(line);
+      if (words.size() != 3 || words[0] != "Frame" || words[1] != "Time:") {
+        fail(number_, fmt::format("expected 'Frame Time: seconds', found '{}'", line));
+      }
+      out.frame_time_s = number({words[2], number_}, "Frame Time");
+      if (out.frame_time_s <= 0) fail(number_, "expected a positive Frame Time");
+    }
+    for (size_t f = 0; f < out.frames.size(); ++f) {
+      if (l >= lines_.size() ||
+          std::all_of(lines_.begin() + static_cast<long>(l), lines_.end(),
+                      [](std::string_view s) { return s.find_first_not_of(" \t") == s.npos; })) {
+        fail(lastLine(), fmt::format("truncated: expected {} frames after 'Frames:', found {}",
+                                     out.frames.size(), f));
+      }
+      auto [line, number_] = nextLine("a frame line");
+      auto words = split(line);
+      if (static_cast<int>(words.size()) != out.value_count) {
+        fail(number_, fmt::format("frame {} has {} values, expected {} (one per channel)", f + 1,
+                                  words.size(), out.value_count));
+      }
+      out.frames[f].resize(words.size());
+      for (size_t v = 0; v < words.size(); ++v) {
+        out.frames[f][v] = number({words[v], number_}, "a channel value");
+      }
+    }
+    while (l < lines_.size()) {
+      if (lines_[l].find_first_not_of(" \t") != std::string_view::npos) {
+        fail(static_cast<int>(l) + 1,
+             fmt::format("more frame lines than 'Frames: {}' announced", out.frames.size()));
+      }
+      ++l;
+    }
+  }
+
+  std::string file_;
+  std::vector<std::string_view> lines_;
+  std::vector<Token> tokens_;
+  size_t pos_ = 0;
+};
+
+Eigen::Matrix3d axisRotation(int axis, double angle_rad) {
+  return Eigen::AngleAxisd(angle_rad, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
+}
+
+// R = Rx(a) Ry(b) Rz(c) with b in [-pi/2, pi/2]; at gimbal lock c = 0.
+Eigen::Vector3d eulerXyz(const Eigen::Matrix3d& r) {
+  const double sb = std::clamp(r(0, 2), -1.0, 1.0);
+  const double b = std::asin(sb);
+  if (std::abs(sb) > 1 - 1e-12) return {std::atan2(r(2, 1), r(1, 1)), b, 0.0};
+  return {std::atan2(-r(1, 2), r(2, 2)), b, std::atan2(-r(0, 1), r(0, 0))};
+}
+
+Eigen::Vector3d rotationVector(const Eigen::Matrix3d& r) {
+  const Eigen::AngleAxisd aa(r);
+  return aa.angle() * aa.axis();
+}
+
+// Height of the root above the lowest joint (or end site) of a skeleton at rest, along `up`.
+double rootHeight(const std::vector<Eigen::Vector3d>& rest, int up) {
+  double lowest = rest[0][up];
+  for (const auto& p : rest) lowest = std::min(lowest, p[up]);
+  return rest[0][up] - lowest;
+}
+
+struct CmuAlias {
+  std::string_view from, to;
+};
+
+}  // namespace
+
+std::optional<std::string> humanJointNameFor(std::string_view name, bool cmu_spine) {
+  // Mixamo (and other FBX exports) prefix a namespace: "mixamorig:Hips".
+  if (const size_t colon = name.rfind(':'); colon != std::string_view::npos) {
+    name = name.substr(colon + 1);
+  }
+  static constexpr std::string_view kOurs[] = {
+      "pelvis",     "spine1",         "spine2",         "spine3",      "neck",
+      "head",       "right_clavicle", "right_shoulder", "right_elbow", "right_wrist",
+      "right_hand", "left_clavicle",  "left_shoulder",  "left_elbow",  "left_wrist",
+      "left_hand",  "right_hip",      "right_knee",     "right_ankle", "right_foot",
+      "left_hip",   "left_knee",      "left_ankle",     "left_foot"};
+  for (std::string_view ours : kOurs) {
+    if (equalsIgnoreCase(name, ours)) return std::string(ours);
+  }
+  static constexpr CmuAlias kSpineCmu[] = {
+      {"LowerBack", "spine1"}, {"Spine", "spine2"}, {"Spine1", "spine3"}};
+  static constexpr CmuAlias kSpineMixamo[] = {
+      {"Spine", "spine1"}, {"Spine1", "spine2"}, {"Spine2", "spine3"}};
+  for (const CmuAlias& a : cmu_spine ? std::span(kSpineCmu) : std::span(kSpineMixamo)) {
+    if (equalsIgnoreCase(name, a.from)) return std::string(a.to);
+  }
+  static constexpr CmuAlias kSided[] = {
+      {"Shoulder", "clavicle"}, {"Collar", "clavicle"}, {"Clavicle", "clavicle"},
+      {"Arm", "shoulder"},      {"UpArm", "shoulder"},  {"UpperArm", "shoulder"},
+      {"ForeArm", "elbow"},     {"LowArm", "elbow"},    {"LowerArm", "elbow"},
+      {"Hand", "wrist"},        {"UpLeg", "hip"},       {"Hip", "hip"},
+      {"Thigh", "hip"},         {"Leg", "knee"},        {"Knee", "knee"},
+      {"LowLeg", "knee"},       {"Shin", "knee"},       {"Foot", "ankle"},
+      {"Ankle", "ankle"},       {"ToeBase", "foot"},    {"Toe", "foot"},
+      {"Toes", "foot"}};
+  static constexpr CmuAlias kMiddle[] = {{"Hips", "pelvis"},
+                                         {"Pelvis", "pelvis"},
+                                         {"Hip", "pelvis"},
+                                         {"Neck", "neck"},
+                                         {"Head", "head"}};
+  for (const CmuAlias& a : kMiddle) {
+    if (equalsIgnoreCase(name, a.from)) return std::string(a.to);
+  }
+  for (auto [prefix, side] : {std::pair{"Right", "right_"}, std::pair{"Left", "left_"}}) {
+    const std::string_view p(prefix);
+    if (name.size() <= p.size() || !equalsIgnoreCase(name.substr(0, p.size()), p)) continue;
+    const std::string_view rest = name.substr(p.size());
+    for (const CmuAlias& a : kSided) {
+      if (equalsIgnoreCase(rest, a.from)) return std::string(side) + std::string(a.to);
+    }
+  }
+  return std::nullopt;
+}
+
+MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
+  const std::string file = path.string();
+  const std::string text = readFile(path);
+  const BvhFile bvh = Parser(file, text).parse();
+  const int source_count = static_cast<int>(bvh.joints.size());
+
+  // Rest positions in the file's frame (the root at its OFFSET), for the root height.
+  std::vector<Eigen::Vector3d> rest(source_count);
+  for (int j = 0; j < source_count; ++j) {
+    const BvhJoint& joint = bvh.joints[j];
+    rest[j] = joint.parent < 0 ? joint.offset : rest[joint.parent] + joint.offset;
+  }
+  std::vector<Eigen::Vector3d> rest_with_ends = rest;
+  for (const auto& [joint, offset] : bvh.end_sites) {
+    rest_with_ends.push_back(rest[joint] + offset);
+  }
+
+  // Map: target joint -> source joint (the first one in file order naming it).
+  const bool cmu_spine = std::any_of(bvh.joints.begin(), bvh.joints.end(), [](const BvhJoint& j) {
+    return equalsIgnoreCase(j.name, "LowerBack");
+  });
+  std::vector<int> source_of(target.jointCount(), -1);
+  int mapped = 0;
+  for (int j = 0; j < source_count; ++j) {
+    std::optional<int> t = target.findJoint(bvh.joints[j].name);
+    if (!t) {
+      if (auto ours = humanJointNameFor(bvh.joints[j].name, cmu_spine)) t = target.findJoint(*ours);
+    }
+    if (t && source_of[*t] < 0) {
+      source_of[*t] = j;
+      ++mapped;
+    }
+  }
+  if (mapped == 0) {
+    throw Error(locate(file, 0, "",
+                       fmt::format("no joint of the file maps to the target skeleton (first "
+                                   "joint '{}', target root '{}'): expected CMU, Mixamo or our "
+                                   "own joint names",
+                                   bvh.joints[0].name, target.joint(0).name)));
+  }
+
+  const double source_height = rootHeight(rest_with_ends, 1);
+  const double target_height = rootHeight(target.restPositions(), 2);
+  if (source_height <= 0 || target_height <= 0) {
+    throw Error(locate(file, bvh.joints[0].line, "",
+                       "cannot scale the root motion: the rest skeleton has no joint below its "
+                       "root, expected a body standing on its legs"));
+  }
+  const double scale = target_height / source_height;
+  const Eigen::Vector3d rest_root(bvh.joints[0].offset.x(), source_height,
+                                  bvh.joints[0].offset.z());
+  const Eigen::Matrix3d c = bvhToOurs();
+
+  MotionClip clip;
+  clip.name = path.stem().string();
+  clip.fps = 1.0 / bvh.frame_time_s;
+  clip.frames.reserve(bvh.frames.size());
+  std::vector<Eigen::Matrix3d> source_global(source_count);
+  std::vector<Eigen::Matrix3d> target_global(target.jointCount());
+  for (const std::vector<double>& values : bvh.frames) {
+    Eigen::Vector3d root_position = bvh.joints[0].offset;
+    for (int j = 0; j < source_count; ++j) {
+      const BvhJoint& joint = bvh.joints[j];
+      // Channels apply in the order listed: R = R_first · R_second · R_third.
+      Eigen::Matrix3d local = Eigen::Matrix3d::Identity();
+      bool has_position = false;
+      Eigen::Vector3d position = Eigen::Vector3d::Zero();
+      for (size_t k = 0; k < joint.channels.size(); ++k) {
+        const double v = values[joint.first_value + k];
+        const int kind = joint.channels[k];
+        if (kind < 3) {
+          position[kind] = v;
+          has_position = true;
+        } else {
+          local = local * axisRotation(kind - 3, v * std::numbers::pi / 180.0);
+        }
+      }
+      if (j == 0 && has_position) root_position = position;
+      source_global[j] = joint.parent < 0 ? local : source_global[joint.parent] * local;
+    }
+    Pose pose = Pose::rest(target.jointCount());
+    pose.root_translation_m = scale * (c * (root_position - rest_root));
+    for (int t = 0; t < target.jointCount(); ++t) {
+      const int parent = target.joint(t).parent;
+      const Eigen::Matrix3d parent_global =
+          parent < 0 ? Eigen::Matrix3d::Identity() : target_global[parent];
+      if (source_of[t] < 0) {
+        target_global[t] = parent_global;  // no source: stays at zero
+        continue;
+      }
+      // Rest poses are identity rotations in both, so a global rotation is relative to rest.
+      target_global[t] = c * source_global[source_of[t]] * c;
+      const Eigen::Matrix3d local = parent_global.transpose() * target_global[t];
+      pose.angles_rad[t] = parent < 0 ? rotationVector(local) : eulerXyz(local);
+    }
+    clip.frames.push_back(std::move(pose));
+  }
+  return clip;
+}
+
+void saveBvh(const MotionClip& clip, const Skeleton& skeleton, const std::filesystem::path& path) {
+  if (!(clip.fps > 0) || !std::isfinite(clip.fps)) {
+    throw Error(fmt::format("{}: cannot write clip '{}': fps is {}, expected a positive number",
+                            path.string(), clip.name, clip.fps));
+  }
+  const int n = skeleton.jointCount();
+  const Eigen::Matrix3d c = bvhToOurs();
+  constexpr double kCm = 100.0;
+  // The floor (y = 0) is at our lowest rest joint, as loadBvh measures the root height.
+  double lowest = skeleton.restPositions()[0].z();
+  for (const auto& p : skeleton.restPositions()) lowest = std::min(lowest, p.z());
+  const Eigen::Vector3d floor_shift(0, 0, -lowest);
+  auto vec = [](const Eigen::Vector3d& v) {
+    // + 0.0 turns -0 into 0: tidier files.
+    return fmt::format("{:.10g} {:.10g} {:.10g}", v.x() + 0.0, v.y() + 0.0, v.z() + 0.0);
+  };
+
+  std::vector<std::vector<int>> children(n);
+  for (int j = 1; j < n; ++j) children[skeleton.joint(j).parent].push_back(j);
+  std::string out = "HIERARCHY\n";
+  std::vector<int> order;  // joints in file order (depth first)
+  auto write = [&](auto&& self, int j, int depth) -> void {
+    const std::string indent(2 * depth, ' ');
+    const Joint& joint = skeleton.joint(j);
+    order.push_back(j);
+    const Eigen::Vector3d offset =
+        kCm * (c * (j == 0 ? Eigen::Vector3d(joint.offset_m + floor_shift) : joint.offset_m));
+    out += fmt::format("{}{} {}\n{}{{\n", indent, j == 0 ? "ROOT" : "JOINT", joint.name, indent);
+    out += fmt::format("{}  OFFSET {}\n", indent, vec(offset));
+    out += fmt::format("{}  CHANNELS {}{}\n", indent, j == 0 ? 6 : 3,
+                       j == 0 ? " Xposition Yposition Zposition Xrotation Yrotation Zrotation"
+                              : " Xrotation Yrotation Zrotation");
+    for (int child : children[j]) self(self, child, depth + 1);
+    if (children[j].empty()) {
+      out += fmt::format("{}  End Site\n{}  {{\n{}    OFFSET 0 0 0\n{}  }}\n", indent, indent,
+                         indent, indent);
+    }
+    out += indent + "}\n";
+  };
+  write(write, 0, 0);
+  out +=
+      fmt::format("MOTION\nFrames: {}\nFrame Time: {:.10g}\n", clip.frames.size(), 1.0 / clip.fps);
+  const double to_deg = 180.0 / std::numbers::pi;
+  for (size_t f = 0; f < clip.frames.size(); ++f) {
+    const Pose& pose = clip.frames[f];
+    if (static_cast<int>(pose.angles_rad.size()) != n) {
+      throw Error(
+          fmt::format("{}: cannot write clip '{}': frame {} has {} joint angles, expected "
+                      "{} (one per joint of the skeleton)",
+                      path.string(), clip.name, f, pose.angles_rad.size(), n));
+    }
+    std::string line;
+    for (int j : order) {
+      Eigen::Matrix3d local;
+      if (j == 0) {
+        const Eigen::Vector3d& v = pose.angles_rad[0];
+        const double angle = v.norm();
+        local = angle > 0 ? Eigen::AngleAxisd(angle, v / angle).toRotationMatrix()
+                          : Eigen::Matrix3d::Identity();
+        const Eigen::Vector3d position =
+            kCm * (c * (skeleton.joint(0).offset_m + pose.root_translation_m + floor_shift));
+        line += vec(position) + " ";
+      } else {
+        local = eulerRotation(pose.angles_rad[j]);
+      }
+      // A rotation in our frame seen in the file's frame: C R C (C is its own inverse).
+      line += vec(eulerXyz(c * local * c) * to_deg);
+      line += j == order.back() ? "\n" : " ";
+    }
+    out += line;
+  }
+  writeFileAtomically(path, out);
+}
+
+}  // namespace lumistage

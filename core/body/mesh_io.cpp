@@ -1,0 +1,483 @@
+#include "core/body/mesh_io.h"
+
+#include <assimp/config.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <set>
+#include <stdexcept>
+#include <system_error>
+
+#include "core/base/error.h"
+#include "core/body/bvh.h"
+#include "core/body/human_skeleton.h"
+
+namespace lumistage {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Assimp / glTF (Y up, facing +Z, +X the actor's left) to ours (z up, facing +y, +x right):
+// x = -X, y = Z, z = Y. A proper rotation and its own inverse.
+Eigen::Matrix3f fileToOurs() {
+  Eigen::Matrix3f c;
+  c << -1, 0, 0,  //
+      0, 0, 1,    //
+      0, 1, 0;
+  return c;
+}
+
+constexpr const char* kMaterialsName = "lumistage_vertex_materials";
+
+aiVector3D toAi(const Eigen::Vector3f& v) {
+  return {v.x(), v.y(), v.z()};
+}
+
+Eigen::Affine3f toEigen(const aiMatrix4x4& m) {
+  Eigen::Matrix4f e;
+  e << m.a1, m.a2, m.a3, m.a4,  //
+      m.b1, m.b2, m.b3, m.b4,   //
+      m.c1, m.c2, m.c3, m.c4,   //
+      m.d1, m.d2, m.d3, m.d4;
+  return Eigen::Affine3f(e);
+}
+
+aiMatrix4x4 translation(const Eigen::Vector3f& t) {
+  aiMatrix4x4 m;  // identity
+  m.a4 = t.x();
+  m.b4 = t.y();
+  m.c4 = t.z();
+  return m;
+}
+
+std::unique_ptr<aiScene> buildScene(const SkinnedMesh& mesh) {
+  const Skeleton& skeleton = mesh.skeleton;
+  const Eigen::Matrix3f c = fileToOurs();  // its own inverse: ours to the file's axes too
+  auto scene = std::make_unique<aiScene>();
+  scene->mRootNode = new aiNode("lumistage_actor");
+
+  // Skeleton nodes: rest frames are world aligned, so each node's transform is a translation.
+  std::vector<aiNode*> nodes(skeleton.jointCount());
+  std::vector<std::vector<int>> children(skeleton.jointCount());
+  for (int j = 1; j < skeleton.jointCount(); ++j) children[skeleton.joint(j).parent].push_back(j);
+  for (int j = 0; j < skeleton.jointCount(); ++j) {
+    nodes[j] = new aiNode(skeleton.joint(j).name);
+    nodes[j]->mTransformation = translation(c * skeleton.joint(j).offset_m.cast<float>());
+  }
+  for (int j = 0; j < skeleton.jointCount(); ++j) {
+    aiNode* parent = j == 0 ? scene->mRootNode : nodes[skeleton.joint(j).parent];
+    nodes[j]->mParent = parent;
+    if (!children[j].empty()) {
+      nodes[j]->mNumChildren = static_cast<unsigned>(children[j].size());
+      nodes[j]->mChildren = new aiNode*[children[j].size()];
+      for (size_t k = 0; k < children[j].size(); ++k)
+        nodes[j]->mChildren[k] = nodes[children[j][k]];
+    }
+  }
+  scene->mRootNode->mNumChildren = 1;
+  scene->mRootNode->mChildren = new aiNode* [1] { nodes[0] };
+  scene->mRootNode->mNumMeshes = 1;
+  scene->mRootNode->mMeshes = new unsigned[1]{0};
+
+  scene->mNumMaterials = 1;
+  scene->mMaterials = new aiMaterial* [1] { new aiMaterial };
+  const aiString material_name(mesh.materials.empty() ? "lumistage_skin" : kMaterialsName);
+  scene->mMaterials[0]->AddProperty(&material_name, AI_MATKEY_NAME);
+
+  auto* m = new aiMesh;
+  scene->mNumMeshes = 1;
+  scene->mMeshes = new aiMesh* [1] { m };
+  m->mName = "actor";
+  m->mMaterialIndex = 0;
+  m->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+  const int n = mesh.rest.vertexCount();
+  m->mNumVertices = static_cast<unsigned>(n);
+  m->mVertices = new aiVector3D[n];
+  m->mNormals = new aiVector3D[n];
+  for (int v = 0; v < n; ++v) {
+    m->mVertices[v] = toAi(c * mesh.rest.positions.col(v));
+    m->mNormals[v] = toAi(c * mesh.rest.normals.col(v));
+  }
+  if (!mesh.materials.empty()) {
+    // Material indices ride in texture coordinate set 0, u = index (exact in a float), v = 0.
+    m->mTextureCoords[0] = new aiVector3D[n];
+    m->mNumUVComponents[0] = 2;
+    for (int v = 0; v < n; ++v) m->mTextureCoords[0][v] = aiVector3D(mesh.materials[v], 0, 0);
+  }
+  m->mNumFaces = static_cast<unsigned>(mesh.rest.triangles.size());
+  m->mFaces = new aiFace[m->mNumFaces];
+  for (size_t t = 0; t < mesh.rest.triangles.size(); ++t) {
+    m->mFaces[t].mNumIndices = 3;
+    m->mFaces[t].mIndices = new unsigned[3];
+    for (int k = 0; k < 3; ++k) m->mFaces[t].mIndices[k] = mesh.rest.triangles[t][k];
+  }
+
+  // One bone per joint; its offset (inverse bind) matrix undoes the rest position.
+  std::vector<std::vector<aiVertexWeight>> weights(skeleton.jointCount());
+  for (int v = 0; v < n; ++v) {
+    for (int k = 0; k < kMaxInfluences; ++k) {
+      if (mesh.skin.weights[v][k] > 0) {
+        weights[mesh.skin.joints[v][k]].emplace_back(static_cast<unsigned>(v),
+                                                     mesh.skin.weights[v][k]);
+      }
+    }
+  }
+  m->mNumBones = static_cast<unsigned>(skeleton.jointCount());
+  m->mBones = new aiBone*[m->mNumBones];
+  for (int j = 0; j < skeleton.jointCount(); ++j) {
+    auto* bone = new aiBone;
+    bone->mName = skeleton.joint(j).name;
+    bone->mOffsetMatrix = translation(-(c * skeleton.restPositions()[j].cast<float>()));
+    bone->mNumWeights = static_cast<unsigned>(weights[j].size());
+    bone->mWeights = new aiVertexWeight[std::max<size_t>(weights[j].size(), 1)];
+    std::copy(weights[j].begin(), weights[j].end(), bone->mWeights);
+    m->mBones[j] = bone;
+  }
+  return scene;
+}
+
+void exportScene(const aiScene& scene, const char* format, const fs::path& target,
+                 const fs::path& file) {
+  Assimp::Exporter exporter;
+  if (exporter.Export(&scene, format, file.string()) != AI_SUCCESS) {
+    throw Error(
+        fmt::format("{}: glTF export failed: {}", target.string(), exporter.GetErrorString()));
+  }
+}
+
+// Rejects a file Assimp can read but we cannot use.
+[[noreturn]] void fail(const fs::path& path, const std::string& message) {
+  throw Error(path.string() + ": " + message);
+}
+
+const aiNode* nodeOfMesh(const aiNode* node, unsigned mesh) {
+  for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+    if (node->mMeshes[k] == mesh) return node;
+  }
+  for (unsigned k = 0; k < node->mNumChildren; ++k) {
+    if (const aiNode* found = nodeOfMesh(node->mChildren[k], mesh)) return found;
+  }
+  return nullptr;
+}
+
+Eigen::Affine3f globalTransform(const aiNode* node) {
+  Eigen::Affine3f t = Eigen::Affine3f::Identity();
+  for (; node != nullptr; node = node->mParent) t = toEigen(node->mTransformation) * t;
+  return t;
+}
+
+bool isAncestorOrSelf(const aiNode* ancestor, const aiNode* node) {
+  for (; node != nullptr; node = node->mParent) {
+    if (node == ancestor) return true;
+  }
+  return false;
+}
+
+const aiNode* commonAncestor(const aiNode* a, const aiNode* b) {
+  for (; a != nullptr; a = a->mParent) {
+    if (isAncestorOrSelf(a, b)) return a;
+  }
+  return nullptr;
+}
+
+JointLimits importedLimits(const std::string& name, const Skeleton& human) {
+  std::optional<int> j = human.findJoint(name);
+  if (!j) {
+    if (auto ours = humanJointNameFor(name)) j = human.findJoint(*ours);
+  }
+  if (j) return human.joint(*j).limits;
+  constexpr double kPi = std::numbers::pi;
+  return {Eigen::Vector3d::Constant(-kPi), Eigen::Vector3d::Constant(kPi)};
+}
+
+}  // namespace
+
+void saveSkinnedMeshGltf(const SkinnedMesh& mesh, const fs::path& path) {
+  const std::string ext = path.extension().string();
+  if (ext != ".glb" && ext != ".gltf") {
+    fail(path, fmt::format("unknown extension '{}', expected .glb or .gltf", ext));
+  }
+  try {
+    mesh.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(path, std::string("cannot write an invalid mesh: ") + e.what());
+  }
+  if (mesh.skeleton.jointCount() == 0) fail(path, "cannot write a mesh without a skeleton");
+  const std::unique_ptr<aiScene> scene = buildScene(mesh);
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  std::error_code ec;
+
+  if (ext == ".glb") {
+    // One file: export beside the target, then rename over it.
+    std::string temp = path.string() + ".tmp-XXXXXX";
+    const int fd = ::mkstemp(temp.data());
+    if (fd < 0) fail(path, "cannot create a temporary file beside it");
+    ::close(fd);
+    // mkstemp makes it private; a mesh file is for everyone to read, like writeFileAtomically's.
+    fs::permissions(temp,
+                    fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                        fs::perms::others_read,
+                    ec);
+    try {
+      exportScene(*scene, "glb2", path, temp);
+    } catch (...) {
+      fs::remove(temp, ec);
+      throw;
+    }
+    fs::rename(temp, path, ec);
+    if (ec) {
+      fs::remove(temp, ec);
+      fail(path, "rename into place failed: " + ec.message());
+    }
+    return;
+  }
+
+  // .gltf: the exporter also writes a .bin buffer and names it after the file, so export into a
+  // temporary folder under the final name, then move the buffers in first and the .gltf last:
+  // a reader never finds a .gltf whose buffer is missing.
+  std::string temp_dir = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
+  if (::mkdtemp(temp_dir.data()) == nullptr) {
+    fail(path, "cannot create a temporary folder beside it");
+  }
+  auto cleanup = [&] { fs::remove_all(temp_dir, ec); };
+  try {
+    exportScene(*scene, "gltf2", path, fs::path(temp_dir) / path.filename());
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(temp_dir)) files.push_back(entry.path());
+    std::stable_partition(files.begin(), files.end(),
+                          [&](const fs::path& p) { return p.filename() != path.filename(); });
+    for (const fs::path& file : files) {
+      fs::rename(file, dir / file.filename(), ec);
+      if (ec)
+        fail(path, "rename of " + file.filename().string() + " into place failed: " + ec.message());
+    }
+  } catch (...) {
+    cleanup();
+    throw;
+  }
+  cleanup();
+}
+
+SkinnedMesh loadSkinnedMesh(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec))
+    fail(path, "no such file (or not a regular file), expected a mesh file");
+  Assimp::Importer importer;
+  // FBX pivots would otherwise become helper nodes ("Hips_$AssimpFbx$_Rotation") between bones,
+  // and so joints of ours.
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
+  const aiScene* scene =
+      importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_Triangulate |
+                                           aiProcess_GenSmoothNormals | aiProcess_SortByPType);
+  if (scene == nullptr) {
+    fail(path, std::string("cannot read it as a mesh (unreadable or unsupported format): ") +
+                   importer.GetErrorString());
+  }
+  if (scene->mRootNode == nullptr) fail(path, "no scene graph, expected a rigged mesh");
+
+  // The triangle meshes (SortByPType moved points and lines into meshes of their own).
+  std::vector<unsigned> meshes;
+  for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+    if (scene->mMeshes[i]->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) meshes.push_back(i);
+  }
+  if (meshes.empty()) fail(path, "no mesh, expected a triangle mesh bound to a skeleton");
+
+  // The skeleton: bone nodes and their ancestors up to the lowest common one.
+  const aiNode* skeleton_root = nullptr;
+  std::vector<const aiNode*> mesh_roots(scene->mNumMeshes, nullptr);
+  std::set<const aiNode*> bone_nodes;
+  for (unsigned i : meshes) {
+    const aiMesh* m = scene->mMeshes[i];
+    for (unsigned b = 0; b < m->mNumBones; ++b) {
+      const aiNode* node = scene->mRootNode->FindNode(m->mBones[b]->mName);
+      if (node == nullptr) {
+        fail(path, fmt::format("bone '{}' of mesh '{}' has no node in the scene graph",
+                               m->mBones[b]->mName.C_Str(), m->mName.C_Str()));
+      }
+      bone_nodes.insert(node);
+      mesh_roots[i] = mesh_roots[i] ? commonAncestor(mesh_roots[i], node) : node;
+    }
+    if (mesh_roots[i] == nullptr) continue;
+    for (unsigned k : meshes) {
+      if (k >= i || mesh_roots[k] == nullptr) continue;
+      if (!isAncestorOrSelf(mesh_roots[k], mesh_roots[i]) &&
+          !isAncestorOrSelf(mesh_roots[i], mesh_roots[k])) {
+        fail(path, fmt::format("meshes '{}' and '{}' are bound to different skeletons (rooted at "
+                               "'{}' and '{}'), expected one skeleton",
+                               scene->mMeshes[k]->mName.C_Str(), m->mName.C_Str(),
+                               mesh_roots[k]->mName.C_Str(), mesh_roots[i]->mName.C_Str()));
+      }
+    }
+    skeleton_root = skeleton_root ? commonAncestor(skeleton_root, mesh_roots[i]) : mesh_roots[i];
+  }
+  if (skeleton_root == nullptr) {
+    fail(path, "no skeleton: the mesh has no bones, expected a mesh rigged to a skeleton");
+  }
+  std::set<const aiNode*> in_skeleton;
+  for (const aiNode* node : bone_nodes) {
+    for (; node != skeleton_root; node = node->mParent) in_skeleton.insert(node);
+  }
+  in_skeleton.insert(skeleton_root);
+
+  // World bind positions: a bone's from its offset matrix (in its mesh's space, then through the
+  // mesh node), another joint's from its node. Rotated bind frames keep only their positions:
+  // our rest frames are world aligned.
+  std::map<const aiNode*, Eigen::Vector3f> bind_position;
+  for (unsigned i : meshes) {
+    const aiMesh* m = scene->mMeshes[i];
+    const aiNode* mesh_node = nodeOfMesh(scene->mRootNode, i);
+    const Eigen::Affine3f mesh_global =
+        mesh_node ? globalTransform(mesh_node) : Eigen::Affine3f::Identity();
+    for (unsigned b = 0; b < m->mNumBones; ++b) {
+      const aiNode* node = scene->mRootNode->FindNode(m->mBones[b]->mName);
+      if (bind_position.count(node)) continue;
+      const Eigen::Affine3f offset = toEigen(m->mBones[b]->mOffsetMatrix);
+      bind_position[node] = mesh_global * offset.inverse().translation();
+    }
+  }
+  const Eigen::Matrix3f c = fileToOurs();
+  const Skeleton human = makeHumanSkeleton();
+  std::vector<Joint> joints;
+  std::vector<Eigen::Vector3f> world;
+  std::map<const aiNode*, int> joint_of;
+  auto addJoints = [&](auto&& self, const aiNode* node, int parent) -> void {
+    if (!in_skeleton.count(node)) return;
+    const auto it = bind_position.find(node);
+    const Eigen::Vector3f p =
+        c * (it != bind_position.end() ? it->second : globalTransform(node).translation());
+    const int index = static_cast<int>(joints.size());
+    joint_of[node] = index;
+    const std::string name = node->mName.C_Str();
+    const Eigen::Vector3f offset = parent < 0 ? p : Eigen::Vector3f(p - world[parent]);
+    joints.push_back({name, parent, offset.cast<double>(), importedLimits(name, human)});
+    world.push_back(p);
+    for (unsigned k = 0; k < node->mNumChildren; ++k) self(self, node->mChildren[k], index);
+  };
+  addJoints(addJoints, skeleton_root, -1);
+
+  SkinnedMesh out;
+  try {
+    out.skeleton = Skeleton(std::move(joints));
+  } catch (const std::invalid_argument& e) {
+    fail(path, std::string("unusable skeleton: ") + e.what());
+  }
+
+  // Vertices, triangles and weights of every mesh, merged.
+  size_t total = 0;
+  for (unsigned i : meshes) total += scene->mMeshes[i]->mNumVertices;
+  out.rest.positions.resize(3, static_cast<Eigen::Index>(total));
+  out.rest.normals.resize(3, static_cast<Eigen::Index>(total));
+  std::vector<std::vector<std::pair<int, float>>> influences(total);
+  int material_meshes = 0;
+  size_t base = 0;
+  for (unsigned i : meshes) {
+    const aiMesh* m = scene->mMeshes[i];
+    const aiNode* mesh_node = nodeOfMesh(scene->mRootNode, i);
+    const Eigen::Affine3f mesh_global =
+        mesh_node ? globalTransform(mesh_node) : Eigen::Affine3f::Identity();
+    const Eigen::Matrix3f normal_matrix = mesh_global.linear().inverse().transpose();
+    if (m->mNormals == nullptr)
+      fail(path, "mesh '" + std::string(m->mName.C_Str()) + "' has no normals");
+    for (unsigned v = 0; v < m->mNumVertices; ++v) {
+      const Eigen::Vector3f p(m->mVertices[v].x, m->mVertices[v].y, m->mVertices[v].z);
+      const Eigen::Vector3f n(m->mNormals[v].x, m->mNormals[v].y, m->mNormals[v].z);
+      out.rest.positions.col(base + v) = c * (mesh_global * p);
+      out.rest.normals.col(base + v) = (c * (normal_matrix * n)).normalized();
+    }
+    for (unsigned f = 0; f < m->mNumFaces; ++f) {
+      const aiFace& face = m->mFaces[f];
+      if (face.mNumIndices != 3) continue;  // points and lines of a mixed mesh
+      out.rest.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1],
+                                      base + face.mIndices[2]);
+    }
+    for (unsigned b = 0; b < m->mNumBones; ++b) {
+      const aiBone* bone = m->mBones[b];
+      const int joint = joint_of.at(scene->mRootNode->FindNode(bone->mName));
+      for (unsigned w = 0; w < bone->mNumWeights; ++w) {
+        const aiVertexWeight& vw = bone->mWeights[w];
+        if (vw.mVertexId >= m->mNumVertices) {
+          fail(path,
+               fmt::format("bone '{}' weights vertex {} of mesh '{}', which has {}",
+                           bone->mName.C_Str(), vw.mVertexId, m->mName.C_Str(), m->mNumVertices));
+        }
+        if (vw.mWeight > 0) influences[base + vw.mVertexId].emplace_back(joint, vw.mWeight);
+      }
+    }
+    aiString material_name;
+    const bool has_materials =
+        m->mMaterialIndex < scene->mNumMaterials &&
+        scene->mMaterials[m->mMaterialIndex]->Get(AI_MATKEY_NAME, material_name) == AI_SUCCESS &&
+        std::string(material_name.C_Str()) == kMaterialsName;
+    if (has_materials) {
+      if (m->mTextureCoords[0] == nullptr) {
+        fail(path, fmt::format("mesh '{}' has material '{}' but no texture coordinates, expected "
+                               "material indices in set 0",
+                               m->mName.C_Str(), kMaterialsName));
+      }
+      out.materials.resize(total);
+      for (unsigned v = 0; v < m->mNumVertices; ++v) {
+        const float u = m->mTextureCoords[0][v].x;
+        if (!(u >= 0 && u <= 255 && u == std::round(u))) {
+          fail(path, fmt::format("mesh '{}' vertex {}: material index {} is not a whole number "
+                                 "from 0 to 255",
+                                 m->mName.C_Str(), v, u));
+        }
+        out.materials[base + v] = static_cast<uint8_t>(u);
+      }
+      ++material_meshes;
+    }
+    base += m->mNumVertices;
+  }
+  if (material_meshes != 0 && material_meshes != static_cast<int>(meshes.size())) {
+    fail(path, fmt::format("{} of {} meshes carry per-vertex materials, expected all or none",
+                           material_meshes, meshes.size()));
+  }
+
+  // Weights: at most four per vertex, each vertex weighted, normalised to sum 1.
+  int unweighted = 0, crowded = 0;
+  size_t most = 0;
+  for (const auto& list : influences) {
+    if (list.empty()) ++unweighted;
+    if (list.size() > kMaxInfluences) ++crowded;
+    most = std::max(most, list.size());
+  }
+  if (unweighted > 0) {
+    fail(path, fmt::format("{} of {} vertices have no bone weights, expected every vertex bound to "
+                           "the skeleton",
+                           unweighted, total));
+  }
+  if (crowded > 0) {
+    fail(path, fmt::format("{} vertices have more than {} bone influences (up to {}), expected at "
+                           "most {}",
+                           crowded, kMaxInfluences, most, kMaxInfluences));
+  }
+  out.skin.joints.assign(total, {0, 0, 0, 0});
+  out.skin.weights.assign(total, {0, 0, 0, 0});
+  for (size_t v = 0; v < total; ++v) {
+    float sum = 0;
+    for (const auto& [joint, weight] : influences[v]) sum += weight;
+    for (size_t k = 0; k < influences[v].size(); ++k) {
+      out.skin.joints[v][k] = static_cast<uint16_t>(influences[v][k].first);
+      out.skin.weights[v][k] = influences[v][k].second / sum;
+    }
+  }
+  try {
+    out.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(path, std::string("unusable mesh: ") + e.what());
+  }
+  return out;
+}
+
+}  // namespace lumistage
