@@ -13,7 +13,7 @@ packages=(
   # vision, maths, geometry
   libopencv-dev libeigen3-dev libceres-dev libassimp-dev
   # cameras: Aravis (GigE Vision / USB3 Vision) and its tools (fake GigE camera)
-  libaravis-dev aravis-tools
+  libaravis-dev aravis-tools libusb-1.0-0-dev
   # transport and messages
   libzmq3-dev cppzmq-dev libflatbuffers-dev flatbuffers-compiler
   # logging, command line, config

@@ -11,20 +11,20 @@ namespace lumistage {
 
 // One image from one camera.
 struct CameraFrame {
-  int camera = -1;            // index into the source's rig
-  int64_t frame_id = -1;      // the camera's frame counter (GigE Vision block id) or the session's
-  int64_t timestamp_ns = 0;   // the camera's timestamp (or the recording's), nanoseconds
+  int camera = -1;           // index into the source's rig
+  int64_t frame_id = -1;     // the camera's frame counter (GigE Vision block id) or the session's
+  int64_t timestamp_ns = 0;  // the camera's timestamp (or the recording's), nanoseconds
   Image image;
 };
 
 // Counters of one camera of a source, for camera health.
 struct CameraStats {
-  int64_t frames = 0;          // delivered
-  int64_t dropped = 0;         // lost (incomplete buffers, gaps in frame ids, full pool)
-  int64_t resends = 0;         // GigE Vision packet resends requested
-  double frame_rate_hz = 0;    // measured over the last second or so
-  double temperature_c = 0;    // NaN where the camera has no sensor
-  std::string last_error;      // empty when none
+  int64_t frames = 0;        // delivered
+  int64_t dropped = 0;       // lost (incomplete buffers, gaps in frame ids, full pool)
+  int64_t resends = 0;       // GigE Vision packet resends requested
+  double frame_rate_hz = 0;  // measured over the last second or so
+  double temperature_c = 0;  // NaN where the camera has no sensor
+  std::string last_error;    // empty when none
 };
 
 // Where frames come from: Aravis cameras, recorded sessions, the virtual studio. Every camera of

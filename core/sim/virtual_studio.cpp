@@ -2,14 +2,19 @@
 
 #include <algorithm>
 
+#include "core/body/bvh.h"
 #include "core/body/motion_library.h"
 
 namespace lumistage {
 
 VirtualStudio::VirtualStudio(StudioConfig config, int frame_count)
     : config_(std::move(config)), actor_(makeHumanModel(config_.actor)) {
-  const double duration_s = std::max(1.0, frame_count / config_.fps);
-  clip_ = makeBuiltinClip(config_.clip, actor_.skeleton, config_.fps, duration_s);
+  if (!config_.bvh_file.empty()) {
+    clip_ = loadBvh(config_.bvh_file, actor_.skeleton);
+  } else {
+    const double duration_s = std::max(1.0, frame_count / config_.fps);
+    clip_ = makeBuiltinClip(config_.clip, actor_.skeleton, config_.fps, duration_s);
+  }
   gl_ = std::make_unique<EglContext>();
   renderer_ = std::make_unique<StudioRenderer>(actor_);
 }

@@ -1,0 +1,287 @@
+#include "core/capture/aravis_source.h"
+
+#include <arv.h>
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "core/base/error.h"
+
+namespace lumistage {
+
+namespace {
+
+ArvPixelFormat toAravis(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::kMono8:
+      return ARV_PIXEL_FORMAT_MONO_8;
+    case PixelFormat::kBayerRggb8:
+      return ARV_PIXEL_FORMAT_BAYER_RG_8;
+    case PixelFormat::kRgb8:
+      return ARV_PIXEL_FORMAT_RGB_8_PACKED;
+  }
+  return ARV_PIXEL_FORMAT_MONO_8;
+}
+
+std::string takeError(GError*& error) {
+  std::string message = error ? error->message : "unknown error";
+  g_clear_error(&error);
+  return message;
+}
+
+const char* statusName(ArvBufferStatus status) {
+  switch (status) {
+    case ARV_BUFFER_STATUS_SUCCESS:
+      return "success";
+    case ARV_BUFFER_STATUS_CLEARED:
+      return "cleared";
+    case ARV_BUFFER_STATUS_TIMEOUT:
+      return "timeout: packets missing";
+    case ARV_BUFFER_STATUS_MISSING_PACKETS:
+      return "missing packets";
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
+      return "wrong packet id";
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
+      return "image larger than the buffer";
+    case ARV_BUFFER_STATUS_FILLING:
+      return "filling";
+    case ARV_BUFFER_STATUS_ABORTED:
+      return "aborted";
+    default:
+      return "unknown buffer status";
+  }
+}
+
+}  // namespace
+
+std::vector<AravisDeviceInfo> discoverAravisCameras() {
+  arv_update_device_list();
+  std::vector<AravisDeviceInfo> out;
+  const unsigned n = arv_get_n_devices();
+  for (unsigned i = 0; i < n; ++i) {
+    auto text = [](const char* s) { return std::string(s ? s : ""); };
+    out.push_back({text(arv_get_device_id(i)), text(arv_get_device_vendor(i)),
+                   text(arv_get_device_model(i)), text(arv_get_device_serial_nbr(i)),
+                   text(arv_get_device_address(i)), text(arv_get_device_protocol(i))});
+  }
+  return out;
+}
+
+struct AravisSource::Device {
+  std::string name;  // "cam01 (127.0.1.1)"
+  AravisCameraConfig config;
+  ArvCamera* camera = nullptr;
+  ArvStream* stream = nullptr;
+  int width = 0, height = 0;
+  std::thread thread;
+  // Counters, guarded by AravisSource::mutex_.
+  CameraStats stats;
+  std::deque<std::chrono::steady_clock::time_point> recent;  // arrival times, for the frame rate
+  int64_t last_frame_id = -1;
+};
+
+AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
+    : rig_(std::move(rig)), capacity_(4 * std::max<size_t>(1, cameras.size())) {
+  if (cameras.size() != static_cast<size_t>(rig_.cameraCount())) {
+    throw Error(fmt::format("Aravis source: {} camera configurations for a rig of {} cameras",
+                            cameras.size(), rig_.cameraCount()));
+  }
+  for (int c = 0; c < rig_.cameraCount(); ++c) {
+    auto device = std::make_unique<Device>();
+    device->config = cameras[c];
+    device->name = rig_.camera(c).name() + " (" + cameras[c].device + ")";
+    device->width = rig_.camera(c).width();
+    device->height = rig_.camera(c).height();
+    device->stats.temperature_c = std::numeric_limits<double>::quiet_NaN();
+    devices_.push_back(std::move(device));
+  }
+  try {
+    for (auto& d : devices_) {
+      GError* error = nullptr;
+      auto check = [&](const char* step) {
+        if (error) throw Error(fmt::format("camera {}: {}: {}", d->name, step, takeError(error)));
+      };
+      d->camera = arv_camera_new(d->config.device.c_str(), &error);
+      if (!d->camera) {
+        throw Error(fmt::format(
+            "camera {}: cannot open: {} (for GigE Vision, is the camera powered, on this "
+            "subnet, and not opened by another program?)",
+            d->name, takeError(error)));
+      }
+      arv_camera_set_pixel_format(d->camera, toAravis(d->config.pixel_format), &error);
+      check(fmt::format("pixel format {}", pixelFormatName(d->config.pixel_format)).c_str());
+      arv_camera_set_region(d->camera, 0, 0, d->width, d->height, &error);
+      check("image size");
+      int x = 0, y = 0, w = 0, h = 0;
+      arv_camera_get_region(d->camera, &x, &y, &w, &h, &error);
+      check("image size");
+      if (w != d->width || h != d->height) {
+        throw Error(fmt::format("camera {}: delivers {}x{} images, the rig says {}x{}", d->name, w,
+                                h, d->width, d->height));
+      }
+      if (d->config.trigger == TriggerMode::kFreeRunning) {
+        arv_camera_clear_triggers(d->camera, &error);
+        check("free running (no trigger)");
+        arv_camera_set_frame_rate(d->camera, d->config.frame_rate_hz, &error);
+        check(fmt::format("frame rate {} Hz", d->config.frame_rate_hz).c_str());
+      } else {
+        const std::string source =
+            d->config.trigger == TriggerMode::kSoftware ? "Software" : d->config.trigger_line;
+        arv_camera_set_trigger(d->camera, source.c_str(), &error);
+        check(fmt::format("trigger on {}", source).c_str());
+      }
+      if (!std::isnan(d->config.exposure_us)) {
+        arv_camera_set_exposure_time(d->camera, d->config.exposure_us, &error);
+        check("exposure time");
+      }
+      if (!std::isnan(d->config.gain_db)) {
+        arv_camera_set_gain(d->camera, d->config.gain_db, &error);
+        check("gain");
+      }
+      if (arv_camera_is_gv_device(d->camera)) {
+        arv_camera_gv_auto_packet_size(d->camera, &error);
+        g_clear_error(&error);  // not every camera negotiates; the default packet size works
+      }
+      d->stream = arv_camera_create_stream(d->camera, nullptr, nullptr, &error);
+      if (!d->stream)
+        throw Error(
+            fmt::format("camera {}: cannot open its stream: {}", d->name, takeError(error)));
+      const guint payload = arv_camera_get_payload(d->camera, &error);
+      check("payload size");
+      for (int b = 0; b < d->config.buffer_count; ++b)
+        arv_stream_push_buffer(d->stream, arv_buffer_new(payload, nullptr));
+      arv_camera_start_acquisition(d->camera, &error);
+      check("start of acquisition");
+    }
+  } catch (...) {
+    running_ = false;
+    for (auto& d : devices_) {
+      if (d->camera) arv_camera_stop_acquisition(d->camera, nullptr);
+      g_clear_object(&d->stream);
+      g_clear_object(&d->camera);
+    }
+    throw;
+  }
+  for (int c = 0; c < rig_.cameraCount(); ++c)
+    devices_[c]->thread = std::thread(&AravisSource::receive, this, c);
+}
+
+AravisSource::~AravisSource() {
+  running_ = false;
+  for (auto& d : devices_) {
+    if (d->thread.joinable()) d->thread.join();
+  }
+  for (auto& d : devices_) {
+    if (d->camera) arv_camera_stop_acquisition(d->camera, nullptr);
+    g_clear_object(&d->stream);
+    g_clear_object(&d->camera);
+  }
+}
+
+void AravisSource::receive(int camera) {
+  Device& d = *devices_[camera];
+  const size_t bytes = size_t(d.width) * d.height * bytesPerPixel(d.config.pixel_format);
+  auto last_temperature = std::chrono::steady_clock::now();
+  while (running_) {
+    ArvBuffer* buffer = arv_stream_timeout_pop_buffer(d.stream, 100000);  // 100 ms, to notice stop
+    if (!buffer) continue;
+    const ArvBufferStatus status = arv_buffer_get_status(buffer);
+    size_t size = 0;
+    const void* data = arv_buffer_get_data(buffer, &size);
+    std::unique_lock lock(mutex_);
+    if (status != ARV_BUFFER_STATUS_SUCCESS || size < bytes) {
+      ++d.stats.dropped;
+      d.stats.last_error = status != ARV_BUFFER_STATUS_SUCCESS
+                               ? statusName(status)
+                               : fmt::format("short image: {} bytes, expected {}", size, bytes);
+    } else {
+      const int64_t frame_id = static_cast<int64_t>(arv_buffer_get_frame_id(buffer));
+      // GigE Vision frame ids count 1..65535 and wrap; a jump means frames never arrived.
+      if (d.last_frame_id >= 0 && frame_id > d.last_frame_id + 1)
+        d.stats.dropped += frame_id - d.last_frame_id - 1;
+      d.last_frame_id = frame_id;
+      if (queue_.size() >= capacity_) {  // the consumer fell behind: drop the oldest frame
+        ++devices_[queue_.front().camera]->stats.dropped;
+        spare_.push_back(std::move(queue_.front().image));
+        queue_.pop_front();
+      }
+      CameraFrame frame;
+      if (!spare_.empty()) {
+        frame.image = std::move(spare_.back());
+        spare_.pop_back();
+      }
+      frame.camera = camera;
+      frame.frame_id = frame_id;
+      frame.timestamp_ns = static_cast<int64_t>(arv_buffer_get_timestamp(buffer));
+      frame.image.resize(d.config.pixel_format, d.width, d.height);
+      std::memcpy(frame.image.pixels.data(), data, bytes);
+      queue_.push_back(std::move(frame));
+      ++d.stats.frames;
+      const auto now = std::chrono::steady_clock::now();
+      d.recent.push_back(now);
+      while (d.recent.size() > 1 && now - d.recent.front() > std::chrono::seconds(2))
+        d.recent.pop_front();
+      if (d.recent.size() > 1) {
+        d.stats.frame_rate_hz =
+            (d.recent.size() - 1) /
+            std::chrono::duration<double>(d.recent.back() - d.recent.front()).count();
+      }
+      ready_.notify_one();
+    }
+    lock.unlock();
+    arv_stream_push_buffer(d.stream, buffer);
+    // Temperature, where the camera reports it: a register read, once in a while.
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_temperature > std::chrono::seconds(5)) {
+      last_temperature = now;
+      GError* error = nullptr;
+      if (arv_camera_is_feature_available(d.camera, "DeviceTemperature", &error)) {
+        const double t = arv_camera_get_float(d.camera, "DeviceTemperature", &error);
+        if (!error) {
+          std::lock_guard guard(mutex_);
+          d.stats.temperature_c = t;
+        }
+      }
+      g_clear_error(&error);
+    }
+  }
+}
+
+bool AravisSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  if (!ready_.wait_for(lock, timeout, [&] { return !queue_.empty(); })) return false;
+  // Swap buffers: the caller's old image becomes a spare, so steady state allocates nothing.
+  if (!frame.image.pixels.empty()) spare_.push_back(std::move(frame.image));
+  frame = std::move(queue_.front());
+  queue_.pop_front();
+  return true;
+}
+
+CameraStats AravisSource::stats(int camera) const {
+  const Device& d = *devices_.at(camera);
+  CameraStats out;
+  {
+    std::lock_guard lock(mutex_);
+    out = d.stats;
+  }
+  if (d.stream && ARV_IS_GV_STREAM(d.stream)) {
+    out.resends =
+        static_cast<int64_t>(arv_stream_get_info_uint64_by_name(d.stream, "n_resend_requests"));
+  }
+  return out;
+}
+
+void AravisSource::trigger() {
+  for (auto& d : devices_) {
+    if (d->config.trigger != TriggerMode::kSoftware) continue;
+    GError* error = nullptr;
+    arv_camera_software_trigger(d->camera, &error);
+    if (error) {
+      std::lock_guard lock(mutex_);
+      d->stats.last_error = "software trigger: " + takeError(error);
+    }
+  }
+}
+
+}  // namespace lumistage

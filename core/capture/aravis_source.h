@@ -1,0 +1,78 @@
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/capture/frame_source.h"
+
+namespace lumistage {
+
+// A GigE Vision or USB3 Vision camera found on the network or the bus.
+struct AravisDeviceInfo {
+  std::string id;  // Aravis device id, e.g. "Basler-21234567"
+  std::string vendor, model, serial;
+  std::string address;   // IP address for GigE Vision, empty for USB3
+  std::string protocol;  // "GigEVision", "USB3Vision", "Fake"
+};
+
+// Cameras Aravis can see: GigE Vision by broadcast discovery (which does not reach loopback:
+// open virtual cameras by address), USB3 Vision on the bus.
+std::vector<AravisDeviceInfo> discoverAravisCameras();
+
+enum class TriggerMode {
+  kFreeRunning,  // the camera's own frame rate
+  kSoftware,     // AravisSource::trigger() fires every camera: a fallback for synchronisation
+  kHardware,     // an external trigger line (synchronised cameras); see trigger_line
+};
+
+struct AravisCameraConfig {
+  std::string device;  // IP address, serial number or Aravis device id
+  PixelFormat pixel_format = PixelFormat::kBayerRggb8;
+  double frame_rate_hz = 25.0;                                    // free running only
+  double exposure_us = std::numeric_limits<double>::quiet_NaN();  // NaN: leave as the camera has it
+  double gain_db = std::numeric_limits<double>::quiet_NaN();
+  TriggerMode trigger = TriggerMode::kFreeRunning;
+  std::string trigger_line = "Line0";
+  int buffer_count = 8;  // the stream's buffer pool
+};
+
+// Frames from Aravis cameras, one per camera of the rig, each camera configured to the rig's
+// image size. One receiving thread per camera copies completed buffers into a bounded queue
+// (the oldest frame is dropped, and counted, when the consumer falls behind) and hands the
+// buffer straight back to the camera's pool.
+class AravisSource : public FrameSource {
+ public:
+  // Opens and configures every camera, then starts streaming. Throws Error naming the camera
+  // (rig name and device) and what failed: not found, image size or pixel format not supported...
+  AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras);
+  ~AravisSource() override;
+
+  const Rig& rig() const override { return rig_; }
+  bool next(CameraFrame& frame, std::chrono::milliseconds timeout) override;
+  CameraStats stats(int camera) const override;
+  // Fires every camera in software trigger mode.
+  void trigger();
+
+ private:
+  struct Device;
+  void receive(int camera);
+
+  Rig rig_;
+  std::vector<std::unique_ptr<Device>> devices_;
+  std::atomic<bool> running_{true};
+  mutable std::mutex mutex_;
+  std::condition_variable ready_;
+  std::deque<CameraFrame> queue_;  // delivered, waiting for next()
+  std::vector<Image> spare_;       // images to reuse
+  size_t capacity_;
+};
+
+}  // namespace lumistage

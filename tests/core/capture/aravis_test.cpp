@@ -1,0 +1,165 @@
+// The real acquisition path: Aravis clients streaming over GigE Vision (GVCP/GVSP on UDP) from
+// Aravis's fake cameras on loopback addresses. Runs inside its own network namespace (see
+// tests/CMakeLists.txt), where the loopback addresses 127.0.1.x can be added freely.
+#include <arv.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <map>
+#include <random>
+#include <thread>
+
+#include "core/base/error.h"
+#include "core/capture/aravis_source.h"
+#include "core/capture/virtual_gige_cameras.h"
+#include "core/geometry/ring_rig.h"
+
+namespace lumistage {
+namespace {
+
+Rig smallRig(int cameras, int width, int height) {
+  RingRigSpec spec;
+  spec.cameras = cameras;
+  spec.width = width;
+  spec.height = height;
+  return makeRingRig(spec);
+}
+
+std::shared_ptr<FrameLoop> randomLoop(const Rig& rig, int length, double fps, PixelFormat format) {
+  auto loop = std::make_shared<FrameLoop>();
+  loop->fps = fps;
+  std::mt19937 rng(5);
+  for (const Camera& camera : rig.cameras()) {
+    loop->frames.emplace_back();
+    for (int f = 0; f < length; ++f) {
+      Image image;
+      image.resize(format, camera.width(), camera.height());
+      for (uint8_t& p : image.pixels) p = static_cast<uint8_t>(rng());
+      loop->frames.back().push_back(std::move(image));
+    }
+  }
+  return loop;
+}
+
+TEST(Aravis, VirtualCamerasStreamTheSyntheticFramesBitExact) {
+  const Rig rig = smallRig(2, 320, 240);
+  const double fps = 50;
+  auto loop = randomLoop(rig, 7, fps, PixelFormat::kBayerRggb8);
+  VirtualGigeCameras server(rig, loop, PixelFormat::kBayerRggb8, "127.0.1.1");
+  ASSERT_EQ(server.addresses(), (std::vector<std::string>{"127.0.1.1", "127.0.1.2"}));
+
+  std::vector<AravisCameraConfig> configs(2);
+  for (int c = 0; c < 2; ++c) {
+    configs[c].device = server.addresses()[c];
+    configs[c].frame_rate_hz = fps;
+  }
+  AravisSource source(rig, configs);
+  CameraFrame frame;
+  int received[2] = {0, 0};
+  std::map<int64_t, std::vector<int64_t>> timestamps_by_id;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while ((received[0] < 100 || received[1] < 100) && std::chrono::steady_clock::now() < deadline) {
+    if (!source.next(frame, std::chrono::milliseconds(500))) continue;
+    ASSERT_GE(frame.camera, 0);
+    ASSERT_LT(frame.camera, 2);
+    ASSERT_EQ(frame.image.format, PixelFormat::kBayerRggb8);
+    ASSERT_EQ(frame.image.width, 320);
+    // The pixels are exactly the loop's frame of the instant the timestamp names.
+    const int64_t tick = std::llround(frame.timestamp_ns * fps / 1e9);
+    const Image& sent = loop->frames[frame.camera][loopFrameOfTick(tick, loop->length())];
+    ASSERT_EQ(frame.image.pixels, sent.pixels)
+        << "camera " << frame.camera << " frame " << frame.frame_id;
+    timestamps_by_id[frame.frame_id].push_back(frame.timestamp_ns);
+    ++received[frame.camera];
+  }
+  EXPECT_GE(received[0], 100);
+  EXPECT_GE(received[1], 100);
+  // Frames of one instant carry the same id and timestamp on every camera: grouping is exact.
+  int shared = 0;
+  for (const auto& [id, stamps] : timestamps_by_id) {
+    if (stamps.size() == 2) {
+      EXPECT_EQ(stamps[0], stamps[1]) << "frame id " << id;
+      ++shared;
+    }
+  }
+  EXPECT_GT(shared, 80);
+  const CameraStats stats = source.stats(0);
+  EXPECT_GE(stats.frames, 100);
+  EXPECT_GT(stats.frame_rate_hz, 0.7 * fps);
+  EXPECT_LT(stats.frame_rate_hz, 1.3 * fps);
+}
+
+TEST(Aravis, ConfiguresAravisOwnFakeCameraProgram) {
+  // Aravis's own fake GigE Vision camera, as a separate process.
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    execlp("arv-fake-gv-camera-0.8", "arv-fake-gv-camera-0.8", "-i", "127.0.1.9", "-s", "ARVFAKE9",
+           static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));  // let it bind
+  const Rig rig = smallRig(1, 640, 480);
+  AravisCameraConfig config;
+  config.device = "127.0.1.9";
+  config.pixel_format = PixelFormat::kMono8;
+  config.frame_rate_hz = 40;
+  std::string error;
+  int frames = 0;
+  try {
+    AravisSource source(rig, {config});
+    CameraFrame frame;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+    while (frames < 100 && std::chrono::steady_clock::now() < deadline) {
+      if (!source.next(frame, std::chrono::milliseconds(500))) continue;
+      EXPECT_EQ(frame.image.width, 640);
+      EXPECT_EQ(frame.image.height, 480);
+      ++frames;
+    }
+    // Its test pattern is a ramp: not one flat value.
+    EXPECT_NE(*std::min_element(frame.image.pixels.begin(), frame.image.pixels.end()),
+              *std::max_element(frame.image.pixels.begin(), frame.image.pixels.end()));
+  } catch (const Error& e) {
+    error = e.what();
+  }
+  kill(child, SIGTERM);
+  waitpid(child, nullptr, 0);
+  EXPECT_EQ(error, "");
+  EXPECT_EQ(frames, 100);
+}
+
+TEST(Aravis, DiscoveryListsTheInProcessFakeInterface) {
+  arv_enable_interface("Fake");
+  const std::vector<AravisDeviceInfo> devices = discoverAravisCameras();
+  bool fake = false;
+  for (const AravisDeviceInfo& d : devices) fake = fake || d.protocol == "Fake";
+  EXPECT_TRUE(fake);
+}
+
+TEST(Aravis, ClearErrorsNameTheCameraAndAddress) {
+  const Rig rig = smallRig(1, 320, 240);
+  AravisCameraConfig config;
+  config.device = "127.0.1.77";  // nobody serves there
+  try {
+    AravisSource source(rig, {config});
+    FAIL() << "opened a camera that does not exist";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("camera cam01 (127.0.1.77): cannot open"),
+              std::string::npos)
+        << e.what();
+  }
+  auto loop = randomLoop(rig, 1, 25, PixelFormat::kMono8);
+  try {
+    VirtualGigeCameras server(rig, loop, PixelFormat::kMono8, "10.254.254.1");
+    FAIL() << "served on an address this machine does not have";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("10.254.254.1 is not an address of this machine"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace lumistage
