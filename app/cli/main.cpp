@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 
+#include "app/cli/body_commands.h"
 #include "app/cli/rig_commands.h"
 #include "app/cli/synth_command.h"
 
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Lumistage: live free-viewpoint video of people from a calibrated camera stage"};
   app.require_subcommand(1);
   lumistage::addRigCommands(app);
+  lumistage::addBodyCommands(app);
   lumistage::addSynthCommand(app);
   try {
     app.parse(argc, argv);

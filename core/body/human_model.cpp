@@ -4,6 +4,8 @@
 #include <cmath>
 #include <set>
 
+#include "core/base/resource_path.h"
+#include "core/body/mesh_io.h"
 #include "core/body/surface_nets.h"
 
 namespace lumistage {
@@ -210,6 +212,10 @@ SkinnedMesh makeHumanModel(const HumanModelSpec& spec) {
   out.rest = std::move(mesh);
   out.validate();
   return out;
+}
+
+SkinnedMesh loadGenericHuman() {
+  return loadSkinnedMesh(resourcePath("body/generic_human.glb"));
 }
 
 }  // namespace lumistage

@@ -24,4 +24,10 @@ struct HumanModelSpec {
 // smoothed over the mesh) and per-vertex materials. Deterministic.
 SkinnedMesh makeHumanModel(const HumanModelSpec& spec = {});
 
+// The generic human as shipped: resources/body/generic_human.glb, written once by
+// `lumistage body generate` (makeHumanModel with the defaults) and read from there at run time,
+// so that a studio can replace it with any rigged mesh. Throws Error when the file is missing or
+// malformed.
+SkinnedMesh loadGenericHuman();
+
 }  // namespace lumistage

@@ -83,3 +83,38 @@ TEST(HumanModel, ActorDiffersFromTheGenericHuman) {
 
 }  // namespace
 }  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+TEST(HumanModel, ShippedGenericHumanIsTheGeneratedOne) {
+  // resources/body/generic_human.glb is written by `lumistage body generate`; it must not drift.
+  const SkinnedMesh shipped = loadGenericHuman();
+  const SkinnedMesh generated = makeHumanModel();
+  ASSERT_EQ(shipped.rest.vertexCount(), generated.rest.vertexCount());
+  ASSERT_EQ(shipped.skeleton.jointCount(), generated.skeleton.jointCount());
+  EXPECT_EQ(checkClosedManifold(shipped.rest), "");
+  for (int j = 0; j < generated.skeleton.jointCount(); ++j) {
+    EXPECT_EQ(shipped.skeleton.joint(j).name, generated.skeleton.joint(j).name);
+    EXPECT_LT((shipped.skeleton.restPositions()[j] - generated.skeleton.restPositions()[j]).norm(),
+              1e-5);
+  }
+  // Posed alike: every posed vertex of one has a twin in the other (order may differ).
+  Pose pose = Pose::rest(generated.skeleton.jointCount());
+  pose.angles_rad[kLeftElbow] = Eigen::Vector3d(0, 0, -1.0);
+  pose.angles_rad[kRightHip] = Eigen::Vector3d(0.7, 0, 0);
+  std::vector<Eigen::Affine3f> a_transforms, b_transforms;
+  shipped.skeleton.skinningTransforms(pose, a_transforms);
+  generated.skeleton.skinningTransforms(pose, b_transforms);
+  Eigen::Matrix3Xf a, b, na, nb;
+  skinMesh(shipped, a_transforms, a, na);
+  skinMesh(generated, b_transforms, b, nb);
+  float worst = 0;
+  for (int v = 0; v < a.cols(); ++v) {
+    worst = std::max(worst, std::sqrt((b.colwise() - a.col(v)).colwise().squaredNorm().minCoeff()));
+  }
+  EXPECT_LT(worst, 1e-4f);
+}
+
+}  // namespace
+}  // namespace lumistage
