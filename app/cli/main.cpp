@@ -6,6 +6,7 @@
 #include <exception>
 
 #include "app/cli/body_commands.h"
+#include "app/cli/camera_commands.h"
 #include "app/cli/rig_commands.h"
 #include "app/cli/synth_command.h"
 
@@ -14,6 +15,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   lumistage::addRigCommands(app);
   lumistage::addBodyCommands(app);
+  lumistage::addCameraCommands(app);
   lumistage::addSynthCommand(app);
   try {
     app.parse(argc, argv);

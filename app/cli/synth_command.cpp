@@ -1,7 +1,6 @@
 #include "app/cli/synth_command.h"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -10,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "app/cli/progress.h"
 #include "core/base/error.h"
 #include "core/capture/session_writer.h"
 #include "core/sim/virtual_studio.h"
@@ -43,20 +43,6 @@ cv::Mat contactSheet(const Rig& rig, const StudioFrame& frame) {
                 cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   }
   return sheet;
-}
-
-void progress(int done, int total, double ms_per_frame) {
-  constexpr int kWidth = 30;
-  const int filled = total > 0 ? done * kWidth / total : kWidth;
-  const double remaining_s = (total - done) * ms_per_frame / 1000.0;
-  if (isatty(STDERR_FILENO)) {
-    fmt::print(stderr, "\rsynth [{}{}] {}/{} frames, {:.0f} ms/frame, {:.0f} s left   ",
-               std::string(filled, '#'), std::string(kWidth - filled, '.'), done, total,
-               ms_per_frame, remaining_s);
-    if (done == total) fmt::print(stderr, "\n");
-  } else if (done == total || (done * 10 / total) != ((done - 1) * 10 / total)) {
-    fmt::print(stderr, "synth: {}/{} frames, {:.0f} ms/frame\n", done, total, ms_per_frame);
-  }
 }
 
 }  // namespace
@@ -125,7 +111,7 @@ void addSynthCommand(CLI::App& app) {
           throw Error(args->sheet + ": cannot write the contact sheet");
         }
       }
-      progress(f + 1, args->frames, millisecondsSince(start) / (f + 1));
+      printProgress("synth", f + 1, args->frames, millisecondsSince(start) / (f + 1));
     }
     fmt::print(
         "wrote {} frames to {}: {:.1f} ms a frame to pose and render {} views, {:.1f} ms to write "

@@ -16,17 +16,19 @@
 
 namespace lumistage {
 
-int64_t loopTick(int64_t monotonic_ns, double fps) {
-  const double period_ns = 1e9 / fps;
-  return static_cast<int64_t>(std::llround(monotonic_ns / period_ns));
+int64_t cameraTick(int64_t monotonic_ns, int64_t period_ns) {
+  return period_ns > 0 ? (monotonic_ns + period_ns / 2) / period_ns : 0;
 }
 
-int loopFrameOfTick(int64_t tick, int loop_length) {
-  return loop_length > 0 ? static_cast<int>(((tick % loop_length) + loop_length) % loop_length) : 0;
+int64_t tickTimestampNs(int64_t tick, int64_t period_ns) {
+  return tick * period_ns;
 }
 
-int64_t loopTimestampNs(int64_t tick, double fps) {
-  return static_cast<int64_t>(std::llround(tick * 1e9 / fps));
+int loopFrameAt(int64_t timestamp_ns, double loop_fps, int loop_length) {
+  if (loop_length <= 0) return 0;
+  // The small bias keeps a frame that starts exactly at a timestamp from rounding to the previous.
+  const int64_t frame = static_cast<int64_t>(std::floor(timestamp_ns * 1e-9 * loop_fps + 1e-6));
+  return static_cast<int>(((frame % loop_length) + loop_length) % loop_length);
 }
 
 namespace {
@@ -113,8 +115,16 @@ struct VirtualGigeCameras::Served {
   // Called by the fake camera's thread for every frame it sends.
   static void fill(ArvBuffer* buffer, void* data, guint32, guint32, ArvPixelFormat arv_format) {
     const Served& self = *static_cast<const Served*>(data);
-    const int64_t tick = loopTick(monotonicNs(), self.loop->fps);
-    const Image& image = self.loop->frames[self.camera][loopFrameOfTick(tick, self.loop->length())];
+    // The camera's own period (a client may have changed its frame rate).
+    guint32 period_us = 0;
+    arv_fake_camera_read_register(self.fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
+                                  &period_us);
+    const int64_t period_ns = std::max<int64_t>(int64_t(period_us) * 1000, 1000);
+    const int64_t tick = cameraTick(monotonicNs(), period_ns);
+    const int64_t timestamp_ns = tickTimestampNs(tick, period_ns);
+    const Image& image =
+        self.loop
+            ->frames[self.camera][loopFrameAt(timestamp_ns, self.loop->fps, self.loop->length())];
     bool known = false;
     const PixelFormat format = fromAravis(arv_format, known);
     // The buffer holds the camera's payload (the fake camera checked that); its received size is
@@ -125,7 +135,7 @@ struct VirtualGigeCameras::Served {
     if (!known || !out || arv_fake_camera_get_payload(self.fake) < needed)
       return;  // client changed the format
     convert(image, format, out);
-    arv_buffer_set_timestamp(buffer, static_cast<guint64>(loopTimestampNs(tick, self.loop->fps)));
+    arv_buffer_set_timestamp(buffer, static_cast<guint64>(timestamp_ns));
     arv_buffer_set_frame_id(buffer,
                             static_cast<guint64>(tick % 65535 + 1));  // GigE Vision ids: 1..65535
   }

@@ -17,12 +17,14 @@ struct FrameLoop {
   int length() const { return frames.empty() ? 0 : static_cast<int>(frames[0].size()); }
 };
 
-// The frame of a loop that a virtual camera serves at a time. Frames are paced on the monotonic
-// clock, so every camera of the process serves the same frame at the same instant, stamped with
-// the same timestamp and GigE Vision frame id: a client can group them exactly.
-int64_t loopTick(int64_t monotonic_ns, double fps);
-int loopFrameOfTick(int64_t tick, int loop_length);
-int64_t loopTimestampNs(int64_t tick, double fps);
+// Pacing of virtual cameras. Frames are sent on ticks of the monotonic clock, every camera
+// period, so every camera of a process running at one rate sends at the same instants, stamped
+// with the same timestamp (tick x period) and GigE Vision frame id: a client groups them exactly.
+// The loop's content advances in real time whatever the cameras' rate.
+int64_t cameraTick(int64_t monotonic_ns, int64_t period_ns);
+int64_t tickTimestampNs(int64_t tick, int64_t period_ns);
+// The loop frame showing at a timestamp.
+int loopFrameAt(int64_t timestamp_ns, double loop_fps, int loop_length);
 
 // Serves a FrameLoop through Aravis's fake GigE Vision camera (the real GVCP/GVSP protocol), one
 // camera per rig camera, each on its own IP address: by default camera i at 127.0.1.(i+1). Each

@@ -49,4 +49,23 @@ void VirtualStudio::renderFrame(int index, StudioFrame& frame) {
   }
 }
 
+FrameLoop renderFrameLoop(VirtualStudio& studio, int frame_count, PixelFormat format,
+                          const std::function<void(int, int)>& progress) {
+  FrameLoop loop;
+  loop.fps = studio.config().fps;
+  loop.frames.resize(studio.rig().cameraCount());
+  StudioFrame frame;
+  for (int f = 0; f < frame_count; ++f) {
+    studio.renderFrame(f, frame);
+    for (int c = 0; c < studio.rig().cameraCount(); ++c) {
+      const Camera& camera = studio.rig().camera(c);
+      Image image;
+      rgbaToImage(frame.images[c].data(), camera.width(), camera.height(), format, image);
+      loop.frames[c].push_back(std::move(image));
+    }
+    if (progress) progress(f + 1, frame_count);
+  }
+  return loop;
+}
+
 }  // namespace lumistage

@@ -1,9 +1,11 @@
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <vector>
 
 #include "core/body/motion_clip.h"
+#include "core/capture/virtual_gige_cameras.h"
 #include "core/render/egl_context.h"
 #include "core/sim/studio_config.h"
 #include "core/sim/studio_renderer.h"
@@ -48,5 +50,10 @@ class VirtualStudio {
   std::unique_ptr<StudioRenderer> renderer_;
   std::vector<Eigen::Affine3f> transforms_;
 };
+
+// Renders frames 0..frame_count-1 of the studio into a loop for virtual cameras, in `format`.
+// `progress(done, total)` is called after each frame.
+FrameLoop renderFrameLoop(VirtualStudio& studio, int frame_count, PixelFormat format,
+                          const std::function<void(int, int)>& progress = {});
 
 }  // namespace lumistage

@@ -67,8 +67,8 @@ TEST(Aravis, VirtualCamerasStreamTheSyntheticFramesBitExact) {
     ASSERT_EQ(frame.image.format, PixelFormat::kBayerRggb8);
     ASSERT_EQ(frame.image.width, 320);
     // The pixels are exactly the loop's frame of the instant the timestamp names.
-    const int64_t tick = std::llround(frame.timestamp_ns * fps / 1e9);
-    const Image& sent = loop->frames[frame.camera][loopFrameOfTick(tick, loop->length())];
+    const Image& sent =
+        loop->frames[frame.camera][loopFrameAt(frame.timestamp_ns, fps, loop->length())];
     ASSERT_EQ(frame.image.pixels, sent.pixels)
         << "camera " << frame.camera << " frame " << frame.frame_id;
     timestamps_by_id[frame.frame_id].push_back(frame.timestamp_ns);

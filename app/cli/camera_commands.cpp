@@ -1,0 +1,166 @@
+#include "app/cli/camera_commands.h"
+
+#include <fmt/format.h>
+#include <sys/resource.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <thread>
+
+#include "app/cli/progress.h"
+#include "core/base/error.h"
+#include "core/capture/aravis_source.h"
+#include "core/capture/virtual_gige_cameras.h"
+#include "core/geometry/rig_file.h"
+#include "core/sim/virtual_studio.h"
+
+namespace lumistage {
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+void onSignal(int) {
+  g_stop = true;
+}
+
+double cpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
+         1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+PixelFormat pixelFormatOption(const std::string& name) {
+  const std::optional<PixelFormat> format = parsePixelFormat(name);
+  if (!format)
+    throw CLI::ValidationError("--pixel-format",
+                               "expected mono8, bayer_rggb8 or rgb8, got '" + name + "'");
+  return *format;
+}
+
+}  // namespace
+
+void addCameraCommands(CLI::App& app) {
+  CLI::App* cameras =
+      app.add_subcommand("cameras", "List the GigE Vision and USB3 Vision cameras Aravis finds");
+  cameras->callback([] {
+    const std::vector<AravisDeviceInfo> devices = discoverAravisCameras();
+    if (devices.empty()) {
+      fmt::print(
+          "no cameras found (GigE Vision discovery does not reach loopback: open virtual cameras "
+          "by "
+          "address)\n");
+    }
+    for (const AravisDeviceInfo& d : devices) {
+      fmt::print("{:<28} {:<12} {:<16} serial {:<14} {}\n", d.id, d.protocol,
+                 d.vendor + " " + d.model, d.serial, d.address);
+    }
+  });
+
+  struct VirtualArgs {
+    std::string config, address = "127.0.1.1", pixel_format = "bayer_rggb8";
+    int frames = 30;
+    double seconds = 0;
+  };
+  auto v = std::make_shared<VirtualArgs>();
+  CLI::App* serve = app.add_subcommand(
+      "virtual-cameras",
+      "Serve the virtual studio through GigE Vision: camera i of the rig at ADDRESS+i");
+  serve->add_option("--config", v->config, "studio config (YAML)")->required();
+  serve->add_option("--frames", v->frames, "frames rendered and looped")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  serve->add_option("--address", v->address, "address of the first camera")->capture_default_str();
+  serve->add_option("--pixel-format", v->pixel_format, "mono8, bayer_rggb8 or rgb8")
+      ->capture_default_str();
+  serve->add_option("--seconds", v->seconds, "stop after this long (default: until interrupted)");
+  serve->callback([v] {
+    const PixelFormat format = pixelFormatOption(v->pixel_format);
+    StudioConfig config = loadStudioConfig(v->config);
+    const Rig rig = config.rig;
+    auto loop = std::make_shared<FrameLoop>();
+    {
+      VirtualStudio studio(std::move(config), v->frames);
+      fmt::print("rendering {} frames of {} cameras on {}\n", v->frames, rig.cameraCount(),
+                 studio.rendererDescription());
+      *loop = renderFrameLoop(studio, v->frames, format,
+                              [](int done, int total) { printProgress("render", done, total); });
+    }
+    VirtualGigeCameras server(rig, loop, format, v->address);
+    for (int c = 0; c < rig.cameraCount(); ++c) {
+      fmt::print("{} ({}x{}, {}, {} fps) at {}\n", rig.camera(c).name(), rig.camera(c).width(),
+                 rig.camera(c).height(), pixelFormatName(format), loop->fps, server.addresses()[c]);
+    }
+    fmt::print("serving; stop with Ctrl-C\n");
+    std::fflush(stdout);
+    std::signal(SIGINT, onSignal);
+    std::signal(SIGTERM, onSignal);
+    const auto start = std::chrono::steady_clock::now();
+    while (!g_stop && (v->seconds <= 0 || std::chrono::steady_clock::now() - start <
+                                              std::chrono::duration<double>(v->seconds))) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  });
+
+  struct StreamArgs {
+    std::string rig, address = "127.0.1.1", pixel_format = "bayer_rggb8";
+    std::vector<std::string> devices;
+    double seconds = 5, fps = 25;
+  };
+  auto s = std::make_shared<StreamArgs>();
+  CLI::App* stream =
+      app.add_subcommand("stream", "Stream from Aravis cameras and report rate, drops and CPU use");
+  stream->add_option("--rig", s->rig, "rig file: one Aravis camera per rig camera")->required();
+  stream->add_option("--address", s->address, "address of the first camera (camera i at ADDRESS+i)")
+      ->capture_default_str();
+  stream->add_option("--device", s->devices,
+                     "camera devices in rig order (address, serial or id), instead of --address");
+  stream->add_option("--pixel-format", s->pixel_format, "mono8, bayer_rggb8 or rgb8")
+      ->capture_default_str();
+  stream->add_option("--fps", s->fps, "frame rate asked of the cameras")->capture_default_str();
+  stream->add_option("--seconds", s->seconds, "how long")->capture_default_str();
+  stream->callback([s] {
+    const Rig rig = loadRig(s->rig);
+    if (!s->devices.empty() && s->devices.size() != static_cast<size_t>(rig.cameraCount())) {
+      throw Error(fmt::format("--device given {} times for a rig of {} cameras", s->devices.size(),
+                              rig.cameraCount()));
+    }
+    std::vector<AravisCameraConfig> configs(rig.cameraCount());
+    for (int c = 0; c < rig.cameraCount(); ++c) {
+      configs[c].device =
+          s->devices.empty() ? VirtualGigeCameras::addressOf(s->address, c) : s->devices[c];
+      configs[c].pixel_format = pixelFormatOption(s->pixel_format);
+      configs[c].frame_rate_hz = s->fps;
+    }
+    AravisSource source(rig, configs);
+    const double cpu_start = cpuSeconds();
+    const auto start = std::chrono::steady_clock::now();
+    CameraFrame frame;
+    int64_t bytes = 0;
+    while (std::chrono::steady_clock::now() - start < std::chrono::duration<double>(s->seconds)) {
+      if (source.next(frame, std::chrono::milliseconds(200)))
+        bytes += static_cast<int64_t>(frame.image.pixels.size());
+    }
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double cpu = cpuSeconds() - cpu_start;
+    fmt::print("{:<8} {:>8} {:>8} {:>8} {:>8}  {}\n", "camera", "frames", "fps", "dropped",
+               "resends", "last error");
+    int64_t frames = 0;
+    for (int c = 0; c < rig.cameraCount(); ++c) {
+      const CameraStats st = source.stats(c);
+      frames += st.frames;
+      fmt::print("{:<8} {:>8} {:>8.1f} {:>8} {:>8}  {}\n", rig.camera(c).name(), st.frames,
+                 st.frames / wall, st.dropped, st.resends, st.last_error);
+    }
+    fmt::print(
+        "{} frames in {:.1f} s ({:.1f} MB/s); CPU {:.0f}% of one core, {:.2f} ms per frame\n",
+        frames, wall, bytes / wall / 1e6, 100 * cpu / wall, frames > 0 ? 1000 * cpu / frames : 0.0);
+  });
+}
+
+}  // namespace lumistage
