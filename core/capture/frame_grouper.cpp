@@ -34,6 +34,7 @@ FrameSet FrameGrouper::newSet() {
 }
 
 bool FrameGrouper::push(CameraFrame& frame) {
+  new_batch_ = true;
   const int c = frame.camera;
   const int64_t key = keyOf(frame);
   const bool by_id = options_.key == FrameGrouperOptions::Key::kFrameId;
@@ -73,6 +74,8 @@ bool FrameGrouper::push(CameraFrame& frame) {
 
 void FrameGrouper::emitUpTo(size_t count) {
   for (size_t i = 0; i < count && !pending_.empty(); ++i) {
+    if (new_batch_) late_.clear();
+    new_batch_ = false;
     FrameSet& set = pending_.front();
     set.missing.clear();
     for (int c = 0; c < cameras_; ++c) {
@@ -81,7 +84,9 @@ void FrameGrouper::emitUpTo(size_t count) {
       ++stats_.missed[c];
     }
     ++(set.missing.empty() ? stats_.complete : stats_.incomplete);
-    late_ = set.missing;
+    for (int c : set.missing) {
+      if (std::find(late_.begin(), late_.end(), c) == late_.end()) late_.push_back(c);
+    }
     emitted_any_ = true;
     last_emitted_key_ = keyOf(set);
     ready_.push_back(std::move(set));

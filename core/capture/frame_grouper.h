@@ -54,7 +54,8 @@ class FrameGrouper {
   // Emits every waiting set, incomplete ones included (end of stream).
   void flush();
 
-  // Cameras missing from the most recently emitted set: the ones behind or losing frames.
+  // Cameras missing from the sets emitted by the latest push() or flush() that emitted any:
+  // the ones behind or losing frames. Empty once they catch up.
   const std::vector<int>& lateCameras() const { return late_; }
   const FrameGrouperStats& stats() const { return stats_; }
   int pendingCount() const { return static_cast<int>(pending_.size()); }
@@ -74,6 +75,7 @@ class FrameGrouper {
   bool emitted_any_ = false;
   int64_t last_emitted_key_ = 0;
   std::vector<int> late_;
+  bool new_batch_ = false;  // the next emission starts a new late_
   FrameGrouperStats stats_;
 };
 

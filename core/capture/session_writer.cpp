@@ -188,7 +188,8 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
   index_ << frame_id << "," << timestamp_ns << "\n";
   index_.flush();
   if (!index_ || (truth && !joints_))
-    throw Error(folder_.string() + ": cannot append to index.csv (disk full?)");
+    throw Error(fmt::format("{}: cannot append frame {} (disk full?); the session ends before it",
+                            (folder_ / "index.csv").string(), frame_id));
   ++frames_;
   bytes_ += bytes;
 }
