@@ -1,7 +1,11 @@
 #include "core/capture/session_writer.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <unistd.h>
 
+#include <atomic>
+#include <cerrno>
 #include <cstring>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -17,20 +21,49 @@ namespace fs = std::filesystem;
 
 namespace {
 
-void writeImageAtomically(const fs::path& path, const cv::Mat& image) {
+// Encodes in memory and writes with checked system calls: cv::imwrite ignores the result of
+// fclose, so on a full disk it can leave a truncated PNG that would then be renamed into place.
+// Returns the bytes written.
+size_t writeImageAtomically(const fs::path& path, const cv::Mat& image) {
   const fs::path temp = path.parent_path() / (path.stem().string() + ".partial.png");
   // Fast PNG: the session is written while capturing; compression level 1 is lossless too.
   const std::vector<int> options = {cv::IMWRITE_PNG_COMPRESSION, 1};
-  bool ok = false;
+  thread_local std::vector<uchar> encoded;  // reused: no allocation per image once warmed up
   try {
-    ok = cv::imwrite(temp.string(), image, options);
+    if (!cv::imencode(".png", image, encoded, options))
+      throw Error(path.string() + ": cannot encode the image as PNG");
   } catch (const cv::Exception& e) {
-    throw Error(path.string() + ": cannot write image: " + e.err);
+    throw Error(path.string() + ": cannot encode image: " + e.err);
   }
-  if (!ok) throw Error(path.string() + ": cannot write image (disk full or no permission?)");
-  std::error_code ec;
-  fs::rename(temp, path, ec);
-  if (ec) throw Error(path.string() + ": cannot rename into place: " + ec.message());
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw Error(temp.string() + ": cannot create: " + std::strerror(errno));
+  auto fail = [&](const char* step) {
+    const int saved = errno;
+    if (fd >= 0) ::close(fd);
+    ::unlink(temp.c_str());
+    throw Error(path.string() + ": " + step + " failed: " + std::strerror(saved) +
+                (saved == ENOSPC || saved == EFBIG ? " (disk full?)" : ""));
+  };
+  size_t written = 0;
+  while (written < encoded.size()) {
+    const ssize_t n = ::write(fd, encoded.data() + written, encoded.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("write");
+    }
+    written += static_cast<size_t>(n);
+  }
+  if (::close(fd) != 0) {
+    const int saved = errno;
+    ::unlink(temp.c_str());
+    throw Error(path.string() + ": close failed: " + std::strerror(saved));
+  }
+  if (::rename(temp.c_str(), path.c_str()) != 0) {
+    const int saved = errno;
+    ::unlink(temp.c_str());
+    throw Error(path.string() + ": cannot rename into place: " + std::strerror(saved));
+  }
+  return written;
 }
 
 void writePly(const fs::path& path, const TriangleMesh& mesh) {
@@ -116,6 +149,7 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
   const std::string name = fmt::format("{:06}.png", frame_id);
   // PNG encoding dominates a frame's writing: cameras in parallel, errors carried out.
   std::vector<std::string> errors(rig_.cameraCount());
+  std::atomic<int64_t> bytes = 0;
   cv::parallel_for_(cv::Range(0, rig_.cameraCount()), [&](const cv::Range& range) {
     for (int c = range.start; c < range.end; ++c) {
       try {
@@ -127,7 +161,7 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
         cv::Mat image = source;
         if (view.format == PixelFormat::kRgb8)
           cv::cvtColor(source, image, cv::COLOR_RGB2BGR);  // imwrite takes BGR
-        writeImageAtomically(folder_ / camera.name() / name, image);
+        bytes += int64_t(writeImageAtomically(folder_ / camera.name() / name, image));
         if (truth && truth->masks) {
           const cv::Mat mask(camera.height(), camera.width(), CV_8UC1,
                              const_cast<uint8_t*>((*truth->masks)[c].data()));
@@ -154,8 +188,10 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
   index_ << frame_id << "," << timestamp_ns << "\n";
   index_.flush();
   if (!index_ || (truth && !joints_))
-    throw Error(folder_.string() + ": cannot append to index.csv (disk full?)");
+    throw Error(fmt::format("{}: cannot append frame {} (disk full?); the session ends before it",
+                            (folder_ / "index.csv").string(), frame_id));
   ++frames_;
+  bytes_ += bytes;
 }
 
 }  // namespace lumistage

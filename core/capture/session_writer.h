@@ -37,6 +37,7 @@ class SessionWriter {
   void writeFrame(int64_t frame_id, int64_t timestamp_ns, const std::vector<ImageView>& images,
                   const FrameTruth* truth = nullptr);
   int framesWritten() const { return frames_; }
+  int64_t bytesWritten() const { return bytes_; }  // camera images' PNG bytes of indexed frames
   const std::filesystem::path& folder() const { return folder_; }
 
  private:
@@ -47,6 +48,7 @@ class SessionWriter {
   std::ofstream index_;
   std::ofstream joints_;
   int frames_ = 0;
+  int64_t bytes_ = 0;
 };
 
 }  // namespace lumistage

@@ -1,0 +1,353 @@
+#include "core/capture/session_reader.h"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string_view>
+
+#include "core/base/atomic_file.h"
+#include "core/base/error.h"
+#include "core/base/yaml_reader.h"
+#include "core/geometry/rig_file.h"
+
+namespace lumistage {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Whole-field parse: "12x" or "" is not a number.
+template <typename T>
+bool parseNumber(std::string_view text, T& out) {
+  if (text.empty()) return false;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), out);
+  return ec == std::errc() && end == text.data() + text.size();
+}
+
+std::vector<std::string_view> splitFields(std::string_view line) {
+  std::vector<std::string_view> fields;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = line.find(',', start);
+    fields.push_back(line.substr(start, comma - start));
+    if (comma == std::string_view::npos) return fields;
+    start = comma + 1;
+  }
+}
+
+// Complete lines of a file and what follows the last newline (a torn line, or empty).
+struct Lines {
+  std::vector<std::string_view> complete;
+  std::string_view torn;
+};
+
+Lines splitLines(std::string_view text) {
+  Lines lines;
+  size_t start = 0;
+  for (size_t nl = text.find('\n'); nl != std::string_view::npos; nl = text.find('\n', start)) {
+    lines.complete.push_back(text.substr(start, nl - start));
+    start = nl + 1;
+  }
+  lines.torn = text.substr(start);
+  return lines;
+}
+
+uint32_t bigEndian32(const unsigned char* p) {
+  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | uint32_t(p[3]);
+}
+
+// Cheap check of a frame's PNG without decoding it: the header says size and channels, and the
+// file ends with the IEND chunk (a file cut short by a crash or a full disk does not). Returns
+// what is wrong, or an empty string.
+std::string checkPng(const fs::path& path, int width, int height, int channels) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (!file) {
+    return errno == ENOENT ? "is missing"
+                           : fmt::format("cannot be opened: {}", std::strerror(errno));
+  }
+  std::array<unsigned char, 26> header{};
+  std::array<unsigned char, 12> tail{};
+  const bool header_read = std::fread(header.data(), 1, header.size(), file) == header.size();
+  const bool tail_read = header_read && std::fseek(file, -long(tail.size()), SEEK_END) == 0 &&
+                         std::fread(tail.data(), 1, tail.size(), file) == tail.size();
+  std::fclose(file);
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  static constexpr unsigned char kIend[12] = {0,   0,   0,    0,    'I',  'E',
+                                              'N', 'D', 0xae, 0x42, 0x60, 0x82};
+  if (!header_read) return "is truncated (shorter than a PNG header)";
+  if (std::memcmp(header.data(), kSignature, 8) != 0 || std::memcmp(header.data() + 12, "IHDR", 4))
+    return "is not a PNG file";
+  const int w = int(bigEndian32(header.data() + 16)), h = int(bigEndian32(header.data() + 20));
+  if (w != width || h != height)
+    return fmt::format("is a {}x{} image, expected {}x{}", w, h, width, height);
+  const int depth = header[24], colour = header[25];
+  const int expected_colour = channels == 3 ? 2 : 0;  // PNG colour types: 0 grey, 2 RGB
+  if (depth != 8 || colour != expected_colour) {
+    return fmt::format("has bit depth {} and PNG colour type {}, expected 8-bit {}", depth, colour,
+                       channels == 3 ? "RGB (type 2)" : "grey (type 0)");
+  }
+  if (!tail_read || std::memcmp(tail.data(), kIend, sizeof kIend) != 0)
+    return "is truncated (it does not end with the PNG end chunk)";
+  return {};
+}
+
+}  // namespace
+
+SessionReader::SessionReader(const fs::path& folder) : folder_(folder) {
+  std::error_code ec;
+  if (!fs::is_directory(folder_, ec))
+    throw Error(folder_.string() + ": not a session folder (no such folder)");
+  readSessionYaml();
+  readIndex();
+  checkImages();
+}
+
+void SessionReader::readSessionYaml() {
+  const fs::path path = folder_ / "session.yaml";
+  const YamlReader yaml(path.string());
+  const YAML::Node root = yaml.parseDocument(readFile(path));
+  yaml.requireMap(root, "");
+  yaml.checkKeys(root, "",
+                 {"format", "version", "source", "rig", "fps", "pixel_format", "image_files",
+                  "cameras", "truth"});
+  const YAML::Node format = yaml.required(root, "", "format", "lumistage-session");
+  if (yaml.string(format, "format") != "lumistage-session")
+    yaml.fail(format, "format", "expected lumistage-session, got '" + format.Scalar() + "'");
+  const YAML::Node version = yaml.required(root, "", "version", "1");
+  if (yaml.integer(version, "version") != 1) {
+    yaml.fail(version, "version",
+              "this build reads version 1, got " + version.Scalar() + " (a newer Lumistage?)");
+  }
+  source_ = yaml.string(yaml.required(root, "", "source", "where the frames came from"), "source");
+  const YAML::Node fps = yaml.required(root, "", "fps", "frames per second");
+  fps_ = yaml.number(fps, "fps");
+  if (fps_ <= 0) yaml.fail(fps, "fps", "expected a positive frame rate, got " + fps.Scalar());
+  const YAML::Node pixel_format =
+      yaml.required(root, "", "pixel_format", "rgb8, bayer_rggb8 or mono8");
+  const std::optional<PixelFormat> parsed =
+      parsePixelFormat(yaml.string(pixel_format, "pixel_format"));
+  if (!parsed) {
+    yaml.fail(pixel_format, "pixel_format",
+              "expected rgb8, bayer_rggb8 or mono8, got '" + pixel_format.Scalar() + "'");
+  }
+  format_ = *parsed;
+  const YAML::Node image_files = yaml.required(root, "", "image_files", "png");
+  if (yaml.string(image_files, "image_files") != "png")
+    yaml.fail(image_files, "image_files", "expected png, got '" + image_files.Scalar() + "'");
+  const YAML::Node truth = yaml.required(root, "", "truth", "true or false");
+  if (!truth.IsScalar() || !YAML::convert<bool>::decode(truth, truth_))
+    yaml.fail(truth, "truth", "expected true or false, got '" + truth.Scalar() + "'");
+
+  const YAML::Node rig_file = yaml.required(root, "", "rig", "the rig file's name, rig.yaml");
+  rig_ = loadRig(folder_ / yaml.string(rig_file, "rig"));
+
+  // Camera order is the CameraFrame::camera index: it must be the rig's, name for name.
+  const YAML::Node cameras = yaml.required(root, "", "cameras", "the rig's camera names");
+  yaml.requireSequence(cameras, "cameras");
+  std::string expected, got;
+  bool same = int(cameras.size()) == rig_.cameraCount();
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const std::string name = yaml.string(cameras[i], YamlReader::item("cameras", i));
+    got += (got.empty() ? "" : ", ") + name;
+    same = same && int(i) < rig_.cameraCount() && rig_.camera(int(i)).name() == name;
+  }
+  for (const Camera& c : rig_.cameras()) expected += (expected.empty() ? "" : ", ") + c.name();
+  if (!same) {
+    yaml.fail(cameras, "cameras",
+              fmt::format("expected the cameras of {}, in its order: [{}], got [{}]",
+                          rig_file.Scalar(), expected, got));
+  }
+}
+
+void SessionReader::readIndex() {
+  const fs::path path = folder_ / "index.csv";
+  const std::string file = path.string();
+  const std::string text = readFile(path);
+  const Lines lines = splitLines(text);
+  if (lines.complete.empty()) {
+    // The writer's header reaches the disk with the first frame: a crash before it leaves this.
+    warnings_.push_back(file + ": no complete line: no frame was recorded");
+    return;
+  }
+  if (lines.complete[0] != "frame,timestamp_ns") {
+    throw Error(locate(
+        file, 1, "",
+        "expected the header 'frame,timestamp_ns', got '" + std::string(lines.complete[0]) + "'"));
+  }
+  for (size_t l = 1; l < lines.complete.size(); ++l) {
+    const std::string_view line = lines.complete[l];
+    const int line_number = int(l) + 1;
+    const std::vector<std::string_view> fields = splitFields(line);
+    FrameEntry entry{};
+    if (fields.size() != 2 || !parseNumber(fields[0], entry.id) ||
+        !parseNumber(fields[1], entry.timestamp_ns)) {
+      throw Error(locate(
+          file, line_number, "",
+          "expected frame,timestamp_ns as two whole numbers, got '" + std::string(line) + "'"));
+    }
+    if (entry.id < 0) {
+      throw Error(locate(file, line_number, "",
+                         fmt::format("expected a frame number >= 0, got {}", entry.id)));
+    }
+    if (!frames_.empty() && entry.id <= frames_.back().id) {
+      throw Error(locate(file, line_number, "",
+                         fmt::format("frame {} after frame {}: frame numbers must increase",
+                                     entry.id, frames_.back().id)));
+    }
+    frames_.push_back(entry);
+  }
+  if (!lines.torn.empty()) {
+    warnings_.push_back(locate(
+        file, int(lines.complete.size()) + 1, "",
+        fmt::format("torn last line '{}' (no newline: the recording stopped while writing it); "
+                    "ignored, the session ends {}",
+                    lines.torn,
+                    frames_.empty() ? "before its first frame"
+                                    : fmt::format("at frame {}", frames_.back().id))));
+  }
+}
+
+void SessionReader::checkImages() {
+  const int channels = bytesPerPixel(format_);
+  for (size_t i = 0; i < frames_.size(); ++i) {
+    for (int c = 0; c < rig_.cameraCount(); ++c) {
+      const Camera& camera = rig_.camera(c);
+      const fs::path path = imagePath(c, int(i));
+      const std::string problem = checkPng(path, camera.width(), camera.height(), channels);
+      if (problem.empty()) continue;
+      warnings_.push_back(fmt::format(
+          "{}: frame {} is listed in index.csv but its image {}; the session ends {}{}",
+          path.string(), frames_[i].id, problem,
+          i == 0 ? "before its first frame" : fmt::format("at frame {}", frames_[i - 1].id),
+          i + 1 < frames_.size() ? fmt::format(", {} later frames ignored", frames_.size() - i - 1)
+                                 : ""));
+      frames_.resize(i);
+      break;
+    }
+  }
+  // Left-overs of a write that never completed: harmless, but worth knowing about.
+  for (const Camera& camera : rig_.cameras()) {
+    std::error_code ec;
+    for (const fs::directory_entry& entry : fs::directory_iterator(folder_ / camera.name(), ec)) {
+      const std::string name = entry.path().filename().string();
+      if (name.ends_with(".partial.png")) {
+        warnings_.push_back(entry.path().string() +
+                            ": left over from an interrupted write; ignored");
+      }
+    }
+    if (ec) {
+      throw Error((folder_ / camera.name()).string() +
+                  ": cannot list the camera's folder: " + ec.message());
+    }
+  }
+}
+
+fs::path SessionReader::imagePath(int camera, int i) const {
+  return folder_ / rig_.camera(camera).name() / fmt::format("{:06}.png", frameId(i));
+}
+
+fs::path SessionReader::truthMaskPath(int camera, int i) const {
+  return folder_ / "truth" / "masks" / rig_.camera(camera).name() /
+         fmt::format("{:06}.png", frameId(i));
+}
+
+void SessionReader::readFrame(int i, std::vector<CameraFrame>& out) const {
+  const int64_t id = frameId(i), timestamp = timestampNs(i);
+  out.resize(rig_.cameraCount());
+  std::vector<std::string> errors(rig_.cameraCount());
+  // PNG decoding dominates: cameras in parallel, errors carried out.
+  cv::parallel_for_(cv::Range(0, rig_.cameraCount()), [&](const cv::Range& range) {
+    for (int c = range.start; c < range.end; ++c) {
+      const Camera& camera = rig_.camera(c);
+      const fs::path path = imagePath(c, i);
+      cv::Mat decoded;
+      try {
+        decoded = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+      } catch (const cv::Exception& e) {
+        errors[c] = path.string() + ": cannot decode: " + e.err;
+        continue;
+      }
+      const int type = format_ == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1;
+      if (decoded.empty() || decoded.type() != type || decoded.cols != camera.width() ||
+          decoded.rows != camera.height()) {
+        errors[c] = fmt::format(
+            "{}: frame {}: cannot decode a {}x{} {} image from it (damaged since the session "
+            "was opened?)",
+            path.string(), id, camera.width(), camera.height(), pixelFormatName(format_));
+        continue;
+      }
+      CameraFrame& frame = out[c];
+      frame.camera = c;
+      frame.frame_id = id;
+      frame.timestamp_ns = timestamp;
+      frame.image.resize(format_, camera.width(), camera.height());
+      cv::Mat target(camera.height(), camera.width(), type, frame.image.pixels.data());
+      if (format_ == PixelFormat::kRgb8)
+        cv::cvtColor(decoded, target, cv::COLOR_BGR2RGB);  // OpenCV decodes to BGR
+      else
+        decoded.copyTo(target);
+    }
+  });
+  for (const std::string& error : errors) {
+    if (!error.empty()) throw Error(error);
+  }
+}
+
+std::vector<std::vector<Eigen::Vector3d>> SessionReader::readTruthJoints(
+    std::vector<std::string>* joint_names) const {
+  const fs::path path = folder_ / "truth" / "joints.csv";
+  const std::string file = path.string();
+  if (!truth_) throw Error(file + ": the session has no ground truth (session.yaml: truth: false)");
+  const std::string text = readFile(path);
+  const Lines lines = splitLines(text);
+  if (lines.complete.empty()) throw Error(file + ": empty, expected a header line");
+  const std::vector<std::string_view> header = splitFields(lines.complete[0]);
+  if (header[0] != "frame" || (header.size() - 1) % 3 != 0) {
+    throw Error(locate(file, 1, "",
+                       "expected the header frame,NAME_x,NAME_y,NAME_z,..., got '" +
+                           std::string(lines.complete[0]) + "'"));
+  }
+  const size_t joints = (header.size() - 1) / 3;
+  if (joint_names) {
+    joint_names->clear();
+    for (size_t j = 0; j < joints; ++j) {
+      const std::string_view x = header[1 + 3 * j];
+      joint_names->emplace_back(x.substr(0, x.size() >= 2 ? x.size() - 2 : 0));
+    }
+  }
+  // Lines are written before the frame's index line: there may be one for a frame the index
+  // does not list (and a torn last one), both ignored.
+  std::map<int64_t, std::vector<Eigen::Vector3d>> by_frame;
+  for (size_t l = 1; l < lines.complete.size(); ++l) {
+    const std::vector<std::string_view> fields = splitFields(lines.complete[l]);
+    int64_t id = 0;
+    std::vector<Eigen::Vector3d> values(joints);
+    bool ok = fields.size() == header.size() && parseNumber(fields[0], id);
+    for (size_t k = 1; ok && k < fields.size(); ++k)
+      ok = parseNumber(fields[k], values[(k - 1) / 3][int((k - 1) % 3)]);
+    if (!ok) {
+      throw Error(locate(file, int(l) + 1, "",
+                         fmt::format("expected a frame number and {} numbers, got '{}'", 3 * joints,
+                                     lines.complete[l])));
+    }
+    by_frame[id] = std::move(values);
+  }
+  std::vector<std::vector<Eigen::Vector3d>> out;
+  out.reserve(frames_.size());
+  for (const FrameEntry& frame : frames_) {
+    auto found = by_frame.find(frame.id);
+    if (found == by_frame.end())
+      throw Error(fmt::format("{}: no joints for frame {}, which index.csv lists", file, frame.id));
+    out.push_back(std::move(found->second));
+  }
+  return out;
+}
+
+}  // namespace lumistage

@@ -1,0 +1,70 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/capture/frame_source.h"
+#include "core/capture/image.h"
+#include "core/geometry/rig.h"
+
+namespace lumistage {
+
+// Reads a recorded session (docs/session-format.md). Opening checks session.yaml, rig.yaml and
+// index.csv strictly and every listed frame's image files cheaply (present, PNG header of the
+// right size and channels, complete to its last chunk). A crash or a full disk only ever cuts a
+// session short: the readable session ends before the first frame that is torn or incomplete,
+// and warnings() says which and why. Anything else malformed is an Error naming file:line.
+class SessionReader {
+ public:
+  explicit SessionReader(const std::filesystem::path& folder);
+
+  const std::filesystem::path& folder() const { return folder_; }
+  const Rig& rig() const { return rig_; }
+  PixelFormat pixelFormat() const { return format_; }
+  double fps() const { return fps_; }
+  const std::string& source() const { return source_; }
+  bool hasTruth() const { return truth_; }
+
+  // The readable frames, in recording order.
+  int frameCount() const { return static_cast<int>(frames_.size()); }
+  int64_t frameId(int i) const { return frames_.at(i).id; }
+  int64_t timestampNs(int i) const { return frames_.at(i).timestamp_ns; }
+  // Why the readable session is shorter than what was recorded, or what was left over: one
+  // message per problem, naming the file and the frame. Empty for a cleanly closed session.
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+  // Decodes frame i, one CameraFrame per camera of the rig (index order), reusing `out`'s image
+  // buffers. Throws Error naming the file when an image cannot be decoded (damaged after open).
+  void readFrame(int i, std::vector<CameraFrame>& out) const;
+  std::filesystem::path imagePath(int camera, int i) const;
+
+  // Ground truth (virtual studio sessions, hasTruth()). Joints per readable frame, in the order
+  // of truth/joints.csv's header (names in `joint_names` when given). Throws Error naming
+  // file:line for a malformed line or a frame without joints.
+  std::vector<std::vector<Eigen::Vector3d>> readTruthJoints(
+      std::vector<std::string>* joint_names = nullptr) const;
+  std::filesystem::path truthMaskPath(int camera, int i) const;
+
+ private:
+  struct FrameEntry {
+    int64_t id;
+    int64_t timestamp_ns;
+  };
+  void readSessionYaml();
+  void readIndex();
+  void checkImages();
+
+  std::filesystem::path folder_;
+  Rig rig_;
+  PixelFormat format_ = PixelFormat::kMono8;
+  double fps_ = 0;
+  std::string source_;
+  bool truth_ = false;
+  std::vector<FrameEntry> frames_;
+  std::vector<std::string> warnings_;
+};
+
+}  // namespace lumistage

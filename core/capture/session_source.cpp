@@ -1,0 +1,120 @@
+#include "core/capture/session_source.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstring>
+#include <thread>
+
+#include "core/base/error.h"
+
+namespace lumistage {
+
+namespace {
+
+void copyFrame(const CameraFrame& from, CameraFrame& to) {
+  to.camera = from.camera;
+  to.frame_id = from.frame_id;
+  to.timestamp_ns = from.timestamp_ns;
+  to.image.resize(from.image.format, from.image.width, from.image.height);  // keeps the buffer
+  std::memcpy(to.image.pixels.data(), from.image.pixels.data(), from.image.pixels.size());
+}
+
+}  // namespace
+
+SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions options)
+    : reader_(folder), options_(options), delivered_(reader_.rig().cameraCount(), 0) {
+  const int frames = reader_.frameCount();
+  if (frames > 0) {
+    id_span_ = reader_.frameId(frames - 1) - reader_.frameId(0) + 1;
+    time_span_ns_ = reader_.timestampNs(frames - 1) - reader_.timestampNs(0) +
+                    int64_t(std::llround(1e9 / reader_.fps()));
+  }
+  finished_ = frames == 0;
+  if (options_.mode != ReplayMode::kFromMemory) return;
+  size_t set_bytes = 0;
+  for (const Camera& c : reader_.rig().cameras())
+    set_bytes += size_t(c.width()) * c.height() * bytesPerPixel(reader_.pixelFormat());
+  const size_t needed = set_bytes * size_t(frames);
+  if (needed > options_.memory_limit_bytes) {
+    throw Error(fmt::format(
+        "{}: replaying from memory needs {:.1f} MiB ({} frames of {} cameras), over the limit of "
+        "{:.1f} MiB; replay from disk, or raise ReplayOptions::memory_limit_bytes",
+        folder.string(), needed / 1048576.0, frames, reader_.rig().cameraCount(),
+        options_.memory_limit_bytes / 1048576.0));
+  }
+  memory_.resize(frames);
+  for (int i = 0; i < frames; ++i) reader_.readFrame(i, memory_[i]);
+}
+
+bool SessionSource::loadSet() {
+  if (options_.mode == ReplayMode::kFromMemory) return true;
+  try {
+    reader_.readFrame(next_set_, set_);
+  } catch (const std::exception& e) {
+    error_ = e.what();
+    finished_ = true;
+    return false;
+  }
+  return true;
+}
+
+bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) {
+  using Clock = std::chrono::steady_clock;
+  if (finished_) return false;
+  const Clock::time_point now = Clock::now();
+  if (!started_) {
+    started_ = true;
+    start_ = now;
+  }
+  const int64_t timestamp =
+      reader_.timestampNs(next_set_) + loop_ * time_span_ns_;  // of the set to serve
+  if (options_.mode == ReplayMode::kRecordedRate && next_camera_ == 0) {
+    const Clock::time_point due =
+        start_ + std::chrono::nanoseconds(timestamp - reader_.timestampNs(0));
+    if (due > now + timeout) {
+      std::this_thread::sleep_for(timeout);
+      return false;
+    }
+    std::this_thread::sleep_until(due);
+  }
+  if (next_camera_ == 0 && !loadSet()) return false;
+
+  const int c = next_camera_;
+  if (options_.mode == ReplayMode::kFromMemory) {
+    copyFrame(memory_[next_set_][c], frame);
+  } else {
+    // Swapped, not copied: the caller's old buffer receives the next decode.
+    std::swap(frame.image, set_[c].image);
+    frame.camera = c;
+  }
+  frame.frame_id = reader_.frameId(next_set_) + loop_ * id_span_;
+  frame.timestamp_ns = timestamp;
+
+  const Clock::time_point delivered = Clock::now();
+  if (delivered_[c]++ == 0 && c == 0) first_delivery_ = delivered;
+  last_delivery_ = delivered;
+  if (++next_camera_ == rig().cameraCount()) {
+    next_camera_ = 0;
+    if (++next_set_ == reader_.frameCount()) {
+      next_set_ = 0;
+      if (options_.loop)
+        ++loop_;
+      else
+        finished_ = true;
+    }
+  }
+  return true;
+}
+
+CameraStats SessionSource::stats(int camera) const {
+  CameraStats stats;
+  stats.frames = delivered_.at(camera);
+  const double seconds = std::chrono::duration<double>(last_delivery_ - first_delivery_).count();
+  stats.frame_rate_hz = stats.frames > 1 && seconds > 0 ? (stats.frames - 1) / seconds : 0.0;
+  stats.temperature_c = std::nan("");  // a recording has no sensor
+  stats.last_error = error_;
+  return stats;
+}
+
+}  // namespace lumistage

@@ -1,0 +1,64 @@
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/capture/frame_source.h"
+#include "core/capture/session_reader.h"
+
+namespace lumistage {
+
+enum class ReplayMode {
+  kRecordedRate,      // each set when its timestamp is due, from the first call to next()
+  kAsFastAsPossible,  // decoded from disk as they are asked for
+  kFromMemory,        // all decoded up front, then served without disk or decoding (benchmarks)
+};
+
+struct ReplayOptions {
+  ReplayMode mode = ReplayMode::kAsFastAsPossible;
+  // Start again after the last set. Frame ids and timestamps go on increasing across loops (by
+  // the session's span), so that consumers grouping or pacing by them see a longer recording.
+  bool loop = false;
+  // kFromMemory refuses (Error) a session whose decoded images would need more than this.
+  size_t memory_limit_bytes = size_t(2) << 30;
+};
+
+// Replays a recorded session through the FrameSource interface: the frames of a set come out
+// camera by camera (rig order), then the next set's. Frames are exactly what was recorded.
+class SessionSource : public FrameSource {
+ public:
+  // Opens the session (SessionReader: throws Error) and, for kFromMemory, decodes it all.
+  explicit SessionSource(const std::filesystem::path& folder, ReplayOptions options = {});
+
+  const Rig& rig() const override { return reader_.rig(); }
+  // False on timeout (kRecordedRate: the next set is not due yet), at the end, or when a frame
+  // cannot be decoded any more (stats().last_error says which file; finished() is then true).
+  bool next(CameraFrame& frame, std::chrono::milliseconds timeout) override;
+  bool finished() const override { return finished_; }
+  CameraStats stats(int camera) const override;
+
+  const SessionReader& reader() const { return reader_; }
+
+ private:
+  bool loadSet();  // into set_, for set index next_set_
+
+  SessionReader reader_;
+  ReplayOptions options_;
+  std::vector<std::vector<CameraFrame>> memory_;  // kFromMemory: every set
+  std::vector<CameraFrame> set_;                  // the set being served (disk modes)
+  int next_set_ = 0;                              // index of the set to serve next
+  int next_camera_ = 0;  // camera of that set to serve next; 0: the set is not loaded yet
+  int64_t loop_ = 0;
+  int64_t id_span_ = 0, time_span_ns_ = 0;  // how much ids and timestamps advance per loop
+  bool started_ = false;
+  bool finished_ = false;
+  std::chrono::steady_clock::time_point start_;
+  std::vector<int64_t> delivered_;
+  std::chrono::steady_clock::time_point first_delivery_, last_delivery_;
+  std::string error_;
+};
+
+}  // namespace lumistage

@@ -1,0 +1,195 @@
+#include "core/capture/session_reader.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/base/error.h"
+#include "tests/core/capture/capture_test_util.h"
+
+namespace lumistage {
+namespace {
+
+using namespace lumistage::test;
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+std::string allWarnings(const SessionReader& reader) {
+  std::string out;
+  for (const std::string& w : reader.warnings()) out += w + "\n";
+  return out;
+}
+
+void expectFramesExact(const SessionReader& reader, PixelFormat format, int count) {
+  ASSERT_EQ(reader.frameCount(), count);
+  std::vector<CameraFrame> frames;
+  for (int i = 0; i < count; ++i) {
+    EXPECT_EQ(reader.frameId(i), i);
+    EXPECT_EQ(reader.timestampNs(i), timestampOf(i));
+    reader.readFrame(i, frames);
+    const std::vector<Image> expected = frameImages(reader.rig(), format, i);
+    ASSERT_EQ(frames.size(), expected.size());
+    for (size_t c = 0; c < frames.size(); ++c) {
+      EXPECT_EQ(frames[c].camera, int(c));
+      EXPECT_EQ(frames[c].frame_id, i);
+      EXPECT_EQ(frames[c].timestamp_ns, timestampOf(i));
+      EXPECT_EQ(frames[c].image.format, format);
+      EXPECT_TRUE(frames[c].image.pixels == expected[c].pixels) << "frame " << i << " cam " << c;
+    }
+  }
+}
+
+TEST(SessionReader, ReadsBackWhatWasWrittenBitExactInEveryPixelFormat) {
+  const Rig rig = smallRig();
+  for (PixelFormat format : {PixelFormat::kMono8, PixelFormat::kBayerRggb8, PixelFormat::kRgb8}) {
+    const fs::path folder = freshFolder(std::string("exact_") + pixelFormatName(format));
+    writeSession(folder, rig, format, 4);
+    const SessionReader reader(folder);
+    EXPECT_EQ(reader.pixelFormat(), format);
+    EXPECT_EQ(reader.fps(), 30.0);
+    EXPECT_EQ(reader.source(), "test");
+    EXPECT_FALSE(reader.hasTruth());
+    EXPECT_TRUE(reader.rig() == rig);
+    EXPECT_TRUE(reader.warnings().empty()) << allWarnings(reader);
+    expectFramesExact(reader, format, 4);
+    fs::remove_all(folder);
+  }
+}
+
+TEST(SessionReader, TornLastIndexLineIsSkippedWithAWarning) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("torn_index");
+  writeSession(folder, rig, PixelFormat::kMono8, 5);
+  // Cut mid-line: "4,133333349\n" loses its newline and two digits.
+  truncateFile(folder / "index.csv", fs::file_size(folder / "index.csv") - 3);
+  const SessionReader reader(folder);
+  expectFramesExact(reader, PixelFormat::kMono8, 4);
+  ASSERT_EQ(reader.warnings().size(), 1u) << allWarnings(reader);
+  const std::string& w = reader.warnings()[0];
+  EXPECT_TRUE(contains(w, "index.csv:6: torn last line '4,1333333")) << w;
+  EXPECT_TRUE(contains(w, "the session ends at frame 3")) << w;
+  fs::remove_all(folder);
+}
+
+TEST(SessionReader, TruncatedLastImageAndLeftoverPartialFileEndTheSessionBeforeThem) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("torn_image");
+  writeSession(folder, rig, PixelFormat::kRgb8, 5);
+  const fs::path png = folder / "cam02" / "000004.png";
+  truncateFile(png, fs::file_size(png) / 2);
+  fs::copy_file(folder / "cam01" / "000003.png", folder / "cam01" / "000005.partial.png");
+  const SessionReader reader(folder);
+  expectFramesExact(reader, PixelFormat::kRgb8, 4);
+  const std::string w = allWarnings(reader);
+  ASSERT_EQ(reader.warnings().size(), 2u) << w;
+  EXPECT_TRUE(contains(w, png.string() + ": frame 4 is listed in index.csv but its image is "
+                                         "truncated"))
+      << w;
+  EXPECT_TRUE(contains(w, "the session ends at frame 3")) << w;
+  EXPECT_TRUE(contains(w, "000005.partial.png: left over from an interrupted write; ignored")) << w;
+  fs::remove_all(folder);
+}
+
+TEST(SessionReader, MissingOrWrongImageEndsTheSessionThere) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("missing_image");
+  writeSession(folder, rig, PixelFormat::kMono8, 5);
+  fs::remove(folder / "cam03" / "000002.png");
+  {
+    const SessionReader reader(folder);
+    expectFramesExact(reader, PixelFormat::kMono8, 2);
+    ASSERT_EQ(reader.warnings().size(), 1u);
+    EXPECT_TRUE(contains(reader.warnings()[0],
+                         "000002.png: frame 2 is listed in index.csv but its "
+                         "image is missing; the session ends at frame 1, 2 "
+                         "later frames ignored"))
+        << reader.warnings()[0];
+  }
+  // An image of the wrong size, and one of the wrong channel count.
+  cv::imwrite((folder / "cam03" / "000002.png").string(), cv::Mat(24, 32, CV_8UC1, cv::Scalar(0)));
+  EXPECT_TRUE(contains(SessionReader(folder).warnings()[0], "is a 32x24 image, expected 64x48"));
+  cv::imwrite((folder / "cam03" / "000002.png").string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(0)));
+  EXPECT_TRUE(contains(SessionReader(folder).warnings()[0],
+                       "PNG colour type 2, expected 8-bit grey (type 0)"));
+  fs::remove_all(folder);
+}
+
+TEST(SessionReader, MalformedFilesAreErrorsNamingFileAndLine) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("malformed");
+  writeSession(folder, rig, PixelFormat::kMono8, 3);
+  const std::string yaml = (folder / "session.yaml").string();
+  const std::string index = (folder / "index.csv").string();
+  const std::string yaml_text = readFile(yaml), index_text = readFile(index);
+  auto expectError = [&](const std::string& message) {
+    try {
+      SessionReader reader(folder);
+      ADD_FAILURE() << "no error, expected: " << message;
+    } catch (const Error& e) {
+      EXPECT_TRUE(contains(e.what(), message)) << e.what() << "\nexpected: " << message;
+    }
+    std::ofstream(yaml, std::ios::trunc) << yaml_text;
+    std::ofstream(index, std::ios::trunc) << index_text;
+  };
+  replaceInFile(yaml, "pixel_format: mono8", "pixel_format: yuv422");
+  expectError(yaml + ":7: pixel_format: expected rgb8, bayer_rggb8 or mono8, got 'yuv422'");
+  replaceInFile(yaml, "cameras: [cam01, cam02, cam03]", "cameras: [cam01, cam03, cam02]");
+  expectError(yaml +
+              ":9: cameras: expected the cameras of rig.yaml, in its order: [cam01, cam02, "
+              "cam03], got [cam01, cam03, cam02]");
+  replaceInFile(yaml, "cameras: [cam01, cam02, cam03]", "cameras: [cam01, cam02]");
+  expectError(yaml + ":9: cameras: expected the cameras of rig.yaml");
+  replaceInFile(yaml, "version: 1", "version: 2");
+  expectError(yaml + ":3: version: this build reads version 1, got 2");
+  replaceInFile(yaml, "format: lumistage-session", "format: lumistage-rig");
+  expectError(yaml + ":2: format: expected lumistage-session, got 'lumistage-rig'");
+  replaceInFile(yaml, "fps: 30", "fps: -30");
+  expectError(yaml + ":6: fps: expected a positive frame rate, got -30");
+  replaceInFile(yaml, "truth: false", "truth: false\nlens: wide");
+  expectError(yaml + ":11: lens: unknown key 'lens'");
+  replaceInFile(index, "1,", "x1,");
+  expectError(index + ":3: expected frame,timestamp_ns as two whole numbers, got 'x1,33333350'");
+  replaceInFile(index, "1,", "1,2,");
+  expectError(index + ":3: expected frame,timestamp_ns as two whole numbers, got '1,2,33333350'");
+  replaceInFile(index, "2,", "0,");
+  expectError(index + ":4: frame 0 after frame 1: frame numbers must increase");
+  replaceInFile(index, "frame,timestamp_ns", "frame;timestamp_ns");
+  expectError(index + ":1: expected the header 'frame,timestamp_ns', got 'frame;timestamp_ns'");
+  fs::remove_all(folder);
+}
+
+TEST(SessionReader, ReadsGroundTruthJointsAndMaskPaths) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("truth");
+  const std::vector<std::string> names = {"pelvis", "head"};
+  std::vector<std::vector<Eigen::Vector3d>> joints;
+  {
+    SessionWriter writer(folder, rig, PixelFormat::kMono8, 30.0, "virtual-studio", names);
+    std::vector<std::vector<uint8_t>> masks(3, std::vector<uint8_t>(64 * 48, 255));
+    for (int f = 0; f < 3; ++f) {
+      FrameTruth truth;
+      truth.joints = {Eigen::Vector3d(0.1 * f, 1.0 / 3.0, 1e-17), Eigen::Vector3d(-f, 2, 1.75)};
+      truth.masks = &masks;
+      joints.push_back(truth.joints);
+      writer.writeFrame(f, timestampOf(f), views(frameImages(rig, PixelFormat::kMono8, f)), &truth);
+    }
+  }
+  const SessionReader reader(folder);
+  EXPECT_TRUE(reader.hasTruth());
+  std::vector<std::string> read_names;
+  const std::vector<std::vector<Eigen::Vector3d>> read = reader.readTruthJoints(&read_names);
+  EXPECT_EQ(read_names, names);
+  ASSERT_EQ(read.size(), 3u);
+  for (int f = 0; f < 3; ++f) {
+    for (int j = 0; j < 2; ++j) EXPECT_TRUE(read[f][j] == joints[f][j]) << f << " " << j;  // exact
+  }
+  EXPECT_TRUE(fs::exists(reader.truthMaskPath(1, 2)));
+  EXPECT_EQ(reader.truthMaskPath(1, 2), folder / "truth" / "masks" / "cam02" / "000002.png");
+  fs::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace lumistage

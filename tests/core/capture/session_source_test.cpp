@@ -1,0 +1,114 @@
+#include "core/capture/session_source.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+
+#include "core/base/error.h"
+#include "core/capture/session_recorder.h"
+#include "tests/core/capture/capture_test_util.h"
+
+namespace lumistage {
+namespace {
+
+using namespace lumistage::test;
+using std::chrono::milliseconds;
+
+constexpr int64_t kPeriodNs = 10'000'000;  // 100 fps: a recorded-rate replay takes 50 ms
+
+// Records `count` sets through SessionRecorder, 10 ms apart.
+void record(const fs::path& folder, const Rig& rig, PixelFormat format, int count) {
+  SessionRecorder recorder(folder, rig, format, 100.0, "test", count);
+  for (int f = 0; f < count; ++f)
+    ASSERT_TRUE(recorder.push(f, f * kPeriodNs, frameImages(rig, format, f)));
+  recorder.stop();
+  ASSERT_EQ(recorder.stats().written, count);
+}
+
+TEST(Replay, EveryModeGivesBackExactlyWhatWasRecorded) {
+  const Rig rig = smallRig();
+  constexpr int kFrames = 6;
+  for (PixelFormat format : {PixelFormat::kBayerRggb8, PixelFormat::kRgb8}) {
+    const fs::path folder = freshFolder(std::string("replay_") + pixelFormatName(format));
+    record(folder, rig, format, kFrames);
+    for (ReplayMode mode :
+         {ReplayMode::kRecordedRate, ReplayMode::kAsFastAsPossible, ReplayMode::kFromMemory}) {
+      SCOPED_TRACE(int(mode));
+      SessionSource source(folder, {mode, false});
+      EXPECT_TRUE(source.rig() == rig);
+      const auto start = std::chrono::steady_clock::now();
+      CameraFrame frame;
+      int got = 0;
+      while (!source.finished()) {
+        if (!source.next(frame, milliseconds(5))) continue;  // recorded rate: not due yet
+        const int set = got / 3, camera = got % 3;
+        ASSERT_EQ(frame.camera, camera);  // camera by camera, in rig order
+        EXPECT_EQ(frame.frame_id, set);
+        EXPECT_EQ(frame.timestamp_ns, set * kPeriodNs);
+        EXPECT_TRUE(frame.image.pixels == frameImages(rig, format, set)[camera].pixels);
+        ++got;
+      }
+      EXPECT_EQ(got, kFrames * 3);
+      EXPECT_FALSE(source.next(frame, milliseconds(0)));
+      EXPECT_EQ(source.stats(0).frames, kFrames);
+      EXPECT_TRUE(source.stats(0).last_error.empty());
+      if (mode == ReplayMode::kRecordedRate) {
+        EXPECT_GE(std::chrono::steady_clock::now() - start, milliseconds(50));
+      }
+    }
+    fs::remove_all(folder);
+  }
+}
+
+TEST(Replay, LoopsWithIdsAndTimestampsGoingOn) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("replay_loop");
+  record(folder, rig, PixelFormat::kMono8, 2);
+  SessionSource source(folder, {ReplayMode::kFromMemory, true});
+  CameraFrame frame;
+  for (int i = 0; i < 5 * 3; ++i) {
+    ASSERT_TRUE(source.next(frame, milliseconds(0)));
+    const int set = i / 3;
+    EXPECT_EQ(frame.frame_id, set);
+    EXPECT_EQ(frame.timestamp_ns, set * kPeriodNs);  // the span is last - first + one period
+    EXPECT_TRUE(frame.image.pixels ==
+                frameImages(rig, PixelFormat::kMono8, set % 2)[frame.camera].pixels);
+  }
+  EXPECT_FALSE(source.finished());
+  fs::remove_all(folder);
+}
+
+TEST(Replay, FromMemoryOverTheLimitSaysHowMuchItWouldNeed) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("replay_limit");
+  record(folder, rig, PixelFormat::kRgb8, 2);
+  try {
+    SessionSource source(folder, {ReplayMode::kFromMemory, false, 10000});
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("replaying from memory needs 0.1 MiB (2 frames of 3 "
+                                         "cameras), over the limit of 0.0 MiB"),
+              std::string::npos)
+        << e.what();
+  }
+  fs::remove_all(folder);
+}
+
+TEST(Replay, AnImageDamagedAfterOpeningEndsTheReplayWithItsName) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("replay_damaged");
+  record(folder, rig, PixelFormat::kMono8, 3);
+  SessionSource source(folder, {ReplayMode::kAsFastAsPossible, false});
+  std::ofstream(folder / "cam02" / "000001.png", std::ios::trunc) << "not a png";
+  CameraFrame frame;
+  int got = 0;
+  while (source.next(frame, milliseconds(0))) ++got;
+  EXPECT_EQ(got, 3);
+  EXPECT_TRUE(source.finished());
+  EXPECT_NE(source.stats(1).last_error.find("cam02/000001.png"), std::string::npos)
+      << source.stats(1).last_error;
+  fs::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace lumistage
