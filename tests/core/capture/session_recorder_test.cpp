@@ -77,30 +77,40 @@ std::vector<Image> fullDiskImages(const Rig& rig, int64_t frame_id) {
   return images;
 }
 
-// Runs only as the child of FullDiskStopsCleanly...: a process whose files may not grow beyond
-// a few hundred bytes, as on a full disk (writes fail with EFBIG).
-TEST(RecorderChild, RecordsUntilTheDiskIsFull) {
-  const char* folder = std::getenv("LUMISTAGE_RECORDER_CHILD_FOLDER");
-  if (!folder) GTEST_SKIP() << "runs as the child process of Recorder.FullDisk...";
+// The child of FullDiskStopsCleanly...: a process whose files may not grow beyond a few hundred
+// bytes, as on a full disk (writes fail with EFBIG). It runs when the test binary starts with
+// LUMISTAGE_RECORDER_CHILD_FOLDER set, before GoogleTest, and exits: 0 when the recorder failed
+// cleanly and refused what came after, 1 otherwise.
+int recordUntilTheDiskIsFull(const char* folder) {
   const Rig rig = smallRig();
   SessionRecorder recorder(folder, rig, PixelFormat::kMono8, 30.0, "test", 64);
   std::signal(SIGXFSZ, SIG_IGN);
   const rlimit limit{400, 400};
-  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &limit), 0);
+  if (::setrlimit(RLIMIT_FSIZE, &limit) != 0) return 1;
   for (int f = 0; f < 60; ++f) recorder.push(f, timestampOf(f), fullDiskImages(rig, f));
   recorder.stop();
   const RecorderStats stats = recorder.stats();
   std::printf("RECORDER written=%lld failed=%d error=%s\n", static_cast<long long>(stats.written),
               int(stats.failed), stats.last_error.c_str());
-  EXPECT_TRUE(stats.failed);
-  EXPECT_FALSE(recorder.push(99, 0, fullDiskImages(rig, 99)));
+  const bool refused = !recorder.push(99, 0, fullDiskImages(rig, 99));
+  return stats.failed && refused ? 0 : 1;
 }
+
+[[maybe_unused]] const int kRecorderChild = [] {
+  if (const char* folder = std::getenv("LUMISTAGE_RECORDER_CHILD_FOLDER")) {
+    std::fflush(stdout);
+    const int code = recordUntilTheDiskIsFull(folder);
+    std::fflush(stdout);
+    std::_Exit(code);
+  }
+  return 0;
+}();
 
 TEST(Recorder, FullDiskStopsCleanlyAndTheSessionStaysReadable) {
   const fs::path folder = freshFolder("full_disk");
   const std::string self = fs::read_symlink("/proc/self/exe").string();
-  const std::string command = "LUMISTAGE_RECORDER_CHILD_FOLDER=" + folder.string() + " " + self +
-                              " --gtest_filter=RecorderChild.RecordsUntilTheDiskIsFull 2>&1";
+  const std::string command =
+      "LUMISTAGE_RECORDER_CHILD_FOLDER=" + folder.string() + " " + self + " 2>&1";
   FILE* pipe = ::popen(command.c_str(), "r");
   ASSERT_TRUE(pipe);
   std::string output;
