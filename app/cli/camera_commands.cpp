@@ -13,6 +13,10 @@
 #include "app/cli/progress.h"
 #include "core/base/error.h"
 #include "core/capture/aravis_source.h"
+#include "core/capture/frame_grouper.h"
+#include "core/capture/session_reader.h"
+#include "core/capture/session_recorder.h"
+#include "core/capture/session_source.h"
 #include "core/capture/virtual_gige_cameras.h"
 #include "core/geometry/rig_file.h"
 #include "core/sim/virtual_studio.h"
@@ -62,7 +66,7 @@ void addCameraCommands(CLI::App& app) {
   });
 
   struct VirtualArgs {
-    std::string config, address = "127.0.1.1", pixel_format = "bayer_rggb8";
+    std::string config, session, address = "127.0.1.1", pixel_format = "bayer_rggb8";
     int frames = 30;
     double seconds = 0;
   };
@@ -70,7 +74,11 @@ void addCameraCommands(CLI::App& app) {
   CLI::App* serve = app.add_subcommand(
       "virtual-cameras",
       "Serve the virtual studio through GigE Vision: camera i of the rig at ADDRESS+i");
-  serve->add_option("--config", v->config, "studio config (YAML)")->required();
+  auto* config_option =
+      serve->add_option("--config", v->config, "studio config (YAML): render its frames");
+  auto* session_option =
+      serve->add_option("--session", v->session, "or serve a recorded session's frames");
+  config_option->excludes(session_option);
   serve->add_option("--frames", v->frames, "frames rendered and looped")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
@@ -79,11 +87,31 @@ void addCameraCommands(CLI::App& app) {
       ->capture_default_str();
   serve->add_option("--seconds", v->seconds, "stop after this long (default: until interrupted)");
   serve->callback([v] {
-    const PixelFormat format = pixelFormatOption(v->pixel_format);
-    StudioConfig config = loadStudioConfig(v->config);
-    const Rig rig = config.rig;
+    PixelFormat format = pixelFormatOption(v->pixel_format);
     auto loop = std::make_shared<FrameLoop>();
-    {
+    Rig rig;
+    if (!v->session.empty()) {
+      // A recording, in its own pixel format, as the cameras would have delivered it.
+      const SessionReader reader(v->session);
+      for (const std::string& warning : reader.warnings())
+        fmt::print(stderr, "warning: {}\n", warning);
+      rig = reader.rig();
+      format = reader.pixelFormat();
+      loop->fps = reader.fps();
+      loop->frames.resize(rig.cameraCount());
+      const int count = std::min(v->frames, reader.frameCount());
+      if (count == 0) throw Error(v->session + ": no complete frame to serve");
+      std::vector<CameraFrame> frames;
+      for (int f = 0; f < count; ++f) {
+        reader.readFrame(f, frames);
+        for (int c = 0; c < rig.cameraCount(); ++c)
+          loop->frames[c].push_back(std::move(frames[c].image));
+        printProgress("load", f + 1, count);
+      }
+    } else {
+      if (v->config.empty()) throw CLI::RequiredError("--config or --session");
+      StudioConfig config = loadStudioConfig(v->config);
+      rig = config.rig;
       VirtualStudio studio(std::move(config), v->frames);
       fmt::print("rendering {} frames of {} cameras on {}\n", v->frames, rig.cameraCount(),
                  studio.rendererDescription());
@@ -107,14 +135,16 @@ void addCameraCommands(CLI::App& app) {
   });
 
   struct StreamArgs {
-    std::string rig, address = "127.0.1.1", pixel_format = "bayer_rggb8";
+    std::string rig, address = "127.0.1.1", pixel_format = "bayer_rggb8", session, replay = "rate",
+                     record;
     std::vector<std::string> devices;
     double seconds = 5, fps = 25;
   };
   auto s = std::make_shared<StreamArgs>();
-  CLI::App* stream =
-      app.add_subcommand("stream", "Stream from Aravis cameras and report rate, drops and CPU use");
-  stream->add_option("--rig", s->rig, "rig file: one Aravis camera per rig camera")->required();
+  CLI::App* stream = app.add_subcommand("stream",
+                                        "Stream from Aravis cameras or a recorded session; report "
+                                        "rate, drops and CPU; optionally record");
+  stream->add_option("--rig", s->rig, "rig file: one Aravis camera per rig camera");
   stream->add_option("--address", s->address, "address of the first camera (camera i at ADDRESS+i)")
       ->capture_default_str();
   stream->add_option("--device", s->devices,
@@ -122,28 +152,78 @@ void addCameraCommands(CLI::App& app) {
   stream->add_option("--pixel-format", s->pixel_format, "mono8, bayer_rggb8 or rgb8")
       ->capture_default_str();
   stream->add_option("--fps", s->fps, "frame rate asked of the cameras")->capture_default_str();
+  stream->add_option("--session", s->session, "replay this recorded session instead of cameras");
+  stream->add_option("--replay", s->replay, "replay pace: rate (as recorded), fast, memory")
+      ->capture_default_str();
   stream->add_option("--seconds", s->seconds, "how long")->capture_default_str();
+  stream->add_option("--record", s->record,
+                     "record complete frame sets into this new session folder");
   stream->callback([s] {
-    const Rig rig = loadRig(s->rig);
-    if (!s->devices.empty() && s->devices.size() != static_cast<size_t>(rig.cameraCount())) {
-      throw Error(fmt::format("--device given {} times for a rig of {} cameras", s->devices.size(),
-                              rig.cameraCount()));
+    std::unique_ptr<FrameSource> source;
+    if (!s->session.empty()) {
+      ReplayOptions options;
+      if (s->replay == "rate") {
+        options.mode = ReplayMode::kRecordedRate;
+      } else if (s->replay == "fast") {
+        options.mode = ReplayMode::kAsFastAsPossible;
+      } else if (s->replay == "memory") {
+        options.mode = ReplayMode::kFromMemory;
+      } else {
+        throw CLI::ValidationError("--replay",
+                                   "expected rate, fast or memory, got '" + s->replay + "'");
+      }
+      source = std::make_unique<SessionSource>(s->session, options);
+    } else {
+      if (s->rig.empty()) throw CLI::RequiredError("--rig (or --session)");
+      const Rig rig = loadRig(s->rig);
+      if (!s->devices.empty() && s->devices.size() != static_cast<size_t>(rig.cameraCount())) {
+        throw Error(fmt::format("--device given {} times for a rig of {} cameras",
+                                s->devices.size(), rig.cameraCount()));
+      }
+      std::vector<AravisCameraConfig> configs(rig.cameraCount());
+      for (int c = 0; c < rig.cameraCount(); ++c) {
+        configs[c].device =
+            s->devices.empty() ? VirtualGigeCameras::addressOf(s->address, c) : s->devices[c];
+        configs[c].pixel_format = pixelFormatOption(s->pixel_format);
+        configs[c].frame_rate_hz = s->fps;
+      }
+      source = std::make_unique<AravisSource>(rig, configs);
     }
-    std::vector<AravisCameraConfig> configs(rig.cameraCount());
-    for (int c = 0; c < rig.cameraCount(); ++c) {
-      configs[c].device =
-          s->devices.empty() ? VirtualGigeCameras::addressOf(s->address, c) : s->devices[c];
-      configs[c].pixel_format = pixelFormatOption(s->pixel_format);
-      configs[c].frame_rate_hz = s->fps;
+    const Rig& rig = source->rig();
+    // Recording takes complete sets of one instant: frames grouped by id.
+    std::unique_ptr<SessionRecorder> recorder;
+    std::unique_ptr<FrameGrouper> grouper;
+    if (!s->record.empty()) {
+      const PixelFormat format = s->session.empty() ? pixelFormatOption(s->pixel_format)
+                                                    : SessionReader(s->session).pixelFormat();
+      recorder = std::make_unique<SessionRecorder>(s->record, rig, format, s->fps,
+                                                   s->session.empty() ? "aravis" : "replay");
+      grouper = std::make_unique<FrameGrouper>(rig.cameraCount());
     }
-    AravisSource source(rig, configs);
     const double cpu_start = cpuSeconds();
     const auto start = std::chrono::steady_clock::now();
     CameraFrame frame;
-    int64_t bytes = 0;
-    while (std::chrono::steady_clock::now() - start < std::chrono::duration<double>(s->seconds)) {
-      if (source.next(frame, std::chrono::milliseconds(200)))
-        bytes += static_cast<int64_t>(frame.image.pixels.size());
+    FrameSet set;
+    int64_t bytes = 0, incomplete = 0, first_timestamp = -1;
+    std::signal(SIGINT, onSignal);
+    while (!g_stop && !source->finished() &&
+           std::chrono::steady_clock::now() - start < std::chrono::duration<double>(s->seconds)) {
+      if (!source->next(frame, std::chrono::milliseconds(200))) continue;
+      bytes += static_cast<int64_t>(frame.image.pixels.size());
+      if (!grouper) continue;
+      grouper->push(frame);
+      while (grouper->pop(set)) {
+        if (!set.complete()) {
+          ++incomplete;
+          continue;
+        }
+        if (first_timestamp < 0) first_timestamp = set.timestamp_ns;
+        std::vector<Image> images;
+        recorder->takeSpareImages(images);
+        images.resize(set.frames.size());
+        for (size_t c = 0; c < set.frames.size(); ++c) std::swap(images[c], set.frames[c].image);
+        recorder->push(set.frame_id, set.timestamp_ns - first_timestamp, std::move(images));
+      }
     }
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -152,7 +232,7 @@ void addCameraCommands(CLI::App& app) {
                "resends", "last error");
     int64_t frames = 0;
     for (int c = 0; c < rig.cameraCount(); ++c) {
-      const CameraStats st = source.stats(c);
+      const CameraStats st = source->stats(c);
       frames += st.frames;
       fmt::print("{:<8} {:>8} {:>8.1f} {:>8} {:>8}  {}\n", rig.camera(c).name(), st.frames,
                  st.frames / wall, st.dropped, st.resends, st.last_error);
@@ -160,6 +240,16 @@ void addCameraCommands(CLI::App& app) {
     fmt::print(
         "{} frames in {:.1f} s ({:.1f} MB/s); CPU {:.0f}% of one core, {:.2f} ms per frame\n",
         frames, wall, bytes / wall / 1e6, 100 * cpu / wall, frames > 0 ? 1000 * cpu / frames : 0.0);
+    if (recorder) {
+      recorder->stop();
+      const RecorderStats st = recorder->stats();
+      fmt::print(
+          "recorded {} frame sets to {} ({:.1f} MB), {} dropped by the recorder, {} incomplete "
+          "sets left out{}\n",
+          st.written, s->record, st.bytes / 1e6, st.dropped, incomplete,
+          st.failed ? "; recording stopped: " + st.last_error : "");
+      if (st.failed) throw Error(st.last_error);
+    }
   });
 }
 
