@@ -10,22 +10,32 @@
 #include <QMessageBox>
 #include <QSettings>
 #include <QStatusBar>
+#include <QTabWidget>
+#include <QThread>
 #include <exception>
 
 #include "core/geometry/rig_file.h"
+#include "ui/camera_grid_panel.h"
 #include "ui/rig_panel.h"
+#include "ui/source_worker.h"
 #include "ui/stage_plan_view.h"
 
 namespace lumistage {
 
 MainWindow::MainWindow(QWidget* parent)
     : QMainWindow(parent),
+      tabs_(new QTabWidget(this)),
+      camera_grid_(new CameraGridPanel(this)),
       stage_plan_(new StagePlanView(this)),
       rig_panel_(new RigPanel(this)),
       rig_dock_(new QDockWidget(tr("Cameras"), this)),
       status_(new QLabel(this)) {
   setWindowTitle(tr("Lumistage Studio"));
-  setCentralWidget(stage_plan_);
+  qRegisterMetaType<std::shared_ptr<const lumistage::Rig>>();
+  qRegisterMetaType<QVector<lumistage::CameraStatus>>();
+  tabs_->addTab(camera_grid_, tr("Cameras"));
+  tabs_->addTab(stage_plan_, tr("Stage"));
+  setCentralWidget(tabs_);
 
   rig_dock_->setObjectName("cameras_dock");
   rig_dock_->setWidget(rig_panel_);
@@ -50,25 +60,64 @@ MainWindow::MainWindow(QWidget* parent)
   if (!settings.contains("window/geometry")) resize(1100, 820);
 }
 
-MainWindow::~MainWindow() = default;
+MainWindow::~MainWindow() {
+  stopSource();
+}
+
+void MainWindow::showRig(std::unique_ptr<Rig> rig, const QString& origin) {
+  // Views hold a pointer to the rig: give them the new one before the old one goes.
+  stage_plan_->setRig(rig.get());
+  rig_panel_->setRig(rig.get());
+  camera_grid_->setRig(*rig);
+  rig_ = std::move(rig);
+  status_->setText(
+      tr("%1: %2 cameras on %3 nodes").arg(origin).arg(rig_->cameraCount()).arg(rig_->nodeCount()));
+  setWindowTitle(tr("Lumistage Studio - %1").arg(origin));
+}
 
 QString MainWindow::openRig(const QString& path) {
+  std::unique_ptr<Rig> rig;
   try {
-    auto rig = std::make_unique<Rig>(loadRig(path.toStdString()));
-    // Views hold a pointer to the rig: give them the new one before the old one goes.
-    stage_plan_->setRig(rig.get());
-    rig_panel_->setRig(rig.get());
-    rig_ = std::move(rig);
-    rig_path_ = path;
+    rig = std::make_unique<Rig>(loadRig(path.toStdString()));
   } catch (const std::exception& e) {
     return QString::fromStdString(e.what());
   }
-  status_->setText(tr("Rig %1: %2 cameras on %3 nodes")
-                       .arg(QFileInfo(rig_path_).fileName())
-                       .arg(rig_->cameraCount())
-                       .arg(rig_->nodeCount()));
-  setWindowTitle(tr("Lumistage Studio - %1").arg(QFileInfo(rig_path_).fileName()));
+  rig_path_ = path;
+  showRig(std::move(rig), tr("Rig %1").arg(QFileInfo(path).fileName()));
   return {};
+}
+
+void MainWindow::startSource(const SourceSpec& spec) {
+  stopSource();
+  source_thread_ = new QThread(this);
+  SourceWorker* worker = new SourceWorker(spec);
+  source_worker_ = worker;
+  worker->moveToThread(source_thread_);
+  connect(source_thread_, &QThread::started, worker, &SourceWorker::run);
+  connect(worker, &SourceWorker::finished, source_thread_, &QThread::quit);
+  connect(source_thread_, &QThread::finished, worker, &QObject::deleteLater);
+  connect(worker, &SourceWorker::opened, this,
+          [this](std::shared_ptr<const Rig> rig, const QString& description) {
+            showRig(std::make_unique<Rig>(*rig), description);
+          });
+  connect(worker, &SourceWorker::failed, this, [this](const QString& error) {
+    status_->setText(tr("Source stopped: %1").arg(error));
+    emit sourceFailed(error);
+  });
+  connect(worker, &SourceWorker::frame, camera_grid_, &CameraGridPanel::showFrame);
+  connect(worker, &SourceWorker::status, camera_grid_, &CameraGridPanel::showStatus);
+  status_->setText(tr("Opening %1...").arg(spec.describe()));
+  source_thread_->start();
+}
+
+void MainWindow::stopSource() {
+  if (!source_thread_) return;
+  if (source_worker_) source_worker_->stop();  // the worker is alive until its thread finishes
+  source_thread_->quit();
+  source_thread_->wait();
+  delete source_thread_;
+  source_thread_ = nullptr;
+  source_worker_ = nullptr;
 }
 
 void MainWindow::chooseRig() {
@@ -82,6 +131,7 @@ void MainWindow::chooseRig() {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
+  stopSource();
   QSettings settings("Lumistage", "Studio");
   settings.setValue("window/geometry", saveGeometry());
   settings.setValue("window/state", saveState());

@@ -8,14 +8,19 @@
 
 class QDockWidget;
 class QLabel;
+class QTabWidget;
+class QThread;
 
 namespace lumistage {
 
+class CameraGridPanel;
 class RigPanel;
+class SourceWorker;
 class StagePlanView;
+struct SourceSpec;
 
-// The studio's main window: the stage plan in the centre, dockable panels around it, the layout
-// remembered between runs (QSettings "Lumistage/Studio").
+// The studio's main window: the live cameras and the stage plan in the centre, dockable panels
+// around them, the layout remembered between runs (QSettings "Lumistage/Studio").
 class MainWindow : public QMainWindow {
   Q_OBJECT
 
@@ -28,18 +33,32 @@ class MainWindow : public QMainWindow {
   QString openRig(const QString& path);
   const Rig* rig() const { return rig_.get(); }
 
+  // Starts streaming from a source on a worker thread (stopping any running one); the source's
+  // rig replaces the loaded one. Errors arrive in sourceFailed and in the status bar.
+  void startSource(const SourceSpec& spec);
+  void stopSource();
+
   RigPanel* rigPanel() const { return rig_panel_; }
   StagePlanView* stagePlan() const { return stage_plan_; }
+  CameraGridPanel* cameraGrid() const { return camera_grid_; }
+
+ signals:
+  void sourceFailed(QString error);
 
  protected:
   void closeEvent(QCloseEvent* event) override;
 
  private:
   void chooseRig();
+  void showRig(std::unique_ptr<Rig> rig, const QString& origin);
 
   std::unique_ptr<Rig> rig_;
   QString rig_path_;
+  QTabWidget* tabs_;
+  CameraGridPanel* camera_grid_;
   StagePlanView* stage_plan_;
+  QThread* source_thread_ = nullptr;
+  SourceWorker* source_worker_ = nullptr;
   RigPanel* rig_panel_;
   QDockWidget* rig_dock_;
   QLabel* status_;

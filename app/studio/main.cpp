@@ -1,13 +1,17 @@
 // lumistage-studio: the Qt6 coordinator of the stage.
 #include <QApplication>
 #include <QCommandLineParser>
+#include <QElapsedTimer>
 #include <QMessageBox>
+#include <QTimer>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 
 #include "core/base/resource_path.h"
+#include "ui/camera_grid_panel.h"
 #include "ui/main_window.h"
+#include "ui/source_worker.h"
 
 namespace {
 
@@ -40,11 +44,22 @@ int main(int argc, char** argv) {
   QCommandLineParser parser;
   parser.setApplicationDescription("Lumistage Studio: live free-viewpoint video of people");
   parser.addHelpOption();
-  QCommandLineOption rig_option("rig", "Rig file to open (default: the reference rig).", "file");
+  QCommandLineOption rig_option(
+      "rig", "Rig file to open (default: the reference rig; with aravis, the cameras' rig).",
+      "file");
+  QCommandLineOption source_option("source",
+                                   "Where frames come from: virtual[:STUDIO_CONFIG] (default, the "
+                                   "reference virtual studio), session:DIR "
+                                   "(a recording, looped at its rate), aravis[:FIRST_ADDRESS] "
+                                   "(GigE Vision cameras, camera i at address+i), "
+                                   "none.",
+                                   "source", "virtual");
   QCommandLineOption screenshot_option(
-      "screenshot", "Save a screenshot of the main window to <png> once it is shown, then quit.",
+      "screenshot",
+      "Save a screenshot of the main window to <png> once every camera shows a picture, then quit.",
       "png");
   parser.addOption(rig_option);
+  parser.addOption(source_option);
   parser.addOption(screenshot_option);
   parser.process(app);
 
@@ -65,17 +80,40 @@ int main(int argc, char** argv) {
       if (!parser.isSet(screenshot_option)) QMessageBox::warning(&window, "Cannot open rig", error);
     }
   }
+  const QString source = parser.value(source_option);
+  if (source != "none") {
+    lumistage::SourceSpec spec;
+    if (const QString error = lumistage::SourceSpec::parse(source, spec); !error.isEmpty()) {
+      std::fprintf(stderr, "lumistage-studio: %s\n", qPrintable(error));
+      return 2;
+    }
+    spec.rig = parser.value(rig_option);
+    window.startSource(spec);
+  }
   if (parser.isSet(screenshot_option)) {
+    // Once every camera has shown pictures and counters for a few seconds (or after a minute; at
+    // once without a source).
     const QString png = parser.value(screenshot_option);
-    QMetaObject::invokeMethod(
-        &window,
-        [&window, png] {
-          const bool ok = window.grab().save(png);
-          std::fprintf(ok ? stdout : stderr, "%s %s\n", ok ? "saved" : "cannot save",
-                       qPrintable(png));
-          QApplication::exit(ok ? 0 : 1);
-        },
-        Qt::QueuedConnection);
+    QObject::connect(&window, &lumistage::MainWindow::sourceFailed, &app, [](const QString& error) {
+      std::fprintf(stderr, "lumistage-studio: %s\n", qPrintable(error));
+      QApplication::exit(1);
+    });
+    auto* timer = new QTimer(&window);
+    QElapsedTimer clock;
+    clock.start();
+    QObject::connect(timer, &QTimer::timeout, &window, [&window, png, clock, source, timer] {
+      const auto* grid = window.cameraGrid();
+      const bool ready = source == "none" || (grid->cameraCount() > 0 &&
+                                              grid->camerasWithPictures() == grid->cameraCount() &&
+                                              clock.elapsed() > 5000);
+      if (!ready && clock.elapsed() < 60000) return;
+      timer->stop();
+      const bool ok = window.grab().save(png);
+      std::fprintf(ok ? stdout : stderr, "%s %s%s\n", ok ? "saved" : "cannot save", qPrintable(png),
+                   ready ? "" : " (not every camera had a picture after a minute)");
+      QApplication::exit(ok && ready ? 0 : 1);
+    });
+    timer->start(300);
   }
   return app.exec();
 }

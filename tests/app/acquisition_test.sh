@@ -2,7 +2,7 @@
 # The whole acquisition path with real processes: a synthetic session is served by virtual GigE
 # Vision cameras (lumistage virtual-cameras), streamed and recorded by an Aravis client
 # (lumistage stream --record), and the recording must hold exactly the frames that were served.
-# Run inside tests/in_network_namespace.sh (it needs the 127.0.1.x loopback addresses).
+# Run inside tests/in-network-namespace.sh (it needs the 127.0.1.x loopback addresses).
 # Usage: acquisition_test.sh LUMISTAGE_BINARY
 set -eu
 cli=$1

@@ -7,7 +7,11 @@
 #include <QTemporaryDir>
 #include <QtTest>
 
+#include "core/capture/session_writer.h"
+#include "core/geometry/ring_rig.h"
+#include "ui/camera_grid_panel.h"
 #include "ui/rig_panel.h"
+#include "ui/source_worker.h"
 #include "ui/stage_plan_view.h"
 
 using lumistage::MainWindow;
@@ -73,6 +77,59 @@ class MainWindowTest : public QObject {
     const QImage after = window.stagePlan()->grab().toImage();
     const QColor node1 = lumistage::StagePlanView::nodeColour(0);  // cam05 is on node1
     QVERIFY(pixelsNear(after, node1) > pixelsNear(before, node1));
+  }
+
+  void previewsDecimateBayerIntoColour() {
+    // A 8x8 Bayer image: R=200, G=100, B=50 everywhere.
+    lumistage::Image bayer;
+    bayer.resize(lumistage::PixelFormat::kBayerRggb8, 8, 8);
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 0; x < 8; ++x)
+        bayer.pixels[y * 8 + x] = (y % 2 == 0) ? (x % 2 == 0 ? 200 : 100) : (x % 2 == 0 ? 100 : 50);
+    }
+    const QImage preview = lumistage::SourceWorker::preview(bayer);
+    QCOMPARE(preview.size(), QSize(2, 2));
+    QCOMPARE(preview.pixelColor(1, 1), QColor(200, 100, 50));
+  }
+
+  void liveSessionShowsEveryCameraAndNoticesWhenFramesStop() {
+    // A small recorded session of two cameras, replayed as the studio's source.
+    QTemporaryDir dir;
+    lumistage::RingRigSpec spec;
+    spec.cameras = 2;
+    spec.width = 64;
+    spec.height = 48;
+    const lumistage::Rig rig = lumistage::makeRingRig(spec);
+    {
+      lumistage::SessionWriter writer(dir.filePath("session").toStdString(), rig,
+                                      lumistage::PixelFormat::kBayerRggb8, 10.0, "test");
+      lumistage::Image image;
+      image.resize(lumistage::PixelFormat::kBayerRggb8, 64, 48);
+      for (int f = 0; f < 5; ++f) {
+        std::fill(image.pixels.begin(), image.pixels.end(), uint8_t(40 * f));
+        writer.writeFrame(f, f * 100000000LL, {image.view(), image.view()});
+      }
+    }
+    MainWindow window;
+    window.resize(900, 700);
+    window.show();
+    lumistage::SourceSpec source;
+    QCOMPARE(lumistage::SourceSpec::parse("session:" + dir.filePath("session"), source), QString());
+    window.startSource(source);
+    lumistage::CameraGridPanel* grid = window.cameraGrid();
+    QTRY_COMPARE_WITH_TIMEOUT(grid->camerasWithPictures(), 2, 5000);
+    QCOMPARE(grid->state(0), QString("streaming"));
+    QCOMPARE(window.rig()->cameraCount(), 2);
+    // Frames stop: late within a second, lost within three.
+    window.stopSource();
+    QTRY_COMPARE_WITH_TIMEOUT(grid->state(1), QString("late"), 1500);
+    QTRY_COMPARE_WITH_TIMEOUT(grid->state(1), QString("lost"), 3000);
+  }
+
+  void unknownSourceIsRefusedWithTheChoices() {
+    lumistage::SourceSpec spec;
+    QVERIFY(lumistage::SourceSpec::parse("webcam", spec)
+                .contains("expected virtual[:CONFIG], session:DIR"));
   }
 
   void badRigKeepsThePreviousOneAndSaysWhy() {

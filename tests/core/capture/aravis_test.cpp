@@ -91,6 +91,33 @@ TEST(Aravis, VirtualCamerasStreamTheSyntheticFramesBitExact) {
   EXPECT_LT(stats.frame_rate_hz, 1.3 * fps);
 }
 
+TEST(Aravis, SoftwareTriggerFiresEveryCamera) {
+  const Rig rig = smallRig(2, 160, 120);
+  auto loop = randomLoop(rig, 3, 25, PixelFormat::kMono8);
+  VirtualGigeCameras server(rig, loop, PixelFormat::kMono8, "127.0.1.4");
+  std::vector<AravisCameraConfig> configs(2);
+  for (int c = 0; c < 2; ++c) {
+    configs[c].device = server.addresses()[c];
+    configs[c].pixel_format = PixelFormat::kMono8;
+    configs[c].trigger = TriggerMode::kSoftware;
+  }
+  AravisSource source(rig, configs);
+  CameraFrame frame;
+  // Untriggered, the cameras stay quiet.
+  EXPECT_FALSE(source.next(frame, std::chrono::milliseconds(600)));
+  int received[2] = {0, 0};
+  for (int shot = 0; shot < 5; ++shot) {
+    source.trigger();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+    while (received[0] + received[1] < 2 * (shot + 1) &&
+           std::chrono::steady_clock::now() < deadline) {
+      if (source.next(frame, std::chrono::milliseconds(200))) ++received[frame.camera];
+    }
+  }
+  EXPECT_EQ(received[0], 5);
+  EXPECT_EQ(received[1], 5);
+}
+
 TEST(Aravis, ConfiguresAravisOwnFakeCameraProgram) {
   // Aravis's own fake GigE Vision camera, as a separate process.
   const pid_t child = fork();

@@ -1,0 +1,129 @@
+#include "ui/source_worker.h"
+
+#include <chrono>
+#include <exception>
+
+#include "core/base/resource_path.h"
+#include "core/capture/aravis_source.h"
+#include "core/capture/session_source.h"
+#include "core/capture/virtual_gige_cameras.h"
+#include "core/geometry/rig_file.h"
+#include "core/sim/virtual_studio_source.h"
+
+namespace lumistage {
+
+QString SourceSpec::parse(const QString& text, SourceSpec& out) {
+  const QString kind = text.section(':', 0, 0);
+  const QString rest = text.section(':', 1);
+  if (kind == "virtual") {
+    out.kind = Kind::kVirtualStudio;
+    out.path = rest;
+  } else if (kind == "session" && !rest.isEmpty()) {
+    out.kind = Kind::kSession;
+    out.path = rest;
+  } else if (kind == "aravis") {
+    out.kind = Kind::kAravis;
+    out.address = rest.isEmpty() ? "127.0.1.1" : rest;
+  } else {
+    return QString(
+               "unknown source '%1': expected virtual[:CONFIG], session:DIR or "
+               "aravis[:FIRST_ADDRESS]")
+        .arg(text);
+  }
+  return {};
+}
+
+QString SourceSpec::describe() const {
+  switch (kind) {
+    case Kind::kVirtualStudio:
+      return "virtual studio";
+    case Kind::kSession:
+      return "session " + path;
+    case Kind::kAravis:
+      return "Aravis cameras from " + address;
+  }
+  return {};
+}
+
+QImage SourceWorker::preview(const Image& image) {
+  const int w = image.width / 4, h = image.height / 4;
+  QImage out(w, h, QImage::Format_RGB888);
+  const uint8_t* p = image.pixels.data();
+  for (int y = 0; y < h; ++y) {
+    uchar* row = out.scanLine(y);
+    for (int x = 0; x < w; ++x) {
+      const size_t sx = 4 * size_t(x), sy = 4 * size_t(y);
+      uchar r, g, b;
+      if (image.format == PixelFormat::kRgb8) {
+        const uint8_t* q = p + 3 * (sy * image.width + sx);
+        r = q[0], g = q[1], b = q[2];
+      } else if (image.format == PixelFormat::kBayerRggb8) {
+        r = p[sy * image.width + sx];
+        g = p[sy * image.width + sx + 1];
+        b = p[(sy + 1) * image.width + sx + 1];
+      } else {
+        r = g = b = p[sy * image.width + sx];
+      }
+      row[3 * x] = r, row[3 * x + 1] = g, row[3 * x + 2] = b;
+    }
+  }
+  return out;
+}
+
+void SourceWorker::run() {
+  using Clock = std::chrono::steady_clock;
+  try {
+    std::unique_ptr<FrameSource> source;
+    QString description = spec_.describe();
+    if (spec_.kind == SourceSpec::Kind::kVirtualStudio) {
+      const std::string config = spec_.path.isEmpty()
+                                     ? resourcePath("studio/reference.yaml").string()
+                                     : spec_.path.toStdString();
+      auto studio = std::make_unique<VirtualStudioSource>(loadStudioConfig(config), 300);
+      description += " on " + QString::fromStdString(studio->studio().rendererDescription());
+      source = std::move(studio);
+    } else if (spec_.kind == SourceSpec::Kind::kSession) {
+      ReplayOptions options;
+      options.mode = ReplayMode::kRecordedRate;
+      options.loop = true;
+      source = std::make_unique<SessionSource>(spec_.path.toStdString(), options);
+    } else {
+      if (spec_.rig.isEmpty()) throw std::runtime_error("Aravis cameras need a rig file (--rig)");
+      const Rig rig = loadRig(spec_.rig.toStdString());
+      std::vector<AravisCameraConfig> configs(rig.cameraCount());
+      for (int c = 0; c < rig.cameraCount(); ++c) {
+        configs[c].device = VirtualGigeCameras::addressOf(spec_.address.toStdString(), c);
+      }
+      source = std::make_unique<AravisSource>(rig, configs);
+    }
+    const int cameras = source->rig().cameraCount();
+    emit opened(std::make_shared<const Rig>(source->rig()), description);
+    std::vector<Clock::time_point> last_preview(cameras);
+    auto last_status = Clock::now();
+    CameraFrame frame;
+    while (!stop_ && !source->finished()) {
+      if (source->next(frame, std::chrono::milliseconds(100))) {
+        // A few previews a second per camera are plenty for a person; the rest is not drawn.
+        const auto now = Clock::now();
+        if (now - last_preview[frame.camera] > std::chrono::milliseconds(150)) {
+          last_preview[frame.camera] = now;
+          emit this->frame(frame.camera, preview(frame.image), frame.frame_id);
+        }
+      }
+      if (Clock::now() - last_status > std::chrono::seconds(1)) {
+        last_status = Clock::now();
+        QVector<CameraStatus> all(cameras);
+        for (int c = 0; c < cameras; ++c) {
+          const CameraStats s = source->stats(c);
+          all[c] = {s.frame_rate_hz, s.frames, s.dropped, QString::fromStdString(s.last_error)};
+        }
+        emit status(all);
+      }
+    }
+  } catch (const std::exception& e) {
+    emit failed(QString::fromStdString(e.what()));
+  }
+  emit finished();
+}
+
+}  // namespace lumistage
