@@ -105,17 +105,22 @@ TEST(Aravis, SoftwareTriggerFiresEveryCamera) {
   CameraFrame frame;
   // Untriggered, the cameras stay quiet.
   EXPECT_FALSE(source.next(frame, std::chrono::milliseconds(600)));
-  int received[2] = {0, 0};
-  for (int shot = 0; shot < 5; ++shot) {
+  // Each trigger fires both cameras. UDP on a loaded machine may lose a frame now and then (it
+  // is counted as dropped), so fire up to twice as often as needed for five frames each.
+  int received[2] = {0, 0}, triggers = 0;
+  while ((received[0] < 5 || received[1] < 5) && triggers < 10) {
     source.trigger();
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(3);
-    while (received[0] + received[1] < 2 * (shot + 1) &&
-           std::chrono::steady_clock::now() < deadline) {
-      if (source.next(frame, std::chrono::milliseconds(200))) ++received[frame.camera];
+    ++triggers;
+    const int before = received[0] + received[1];
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+    while (received[0] + received[1] < before + 2 && std::chrono::steady_clock::now() < deadline) {
+      if (source.next(frame, std::chrono::milliseconds(100))) ++received[frame.camera];
     }
   }
-  EXPECT_EQ(received[0], 5);
-  EXPECT_EQ(received[1], 5);
+  EXPECT_GE(received[0], 5);
+  EXPECT_GE(received[1], 5);
+  EXPECT_LE(received[0], triggers);  // never more frames than triggers: the cameras wait for them
+  EXPECT_LE(received[1], triggers);
 }
 
 TEST(Aravis, ConfiguresAravisOwnFakeCameraProgram) {
