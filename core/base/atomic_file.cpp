@@ -27,7 +27,12 @@ std::string readFile(const std::filesystem::path& path) {
   return buffer.str();
 }
 
-void writeFileAtomically(const std::filesystem::path& path, std::string_view contents) {
+bool isAtomicWriteLeftover(std::string_view file_name) {
+  const size_t at = file_name.rfind(".tmp-");
+  return at != std::string_view::npos && file_name.size() - at == 11;
+}
+
+void writeFileAtomically(const std::filesystem::path& path, std::string_view contents, bool sync) {
   const std::string target = path.string();
   std::string temp = target + ".tmp-XXXXXX";
   const int fd = ::mkstemp(temp.data());
@@ -37,7 +42,8 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view con
     const int saved = errno;
     ::close(fd);
     ::unlink(temp.c_str());
-    throw Error(target + ": " + step + " failed: " + std::strerror(saved));
+    throw Error(target + ": " + step + " failed: " + std::strerror(saved) +
+                (saved == ENOSPC || saved == EFBIG ? " (disk full?)" : ""));
   };
   size_t written = 0;
   while (written < contents.size()) {
@@ -49,7 +55,7 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view con
     written += static_cast<size_t>(n);
   }
   if (::fchmod(fd, 0644) != 0) fail("chmod");
-  if (::fsync(fd) != 0) fail("fsync");
+  if (sync && ::fsync(fd) != 0) fail("fsync");
   if (::close(fd) != 0) {
     const int saved = errno;
     ::unlink(temp.c_str());

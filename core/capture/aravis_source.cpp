@@ -7,22 +7,11 @@
 #include <cstring>
 
 #include "core/base/error.h"
+#include "core/capture/aravis_pixel_format.h"
 
 namespace lumistage {
 
 namespace {
-
-ArvPixelFormat toAravis(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::kMono8:
-      return ARV_PIXEL_FORMAT_MONO_8;
-    case PixelFormat::kBayerRggb8:
-      return ARV_PIXEL_FORMAT_BAYER_RG_8;
-    case PixelFormat::kRgb8:
-      return ARV_PIXEL_FORMAT_RGB_8_PACKED;
-  }
-  return ARV_PIXEL_FORMAT_MONO_8;
-}
 
 std::string takeError(GError*& error) {
   std::string message = error ? error->message : "unknown error";

@@ -237,7 +237,7 @@ void SessionReader::checkImages() {
     std::error_code ec;
     for (const fs::directory_entry& entry : fs::directory_iterator(folder_ / camera.name(), ec)) {
       const std::string name = entry.path().filename().string();
-      if (name.ends_with(".partial.png")) {
+      if (isAtomicWriteLeftover(name)) {
         warnings_.push_back(entry.path().string() +
                             ": left over from an interrupted write; ignored");
       }

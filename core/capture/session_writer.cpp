@@ -25,7 +25,6 @@ namespace {
 // fclose, so on a full disk it can leave a truncated PNG that would then be renamed into place.
 // Returns the bytes written.
 size_t writeImageAtomically(const fs::path& path, const cv::Mat& image) {
-  const fs::path temp = path.parent_path() / (path.stem().string() + ".partial.png");
   // Fast PNG: the session is written while capturing; compression level 1 is lossless too.
   const std::vector<int> options = {cv::IMWRITE_PNG_COMPRESSION, 1};
   thread_local std::vector<uchar> encoded;  // reused: no allocation per image once warmed up
@@ -35,35 +34,10 @@ size_t writeImageAtomically(const fs::path& path, const cv::Mat& image) {
   } catch (const cv::Exception& e) {
     throw Error(path.string() + ": cannot encode image: " + e.err);
   }
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw Error(temp.string() + ": cannot create: " + std::strerror(errno));
-  auto fail = [&](const char* step) {
-    const int saved = errno;
-    if (fd >= 0) ::close(fd);
-    ::unlink(temp.c_str());
-    throw Error(path.string() + ": " + step + " failed: " + std::strerror(saved) +
-                (saved == ENOSPC || saved == EFBIG ? " (disk full?)" : ""));
-  };
-  size_t written = 0;
-  while (written < encoded.size()) {
-    const ssize_t n = ::write(fd, encoded.data() + written, encoded.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail("write");
-    }
-    written += static_cast<size_t>(n);
-  }
-  if (::close(fd) != 0) {
-    const int saved = errno;
-    ::unlink(temp.c_str());
-    throw Error(path.string() + ": close failed: " + std::strerror(saved));
-  }
-  if (::rename(temp.c_str(), path.c_str()) != 0) {
-    const int saved = errno;
-    ::unlink(temp.c_str());
-    throw Error(path.string() + ": cannot rename into place: " + std::strerror(saved));
-  }
-  return written;
+  writeFileAtomically(
+      path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()),
+      /*sync=*/false);
+  return encoded.size();
 }
 
 void writePly(const fs::path& path, const TriangleMesh& mesh) {

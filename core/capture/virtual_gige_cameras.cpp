@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/base/error.h"
+#include "core/capture/aravis_pixel_format.h"
 
 namespace lumistage {
 
@@ -51,21 +52,6 @@ int64_t monotonicNs() {
   timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
   return int64_t(t.tv_sec) * 1000000000 + t.tv_nsec;
-}
-
-PixelFormat fromAravis(ArvPixelFormat format, bool& known) {
-  known = true;
-  switch (format) {
-    case ARV_PIXEL_FORMAT_MONO_8:
-      return PixelFormat::kMono8;
-    case ARV_PIXEL_FORMAT_BAYER_RG_8:
-      return PixelFormat::kBayerRggb8;
-    case ARV_PIXEL_FORMAT_RGB_8_PACKED:
-      return PixelFormat::kRgb8;
-    default:
-      known = false;
-      return PixelFormat::kMono8;
-  }
 }
 
 // Writes `source` into `out` in `format`: exact where the source holds the information (RGB to
@@ -125,16 +111,15 @@ struct VirtualGigeCameras::Served {
     const Image& image =
         self.loop
             ->frames[self.camera][loopFrameAt(timestamp_ns, self.loop->fps, self.loop->length())];
-    bool known = false;
-    const PixelFormat format = fromAravis(arv_format, known);
+    const std::optional<PixelFormat> format = fromAravis(arv_format);
     // The buffer holds the camera's payload (the fake camera checked that); its received size is
     // not set until later, so arv_buffer_get_data reports 0 here: size it from the registers.
     size_t ignored = 0;
     auto* out = static_cast<uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, &ignored)));
-    const size_t needed = size_t(image.width) * image.height * bytesPerPixel(format);
-    if (!known || !out || arv_fake_camera_get_payload(self.fake) < needed)
-      return;  // client changed the format
-    convert(image, format, out);
+    if (!format || !out) return;  // a client set a format we cannot produce
+    const size_t needed = size_t(image.width) * image.height * bytesPerPixel(*format);
+    if (arv_fake_camera_get_payload(self.fake) < needed) return;  // a client shrank the image
+    convert(image, *format, out);
     arv_buffer_set_timestamp(buffer, static_cast<guint64>(timestamp_ns));
     arv_buffer_set_frame_id(buffer,
                             static_cast<guint64>(tick % 65535 + 1));  // GigE Vision ids: 1..65535
@@ -193,17 +178,7 @@ VirtualGigeCameras::VirtualGigeCameras(const Rig& rig, std::shared_ptr<const Fra
     served->fake = fake;
     arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, camera.width());
     arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, camera.height());
-    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, [format] {
-      switch (format) {
-        case PixelFormat::kMono8:
-          return ARV_PIXEL_FORMAT_MONO_8;
-        case PixelFormat::kBayerRggb8:
-          return ARV_PIXEL_FORMAT_BAYER_RG_8;
-        case PixelFormat::kRgb8:
-          return ARV_PIXEL_FORMAT_RGB_8_PACKED;
-      }
-      return ARV_PIXEL_FORMAT_MONO_8;
-    }());
+    arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, toAravis(format));
     arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
                                    static_cast<guint32>(std::llround(1e6 / loop->fps)));
     arv_fake_camera_set_fill_pattern(fake, &Served::fill, served.get());

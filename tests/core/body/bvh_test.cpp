@@ -11,6 +11,7 @@
 
 #include "core/base/error.h"
 #include "core/body/human_skeleton.h"
+#include "tests/test_folder.h"
 
 namespace lumistage {
 namespace {
@@ -19,13 +20,7 @@ namespace fs = std::filesystem;
 constexpr double kPi = std::numbers::pi;
 
 fs::path testFolder() {
-  const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path folder =
-      fs::temp_directory_path() /
-      ("lumistage_bvh_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  return folder;
+  return testing::testFolder("bvh");
 }
 
 void writeText(const fs::path& path, const std::string& text) {

@@ -14,6 +14,7 @@
 
 #include "core/base/error.h"
 #include "core/body/human_skeleton.h"
+#include "tests/test_folder.h"
 
 namespace lumistage {
 namespace {
@@ -21,15 +22,8 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kPi = std::numbers::pi;
 
-// A folder of its own per test (ctest runs tests in parallel).
 fs::path testFolder() {
-  const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path folder =
-      fs::temp_directory_path() /
-      ("lumistage_mesh_io_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  return folder;
+  return testing::testFolder("mesh_io");
 }
 
 std::string messageOf(const std::function<void()>& f) {

@@ -80,7 +80,7 @@ TEST(SessionReader, TruncatedLastImageAndLeftoverPartialFileEndTheSessionBeforeT
   writeSession(folder, rig, PixelFormat::kRgb8, 5);
   const fs::path png = folder / "cam02" / "000004.png";
   truncateFile(png, fs::file_size(png) / 2);
-  fs::copy_file(folder / "cam01" / "000003.png", folder / "cam01" / "000005.partial.png");
+  fs::copy_file(folder / "cam01" / "000003.png", folder / "cam01" / "000005.png.tmp-a1b2c3");
   const SessionReader reader(folder);
   expectFramesExact(reader, PixelFormat::kRgb8, 4);
   const std::string w = allWarnings(reader);
@@ -89,7 +89,8 @@ TEST(SessionReader, TruncatedLastImageAndLeftoverPartialFileEndTheSessionBeforeT
                                          "truncated"))
       << w;
   EXPECT_TRUE(contains(w, "the session ends at frame 3")) << w;
-  EXPECT_TRUE(contains(w, "000005.partial.png: left over from an interrupted write; ignored")) << w;
+  EXPECT_TRUE(contains(w, "000005.png.tmp-a1b2c3: left over from an interrupted write; ignored"))
+      << w;
   fs::remove_all(folder);
 }
 
