@@ -111,7 +111,7 @@ void StudioRenderer::ensureTarget(int width, int height) {
 }
 
 void StudioRenderer::render(const Camera& camera, const StudioLook& look, uint32_t noise_seed,
-                            std::vector<uint8_t>& rgba) {
+                            std::vector<uint8_t>& rgba, bool with_actor) {
   ensureTarget(camera.width(), camera.height());
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
   glViewport(0, 0, width_, height_);
@@ -160,7 +160,7 @@ void StudioRenderer::render(const Camera& camera, const StudioLook& look, uint32
   glUniform1f(actor.uniform("noise_sigma"), look.noise_sigma);
   glUniform1f(actor.uniform("spill"), look.spill);
   glBindVertexArray(vao_);
-  glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  if (with_actor) glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);
 
   const size_t bytes = size_t(width_) * height_ * 4;

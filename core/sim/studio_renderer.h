@@ -33,10 +33,11 @@ class StudioRenderer {
 
   // The posed surface for the next renders (from skinMesh).
   void setSurface(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals);
-  // One camera's image; `noise_seed` should differ per camera and frame. `rgba` is resized to
+  // One camera's image; `noise_seed` should differ per camera and frame. Without the actor: the
+  // empty stage, as a background model learns it. `rgba` is resized to
   // width*height*4 when its size differs (reuse it: no allocation).
   void render(const Camera& camera, const StudioLook& look, uint32_t noise_seed,
-              std::vector<uint8_t>& rgba);
+              std::vector<uint8_t>& rgba, bool with_actor = true);
 
  private:
   void ensureTarget(int width, int height);

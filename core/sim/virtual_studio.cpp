@@ -49,6 +49,12 @@ void VirtualStudio::renderFrame(int index, StudioFrame& frame) {
   }
 }
 
+void VirtualStudio::renderEmptyStage(int camera, int take, std::vector<uint8_t>& rgba) {
+  const uint32_t seed =
+      config_.seed * 7919u + 0x9e3779b9u + static_cast<uint32_t>(take) * 131u + camera;
+  renderer_->render(config_.rig.camera(camera), config_.look, seed, rgba, /*with_actor=*/false);
+}
+
 FrameLoop renderFrameLoop(VirtualStudio& studio, int frame_count, PixelFormat format,
                           const std::function<void(int, int)>& progress) {
   FrameLoop loop;

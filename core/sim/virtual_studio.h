@@ -41,6 +41,9 @@ class VirtualStudio {
 
   // Poses the actor for frame `index` and renders every camera. Reuses `frame`'s buffers.
   void renderFrame(int index, StudioFrame& frame);
+  // One camera's view of the empty stage (RGBA8), with the noise of `take`: what a background
+  // model learns from before the actor walks in.
+  void renderEmptyStage(int camera, int take, std::vector<uint8_t>& rgba);
 
  private:
   StudioConfig config_;

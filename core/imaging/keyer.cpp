@@ -1,0 +1,78 @@
+#include "core/imaging/keyer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lumistage {
+
+int GreenScreenKeyer::learnScreen(const ImageView& screen, int step, int minimum) {
+  std::vector<int> excess;
+  for (int y = step / 2; y < screen.height; y += step) {
+    for (int x = step / 2; x < screen.width; x += step) {
+      const Rgb c = colourAt(screen, x, y);
+      const int e = c.g - std::max(c.r, c.b);
+      if (e > 0) excess.push_back(e);  // what is not green at all is not screen
+    }
+  }
+  if (excess.empty()) return threshold_;
+  const size_t at = excess.size() / 100;
+  std::nth_element(excess.begin(), excess.begin() + at, excess.end());
+  threshold_ = std::max(minimum, excess[at] / 2);
+  return threshold_;
+}
+
+BackgroundModel::BackgroundModel(int width, int height, int block, float k)
+    : width_(width),
+      height_(height),
+      block_(block),
+      columns_((width + block - 1) / block),
+      rows_((height + block - 1) / block),
+      k_(k),
+      sum_(size_t(columns_) * rows_ * 3, 0.0),
+      sum2_(size_t(columns_) * rows_ * 3, 0.0) {}
+
+void BackgroundModel::add(const ImageView& empty) {
+  // Sample a few pixels per block: the spread of a block includes its texture and the noise.
+  for (int y = 0; y < height_; y += 2) {
+    for (int x = 0; x < width_; x += 2) {
+      const Rgb c = colourAt(empty, x, y);
+      const size_t b = 3 * (size_t(y / block_) * columns_ + x / block_);
+      const double v[3] = {double(c.r), double(c.g), double(c.b)};
+      for (int k = 0; k < 3; ++k) {
+        sum_[b + k] += v[k];
+        sum2_[b + k] += v[k] * v[k];
+      }
+    }
+  }
+  ++frames_;
+}
+
+void BackgroundModel::learn() {
+  const size_t blocks = size_t(columns_) * rows_;
+  mean_.assign(blocks * 3, 0.0f);
+  limit2_.assign(blocks, 0.0f);
+  for (size_t b = 0; b < blocks; ++b) {
+    const int bx = int(b % columns_), by = int(b / columns_);
+    const int w = std::min(block_, width_ - bx * block_),
+              h = std::min(block_, height_ - by * block_);
+    const double n = std::max(1.0, double(frames_) * ((w + 1) / 2) * ((h + 1) / 2));
+    double variance = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double mean = sum_[3 * b + k] / n;
+      mean_[3 * b + k] = float(mean);
+      variance += std::max(0.0, sum2_[3 * b + k] / n - mean * mean);
+    }
+    const float spread = float(std::sqrt(variance));
+    const float limit = std::max(k_ * spread, 12.0f);
+    limit2_[b] = limit * limit;
+  }
+}
+
+bool BackgroundModel::isForeground(const ImageView& image, int x, int y) const {
+  const Rgb c = colourAt(image, x, y);
+  const size_t b = size_t(y / block_) * columns_ + x / block_;
+  const float dr = c.r - mean_[3 * b], dg = c.g - mean_[3 * b + 1], db = c.b - mean_[3 * b + 2];
+  return dr * dr + dg * dg + db * db > limit2_[b];
+}
+
+}  // namespace lumistage

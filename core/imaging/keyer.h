@@ -1,0 +1,100 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/capture/image.h"
+
+namespace lumistage {
+
+// Segmentation on demand: whether one pixel shows the actor, computed from that pixel alone (and
+// the camera's background statistics), so that a step pays only for the pixels it asks about —
+// the paper's point. Works on the camera's own pixels: Bayer is read in its 2x2 cell, never
+// demosaiced as a whole.
+
+struct Rgb {
+  int r = 0, g = 0, b = 0;
+};
+
+// The colour at a pixel: RGB8 directly; Bayer RGGB from the 2x2 cell that holds it (R, the mean
+// of the two G, B); Mono8 as grey.
+inline Rgb colourAt(const ImageView& image, int x, int y) {
+  const uint8_t* p = image.data;
+  switch (image.format) {
+    case PixelFormat::kRgb8: {
+      const uint8_t* q = p + 3 * (size_t(y) * image.width + x);
+      return {q[0], q[1], q[2]};
+    }
+    case PixelFormat::kBayerRggb8: {
+      const size_t x0 = size_t(x) & ~size_t(1), y0 = size_t(y) & ~size_t(1);
+      const uint8_t* row0 = p + y0 * image.width + x0;
+      const uint8_t* row1 = row0 + image.width;
+      return {row0[0], (row0[1] + row1[0] + 1) / 2, row1[1]};
+    }
+    case PixelFormat::kMono8:
+      break;
+  }
+  const int v = p[size_t(y) * image.width + x];
+  return {v, v, v};
+}
+
+// Green-screen keying by the green excess e = g - max(r, b): the screen has a large one (under
+// any of its lighting), people, clothes and skin a small or negative one, green spill on the
+// actor's edges a moderate one. A pixel is background when e exceeds a threshold learned from
+// the camera's own view of the screen: learnScreen() on pixels known (or very likely) to be
+// screen sets it below the screen's darkest, most spilled parts.
+class GreenScreenKeyer {
+ public:
+  explicit GreenScreenKeyer(int threshold = 30) : threshold_(threshold) {}
+
+  bool isForeground(const ImageView& image, int x, int y) const {
+    const Rgb c = colourAt(image, x, y);
+    return c.g - (c.r > c.b ? c.r : c.b) < threshold_;
+  }
+  // Learns from a frame of the empty stage, or the image border of a frame with the actor (a
+  // person rarely fills it): sets the threshold at half the 1st percentile of the screen's green
+  // excess, and at least `minimum`. Returns the threshold.
+  int learnScreen(const ImageView& screen, int step = 8, int minimum = 12);
+  int threshold() const { return threshold_; }
+
+ private:
+  int threshold_;
+};
+
+// For stages that are not green: a background model learned from frames of the empty stage, per
+// block of block x block pixels: the mean colour and its spread. A pixel whose colour is further
+// from its block's mean than `k` spreads (and than a floor of a few levels, for noise) is the
+// actor.
+class BackgroundModel {
+ public:
+  BackgroundModel(int width, int height, int block = 8, float k = 4.0f);
+  // Adds a frame of the empty stage; call learn() after the last.
+  void add(const ImageView& empty);
+  void learn();
+  bool isForeground(const ImageView& image, int x, int y) const;
+  int frames() const { return frames_; }
+
+ private:
+  int width_, height_, block_, columns_, rows_;
+  float k_;
+  int frames_ = 0;
+  std::vector<double> sum_, sum2_;    // per block and channel, while adding
+  std::vector<float> mean_, limit2_;  // per block: mean colour, squared distance limit
+};
+
+// A low-resolution silhouette: the key evaluated at the centre of every `step` x `step` cell,
+// one byte a cell (255 actor). `mask` is resized only when its size differs.
+template <typename Key>
+void lowResSilhouette(const Key& key, const ImageView& image, int step,
+                      std::vector<uint8_t>& mask) {
+  const int w = image.width / step, h = image.height / step;
+  if (mask.size() != size_t(w) * h) mask.resize(size_t(w) * h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      mask[size_t(y) * w + x] =
+          key.isForeground(image, x * step + step / 2, y * step + step / 2) ? 255 : 0;
+    }
+  }
+}
+
+}  // namespace lumistage

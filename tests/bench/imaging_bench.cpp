@@ -1,0 +1,40 @@
+// Keying on demand: the cost per pixel asked about. Run: ./studio bench
+#include <benchmark/benchmark.h>
+
+#include <random>
+
+#include "core/imaging/keyer.h"
+
+namespace {
+
+// A 1024x768 Bayer frame of green screen with a grey block in the middle.
+lumistage::Image stageFrame() {
+  lumistage::Image image;
+  image.resize(lumistage::PixelFormat::kBayerRggb8, 1024, 768);
+  std::mt19937 rng(3);
+  for (int y = 0; y < 768; ++y) {
+    for (int x = 0; x < 1024; ++x) {
+      const bool actor = x > 400 && x < 600 && y > 200 && y < 700;
+      const bool green = (x + y) % 2 == 1;
+      image.pixels[size_t(y) * 1024 + x] =
+          static_cast<uint8_t>((actor ? 120 : (green ? 150 : 45)) + rng() % 5);
+    }
+  }
+  return image;
+}
+
+// A low-resolution silhouette (one sample every `step` pixels), as a node sends for tracking.
+void lowResolutionSilhouette(benchmark::State& state) {
+  const lumistage::Image image = stageFrame();
+  const lumistage::GreenScreenKeyer keyer;
+  const int step = static_cast<int>(state.range(0));
+  std::vector<uint8_t> mask;
+  for (auto _ : state) {
+    lumistage::lowResSilhouette(keyer, image.view(), step, mask);
+    benchmark::DoNotOptimize(mask.data());
+  }
+  state.SetItemsProcessed(state.iterations() * int64_t(mask.size()));
+}
+BENCHMARK(lowResolutionSilhouette)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
+
+}  // namespace

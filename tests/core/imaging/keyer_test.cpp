@@ -1,0 +1,135 @@
+// Keying against the virtual studio's truth: the silhouette masks the renderer knows exactly.
+#include "core/imaging/keyer.h"
+
+#include <gtest/gtest.h>
+
+#include "core/geometry/ring_rig.h"
+#include "core/sim/virtual_studio.h"
+
+namespace lumistage {
+namespace {
+
+struct Agreement {
+  size_t both = 0, either = 0, wrong = 0, total = 0;
+  double iou() const { return double(both) / double(either); }
+  double errorRate() const { return double(wrong) / double(total); }
+};
+
+template <typename Key>
+Agreement compare(const Key& key, const ImageView& image, const std::vector<uint8_t>& truth) {
+  Agreement a;
+  for (int y = 0; y < image.height; y += 2) {
+    for (int x = 0; x < image.width; x += 2) {
+      const bool keyed = key.isForeground(image, x, y);
+      const bool actor = truth[size_t(y) * image.width + x] > 0;
+      a.both += keyed && actor;
+      a.either += keyed || actor;
+      a.wrong += keyed != actor;
+      ++a.total;
+    }
+  }
+  return a;
+}
+
+class KeyerTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    StudioConfig config =
+        loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
+    RingRigSpec rig;
+    rig.cameras = 4;
+    rig.width = 512;
+    rig.height = 384;
+    config.rig = makeRingRig(rig);
+    config.actor.target_vertices = 4000;
+    studio_ = new VirtualStudio(config, 30);
+  }
+  static void TearDownTestSuite() {
+    delete studio_;
+    studio_ = nullptr;
+  }
+  static VirtualStudio* studio_;
+};
+
+VirtualStudio* KeyerTest::studio_ = nullptr;
+
+TEST_F(KeyerTest, GreenScreenKeyMatchesTheTrueSilhouetteOnBayerImages) {
+  StudioFrame frame;
+  studio_->renderFrame(20, frame);  // mid-walk
+  std::vector<uint8_t> empty;
+  for (int c = 0; c < studio_->rig().cameraCount(); ++c) {
+    const Camera& camera = studio_->rig().camera(c);
+    Image image, screen;
+    rgbaToImage(frame.images[c].data(), camera.width(), camera.height(), PixelFormat::kBayerRggb8,
+                image);
+    studio_->renderEmptyStage(c, 0, empty);
+    rgbaToImage(empty.data(), camera.width(), camera.height(), PixelFormat::kBayerRggb8, screen);
+    GreenScreenKeyer keyer;
+    const int threshold = keyer.learnScreen(screen.view());
+    EXPECT_GT(threshold, 12);
+    const Agreement a = compare(keyer, image.view(), frame.masks[c]);
+    // Disagreement is confined to the silhouette's edge (a Bayer cell straddles it).
+    EXPECT_GT(a.iou(), 0.93) << camera.name() << " threshold " << threshold;
+    EXPECT_LT(a.errorRate(), 0.004) << camera.name();
+  }
+}
+
+TEST_F(KeyerTest, BackgroundModelLearnedFromTheEmptyStageFindsTheActor) {
+  StudioFrame frame;
+  studio_->renderFrame(25, frame);
+  std::vector<uint8_t> empty;
+  const Camera& camera = studio_->rig().camera(1);
+  BackgroundModel model(camera.width(), camera.height());
+  for (int take = 0; take < 4; ++take) {
+    Image screen;
+    studio_->renderEmptyStage(1, take, empty);
+    rgbaToImage(empty.data(), camera.width(), camera.height(), PixelFormat::kRgb8, screen);
+    model.add(screen.view());
+  }
+  model.learn();
+  Image image;
+  rgbaToImage(frame.images[1].data(), camera.width(), camera.height(), PixelFormat::kRgb8, image);
+  const Agreement a = compare(model, image.view(), frame.masks[1]);
+  EXPECT_GT(a.iou(), 0.97);
+  EXPECT_LT(a.errorRate(), 0.006);
+}
+
+TEST_F(KeyerTest, LowResolutionSilhouetteSamplesCellCentres) {
+  StudioFrame frame;
+  studio_->renderFrame(10, frame);
+  const Camera& camera = studio_->rig().camera(2);
+  Image image;
+  rgbaToImage(frame.images[2].data(), camera.width(), camera.height(), PixelFormat::kBayerRggb8,
+              image);
+  GreenScreenKeyer keyer;
+  std::vector<uint8_t> mask;
+  lowResSilhouette(keyer, image.view(), 8, mask);
+  ASSERT_EQ(mask.size(), size_t(64 * 48));
+  size_t agree = 0, actor = 0;
+  for (int y = 0; y < 48; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      const bool truth = frame.masks[2][size_t(y * 8 + 4) * camera.width() + x * 8 + 4] > 0;
+      agree += (mask[size_t(y) * 64 + x] > 0) == truth;
+      actor += truth;
+    }
+  }
+  EXPECT_GT(actor, 30u);
+  EXPECT_GT(double(agree) / mask.size(), 0.99);
+}
+
+TEST(Keyer, ColourOfABayerPixelComesFromItsCell) {
+  // RGGB 2x2 cells: R=10, G=20/30, B=40.
+  const uint8_t bayer[8] = {10, 20, 10, 20, 30, 40, 30, 40};
+  const ImageView view{PixelFormat::kBayerRggb8, 4, 2, bayer};
+  for (int x = 0; x < 4; ++x) {
+    for (int y = 0; y < 2; ++y) {
+      const Rgb c = colourAt(view, x, y);
+      EXPECT_EQ(c.r, 10);
+      EXPECT_EQ(c.g, 25);
+      EXPECT_EQ(c.b, 40);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lumistage
