@@ -8,6 +8,7 @@
 #include "core/capture/session_source.h"
 #include "core/capture/virtual_gige_cameras.h"
 #include "core/geometry/rig_file.h"
+#include "core/imaging/keyer.h"
 #include "core/sim/virtual_studio_source.h"
 
 namespace lumistage {
@@ -48,22 +49,12 @@ QString SourceSpec::describe() const {
 QImage SourceWorker::preview(const Image& image) {
   const int w = image.width / 4, h = image.height / 4;
   QImage out(w, h, QImage::Format_RGB888);
-  const uint8_t* p = image.pixels.data();
   for (int y = 0; y < h; ++y) {
     uchar* row = out.scanLine(y);
     for (int x = 0; x < w; ++x) {
       const size_t sx = 4 * size_t(x), sy = 4 * size_t(y);
-      uchar r, g, b;
-      if (image.format == PixelFormat::kRgb8) {
-        const uint8_t* q = p + 3 * (sy * image.width + sx);
-        r = q[0], g = q[1], b = q[2];
-      } else if (image.format == PixelFormat::kBayerRggb8) {
-        r = p[sy * image.width + sx];
-        g = p[sy * image.width + sx + 1];
-        b = p[(sy + 1) * image.width + sx + 1];
-      } else {
-        r = g = b = p[sy * image.width + sx];
-      }
+      const Rgb c = colourAt(image.view(), static_cast<int>(sx), static_cast<int>(sy));
+      const uchar r = uchar(c.r), g = uchar(c.g), b = uchar(c.b);
       row[3 * x] = r, row[3 * x + 1] = g, row[3 * x + 2] = b;
     }
   }

@@ -42,7 +42,7 @@ PixelFormat pixelFormatOption(const std::string& name) {
   const std::optional<PixelFormat> format = parsePixelFormat(name);
   if (!format)
     throw CLI::ValidationError("--pixel-format",
-                               "expected mono8, bayer_rggb8 or rgb8, got '" + name + "'");
+                               "expected one of " + pixelFormatNames() + ", got '" + name + "'");
   return *format;
 }
 
@@ -83,8 +83,7 @@ void addCameraCommands(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
   serve->add_option("--address", v->address, "address of the first camera")->capture_default_str();
-  serve->add_option("--pixel-format", v->pixel_format, "mono8, bayer_rggb8 or rgb8")
-      ->capture_default_str();
+  serve->add_option("--pixel-format", v->pixel_format, pixelFormatNames())->capture_default_str();
   serve->add_option("--seconds", v->seconds, "stop after this long (default: until interrupted)");
   serve->callback([v] {
     PixelFormat format = pixelFormatOption(v->pixel_format);
@@ -149,8 +148,7 @@ void addCameraCommands(CLI::App& app) {
       ->capture_default_str();
   stream->add_option("--device", s->devices,
                      "camera devices in rig order (address, serial or id), instead of --address");
-  stream->add_option("--pixel-format", s->pixel_format, "mono8, bayer_rggb8 or rgb8")
-      ->capture_default_str();
+  stream->add_option("--pixel-format", s->pixel_format, pixelFormatNames())->capture_default_str();
   stream->add_option("--fps", s->fps, "frame rate asked of the cameras")->capture_default_str();
   stream->add_option("--session", s->session, "replay this recorded session instead of cameras");
   stream->add_option("--replay", s->replay, "replay pace: rate (as recorded), fast, memory")

@@ -16,6 +16,12 @@ inline ArvPixelFormat toAravis(PixelFormat format) {
       return ARV_PIXEL_FORMAT_MONO_8;
     case PixelFormat::kBayerRggb8:
       return ARV_PIXEL_FORMAT_BAYER_RG_8;
+    case PixelFormat::kBayerGrbg8:
+      return ARV_PIXEL_FORMAT_BAYER_GR_8;
+    case PixelFormat::kBayerGbrg8:
+      return ARV_PIXEL_FORMAT_BAYER_GB_8;
+    case PixelFormat::kBayerBggr8:
+      return ARV_PIXEL_FORMAT_BAYER_BG_8;
     case PixelFormat::kRgb8:
       return ARV_PIXEL_FORMAT_RGB_8_PACKED;
   }
@@ -23,7 +29,7 @@ inline ArvPixelFormat toAravis(PixelFormat format) {
 }
 
 inline std::optional<PixelFormat> fromAravis(ArvPixelFormat format) {
-  for (PixelFormat f : {PixelFormat::kMono8, PixelFormat::kBayerRggb8, PixelFormat::kRgb8}) {
+  for (PixelFormat f : kAllPixelFormats) {
     if (toAravis(f) == format) return f;
   }
   return std::nullopt;

@@ -8,6 +8,12 @@ const char* pixelFormatName(PixelFormat format) {
       return "mono8";
     case PixelFormat::kBayerRggb8:
       return "bayer_rggb8";
+    case PixelFormat::kBayerGrbg8:
+      return "bayer_grbg8";
+    case PixelFormat::kBayerGbrg8:
+      return "bayer_gbrg8";
+    case PixelFormat::kBayerBggr8:
+      return "bayer_bggr8";
     case PixelFormat::kRgb8:
       return "rgb8";
   }
@@ -15,24 +21,49 @@ const char* pixelFormatName(PixelFormat format) {
 }
 
 std::optional<PixelFormat> parsePixelFormat(std::string_view name) {
-  for (PixelFormat f : {PixelFormat::kMono8, PixelFormat::kBayerRggb8, PixelFormat::kRgb8}) {
+  for (PixelFormat f : kAllPixelFormats) {
     if (name == pixelFormatName(f)) return f;
   }
   return std::nullopt;
+}
+
+std::string pixelFormatNames() {
+  std::string names;
+  for (PixelFormat f : kAllPixelFormats)
+    names += (names.empty() ? "" : ", ") + std::string(pixelFormatName(f));
+  return names;
 }
 
 int bytesPerPixel(PixelFormat format) {
   return format == PixelFormat::kRgb8 ? 3 : 1;
 }
 
-void rgbaToBayerRggb(const uint8_t* rgba, int width, int height, uint8_t* bayer) {
+bool isBayer(PixelFormat format) {
+  return format != PixelFormat::kMono8 && format != PixelFormat::kRgb8;
+}
+
+BayerLayout bayerLayout(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::kBayerGrbg8:
+      return {1, 0};
+    case PixelFormat::kBayerGbrg8:
+      return {0, 1};
+    case PixelFormat::kBayerBggr8:
+      return {1, 1};
+    default:
+      return {0, 0};
+  }
+}
+
+void rgbaToBayer(const uint8_t* rgba, int width, int height, BayerLayout layout, uint8_t* bayer) {
   for (int y = 0; y < height; ++y) {
     const uint8_t* row = rgba + size_t(y) * width * 4;
     uint8_t* out = bayer + size_t(y) * width;
-    // Channel: R at (even, even), B at (odd, odd), G elsewhere.
-    const int even = (y & 1) ? 1 : 0, odd = (y & 1) ? 2 : 1;
-    for (int x = 0; x < width; x += 2) out[x] = row[4 * x + even];
-    for (int x = 1; x < width; x += 2) out[x] = row[4 * x + odd];
+    // On a row that holds R: R at red_x, G between; on the other: G at red_x, B between.
+    const bool red_row = (y & 1) == layout.red_y;
+    const int at_red_x = red_row ? 0 : 1, other = red_row ? 1 : 2;
+    for (int x = 0; x < width; ++x)
+      out[x] = row[4 * x + (((x & 1) == layout.red_x) ? at_red_x : other)];
   }
 }
 
@@ -49,7 +80,10 @@ void rgbaToImage(const uint8_t* rgba, int width, int height, PixelFormat format,
   out.resize(format, width, height);
   switch (format) {
     case PixelFormat::kBayerRggb8:
-      rgbaToBayerRggb(rgba, width, height, out.pixels.data());
+    case PixelFormat::kBayerGrbg8:
+    case PixelFormat::kBayerGbrg8:
+    case PixelFormat::kBayerBggr8:
+      rgbaToBayer(rgba, width, height, bayerLayout(format), out.pixels.data());
       break;
     case PixelFormat::kRgb8:
       rgbaToRgb(rgba, width, height, out.pixels.data());

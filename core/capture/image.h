@@ -2,18 +2,41 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
 namespace lumistage {
 
 // Pixel layouts of camera images. Bayer is what most GigE Vision colour cameras deliver: one byte
-// a pixel, rows R G R G... / G B G B... (RGGB); it is also the cheapest to upload and to store.
-enum class PixelFormat : uint8_t { kMono8, kBayerRggb8, kRgb8 };
+// a pixel, a 2x2 cell of R, two G and B repeated; it is also the cheapest to upload and to store.
+// The four Bayer formats differ in where R sits in the cell: RGGB (top left), GRBG (top right),
+// GBRG (bottom left), BGGR (bottom right), named by the cell's first two rows as GenICam does.
+enum class PixelFormat : uint8_t {
+  kMono8,
+  kBayerRggb8,
+  kRgb8,
+  kBayerGrbg8,
+  kBayerGbrg8,
+  kBayerBggr8
+};
 
-const char* pixelFormatName(PixelFormat format);  // "mono8", "bayer_rggb8", "rgb8"
+inline constexpr PixelFormat kAllPixelFormats[] = {
+    PixelFormat::kMono8,      PixelFormat::kBayerRggb8, PixelFormat::kBayerGrbg8,
+    PixelFormat::kBayerGbrg8, PixelFormat::kBayerBggr8, PixelFormat::kRgb8};
+
+// "mono8", "bayer_rggb8", "bayer_grbg8", "bayer_gbrg8", "bayer_bggr8", "rgb8"
+const char* pixelFormatName(PixelFormat format);
 std::optional<PixelFormat> parsePixelFormat(std::string_view name);
+// "mono8, bayer_rggb8, ..., rgb8": for messages that say what was expected.
+std::string pixelFormatNames();
 int bytesPerPixel(PixelFormat format);
+bool isBayer(PixelFormat format);
+// Where R sits in a Bayer format's 2x2 cell (B is diagonally opposite, G in the other two).
+struct BayerLayout {
+  int red_x = 0, red_y = 0;
+};
+BayerLayout bayerLayout(PixelFormat format);
 
 // A view of tightly packed pixels owned elsewhere.
 struct ImageView {
@@ -41,7 +64,7 @@ struct Image {
 };
 
 // From the renderer's RGBA8 (rows top first) to what a camera would deliver.
-void rgbaToBayerRggb(const uint8_t* rgba, int width, int height, uint8_t* bayer);
+void rgbaToBayer(const uint8_t* rgba, int width, int height, BayerLayout layout, uint8_t* bayer);
 void rgbaToRgb(const uint8_t* rgba, int width, int height, uint8_t* rgb);
 void rgbaToImage(const uint8_t* rgba, int width, int height, PixelFormat format, Image& out);
 

@@ -129,13 +129,12 @@ void SessionReader::readSessionYaml() {
   const YAML::Node fps = yaml.required(root, "", "fps", "frames per second");
   fps_ = yaml.number(fps, "fps");
   if (fps_ <= 0) yaml.fail(fps, "fps", "expected a positive frame rate, got " + fps.Scalar());
-  const YAML::Node pixel_format =
-      yaml.required(root, "", "pixel_format", "rgb8, bayer_rggb8 or mono8");
+  const YAML::Node pixel_format = yaml.required(root, "", "pixel_format", pixelFormatNames());
   const std::optional<PixelFormat> parsed =
       parsePixelFormat(yaml.string(pixel_format, "pixel_format"));
   if (!parsed) {
     yaml.fail(pixel_format, "pixel_format",
-              "expected rgb8, bayer_rggb8 or mono8, got '" + pixel_format.Scalar() + "'");
+              "expected one of " + pixelFormatNames() + ", got '" + pixel_format.Scalar() + "'");
   }
   format_ = *parsed;
   const YAML::Node image_files = yaml.required(root, "", "image_files", "png");

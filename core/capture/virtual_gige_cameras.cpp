@@ -63,31 +63,28 @@ void convert(const Image& source, PixelFormat format, uint8_t* out) {
     return;
   }
   cv::Mat rgb;
+  const cv::Mat plane(source.height, source.width, CV_8UC1,
+                      const_cast<uint8_t*>(source.pixels.data()));
   if (source.format == PixelFormat::kRgb8) {
     rgb = cv::Mat(source.height, source.width, CV_8UC3, const_cast<uint8_t*>(source.pixels.data()));
-  } else if (source.format == PixelFormat::kBayerRggb8) {
-    const cv::Mat bayer(source.height, source.width, CV_8UC1,
-                        const_cast<uint8_t*>(source.pixels.data()));
-    cv::cvtColor(bayer, rgb, cv::COLOR_BayerBG2RGB);  // OpenCV names RGGB sensors "BG"
+  } else if (isBayer(source.format)) {
+    // OpenCV names Bayer patterns by the second row's second and third pixels.
+    const BayerLayout l = bayerLayout(source.format);
+    const int code = l.red_y == 0 ? (l.red_x == 0 ? cv::COLOR_BayerBG2RGB : cv::COLOR_BayerGB2RGB)
+                                  : (l.red_x == 0 ? cv::COLOR_BayerGR2RGB : cv::COLOR_BayerRG2RGB);
+    cv::cvtColor(plane, rgb, code);
   } else {
-    const cv::Mat mono(source.height, source.width, CV_8UC1,
-                       const_cast<uint8_t*>(source.pixels.data()));
-    cv::cvtColor(mono, rgb, cv::COLOR_GRAY2RGB);
+    cv::cvtColor(plane, rgb, cv::COLOR_GRAY2RGB);
   }
-  const uint8_t* p = rgb.data;
   if (format == PixelFormat::kRgb8) {
-    std::memcpy(out, p, n * 3);
-  } else if (format == PixelFormat::kMono8) {
-    for (size_t i = 0; i < n; ++i)
-      out[i] = uint8_t((77 * p[3 * i] + 150 * p[3 * i + 1] + 29 * p[3 * i + 2]) >> 8);
-  } else {
-    for (int y = 0; y < source.height; ++y) {
-      for (int x = 0; x < source.width; ++x) {
-        const int channel = (y & 1) ? ((x & 1) ? 2 : 1) : ((x & 1) ? 1 : 0);
-        out[size_t(y) * source.width + x] = p[3 * (size_t(y) * source.width + x) + channel];
-      }
-    }
+    std::memcpy(out, rgb.data, n * 3);
+    return;
   }
+  cv::Mat rgba;
+  cv::cvtColor(rgb, rgba, cv::COLOR_RGB2RGBA);
+  Image converted;
+  rgbaToImage(rgba.data, source.width, source.height, format, converted);
+  std::memcpy(out, converted.pixels.data(), converted.pixels.size());
 }
 
 }  // namespace

@@ -16,8 +16,8 @@ struct Rgb {
   int r = 0, g = 0, b = 0;
 };
 
-// The colour at a pixel: RGB8 directly; Bayer RGGB from the 2x2 cell that holds it (R, the mean
-// of the two G, B); Mono8 as grey.
+// The colour at a pixel: RGB8 directly; Bayer from the 2x2 cell that holds it (R, the mean of the
+// two G, B); Mono8 as grey.
 inline Rgb colourAt(const ImageView& image, int x, int y) {
   const uint8_t* p = image.data;
   switch (image.format) {
@@ -25,11 +25,18 @@ inline Rgb colourAt(const ImageView& image, int x, int y) {
       const uint8_t* q = p + 3 * (size_t(y) * image.width + x);
       return {q[0], q[1], q[2]};
     }
-    case PixelFormat::kBayerRggb8: {
+    case PixelFormat::kBayerRggb8:
+    case PixelFormat::kBayerGrbg8:
+    case PixelFormat::kBayerGbrg8:
+    case PixelFormat::kBayerBggr8: {
+      const BayerLayout l = bayerLayout(image.format);
       const size_t x0 = size_t(x) & ~size_t(1), y0 = size_t(y) & ~size_t(1);
-      const uint8_t* row0 = p + y0 * image.width + x0;
-      const uint8_t* row1 = row0 + image.width;
-      return {row0[0], (row0[1] + row1[0] + 1) / 2, row1[1]};
+      const uint8_t* cell = p + y0 * image.width + x0;
+      const size_t w = image.width;
+      const int red = cell[l.red_y * w + l.red_x], blue = cell[(1 - l.red_y) * w + 1 - l.red_x];
+      const int green =
+          (cell[l.red_y * w + 1 - l.red_x] + cell[(1 - l.red_y) * w + l.red_x] + 1) / 2;
+      return {red, green, blue};
     }
     case PixelFormat::kMono8:
       break;

@@ -104,7 +104,7 @@ StudioConfig loadStudioConfig(const std::filesystem::path& path) {
       const std::optional<PixelFormat> format = parsePixelFormat(f);
       if (!format) {
         in.fail(look["pixel_format"], "look.pixel_format",
-                "expected rgb8, bayer_rggb8 or mono8, got '" + f + "'");
+                "expected one of " + pixelFormatNames() + ", got '" + f + "'");
       }
       config.pixel_format = *format;
     }

@@ -91,6 +91,34 @@ TEST(Aravis, VirtualCamerasStreamTheSyntheticFramesBitExact) {
   EXPECT_LT(stats.frame_rate_hz, 1.3 * fps);
 }
 
+TEST(Aravis, ClientChoosesAnotherBayerLayoutAndGetsItExactly) {
+  // Frames held as RGB; the client asks for BayerGR8: the virtual camera mosaics exactly.
+  const Rig rig = smallRig(1, 160, 120);
+  auto loop = randomLoop(rig, 4, 25, PixelFormat::kRgb8);
+  VirtualGigeCameras server(rig, loop, PixelFormat::kRgb8, "127.0.1.6");
+  AravisCameraConfig config;
+  config.device = server.addresses()[0];
+  config.pixel_format = PixelFormat::kBayerGrbg8;
+  AravisSource source(rig, {config});
+  CameraFrame frame;
+  int checked = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (checked < 10 && std::chrono::steady_clock::now() < deadline) {
+    if (!source.next(frame, std::chrono::milliseconds(300))) continue;
+    ASSERT_EQ(frame.image.format, PixelFormat::kBayerGrbg8);
+    const Image& sent = loop->frames[0][loopFrameAt(frame.timestamp_ns, 25, loop->length())];
+    std::vector<uint8_t> rgba(size_t(160) * 120 * 4);
+    for (size_t p = 0; p < size_t(160) * 120; ++p) {
+      for (int k = 0; k < 3; ++k) rgba[4 * p + k] = sent.pixels[3 * p + k];
+    }
+    Image expected;
+    rgbaToImage(rgba.data(), 160, 120, PixelFormat::kBayerGrbg8, expected);
+    ASSERT_EQ(frame.image.pixels, expected.pixels);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 10);
+}
+
 TEST(Aravis, SoftwareTriggerFiresEveryCamera) {
   const Rig rig = smallRig(2, 160, 120);
   auto loop = randomLoop(rig, 3, 25, PixelFormat::kMono8);

@@ -136,7 +136,9 @@ TEST(SessionReader, MalformedFilesAreErrorsNamingFileAndLine) {
     std::ofstream(index, std::ios::trunc) << index_text;
   };
   replaceInFile(yaml, "pixel_format: mono8", "pixel_format: yuv422");
-  expectError(yaml + ":7: pixel_format: expected rgb8, bayer_rggb8 or mono8, got 'yuv422'");
+  expectError(yaml +
+              ":7: pixel_format: expected one of mono8, bayer_rggb8, bayer_grbg8, bayer_gbrg8, "
+              "bayer_bggr8, rgb8, got 'yuv422'");
   replaceInFile(yaml, "cameras: [cam01, cam02, cam03]", "cameras: [cam01, cam03, cam02]");
   expectError(yaml +
               ":9: cameras: expected the cameras of rig.yaml, in its order: [cam01, cam02, "

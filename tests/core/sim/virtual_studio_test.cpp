@@ -46,7 +46,7 @@ TEST(StudioConfig, MistakesAreNamed) {
                 .find("studio.yaml:5: motion.clip: unknown clip 'moonwalk'; expected one of: walk"),
             std::string::npos);
   EXPECT_NE(errorOf(head + "look:\n  pixel_format: yuv\n")
-                .find("look.pixel_format: expected rgb8, bayer_rggb8 or mono8"),
+                .find("look.pixel_format: expected one of mono8, bayer_rggb8, bayer_grbg8, bayer_gbrg8, bayer_bggr8, rgb8"),
             std::string::npos);
   EXPECT_NE(
       errorOf(head + "actor:\n  height_m: -2\n").find("actor.height_m: expected a positive number"),
