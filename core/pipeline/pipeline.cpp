@@ -1,0 +1,20 @@
+#include "core/pipeline/pipeline.h"
+
+#include <algorithm>
+
+namespace lumistage {
+
+int64_t steadyNowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+double quantile(std::vector<double>& values, double q) {
+  if (values.empty()) return 0;
+  const size_t at = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
+  std::nth_element(values.begin(), values.begin() + at, values.end());
+  return values[at];
+}
+
+}  // namespace lumistage
