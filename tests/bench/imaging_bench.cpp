@@ -38,3 +38,30 @@ void lowResolutionSilhouette(benchmark::State& state) {
 BENCHMARK(lowResolutionSilhouette)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
+
+#include "core/geometry/ring_rig.h"
+#include "core/tracking/visual_hull_locator.h"
+
+namespace {
+
+// Carving the stage (6 cm voxels) with 12 silhouettes of 128x96 cells: the placeholder tracker's
+// cost per frame.
+void locateActor(benchmark::State& state) {
+  const lumistage::Rig rig = lumistage::makeRingRig({});
+  const lumistage::VisualHullLocator locator(rig, 8);
+  std::vector<lumistage::LowResSilhouette> silhouettes(rig.cameraCount());
+  std::vector<const lumistage::LowResSilhouette*> all;
+  for (int c = 0; c < rig.cameraCount(); ++c) {
+    auto& s = silhouettes[c];
+    s.camera = c, s.step = 8, s.width = 128, s.height = 96;
+    s.bits.assign(size_t(16) * 96, 0);
+    for (int y = 30; y < 80; ++y) {
+      for (int x = 56; x < 72; ++x) s.bits[size_t(y) * 16 + x / 8] |= uint8_t(1u << (x % 8));
+    }
+    all.push_back(&s);
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(locator.locate(all));
+}
+BENCHMARK(locateActor)->Unit(benchmark::kMillisecond);
+
+}  // namespace

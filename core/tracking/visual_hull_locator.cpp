@@ -1,0 +1,77 @@
+#include "core/tracking/visual_hull_locator.h"
+
+#include <cmath>
+
+namespace lumistage {
+
+VisualHullLocator::VisualHullLocator(const Rig& rig, int silhouette_step, double voxel_m,
+                                     Eigen::Vector3d stage_lower, Eigen::Vector3d stage_upper)
+    : cameras_(rig.cameraCount()), step_(silhouette_step), voxel_m_(voxel_m), lower_(stage_lower) {
+  dims_ = ((stage_upper - stage_lower) / voxel_m).array().ceil().cast<int>();
+  const size_t voxels = size_t(dims_.x()) * dims_.y() * dims_.z();
+  cell_.assign(voxels * cameras_, -1);
+  Eigen::Matrix3Xd centres(3, voxels);
+  for (int z = 0; z < dims_.z(); ++z) {
+    for (int y = 0; y < dims_.y(); ++y) {
+      for (int x = 0; x < dims_.x(); ++x) {
+        centres.col((size_t(z) * dims_.y() + y) * dims_.x() + x) =
+            lower_ + voxel_m * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
+      }
+    }
+  }
+  Eigen::Matrix2Xd pixels;
+  Eigen::VectorXd depths;
+  for (int c = 0; c < cameras_; ++c) {
+    const Camera& camera = rig.camera(c);
+    camera.project(centres, pixels, depths);
+    const int w = camera.width() / step_, h = camera.height() / step_;
+    for (size_t v = 0; v < voxels; ++v) {
+      if (depths(v) <= 0) continue;
+      const int x = static_cast<int>(std::floor(pixels(0, v) / step_)),
+                y = static_cast<int>(std::floor(pixels(1, v) / step_));
+      if (x >= 0 && y >= 0 && x < w && y < h) cell_[v * cameras_ + c] = y * w + x;
+    }
+  }
+}
+
+ActorLocation VisualHullLocator::locate(
+    const std::vector<const LowResSilhouette*>& silhouettes) const {
+  std::vector<const LowResSilhouette*> by_camera(cameras_, nullptr);
+  int present = 0;
+  for (const LowResSilhouette* s : silhouettes) {
+    if (s && s->camera >= 0 && s->camera < cameras_ && s->step == step_) {
+      by_camera[s->camera] = s;
+      ++present;
+    }
+  }
+  ActorLocation out;
+  out.voxel_m = voxel_m_;
+  if (present < 2) return out;
+  const size_t voxels = size_t(dims_.x()) * dims_.y() * dims_.z();
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (size_t v = 0; v < voxels; ++v) {
+    int seen = 0;
+    bool inside = true;
+    for (int c = 0; c < cameras_ && inside; ++c) {
+      const LowResSilhouette* s = by_camera[c];
+      const int32_t cell = cell_[v * cameras_ + c];
+      if (!s || cell < 0) continue;
+      ++seen;
+      inside = s->at(cell % s->width, cell / s->width);
+    }
+    if (!inside || seen < 2) continue;
+    const int x = int(v % dims_.x()), y = int((v / dims_.x()) % dims_.y()),
+              z = int(v / (size_t(dims_.x()) * dims_.y()));
+    const Eigen::Vector3d p = lower_ + voxel_m_ * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
+    if (out.voxels == 0) out.lower = out.upper = p;
+    out.lower = out.lower.cwiseMin(p);
+    out.upper = out.upper.cwiseMax(p);
+    sum += p;
+    ++out.voxels;
+  }
+  out.found = out.voxels > 0;
+  if (out.found) out.centroid = sum / out.voxels;
+  return out;
+}
+
+}  // namespace lumistage

@@ -1,0 +1,46 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/geometry/rig.h"
+#include "core/pipeline/silhouettes.h"
+
+namespace lumistage {
+
+// Where the actor is, from every camera's low-resolution silhouette: the stage's volume is
+// carved on a coarse voxel grid (a voxel stays when every camera that sees it sees the actor
+// there), and the kept voxels give the actor's centroid, extent and volume. Until the model-based
+// tracker lands this places the generic skeleton; afterwards it initialises and re-finds the
+// actor. Cost: voxels x cameras projections (a 6 cm grid of a 3x3x2.2 m stage, 12 cameras:
+// ~1M projections, a few ms).
+struct ActorLocation {
+  bool found = false;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  // metres
+  Eigen::Vector3d lower = Eigen::Vector3d::Zero(), upper = Eigen::Vector3d::Zero();
+  int voxels = 0;
+  double voxel_m = 0;
+};
+
+class VisualHullLocator {
+ public:
+  // Precomputes every voxel's cell in every camera (the rig does not move).
+  VisualHullLocator(const Rig& rig, int silhouette_step, double voxel_m = 0.06,
+                    Eigen::Vector3d stage_lower = {-1.5, -1.5, 0.0},
+                    Eigen::Vector3d stage_upper = {1.5, 1.5, 2.2});
+
+  // `silhouettes` may hold any subset of the cameras (a late node's are missing): cameras without
+  // one do not carve. At least two cameras are needed to find anything.
+  ActorLocation locate(const std::vector<const LowResSilhouette*>& silhouettes) const;
+
+ private:
+  int cameras_;
+  int step_;
+  double voxel_m_;
+  Eigen::Vector3d lower_;
+  Eigen::Vector3i dims_;
+  std::vector<int32_t>
+      cell_;  // [voxel * cameras + camera]: y * width + x in the cell grid, -1: not seen
+};
+
+}  // namespace lumistage

@@ -1,0 +1,69 @@
+// Finding the actor from low-resolution silhouettes, against the virtual studio's truth.
+#include "core/tracking/visual_hull_locator.h"
+
+#include <gtest/gtest.h>
+
+#include "core/body/human_skeleton.h"
+#include "core/sim/virtual_studio.h"
+
+namespace lumistage {
+namespace {
+
+TEST(VisualHullLocator, FindsTheWalkingActorFromSilhouettes) {
+  StudioConfig config =
+      loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
+  config.actor.target_vertices = 3000;
+  VirtualStudio studio(config, 60);
+  const Rig& rig = studio.rig();
+  const VisualHullLocator locator(rig, 8);
+  StudioFrame frame;
+  std::vector<Image> images(rig.cameraCount());
+  std::vector<LowResSilhouette> silhouettes(rig.cameraCount());
+  for (int f : {15, 45}) {
+    studio.renderFrame(f, frame);
+    std::vector<const LowResSilhouette*> all, half;
+    for (int c = 0; c < rig.cameraCount(); ++c) {
+      rgbaToImage(frame.images[c].data(), rig.camera(c).width(), rig.camera(c).height(),
+                  PixelFormat::kBayerRggb8, images[c]);
+      computeSilhouette(GreenScreenKeyer(), images[c].view(), c, 8, silhouettes[c]);
+      all.push_back(&silhouettes[c]);
+      if (c % 2 == 0) half.push_back(&silhouettes[c]);  // a node or two missing
+    }
+    const Eigen::Vector3d pelvis = frame.joints[kPelvis];
+    const double top = frame.surface.positions.row(2).maxCoeff();
+    for (const auto* cameras : {&all, &half}) {
+      const ActorLocation where = locator.locate(*cameras);
+      ASSERT_TRUE(where.found) << "frame " << f;
+      EXPECT_LT((where.centroid.head<2>() - pelvis.head<2>()).norm(), 0.08) << "frame " << f;
+      EXPECT_NEAR(where.upper.z(), top, 0.15) << "frame " << f;
+      EXPECT_LT(where.lower.z(), 0.1) << "frame " << f;
+    }
+  }
+  // One camera alone cannot place anything.
+  EXPECT_FALSE(locator.locate({&silhouettes[0]}).found);
+}
+
+TEST(VisualHullLocator, SilhouetteBitsAreTheKeyAtCellCentres) {
+  // A 32x16 Bayer image, green except a block: cells inside the block are set.
+  Image image;
+  image.resize(PixelFormat::kBayerRggb8, 32, 16);
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 32; ++x) {
+      const bool block = x >= 8 && x < 16 && y >= 4 && y < 12;
+      const bool green = (x + y) % 2 == 1;
+      image.pixels[size_t(y) * 32 + x] = block ? 120 : (green ? 160 : 40);
+    }
+  }
+  LowResSilhouette s;
+  computeSilhouette(GreenScreenKeyer(), image.view(), 3, 4, s);
+  EXPECT_EQ(s.camera, 3);
+  ASSERT_EQ(s.width, 8);
+  ASSERT_EQ(s.height, 4);
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x < 8; ++x)
+      EXPECT_EQ(s.at(x, y), x >= 2 && x < 4 && y >= 1 && y < 3) << x << "," << y;
+  }
+}
+
+}  // namespace
+}  // namespace lumistage
