@@ -27,7 +27,8 @@ std::string readFile(const std::filesystem::path& path) {
   return buffer.str();
 }
 
-void writeFileAtomically(const std::filesystem::path& path, std::string_view contents) {
+void writeFileAtomically(const std::filesystem::path& path, std::string_view contents,
+                         std::filesystem::perms mode) {
   const std::string target = path.string();
   std::string temp = target + ".tmp-XXXXXX";
   const int fd = ::mkstemp(temp.data());
@@ -48,7 +49,7 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view con
     }
     written += static_cast<size_t>(n);
   }
-  if (::fchmod(fd, 0644) != 0) fail("chmod");
+  if (::fchmod(fd, static_cast<mode_t>(mode)) != 0) fail("chmod");
   if (::fsync(fd) != 0) fail("fsync");
   if (::close(fd) != 0) {
     const int saved = errno;
