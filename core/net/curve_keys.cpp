@@ -180,7 +180,7 @@ void KeyStore::init(const std::vector<std::string>& nodes, bool replace) {
   if (!replace && fs::exists(studioKeyPath(), ec)) {
     throw Error(studioKeyPath().string() +
                 ": a studio key exists already; a new one would lock out every node (use "
-                "'keys add-node' for new nodes, or replace it on purpose)");
+                "'keys add-node' for new nodes, or --replace to start over)");
   }
   createDirectories(dir_);
   createDirectories(dir_ / "nodes");
