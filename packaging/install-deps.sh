@@ -7,6 +7,8 @@ set -euo pipefail
 packages=(
   # toolchain
   build-essential cmake ninja-build ccache pkg-config clang-format
+  # clang with libFuzzer for the message decoder fuzz test (tests/fuzz)
+  clang libclang-rt-14-dev
   # GUI and GL: Qt6 widgets/OpenGL widgets/test, headless EGL through Mesa, GLFW + Dear ImGui
   qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev libgl-dev libegl-dev libgles-dev
   libegl-mesa0 libgl1-mesa-dri mesa-utils libglfw3-dev libimgui-dev xvfb xauth

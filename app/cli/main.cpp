@@ -7,6 +7,7 @@
 
 #include "app/cli/body_commands.h"
 #include "app/cli/camera_commands.h"
+#include "app/cli/key_commands.h"
 #include "app/cli/rig_commands.h"
 #include "app/cli/synth_command.h"
 
@@ -16,6 +17,7 @@ int main(int argc, char** argv) {
   lumistage::addRigCommands(app);
   lumistage::addBodyCommands(app);
   lumistage::addCameraCommands(app);
+  lumistage::addKeyCommands(app);
   lumistage::addSynthCommand(app);
   try {
     app.parse(argc, argv);

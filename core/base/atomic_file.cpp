@@ -32,7 +32,8 @@ bool isAtomicWriteLeftover(std::string_view file_name) {
   return at != std::string_view::npos && file_name.size() - at == 11;
 }
 
-void writeFileAtomically(const std::filesystem::path& path, std::string_view contents, bool sync) {
+void writeFileAtomically(const std::filesystem::path& path, std::string_view contents,
+                         const AtomicWriteOptions& options) {
   const std::string target = path.string();
   std::string temp = target + ".tmp-XXXXXX";
   const int fd = ::mkstemp(temp.data());
@@ -54,8 +55,8 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view con
     }
     written += static_cast<size_t>(n);
   }
-  if (::fchmod(fd, 0644) != 0) fail("chmod");
-  if (sync && ::fsync(fd) != 0) fail("fsync");
+  if (::fchmod(fd, static_cast<mode_t>(options.mode)) != 0) fail("chmod");
+  if (options.sync && ::fsync(fd) != 0) fail("fsync");
   if (::close(fd) != 0) {
     const int saved = errno;
     ::unlink(temp.c_str());

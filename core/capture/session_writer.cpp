@@ -36,7 +36,7 @@ size_t writeImageAtomically(const fs::path& path, const cv::Mat& image) {
   }
   writeFileAtomically(
       path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()),
-      /*sync=*/false);
+      {.sync = false});
   return encoded.size();
 }
 

@@ -11,6 +11,7 @@
 
 #include "core/geometry/rig_file.h"
 #include "core/geometry/ring_rig.h"
+#include "core/net/curve_keys.h"
 
 namespace lumistage {
 namespace {
@@ -62,6 +63,27 @@ TEST(Cli, RigShowOfABadFileSaysWhereAndFails) {
       std::string::npos)
       << r.output;
   fs::remove(bad);
+}
+
+TEST(Cli, KeysInitAndAddNodeWriteAKeyStoreTheStudioCanLoad) {
+  const fs::path dir = tempPath("keys");
+  fs::remove_all(dir);
+  Result r = run(kCli + " keys init --dir " + dir.string() + " --nodes node1,node2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run(kCli + " keys add-node node3 --dir " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const KeyStore store(dir);
+  EXPECT_TRUE(isZ85Key(store.studioKey().secret_key));
+  const std::vector<AuthorizedNode> nodes = store.authorizedNodes();
+  ASSERT_EQ(nodes.size(), 3u);
+  EXPECT_EQ(nodes[2].public_key, store.nodeKey("node3").public_key);
+  // A second init would lock every node out: refused, and the studio key is unchanged.
+  const std::string studio = store.studioKey().public_key;
+  r = run(kCli + " keys init --dir " + dir.string() + " --nodes node4");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("a studio key exists already"), std::string::npos) << r.output;
+  EXPECT_EQ(store.studioKey().public_key, studio);
+  fs::remove_all(dir);
 }
 
 TEST(Cli, RingThenImportOfSvobodaFilesRoundTrips) {

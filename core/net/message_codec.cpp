@@ -1,0 +1,511 @@
+#include "core/net/message_codec.h"
+
+#include <flatbuffers/flatbuffers.h>
+
+#include <algorithm>
+#include <cstring>
+#include <type_traits>
+
+#include "messages_generated.h"
+
+namespace lumistage {
+
+namespace fb = net::fb;
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Encoding
+
+flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<flatbuffers::String>>> stringVector(
+    flatbuffers::FlatBufferBuilder& b, const std::vector<std::string>& strings) {
+  std::vector<flatbuffers::Offset<flatbuffers::String>> offsets;
+  offsets.reserve(strings.size());
+  for (const std::string& s : strings) offsets.push_back(b.CreateString(s));
+  return b.CreateVector(offsets);
+}
+
+struct BodyEncoder {
+  flatbuffers::FlatBufferBuilder& b;
+
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const HelloData& m) const {
+    const auto name = b.CreateString(m.node_name);
+    const auto cameras = stringVector(b, m.camera_names);
+    const auto capabilities = stringVector(b, m.capabilities);
+    return {fb::Body::Hello,
+            fb::CreateHello(b, name, cameras, m.protocol_version, capabilities).Union()};
+  }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const HeartbeatData& m) const {
+    std::vector<flatbuffers::Offset<fb::CameraHealth>> cameras;
+    for (const CameraHealthData& c : m.cameras) {
+      const auto name = b.CreateString(c.camera);
+      const auto error = b.CreateString(c.last_error);
+      cameras.push_back(fb::CreateCameraHealth(b, name, c.frames, c.dropped, c.frame_rate, error));
+    }
+    const auto vector = b.CreateVector(cameras);
+    return {fb::Body::Heartbeat, fb::CreateHeartbeat(b, vector, m.bytes_sent, m.cpu).Union()};
+  }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const SilhouettesData& m) const {
+    std::vector<flatbuffers::Offset<fb::SilhouetteMask>> masks;
+    for (const SilhouetteMaskData& s : m.masks) {
+      const auto bits = b.CreateVector(s.bits);
+      masks.push_back(fb::CreateSilhouetteMask(b, static_cast<uint16_t>(s.camera),
+                                               static_cast<uint16_t>(s.width),
+                                               static_cast<uint16_t>(s.height), bits));
+    }
+    const auto vector = b.CreateVector(masks);
+    return {fb::Body::Silhouettes, fb::CreateSilhouettes(b, vector).Union()};
+  }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const PoseData& m) const {
+    const auto angles = b.CreateVector(m.angles);
+    const auto joints = static_cast<uint16_t>(m.angles.size() / 3);
+    return {fb::Body::Pose,
+            fb::CreatePose(b, m.root[0], m.root[1], m.root[2], joints, angles).Union()};
+  }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const VertexStatisticsData& m) const {
+    const auto sums = b.CreateVector(m.sums);
+    const auto squares = b.CreateVector(m.sums_of_squares);
+    const auto seen = b.CreateVector(m.seen);
+    const auto inside = b.CreateVector(m.inside);
+    return {fb::Body::VertexStatistics,
+            fb::CreateVertexStatistics(b, m.vertex_count, static_cast<uint8_t>(m.offset_count),
+                                       sums, squares, seen, inside)
+                .Union()};
+  }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const OffsetsData& m) const {
+    const auto offsets = b.CreateVector(m.offsets);
+    return {fb::Body::Offsets,
+            fb::CreateOffsets(b, static_cast<uint8_t>(m.offset_count), offsets).Union()};
+  }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const PartialImageData& m) const {
+    const auto data = b.CreateVector(m.data);
+    return {fb::Body::PartialImage,
+            fb::CreatePartialImage(b, static_cast<uint16_t>(m.view), static_cast<uint16_t>(m.width),
+                                   static_cast<uint16_t>(m.height),
+                                   static_cast<fb::ImageEncoding>(m.encoding), data)
+                .Union()};
+  }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const FrameTimestampsData& m) const {
+    std::vector<flatbuffers::Offset<fb::StageTime>> stages;
+    for (const StageTimeData& s : m.stages) {
+      const auto name = b.CreateString(s.stage);
+      stages.push_back(fb::CreateStageTime(b, name, s.ns));
+    }
+    const auto vector = b.CreateVector(stages);
+    return {fb::Body::FrameTimestamps, fb::CreateFrameTimestamps(b, vector).Union()};
+  }
+};
+
+void encodeInto(flatbuffers::FlatBufferBuilder& b, const Message& message) {
+  b.Clear();
+  const auto [type, body] = std::visit(BodyEncoder{b}, message.body);
+  const auto sender = b.CreateString(message.sender);
+  const auto envelope =
+      fb::CreateEnvelope(b, message.version, sender, message.frame_id, message.sent_ns, type, body);
+  fb::FinishEnvelopeBuffer(b, envelope);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Decoding. Every check names the message, the field, the expected and the actual value, since
+// the reason goes to a log next to the sender's name and is all anyone will have to go on.
+
+std::string num(uint64_t v) {
+  return std::to_string(v);
+}
+
+// Failures travel as strings; an empty string means "fine".
+using Check = std::string;
+
+Check checkString(const flatbuffers::String* s, const char* what, const MessageLimits& limits) {
+  if (s != nullptr && s->size() > limits.max_string_bytes) {
+    return std::string(what) + ": " + num(s->size()) + " bytes, at most " +
+           num(limits.max_string_bytes) + " allowed";
+  }
+  return {};
+}
+
+std::string copyString(const flatbuffers::String* s) {
+  return s == nullptr ? std::string() : std::string(s->c_str(), s->size());
+}
+
+template <typename T>
+std::vector<T> copyVector(const flatbuffers::Vector<T>* v) {
+  if (v == nullptr) return {};
+  std::vector<T> out(v->size());
+  // Scalars are little-endian on the wire, as on every machine we build for.
+  static_assert(flatbuffers::is_same<T, uint8_t>::value || flatbuffers::is_same<T, float>::value);
+  if (!out.empty()) std::memcpy(out.data(), v->Data(), out.size() * sizeof(T));
+  return out;
+}
+
+template <typename T>
+size_t sizeOf(const flatbuffers::Vector<T>* v) {
+  return v == nullptr ? 0 : v->size();
+}
+
+Check decodeHello(const fb::Hello& in, const MessageLimits& limits, HelloData& out) {
+  if (Check c = checkString(in.node_name(), "hello: node name", limits); !c.empty()) return c;
+  const size_t cameras = sizeOf(in.camera_names());
+  if (cameras > static_cast<size_t>(limits.max_cameras)) {
+    return "hello: " + num(cameras) + " cameras, at most " + num(limits.max_cameras) + " allowed";
+  }
+  const size_t capabilities = sizeOf(in.capabilities());
+  if (capabilities > 64) return "hello: " + num(capabilities) + " capabilities, at most 64";
+  out.node_name = copyString(in.node_name());
+  if (out.node_name.empty()) return "hello: the node name is empty";
+  out.protocol_version = in.protocol_version();
+  for (size_t i = 0; i < cameras; ++i) {
+    const flatbuffers::String* name =
+        in.camera_names()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    if (Check c = checkString(name, "hello: camera name", limits); !c.empty()) return c;
+    out.camera_names.push_back(copyString(name));
+  }
+  for (size_t i = 0; i < capabilities; ++i) {
+    const flatbuffers::String* name =
+        in.capabilities()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    if (Check c = checkString(name, "hello: capability", limits); !c.empty()) return c;
+    out.capabilities.push_back(copyString(name));
+  }
+  return {};
+}
+
+Check decodeHeartbeat(const fb::Heartbeat& in, const MessageLimits& limits, HeartbeatData& out) {
+  const size_t cameras = sizeOf(in.cameras());
+  if (cameras > static_cast<size_t>(limits.max_cameras)) {
+    return "heartbeat: " + num(cameras) + " cameras, at most " + num(limits.max_cameras) +
+           " allowed";
+  }
+  out.bytes_sent = in.bytes_sent();
+  out.cpu = in.cpu();
+  for (size_t i = 0; i < cameras; ++i) {
+    const fb::CameraHealth* c = in.cameras()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    if (c == nullptr) return "heartbeat: camera " + num(i) + " is missing";
+    if (Check e = checkString(c->camera(), "heartbeat: camera name", limits); !e.empty()) return e;
+    if (Check e = checkString(c->last_error(), "heartbeat: last error", limits); !e.empty()) {
+      return e;
+    }
+    out.cameras.push_back({copyString(c->camera()), c->frames(), c->dropped(), c->frame_rate(),
+                           copyString(c->last_error())});
+  }
+  return {};
+}
+
+Check decodeSilhouettes(const fb::Silhouettes& in, const MessageLimits& limits,
+                        SilhouettesData& out) {
+  const size_t masks = sizeOf(in.masks());
+  if (masks > static_cast<size_t>(limits.max_cameras)) {
+    return "silhouettes: " + num(masks) + " masks, at most " + num(limits.max_cameras) + " allowed";
+  }
+  for (size_t i = 0; i < masks; ++i) {
+    const fb::SilhouetteMask* m = in.masks()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    if (m == nullptr) return "silhouettes: mask " + num(i) + " is missing";
+    const std::string where = "silhouettes: mask " + num(i) + " (camera " + num(m->camera()) + ")";
+    if (m->camera() >= limits.max_cameras) {
+      return where + ": camera index out of range, the rig has " + num(limits.max_cameras);
+    }
+    const uint64_t pixels = uint64_t{m->width()} * m->height();
+    if (pixels > static_cast<uint64_t>(limits.max_mask_pixels)) {
+      return where + ": " + num(m->width()) + "x" + num(m->height()) + " pixels, at most " +
+             num(limits.max_mask_pixels) + " allowed";
+    }
+    const uint64_t expected = (pixels + 7) / 8;
+    if (sizeOf(m->bits()) != expected) {
+      return where + ": " + num(m->width()) + "x" + num(m->height()) + " needs " + num(expected) +
+             " mask bytes, got " + num(sizeOf(m->bits()));
+    }
+    out.masks.push_back({m->camera(), m->width(), m->height(), copyVector(m->bits())});
+  }
+  return {};
+}
+
+Check decodePose(const fb::Pose& in, const MessageLimits& limits, PoseData& out) {
+  if (in.joint_count() > limits.max_joints) {
+    return "pose: " + num(in.joint_count()) + " joints, at most " + num(limits.max_joints) +
+           " allowed";
+  }
+  const size_t expected = size_t{in.joint_count()} * 3;
+  if (sizeOf(in.angles()) != expected) {
+    return "pose: " + num(in.joint_count()) + " joints need " + num(expected) + " angles, got " +
+           num(sizeOf(in.angles()));
+  }
+  out.root[0] = in.root_x();
+  out.root[1] = in.root_y();
+  out.root[2] = in.root_z();
+  out.angles = copyVector(in.angles());
+  return {};
+}
+
+Check decodeVertexStatistics(const fb::VertexStatistics& in, const MessageLimits& limits,
+                             VertexStatisticsData& out) {
+  const uint64_t vertices = in.vertex_count(), offsets = in.offset_count();
+  if (vertices > limits.max_vertices) {
+    return "vertex statistics: " + num(vertices) + " vertices, at most " +
+           num(limits.max_vertices) + " allowed";
+  }
+  if (offsets == 0 || offsets > static_cast<uint64_t>(limits.max_offsets)) {
+    return "vertex statistics: " + num(offsets) + " offsets, expected 1 to " +
+           num(limits.max_offsets);
+  }
+  const uint64_t samples = vertices * offsets;
+  const std::string counts =
+      "vertex statistics: " + num(vertices) + " vertices x " + num(offsets) + " offsets needs ";
+  if (sizeOf(in.sums()) != samples * 3) {
+    return counts + num(samples * 3) + " floats of sums, got " + num(sizeOf(in.sums()));
+  }
+  if (sizeOf(in.sums_of_squares()) != samples * 3) {
+    return counts + num(samples * 3) + " floats of sums of squares, got " +
+           num(sizeOf(in.sums_of_squares()));
+  }
+  if (sizeOf(in.seen()) != samples) {
+    return counts + num(samples) + " seen counts, got " + num(sizeOf(in.seen()));
+  }
+  if (sizeOf(in.inside()) != samples) {
+    return counts + num(samples) + " inside counts, got " + num(sizeOf(in.inside()));
+  }
+  for (uint64_t i = 0; i < samples; ++i) {
+    if (in.inside()->Get(static_cast<flatbuffers::uoffset_t>(i)) >
+        in.seen()->Get(static_cast<flatbuffers::uoffset_t>(i))) {
+      return "vertex statistics: sample " + num(i) + " is inside in more cameras than see it";
+    }
+  }
+  out.vertex_count = in.vertex_count();
+  out.offset_count = in.offset_count();
+  out.sums = copyVector(in.sums());
+  out.sums_of_squares = copyVector(in.sums_of_squares());
+  out.seen = copyVector(in.seen());
+  out.inside = copyVector(in.inside());
+  return {};
+}
+
+Check decodeOffsets(const fb::Offsets& in, const MessageLimits& limits, OffsetsData& out) {
+  const size_t vertices = sizeOf(in.offsets());
+  if (vertices > limits.max_vertices) {
+    return "offsets: " + num(vertices) + " vertices, at most " + num(limits.max_vertices) +
+           " allowed";
+  }
+  if (in.offset_count() == 0 || in.offset_count() > limits.max_offsets) {
+    return "offsets: " + num(in.offset_count()) + " offsets, expected 1 to " +
+           num(limits.max_offsets);
+  }
+  for (size_t v = 0; v < vertices; ++v) {
+    const uint8_t t = in.offsets()->Get(static_cast<flatbuffers::uoffset_t>(v));
+    if (t >= in.offset_count()) {
+      return "offsets: vertex " + num(v) + " has offset " + num(t) + ", expected below " +
+             num(in.offset_count());
+    }
+  }
+  out.offset_count = in.offset_count();
+  out.offsets = copyVector(in.offsets());
+  return {};
+}
+
+Check decodePartialImage(const fb::PartialImage& in, const MessageLimits& limits,
+                         PartialImageData& out) {
+  const uint64_t pixels = uint64_t{in.width()} * in.height();
+  const std::string where = "partial image " + num(in.width()) + "x" + num(in.height());
+  if (pixels > static_cast<uint64_t>(limits.max_image_pixels)) {
+    return where + ": at most " + num(limits.max_image_pixels) + " pixels allowed";
+  }
+  const size_t bytes = sizeOf(in.data());
+  switch (in.encoding()) {
+    case fb::ImageEncoding::raw_rgba:
+      if (bytes != pixels * 4) {
+        return where + ": raw RGBA needs " + num(pixels * 4) + " bytes, got " + num(bytes);
+      }
+      break;
+    case fb::ImageEncoding::rle_rgba: {
+      if (bytes % 5 != 0) {
+        return where + ": RLE data of " + num(bytes) + " bytes is not whole 5-byte runs";
+      }
+      uint64_t covered = 0;
+      for (size_t i = 0; i < bytes; i += 5) {
+        covered += uint64_t{in.data()->Get(static_cast<flatbuffers::uoffset_t>(i))} + 1;
+      }
+      if (covered != pixels) {
+        return where + ": RLE runs cover " + num(covered) + " pixels, expected " + num(pixels);
+      }
+      break;
+    }
+    default:
+      return where + ": unknown encoding " + num(static_cast<uint8_t>(in.encoding()));
+  }
+  out.view = in.view();
+  out.width = in.width();
+  out.height = in.height();
+  out.encoding = static_cast<ImageEncoding>(in.encoding());
+  out.data = copyVector(in.data());
+  return {};
+}
+
+Check decodeFrameTimestamps(const fb::FrameTimestamps& in, const MessageLimits& limits,
+                            FrameTimestampsData& out) {
+  const size_t stages = sizeOf(in.stages());
+  if (stages > static_cast<size_t>(limits.max_stages)) {
+    return "frame timestamps: " + num(stages) + " stages, at most " + num(limits.max_stages) +
+           " allowed";
+  }
+  for (size_t i = 0; i < stages; ++i) {
+    const fb::StageTime* s = in.stages()->Get(static_cast<flatbuffers::uoffset_t>(i));
+    if (s == nullptr) return "frame timestamps: stage " + num(i) + " is missing";
+    if (Check c = checkString(s->stage(), "frame timestamps: stage name", limits); !c.empty()) {
+      return c;
+    }
+    out.stages.push_back({copyString(s->stage()), s->ns()});
+  }
+  return {};
+}
+
+template <typename Table, typename Data, typename Decode>
+Check decodeBody(const Table* table, const char* name, const MessageLimits& limits, Decode decode,
+                 MessageBody& body) {
+  if (table == nullptr) return std::string(name) + ": the body is missing";
+  Data data;
+  Check c = decode(*table, limits, data);
+  if (c.empty()) body = std::move(data);
+  return c;
+}
+
+DecodeResult failure(std::string reason) {
+  DecodeResult r;
+  r.error = std::move(reason);
+  return r;
+}
+
+}  // namespace
+
+DecodeResult decodeMessage(const uint8_t* data, size_t size, const MessageLimits& limits) {
+  if (data == nullptr || size == 0) return failure("empty message");
+  if (size > limits.max_bytes || size >= FLATBUFFERS_MAX_BUFFER_SIZE) {
+    return failure("message of " + num(size) + " bytes, at most " + num(limits.max_bytes) +
+                   " allowed");
+  }
+  if (size < sizeof(flatbuffers::uoffset_t) + flatbuffers::kFileIdentifierLength ||
+      !flatbuffers::BufferHasIdentifier(data, fb::EnvelopeIdentifier())) {
+    return failure("not a Lumistage message (" + num(size) + " bytes without the LUMI identifier)");
+  }
+  // Depth: envelope > body > vector > table > string is 5 deep; tables: a heartbeat or masks of
+  // max_cameras each, with room to spare.
+  flatbuffers::Verifier verifier(
+      data, size, /*max_depth=*/16,
+      /*max_tables=*/
+      static_cast<flatbuffers::uoffset_t>(4 * (limits.max_cameras + limits.max_stages) + 16));
+  if (!fb::VerifyEnvelopeBuffer(verifier)) {
+    return failure("malformed message of " + num(size) +
+                   " bytes (FlatBuffers verifier refused it)");
+  }
+  const fb::Envelope* envelope = fb::GetEnvelope(data);
+  if (envelope->version() != kProtocolVersion) {
+    return failure("protocol version " + num(envelope->version()) + ", expected " +
+                   num(kProtocolVersion));
+  }
+  if (Check c = checkString(envelope->sender(), "sender", limits); !c.empty()) {
+    return failure(std::move(c));
+  }
+  Message message;
+  message.version = envelope->version();
+  message.sender = copyString(envelope->sender());
+  message.frame_id = envelope->frame_id();
+  message.sent_ns = envelope->sent_ns();
+  Check c;
+  switch (envelope->body_type()) {
+    case fb::Body::Hello:
+      c = decodeBody<fb::Hello, HelloData>(envelope->body_as_Hello(), "hello", limits, decodeHello,
+                                           message.body);
+      break;
+    case fb::Body::Heartbeat:
+      c = decodeBody<fb::Heartbeat, HeartbeatData>(envelope->body_as_Heartbeat(), "heartbeat",
+                                                   limits, decodeHeartbeat, message.body);
+      break;
+    case fb::Body::Silhouettes:
+      c = decodeBody<fb::Silhouettes, SilhouettesData>(
+          envelope->body_as_Silhouettes(), "silhouettes", limits, decodeSilhouettes, message.body);
+      break;
+    case fb::Body::Pose:
+      c = decodeBody<fb::Pose, PoseData>(envelope->body_as_Pose(), "pose", limits, decodePose,
+                                         message.body);
+      break;
+    case fb::Body::VertexStatistics:
+      c = decodeBody<fb::VertexStatistics, VertexStatisticsData>(
+          envelope->body_as_VertexStatistics(), "vertex statistics", limits, decodeVertexStatistics,
+          message.body);
+      break;
+    case fb::Body::Offsets:
+      c = decodeBody<fb::Offsets, OffsetsData>(envelope->body_as_Offsets(), "offsets", limits,
+                                               decodeOffsets, message.body);
+      break;
+    case fb::Body::PartialImage:
+      c = decodeBody<fb::PartialImage, PartialImageData>(envelope->body_as_PartialImage(),
+                                                         "partial image", limits,
+                                                         decodePartialImage, message.body);
+      break;
+    case fb::Body::FrameTimestamps:
+      c = decodeBody<fb::FrameTimestamps, FrameTimestampsData>(envelope->body_as_FrameTimestamps(),
+                                                               "frame timestamps", limits,
+                                                               decodeFrameTimestamps, message.body);
+      break;
+    case fb::Body::NONE:
+      c = "message without a body";
+      break;
+    default:
+      c = "unknown message type " + num(static_cast<uint8_t>(envelope->body_type()));
+      break;
+  }
+  if (!c.empty()) return failure(std::move(c));
+  DecodeResult result;
+  result.message = std::move(message);
+  return result;
+}
+
+std::vector<uint8_t> encodeMessage(const Message& message) {
+  flatbuffers::FlatBufferBuilder builder(1024);
+  encodeInto(builder, message);
+  return {builder.GetBufferPointer(), builder.GetBufferPointer() + builder.GetSize()};
+}
+
+MessageEncoder::MessageEncoder() : builder_(std::make_unique<flatbuffers::FlatBufferBuilder>()) {}
+MessageEncoder::~MessageEncoder() = default;
+
+std::span<const uint8_t> MessageEncoder::encode(const Message& message) {
+  encodeInto(*builder_, message);
+  return {builder_->GetBufferPointer(), builder_->GetSize()};
+}
+
+std::vector<uint8_t> encodeRleRgba(std::span<const uint8_t> rgba) {
+  std::vector<uint8_t> out;
+  const size_t pixels = rgba.size() / 4;
+  for (size_t i = 0; i < pixels;) {
+    size_t run = 1;
+    while (run < 256 && i + run < pixels &&
+           std::memcmp(&rgba[4 * i], &rgba[4 * (i + run)], 4) == 0) {
+      ++run;
+    }
+    out.push_back(static_cast<uint8_t>(run - 1));
+    out.insert(out.end(), rgba.begin() + 4 * i, rgba.begin() + 4 * i + 4);
+    i += run;
+  }
+  return out;
+}
+
+std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_count) {
+  if (rle.size() % 5 != 0) return {};
+  std::vector<uint8_t> out;
+  out.reserve(pixel_count * 4);
+  for (size_t i = 0; i < rle.size(); i += 5) {
+    const size_t run = size_t{rle[i]} + 1;
+    if (out.size() / 4 + run > pixel_count) return {};
+    for (size_t k = 0; k < run; ++k)
+      out.insert(out.end(), rle.begin() + i + 1, rle.begin() + i + 5);
+  }
+  if (out.size() != pixel_count * 4) return {};
+  return out;
+}
+
+const char* messageTypeName(const MessageBody& body) {
+  static constexpr const char* kNames[] = {"hello",         "heartbeat",         "silhouettes",
+                                           "pose",          "vertex statistics", "offsets",
+                                           "partial image", "frame timestamps"};
+  static_assert(std::size(kNames) == std::variant_size_v<MessageBody>);
+  return kNames[body.index()];
+}
+
+}  // namespace lumistage

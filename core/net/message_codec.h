@@ -1,0 +1,175 @@
+#pragma once
+
+// Messages between camera nodes and the studio as plain structs, and their FlatBuffers wire form
+// (core/net/messages.fbs). The decoder is the one door through which bytes from the network
+// become data: it verifies before it reads, and copies out so that nothing refers to the buffer
+// afterwards. It depends on nothing else in core so that the fuzz target builds from this file
+// and the generated header alone.
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace flatbuffers {
+class FlatBufferBuilder;
+}
+
+namespace lumistage {
+
+// Raised whenever a table changes in a way an older peer would misread.
+inline constexpr uint16_t kProtocolVersion = 1;
+
+struct HelloData {
+  std::string node_name;
+  std::vector<std::string> camera_names;
+  uint16_t protocol_version = kProtocolVersion;
+  std::vector<std::string> capabilities;
+  bool operator==(const HelloData&) const = default;
+};
+
+struct CameraHealthData {
+  std::string camera;
+  int64_t frames = 0;
+  int64_t dropped = 0;
+  float frame_rate = 0;
+  std::string last_error;
+  bool operator==(const CameraHealthData&) const = default;
+};
+
+struct HeartbeatData {
+  std::vector<CameraHealthData> cameras;
+  int64_t bytes_sent = 0;
+  float cpu = 0;
+  bool operator==(const HeartbeatData&) const = default;
+};
+
+// One bit a pixel, row-major, pixel i in bit (i % 8) of byte i / 8.
+struct SilhouetteMaskData {
+  int camera = 0;
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> bits;  // (width * height + 7) / 8 bytes
+  bool operator==(const SilhouetteMaskData&) const = default;
+};
+
+struct SilhouettesData {
+  std::vector<SilhouetteMaskData> masks;
+  bool operator==(const SilhouettesData&) const = default;
+};
+
+struct PoseData {
+  float root[3] = {0, 0, 0};  // metres
+  std::vector<float> angles;  // three a joint, radians
+  bool operator==(const PoseData&) const = default;
+};
+
+// Per vertex v and offset t, at index (v * offset_count + t) (times 3 for the colour sums).
+struct VertexStatisticsData {
+  uint32_t vertex_count = 0;
+  int offset_count = 0;
+  std::vector<float> sums;
+  std::vector<float> sums_of_squares;
+  std::vector<uint8_t> seen;
+  std::vector<uint8_t> inside;
+  bool operator==(const VertexStatisticsData&) const = default;
+};
+
+struct OffsetsData {
+  int offset_count = 0;
+  std::vector<uint8_t> offsets;  // one a vertex, each < offset_count
+  bool operator==(const OffsetsData&) const = default;
+};
+
+enum class ImageEncoding : uint8_t { kRawRgba = 0, kRleRgba = 1 };
+
+struct PartialImageData {
+  int view = 0;
+  int width = 0;
+  int height = 0;
+  ImageEncoding encoding = ImageEncoding::kRawRgba;
+  std::vector<uint8_t> data;
+  bool operator==(const PartialImageData&) const = default;
+};
+
+struct StageTimeData {
+  std::string stage;
+  int64_t ns = 0;
+  bool operator==(const StageTimeData&) const = default;
+};
+
+struct FrameTimestampsData {
+  std::vector<StageTimeData> stages;
+  bool operator==(const FrameTimestampsData&) const = default;
+};
+
+using MessageBody =
+    std::variant<HelloData, HeartbeatData, SilhouettesData, PoseData, VertexStatisticsData,
+                 OffsetsData, PartialImageData, FrameTimestampsData>;
+
+struct Message {
+  uint16_t version = kProtocolVersion;
+  std::string sender;
+  int64_t frame_id = -1;
+  int64_t sent_ns = 0;
+  MessageBody body;
+  bool operator==(const Message&) const = default;
+};
+
+// What a receiver accepts. Set the counts from the rig and the mesh in use (a studio with 9
+// cameras has no business receiving 60 silhouettes); the defaults bound memory, not meaning.
+struct MessageLimits {
+  size_t max_bytes = size_t{64} << 20;
+  int max_cameras = 64;  // per message: names, health entries, masks, camera indices
+  uint32_t max_vertices = 200000;
+  int max_offsets = 64;
+  int max_joints = 128;
+  int max_mask_pixels = 1024 * 1024;
+  int max_image_pixels = 4096 * 4096;
+  int max_stages = 64;
+  size_t max_string_bytes = 1024;
+};
+
+// Either a message or why the bytes were refused.
+struct DecodeResult {
+  std::optional<Message> message;
+  std::string error;
+  bool ok() const { return message.has_value(); }
+};
+
+// Verifies and copies out one buffer. Never throws on bad input (only std::bad_alloc, which
+// max_bytes bounds), never reads outside [data, data + size).
+DecodeResult decodeMessage(const uint8_t* data, size_t size, const MessageLimits& limits = {});
+
+// The wire form of a message. Encoding never validates: a sender that builds nonsense finds out
+// from the receiver's reason, as a broken peer would.
+std::vector<uint8_t> encodeMessage(const Message& message);
+
+// Encodes into a builder it keeps, so that a node sending every frame allocates only while
+// warming up. The span is valid until the next encode() or the encoder's end.
+class MessageEncoder {
+ public:
+  MessageEncoder();
+  ~MessageEncoder();
+  MessageEncoder(const MessageEncoder&) = delete;
+  MessageEncoder& operator=(const MessageEncoder&) = delete;
+  std::span<const uint8_t> encode(const Message& message);
+
+ private:
+  std::unique_ptr<flatbuffers::FlatBufferBuilder> builder_;
+};
+
+// The rle_rgba encoding of PartialImage: runs of up to 256 equal pixels as 5 bytes (length-1,
+// R, G, B, A). Mostly transparent partial renders shrink a lot.
+std::vector<uint8_t> encodeRleRgba(std::span<const uint8_t> rgba);
+// Empty when `rle` is not a valid encoding of exactly pixel_count pixels.
+std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_count);
+
+// The name of the body's type, for logs ("heartbeat", "vertex statistics", ...).
+const char* messageTypeName(const MessageBody& body);
+
+}  // namespace lumistage

@@ -1,0 +1,326 @@
+#include "core/net/transport.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <zmq.h>
+
+#include <array>
+#include <atomic>
+#include <deque>
+#include <iterator>
+#include <mutex>
+#include <thread>
+#include <unordered_map>
+#include <zmq.hpp>
+#include <zmq_addon.hpp>
+
+#include "core/base/error.h"
+
+namespace lumistage {
+
+namespace {
+
+// Logging every bad message of a babbling peer would drown the log: the first few, then one in
+// a thousand.
+bool worthLogging(int64_t count) {
+  return count <= 10 || count % 1000 == 0;
+}
+
+void requireKey(std::string_view key, const char* what) {
+  if (!isZ85Key(key)) {
+    throw Error(fmt::format("{}: expected a 40-character Z85 CURVE key, got {} characters", what,
+                            key.size()));
+  }
+}
+
+// Sends one message (more: more frames follow), waiting at most until `deadline` for room.
+bool sendFrame(zmq::socket_t& socket, std::span<const uint8_t> bytes, bool more,
+               std::chrono::milliseconds timeout) {
+  socket.set(zmq::sockopt::sndtimeo, static_cast<int>(timeout.count()));
+  const auto result = socket.send(zmq::const_buffer(bytes.data(), bytes.size()),
+                                  more ? zmq::send_flags::sndmore : zmq::send_flags::none);
+  return result.has_value();
+}
+
+bool waitReadable(zmq::socket_t& socket, std::chrono::milliseconds timeout) {
+  zmq::pollitem_t item{socket.handle(), 0, ZMQ_POLLIN, 0};
+  return zmq::poll(&item, 1, timeout) > 0 && (item.revents & ZMQ_POLLIN) != 0;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Studio
+
+struct StudioEndpoint::State {
+  StudioEndpointConfig config;
+  zmq::context_t context;
+  zmq::socket_t router;
+  zmq::socket_t zap;  // CURVE only: ZeroMQ asks it about every connecting key (RFC 27)
+  std::thread zap_thread;
+  std::atomic<bool> stop{false};
+  std::unordered_map<std::string, std::string> node_of_key;  // Z85 public key -> node name
+
+  mutable std::mutex mutex;  // guards what other threads read: refusals and counters
+  std::deque<Refusal> refusals;
+  int64_t refusal_count = 0;
+  std::map<std::string, int64_t> bad_messages;
+
+  void serveZap();
+  void countBad(const std::string& node, const std::string& reason);
+};
+
+void StudioEndpoint::State::serveZap() {
+  while (!stop.load()) {
+    try {
+      if (!waitReadable(zap, std::chrono::milliseconds(50))) continue;
+      std::vector<zmq::message_t> request;
+      if (!zmq::recv_multipart(zap, std::back_inserter(request))) continue;
+      // version, request id, domain, address, routing id, mechanism, credentials...
+      if (request.size() < 6) continue;  // not from libzmq; it never sends less
+      const std::string address = request[3].to_string();
+      const std::string mechanism = request[5].to_string();
+      std::string status = "400", text, user;
+      if (mechanism != "CURVE" || request.size() < 7 || request[6].size() != 32) {
+        text = "mechanism " + mechanism + " refused, CURVE required";
+      } else {
+        std::array<char, 41> z85{};
+        zmq_z85_encode(z85.data(), request[6].data<uint8_t>(), 32);
+        const std::string key = z85.data();
+        if (const auto it = node_of_key.find(key); it != node_of_key.end()) {
+          status = "200";
+          text = "OK";
+          user = it->second;
+        } else {
+          text = "node key " + key.substr(0, 8) + " is not authorized";
+        }
+        if (status != "200") {
+          std::lock_guard lock(mutex);
+          ++refusal_count;
+          refusals.push_back({address, key.substr(0, 8), text});
+          if (refusals.size() > 64) refusals.pop_front();
+          if (worthLogging(refusal_count)) {
+            spdlog::warn("studio: refused a node at {}: {}", address, text);
+          }
+        }
+      }
+      const std::string version = request[0].to_string(), id = request[1].to_string();
+      const std::array<zmq::const_buffer, 6> reply{zmq::buffer(version), zmq::buffer(id),
+                                                   zmq::buffer(status),  zmq::buffer(text),
+                                                   zmq::buffer(user),    zmq::str_buffer("")};
+      zmq::send_multipart(zap, reply);
+    } catch (const zmq::error_t& e) {
+      if (e.num() == ETERM) return;
+      spdlog::error("studio: authentication handler: {}", e.what());
+    }
+  }
+}
+
+void StudioEndpoint::State::countBad(const std::string& node, const std::string& reason) {
+  int64_t count;
+  {
+    std::lock_guard lock(mutex);
+    count = ++bad_messages[node];
+  }
+  if (worthLogging(count)) {
+    spdlog::warn("studio: dropped a message from node {} ({} so far): {}", node, count, reason);
+  }
+}
+
+StudioEndpoint::StudioEndpoint(StudioEndpointConfig config) : state_(std::make_unique<State>()) {
+  State& s = *state_;
+  s.config = std::move(config);
+  s.router = zmq::socket_t(s.context, zmq::socket_type::router);
+  s.router.set(zmq::sockopt::linger, 0);
+  s.router.set(zmq::sockopt::router_mandatory, true);
+  // Oversized messages never reach memory: libzmq drops the connection that sends one.
+  s.router.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(s.config.limits.max_bytes));
+  if (s.config.security == TransportSecurity::kCurve) {
+    requireKey(s.config.studio_key.public_key, "studio public key");
+    requireKey(s.config.studio_key.secret_key, "studio secret key");
+    for (const AuthorizedNode& node : s.config.authorized) {
+      requireKey(node.public_key, ("authorized key of node " + node.name).c_str());
+      s.node_of_key[node.public_key] = node.name;
+    }
+    // The handler must be bound before the first handshake, or libzmq admits every key.
+    s.zap = zmq::socket_t(s.context, zmq::socket_type::rep);
+    s.zap.set(zmq::sockopt::linger, 0);
+    s.zap.bind("inproc://zeromq.zap.01");
+    s.router.set(zmq::sockopt::curve_server, true);
+    s.router.set(zmq::sockopt::curve_secretkey, s.config.studio_key.secret_key);
+    s.router.set(zmq::sockopt::zap_domain, "lumistage");
+    s.zap_thread = std::thread([&s] { s.serveZap(); });
+  }
+  try {
+    s.router.bind(s.config.bind);
+  } catch (const zmq::error_t& e) {
+    s.stop = true;
+    if (s.zap_thread.joinable()) s.zap_thread.join();
+    throw Error(fmt::format("studio endpoint {}: cannot bind: {}", s.config.bind, e.what()));
+  }
+}
+
+StudioEndpoint::~StudioEndpoint() {
+  state_->stop = true;
+  if (state_->zap_thread.joinable()) state_->zap_thread.join();
+  state_->router.close();
+  state_->zap.close();
+}
+
+std::string StudioEndpoint::endpoint() const {
+  return state_->router.get(zmq::sockopt::last_endpoint);
+}
+
+std::optional<ReceivedMessage> StudioEndpoint::receive(std::chrono::milliseconds timeout) {
+  State& s = *state_;
+  try {
+    if (!waitReadable(s.router, timeout)) return std::nullopt;
+    std::vector<zmq::message_t> frames;
+    if (!zmq::recv_multipart(s.router, std::back_inserter(frames), zmq::recv_flags::dontwait)) {
+      return std::nullopt;
+    }
+    ReceivedMessage received;
+    received.peer = frames.at(0).to_string();
+    received.node = received.peer;
+    if (frames.size() >= 2) {
+      // Under CURVE the name comes from the key the handshake proved, not from what the peer
+      // calls itself.
+      // (zmq_msg_gets, not message_t::gets, which throws when there is no such property.)
+      const char* user = zmq_msg_gets(frames[1].handle(), "User-Id");
+      if (user != nullptr && *user != '\0') {
+        received.node = user;
+      }
+    }
+    if (frames.size() != 2) {
+      received.result.error =
+          fmt::format("expected one frame a message, got {}", frames.size() - 1);
+    } else {
+      received.result = decodeMessage(frames[1].data<uint8_t>(), frames[1].size(), s.config.limits);
+    }
+    if (!received.result.ok()) s.countBad(received.node, received.result.error);
+    return received;
+  } catch (const zmq::error_t& e) {
+    spdlog::error("studio: receive failed: {}", e.what());
+    return std::nullopt;
+  }
+}
+
+bool StudioEndpoint::send(const std::string& peer, std::span<const uint8_t> bytes,
+                          std::chrono::milliseconds timeout) {
+  try {
+    const auto* id = reinterpret_cast<const uint8_t*>(peer.data());
+    return sendFrame(state_->router, {id, peer.size()}, true, timeout) &&
+           sendFrame(state_->router, bytes, false, timeout);
+  } catch (const zmq::error_t&) {
+    return false;  // EHOSTUNREACH: no such peer (router_mandatory)
+  }
+}
+
+bool StudioEndpoint::send(const std::string& peer, const Message& message,
+                          std::chrono::milliseconds timeout) {
+  const std::vector<uint8_t> bytes = encodeMessage(message);
+  return send(peer, bytes, timeout);
+}
+
+std::vector<Refusal> StudioEndpoint::refusals() const {
+  std::lock_guard lock(state_->mutex);
+  return {state_->refusals.begin(), state_->refusals.end()};
+}
+
+int64_t StudioEndpoint::refusalCount() const {
+  std::lock_guard lock(state_->mutex);
+  return state_->refusal_count;
+}
+
+std::map<std::string, int64_t> StudioEndpoint::badMessages() const {
+  std::lock_guard lock(state_->mutex);
+  return state_->bad_messages;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Node
+
+struct NodeEndpoint::State {
+  NodeEndpointConfig config;
+  zmq::context_t context;
+  zmq::socket_t dealer;
+  std::atomic<int64_t> bad_messages{0};
+};
+
+NodeEndpoint::NodeEndpoint(NodeEndpointConfig config) : state_(std::make_unique<State>()) {
+  State& s = *state_;
+  s.config = std::move(config);
+  if (s.config.name.empty() || s.config.name.size() > 255) {
+    throw Error("node endpoint: the node name must be 1 to 255 bytes");
+  }
+  s.dealer = zmq::socket_t(s.context, zmq::socket_type::dealer);
+  s.dealer.set(zmq::sockopt::linger, 0);
+  s.dealer.set(zmq::sockopt::routing_id, s.config.name);
+  // Messages wait for an accepted connection instead of piling up for a studio that refused us.
+  s.dealer.set(zmq::sockopt::immediate, true);
+  s.dealer.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(s.config.limits.max_bytes));
+  if (s.config.security == TransportSecurity::kCurve) {
+    requireKey(s.config.node_key.public_key, "node public key");
+    requireKey(s.config.node_key.secret_key, "node secret key");
+    requireKey(s.config.studio_public_key, "studio public key");
+    s.dealer.set(zmq::sockopt::curve_serverkey, s.config.studio_public_key);
+    s.dealer.set(zmq::sockopt::curve_publickey, s.config.node_key.public_key);
+    s.dealer.set(zmq::sockopt::curve_secretkey, s.config.node_key.secret_key);
+  }
+  try {
+    s.dealer.connect(s.config.connect);
+  } catch (const zmq::error_t& e) {
+    throw Error(fmt::format("node endpoint {}: cannot connect: {}", s.config.connect, e.what()));
+  }
+}
+
+NodeEndpoint::~NodeEndpoint() {
+  state_->dealer.close();
+}
+
+bool NodeEndpoint::send(std::span<const uint8_t> bytes, std::chrono::milliseconds timeout) {
+  try {
+    return sendFrame(state_->dealer, bytes, false, timeout);
+  } catch (const zmq::error_t&) {
+    return false;
+  }
+}
+
+bool NodeEndpoint::send(const Message& message, std::chrono::milliseconds timeout) {
+  const std::vector<uint8_t> bytes = encodeMessage(message);
+  return send(bytes, timeout);
+}
+
+std::optional<DecodeResult> NodeEndpoint::receive(std::chrono::milliseconds timeout) {
+  State& s = *state_;
+  try {
+    if (!waitReadable(s.dealer, timeout)) return std::nullopt;
+    std::vector<zmq::message_t> frames;
+    if (!zmq::recv_multipart(s.dealer, std::back_inserter(frames), zmq::recv_flags::dontwait)) {
+      return std::nullopt;
+    }
+    DecodeResult result;
+    if (frames.size() != 1) {
+      result.error = fmt::format("expected one frame a message, got {}", frames.size());
+    } else {
+      result = decodeMessage(frames[0].data<uint8_t>(), frames[0].size(), s.config.limits);
+    }
+    if (!result.ok()) {
+      const int64_t count = ++s.bad_messages;
+      if (worthLogging(count)) {
+        spdlog::warn("node {}: dropped a message from the studio ({} so far): {}", s.config.name,
+                     count, result.error);
+      }
+    }
+    return result;
+  } catch (const zmq::error_t& e) {
+    spdlog::error("node {}: receive failed: {}", s.config.name, e.what());
+    return std::nullopt;
+  }
+}
+
+int64_t NodeEndpoint::badMessages() const {
+  return state_->bad_messages.load();
+}
+
+}  // namespace lumistage

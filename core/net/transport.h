@@ -1,0 +1,112 @@
+#pragma once
+
+// The sockets between the studio and its camera nodes (ZeroMQ). The studio binds a ROUTER and
+// every node connects a DEALER, so the studio can answer each node by name and nodes can come and
+// go. Under CURVE (the default) traffic is encrypted and the studio admits only node keys it
+// knows (KeyStore's authorized/ folder): others are refused at the handshake and reported.
+// Every received payload goes through decodeMessage() before anyone sees it.
+//
+// Each endpoint is used from one thread (ZeroMQ sockets are not thread-safe); counters and
+// refusals may be read from any thread. send/receive wait at most their timeout and never throw.
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/net/curve_keys.h"
+#include "core/net/message_codec.h"
+
+namespace lumistage {
+
+// kPlain sends everything in the clear and admits anyone: for a closed lab network or tests, and
+// only when asked for by name. Both sides must agree; a plain node cannot talk to a CURVE studio.
+enum class TransportSecurity { kCurve, kPlain };
+
+struct StudioEndpointConfig {
+  std::string bind = "tcp://*:5570";  // tcp://127.0.0.1:* picks a free port (see endpoint())
+  TransportSecurity security = TransportSecurity::kCurve;
+  CurveKeyPair studio_key;                 // kCurve only
+  std::vector<AuthorizedNode> authorized;  // kCurve only: the node keys admitted
+  MessageLimits limits;
+};
+
+// A node turned away at the handshake.
+struct Refusal {
+  std::string address;     // the peer's IP address
+  std::string key_prefix;  // first 8 Z85 characters of its public key
+  std::string reason;      // "node key abcdefgh is not authorized"
+};
+
+struct ReceivedMessage {
+  std::string peer;  // the node's routing id: what send() takes to answer it
+  std::string node;  // who sent it: the name its CURVE key is authorized under (kPlain: peer)
+  DecodeResult result;
+};
+
+class StudioEndpoint {
+ public:
+  // Throws Error naming the address when it cannot bind, or naming the key when it is not valid.
+  explicit StudioEndpoint(StudioEndpointConfig config);
+  ~StudioEndpoint();
+  StudioEndpoint(const StudioEndpoint&) = delete;
+  StudioEndpoint& operator=(const StudioEndpoint&) = delete;
+
+  // The bound address with the port resolved, e.g. "tcp://127.0.0.1:40123".
+  std::string endpoint() const;
+
+  // The next message from any node, or nothing after `timeout`. A message that fails to decode
+  // comes back with its reason (result.ok() false) after it is counted against its node and
+  // logged.
+  std::optional<ReceivedMessage> receive(std::chrono::milliseconds timeout);
+  // False when the peer is unknown or gone, or its queue stays full for `timeout`.
+  bool send(const std::string& peer, std::span<const uint8_t> bytes,
+            std::chrono::milliseconds timeout);
+  bool send(const std::string& peer, const Message& message, std::chrono::milliseconds timeout);
+
+  // The latest refusals (at most 64) and how many there were in all.
+  std::vector<Refusal> refusals() const;
+  int64_t refusalCount() const;
+  // Messages dropped as malformed, per node.
+  std::map<std::string, int64_t> badMessages() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+struct NodeEndpointConfig {
+  std::string connect;  // the studio, e.g. tcp://studio-pc:5570
+  std::string name;     // the node's name: its routing id at the studio
+  TransportSecurity security = TransportSecurity::kCurve;
+  CurveKeyPair node_key;          // kCurve only
+  std::string studio_public_key;  // kCurve only
+  MessageLimits limits;
+};
+
+class NodeEndpoint {
+ public:
+  // Throws Error when a key is not valid or the address cannot be used.
+  explicit NodeEndpoint(NodeEndpointConfig config);
+  ~NodeEndpoint();
+  NodeEndpoint(const NodeEndpoint&) = delete;
+  NodeEndpoint& operator=(const NodeEndpoint&) = delete;
+
+  // False when no accepted connection to the studio takes the message within `timeout`: the
+  // studio is down, unreachable, or refused this node's key. Nothing is queued for later.
+  bool send(std::span<const uint8_t> bytes, std::chrono::milliseconds timeout);
+  bool send(const Message& message, std::chrono::milliseconds timeout);
+  // The next message from the studio, decoded or with the reason it was dropped.
+  std::optional<DecodeResult> receive(std::chrono::milliseconds timeout);
+  int64_t badMessages() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace lumistage

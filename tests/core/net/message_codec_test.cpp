@@ -1,0 +1,207 @@
+#include "core/net/message_codec.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+
+namespace lumistage {
+namespace {
+
+Message envelope(MessageBody body) {
+  Message m;
+  m.sender = "node2";
+  m.frame_id = 1234;
+  m.sent_ns = 987654321012;
+  m.body = std::move(body);
+  return m;
+}
+
+std::vector<Message> oneOfEach() {
+  HelloData hello{"node2", {"cam04", "cam05", "cam06"}, kProtocolVersion, {"silhouettes", "rle"}};
+  HeartbeatData heartbeat{
+      {{"cam04", 1000, 3, 29.97f, ""}, {"cam05", 998, 5, 30.f, "timeout"}}, 123456789, 0.42f};
+  SilhouettesData silhouettes;
+  silhouettes.masks.push_back({4, 13, 7, std::vector<uint8_t>((13 * 7 + 7) / 8, 0x5a)});
+  silhouettes.masks.push_back({5, 8, 8, std::vector<uint8_t>(8, 0xff)});
+  PoseData pose;
+  pose.root[0] = 0.1f;
+  pose.root[1] = -0.2f;
+  pose.root[2] = 0.95f;
+  for (int i = 0; i < 22 * 3; ++i) pose.angles.push_back(0.01f * static_cast<float>(i));
+  VertexStatisticsData stats;
+  stats.vertex_count = 5;
+  stats.offset_count = 3;
+  for (int i = 0; i < 5 * 3 * 3; ++i) {
+    stats.sums.push_back(static_cast<float>(i));
+    stats.sums_of_squares.push_back(static_cast<float>(i * i));
+  }
+  stats.seen.assign(15, 3);
+  stats.inside.assign(15, 2);
+  OffsetsData offsets{21, {0, 10, 20, 5, 7}};
+  std::vector<uint8_t> rgba(6 * 4 * 4, 0);
+  rgba[0] = 255;
+  PartialImageData raw{1, 6, 4, ImageEncoding::kRawRgba, rgba};
+  PartialImageData rle{1, 6, 4, ImageEncoding::kRleRgba, encodeRleRgba(rgba)};
+  FrameTimestampsData stamps{{{"capture", 100}, {"silhouettes", 250}, {"sent", 300}}};
+  std::vector<Message> all;
+  for (MessageBody body : std::vector<MessageBody>{hello, heartbeat, silhouettes, pose, stats,
+                                                   offsets, raw, rle, stamps}) {
+    all.push_back(envelope(std::move(body)));
+  }
+  return all;
+}
+
+std::string decodeError(const Message& m, const MessageLimits& limits = {}) {
+  const std::vector<uint8_t> bytes = encodeMessage(m);
+  const DecodeResult r = decodeMessage(bytes.data(), bytes.size(), limits);
+  EXPECT_FALSE(r.ok()) << messageTypeName(m.body);
+  return r.error;
+}
+
+TEST(MessageCodec, EveryMessageSurvivesARoundTrip) {
+  MessageEncoder encoder;
+  for (const Message& m : oneOfEach()) {
+    const std::vector<uint8_t> bytes = encodeMessage(m);
+    const DecodeResult r = decodeMessage(bytes.data(), bytes.size());
+    ASSERT_TRUE(r.ok()) << messageTypeName(m.body) << ": " << r.error;
+    EXPECT_EQ(*r.message, m) << messageTypeName(m.body);
+    // The reusing encoder writes the same bytes.
+    const std::span<const uint8_t> again = encoder.encode(m);
+    EXPECT_EQ(std::vector<uint8_t>(again.begin(), again.end()), bytes);
+  }
+}
+
+TEST(MessageCodec, RleRoundTripAndBadRuns) {
+  std::vector<uint8_t> rgba(300 * 4, 7);
+  rgba[4 * 299] = 1;
+  const std::vector<uint8_t> rle = encodeRleRgba(rgba);
+  EXPECT_EQ(rle.size(), 3u * 5u);  // 256 + 43 equal pixels, then one other
+  EXPECT_EQ(decodeRleRgba(rle, 300), rgba);
+  EXPECT_TRUE(decodeRleRgba(rle, 299).empty());
+  EXPECT_TRUE(decodeRleRgba(std::span(rle).first(7), 300).empty());
+}
+
+TEST(MessageCodec, EmptyTruncatedAndRandomBuffersAreRefused) {
+  EXPECT_EQ(decodeMessage(nullptr, 0, {}).error, "empty message");
+  const uint8_t one = 0;
+  EXPECT_FALSE(decodeMessage(&one, 1, {}).ok());
+  for (const Message& m : oneOfEach()) {
+    const std::vector<uint8_t> bytes = encodeMessage(m);
+    for (size_t n = 1; n < bytes.size(); n += 1 + n / 16) {
+      const std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<ptrdiff_t>(n));
+      const DecodeResult r = decodeMessage(cut.data(), cut.size(), {});
+      EXPECT_FALSE(r.ok()) << messageTypeName(m.body) << " cut to " << n << " bytes";
+      EXPECT_FALSE(r.error.empty());
+    }
+  }
+  std::mt19937 random(5);
+  for (int i = 0; i < 2000; ++i) {
+    std::vector<uint8_t> noise(1 + random() % 512);
+    for (uint8_t& b : noise) b = static_cast<uint8_t>(random());
+    // Half of them look like ours, so that the verifier, not the identifier, has to refuse them.
+    if (i % 2 == 0 && noise.size() >= 8) std::memcpy(&noise[4], "LUMI", 4);
+    const DecodeResult r = decodeMessage(noise.data(), noise.size(), {});
+    EXPECT_TRUE(r.ok() || !r.error.empty());
+  }
+}
+
+TEST(MessageCodec, FlippedBytesNeverCrash) {
+  std::mt19937 random(11);
+  for (const Message& m : oneOfEach()) {
+    const std::vector<uint8_t> bytes = encodeMessage(m);
+    for (int i = 0; i < 300; ++i) {
+      std::vector<uint8_t> bent = bytes;
+      for (int k = 0; k < 3; ++k) bent[random() % bent.size()] = static_cast<uint8_t>(random());
+      const DecodeResult r = decodeMessage(bent.data(), bent.size(), {});
+      EXPECT_TRUE(r.ok() || !r.error.empty());
+    }
+  }
+}
+
+TEST(MessageCodec, WrongVersionNamesBoth) {
+  Message m = oneOfEach()[0];
+  m.version = kProtocolVersion + 1;
+  EXPECT_EQ(decodeError(m), "protocol version 2, expected 1");
+}
+
+TEST(MessageCodec, OversizedBuffersAreRefusedBeforeReading) {
+  const std::vector<uint8_t> bytes = encodeMessage(oneOfEach()[4]);
+  MessageLimits limits;
+  limits.max_bytes = bytes.size() - 1;
+  const DecodeResult r = decodeMessage(bytes.data(), bytes.size(), limits);
+  EXPECT_NE(r.error.find("at most " + std::to_string(bytes.size() - 1)), std::string::npos)
+      << r.error;
+}
+
+TEST(MessageCodec, CountsOverTheLimitsAreRefused) {
+  MessageLimits limits;
+  limits.max_cameras = 2;
+  HelloData hello{"node1", {"a", "b", "c"}, kProtocolVersion, {}};
+  EXPECT_EQ(decodeError(envelope(hello), limits), "hello: 3 cameras, at most 2 allowed");
+  HeartbeatData heartbeat;
+  heartbeat.cameras.resize(3);
+  EXPECT_EQ(decodeError(envelope(heartbeat), limits), "heartbeat: 3 cameras, at most 2 allowed");
+  SilhouettesData silhouettes;
+  silhouettes.masks.push_back({7, 8, 1, {0}});
+  EXPECT_EQ(decodeError(envelope(silhouettes), limits),
+            "silhouettes: mask 0 (camera 7): camera index out of range, the rig has 2");
+
+  limits.max_vertices = 1000;
+  OffsetsData offsets{21, std::vector<uint8_t>(1001, 0)};
+  EXPECT_EQ(decodeError(envelope(offsets), limits), "offsets: 1001 vertices, at most 1000 allowed");
+  VertexStatisticsData stats;
+  stats.vertex_count = 1001;
+  stats.offset_count = 21;
+  EXPECT_EQ(decodeError(envelope(stats), limits),
+            "vertex statistics: 1001 vertices, at most 1000 allowed");
+
+  PoseData pose;
+  pose.angles.resize(3 * 200);
+  EXPECT_EQ(decodeError(envelope(pose)), "pose: 200 joints, at most 128 allowed");
+
+  limits = {};
+  limits.max_string_bytes = 8;
+  HelloData long_name{"a-very-long-node-name", {}, kProtocolVersion, {}};
+  EXPECT_EQ(decodeError(envelope(long_name), limits),
+            "hello: node name: 21 bytes, at most 8 allowed");
+}
+
+TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
+  VertexStatisticsData stats;
+  stats.vertex_count = 41000;
+  stats.offset_count = 21;
+  stats.sums.resize(12);
+  EXPECT_EQ(decodeError(envelope(stats)),
+            "vertex statistics: 41000 vertices x 21 offsets needs 2583000 floats of sums, got 12");
+
+  stats = std::get<VertexStatisticsData>(oneOfEach()[4].body);
+  stats.inside[3] = 9;
+  EXPECT_EQ(decodeError(envelope(stats)),
+            "vertex statistics: sample 3 is inside in more cameras than see it");
+
+  SilhouettesData silhouettes;
+  silhouettes.masks.push_back({0, 13, 7, std::vector<uint8_t>(11, 0)});
+  EXPECT_EQ(decodeError(envelope(silhouettes)),
+            "silhouettes: mask 0 (camera 0): 13x7 needs 12 mask bytes, got 11");
+
+  PoseData pose;
+  pose.angles.resize(7);  // the encoder writes 2 joints
+  EXPECT_EQ(decodeError(envelope(pose)), "pose: 2 joints need 6 angles, got 7");
+
+  OffsetsData offsets{21, {3, 21}};
+  EXPECT_EQ(decodeError(envelope(offsets)), "offsets: vertex 1 has offset 21, expected below 21");
+
+  PartialImageData raw{0, 4, 4, ImageEncoding::kRawRgba, std::vector<uint8_t>(63)};
+  EXPECT_EQ(decodeError(envelope(raw)), "partial image 4x4: raw RGBA needs 64 bytes, got 63");
+  PartialImageData rle{0, 4, 4, ImageEncoding::kRleRgba, {2, 0, 0, 0, 0}};
+  EXPECT_EQ(decodeError(envelope(rle)), "partial image 4x4: RLE runs cover 3 pixels, expected 16");
+  PartialImageData odd{0, 4, 4, static_cast<ImageEncoding>(9), {}};
+  EXPECT_EQ(decodeError(envelope(odd)), "partial image 4x4: unknown encoding 9");
+
+  HelloData nameless{"", {}, kProtocolVersion, {}};
+  EXPECT_EQ(decodeError(envelope(nameless)), "hello: the node name is empty");
+}
+
+}  // namespace
+}  // namespace lumistage

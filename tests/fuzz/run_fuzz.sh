@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Builds the message decoder fuzz target with clang (libFuzzer + AddressSanitizer) whatever the
+# project's compiler, seeds a corpus with valid messages, and fuzzes for a bounded time. Fails on
+# a crash, a leak, a sanitizer report or a build failure; the crashing input is kept in OUT_DIR.
+# Usage: run_fuzz.sh SOURCE_DIR GENERATED_DIR OUT_DIR [SECONDS]
+set -euo pipefail
+src=$1 generated=$2 out=$3 seconds=${4:-20}
+
+clang=$(command -v clang++ || command -v clang++-14 || true)
+if [[ -z "$clang" ]]; then
+  echo "run_fuzz: clang++ not found (packaging/install-deps.sh installs clang)" >&2
+  exit 1
+fi
+mkdir -p "$out/corpus"
+binary="$out/message_decoder_fuzz"
+# Rebuilt only when a source is newer than the binary: a repeated ctest run fuzzes at once.
+if [[ ! -x "$binary" || "$src/core/net/message_codec.cpp" -nt "$binary" ||
+      "$src/core/net/message_codec.h" -nt "$binary" || "$generated/messages_generated.h" -nt "$binary" ||
+      "$src/tests/fuzz/message_decoder_fuzz.cpp" -nt "$binary" ]]; then
+  "$clang" -std=c++20 -O1 -g -fsanitize=fuzzer,address -I"$src" -isystem "$generated" \
+    "$src/core/net/message_codec.cpp" "$src/tests/fuzz/message_decoder_fuzz.cpp" -o "$binary.tmp"
+  mv "$binary.tmp" "$binary"
+fi
+cd "$out"
+set +e
+LUMISTAGE_FUZZ_SEED_DIR="$out/corpus" "$binary" -max_total_time="$seconds" -rss_limit_mb=1024 \
+  -timeout=10 -max_len=4096 -print_final_stats=1 -artifact_prefix="$out/" corpus >fuzz.log 2>&1
+status=$?
+set -e
+# The progress lines are noise; the seeds read, the totals and any report are what matter.
+grep -v -E '^#[0-9]+.*(NEW|REDUCE|pulse)|# Uses:|recommended dictionary' fuzz.log | tail -60
+exit "$status"
