@@ -257,26 +257,29 @@ fs::path SessionReader::truthMaskPath(int camera, int i) const {
          fmt::format("{:06}.png", frameId(i));
 }
 
-void SessionReader::readFrame(int i, std::vector<CameraFrame>& out) const {
+void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
+                              const std::vector<int>& cameras) const {
   const int64_t id = frameId(i), timestamp = timestampNs(i);
   out.resize(rig_.cameraCount());
-  std::vector<std::string> errors(rig_.cameraCount());
+  const int count = cameras.empty() ? rig_.cameraCount() : static_cast<int>(cameras.size());
+  std::vector<std::string> errors(count);
   // PNG decoding dominates: cameras in parallel, errors carried out.
-  cv::parallel_for_(cv::Range(0, rig_.cameraCount()), [&](const cv::Range& range) {
-    for (int c = range.start; c < range.end; ++c) {
+  cv::parallel_for_(cv::Range(0, count), [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k) {
+      const int c = cameras.empty() ? k : cameras[k];
       const Camera& camera = rig_.camera(c);
       const fs::path path = imagePath(c, i);
       cv::Mat decoded;
       try {
         decoded = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
       } catch (const cv::Exception& e) {
-        errors[c] = path.string() + ": cannot decode: " + e.err;
+        errors[k] = path.string() + ": cannot decode: " + e.err;
         continue;
       }
       const int type = format_ == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1;
       if (decoded.empty() || decoded.type() != type || decoded.cols != camera.width() ||
           decoded.rows != camera.height()) {
-        errors[c] = fmt::format(
+        errors[k] = fmt::format(
             "{}: frame {}: cannot decode a {}x{} {} image from it (damaged since the session "
             "was opened?)",
             path.string(), id, camera.width(), camera.height(), pixelFormatName(format_));

@@ -38,7 +38,9 @@ class SessionReader {
 
   // Decodes frame i, one CameraFrame per camera of the rig (index order), reusing `out`'s image
   // buffers. Throws Error naming the file when an image cannot be decoded (damaged after open).
-  void readFrame(int i, std::vector<CameraFrame>& out) const;
+  // `cameras`: only these rig cameras are decoded (a node reads its own); empty: all. `out` is
+  // indexed by rig camera either way.
+  void readFrame(int i, std::vector<CameraFrame>& out, const std::vector<int>& cameras = {}) const;
   std::filesystem::path imagePath(int camera, int i) const;
 
   // Ground truth (virtual studio sessions, hasTruth()). Joints per readable frame, in the order

@@ -24,6 +24,16 @@ void copyFrame(const CameraFrame& from, CameraFrame& to) {
 
 SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions options)
     : reader_(folder), options_(options), delivered_(reader_.rig().cameraCount(), 0) {
+  for (int c : options_.cameras) {
+    if (c < 0 || c >= reader_.rig().cameraCount()) {
+      throw Error(fmt::format("{}: replay of camera index {}, but the rig has {} cameras",
+                              folder.string(), c, reader_.rig().cameraCount()));
+    }
+  }
+  cameras_ = options_.cameras;
+  if (cameras_.empty()) {
+    for (int c = 0; c < reader_.rig().cameraCount(); ++c) cameras_.push_back(c);
+  }
   const int frames = reader_.frameCount();
   if (frames > 0) {
     id_span_ = reader_.frameId(frames - 1) - reader_.frameId(0) + 1;
@@ -33,24 +43,26 @@ SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions 
   finished_ = frames == 0;
   if (options_.mode != ReplayMode::kFromMemory) return;
   size_t set_bytes = 0;
-  for (const Camera& c : reader_.rig().cameras())
-    set_bytes += size_t(c.width()) * c.height() * bytesPerPixel(reader_.pixelFormat());
+  for (int c : cameras_) {
+    const Camera& camera = reader_.rig().camera(c);
+    set_bytes += size_t(camera.width()) * camera.height() * bytesPerPixel(reader_.pixelFormat());
+  }
   const size_t needed = set_bytes * size_t(frames);
   if (needed > options_.memory_limit_bytes) {
     throw Error(fmt::format(
         "{}: replaying from memory needs {:.1f} MiB ({} frames of {} cameras), over the limit of "
         "{:.1f} MiB; replay from disk, or raise ReplayOptions::memory_limit_bytes",
-        folder.string(), needed / 1048576.0, frames, reader_.rig().cameraCount(),
+        folder.string(), needed / 1048576.0, frames, cameras_.size(),
         options_.memory_limit_bytes / 1048576.0));
   }
   memory_.resize(frames);
-  for (int i = 0; i < frames; ++i) reader_.readFrame(i, memory_[i]);
+  for (int i = 0; i < frames; ++i) reader_.readFrame(i, memory_[i], cameras_);
 }
 
 bool SessionSource::loadSet() {
   if (options_.mode == ReplayMode::kFromMemory) return true;
   try {
-    reader_.readFrame(next_set_, set_);
+    reader_.readFrame(next_set_, set_, cameras_);
   } catch (const std::exception& e) {
     error_ = e.what();
     finished_ = true;
@@ -80,7 +92,7 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) 
   }
   if (next_camera_ == 0 && !loadSet()) return false;
 
-  const int c = next_camera_;
+  const int c = cameras_[next_camera_];
   if (options_.mode == ReplayMode::kFromMemory) {
     copyFrame(memory_[next_set_][c], frame);
   } else {
@@ -92,9 +104,9 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) 
   frame.timestamp_ns = timestamp;
 
   const Clock::time_point delivered = Clock::now();
-  if (delivered_[c]++ == 0 && c == 0) first_delivery_ = delivered;
+  if (delivered_[c]++ == 0 && next_camera_ == 0) first_delivery_ = delivered;
   last_delivery_ = delivered;
-  if (++next_camera_ == rig().cameraCount()) {
+  if (++next_camera_ == static_cast<int>(cameras_.size())) {
     next_camera_ = 0;
     if (++next_set_ == reader_.frameCount()) {
       next_set_ = 0;

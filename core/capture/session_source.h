@@ -24,6 +24,8 @@ struct ReplayOptions {
   bool loop = false;
   // kFromMemory refuses (Error) a session whose decoded images would need more than this.
   size_t memory_limit_bytes = size_t(2) << 30;
+  // Only these rig cameras (a camera node replays its own); empty: all of them.
+  std::vector<int> cameras;
 };
 
 // Replays a recorded session through the FrameSource interface: the frames of a set come out
@@ -50,7 +52,9 @@ class SessionSource : public FrameSource {
   std::vector<std::vector<CameraFrame>> memory_;  // kFromMemory: every set
   std::vector<CameraFrame> set_;                  // the set being served (disk modes)
   int next_set_ = 0;                              // index of the set to serve next
-  int next_camera_ = 0;  // camera of that set to serve next; 0: the set is not loaded yet
+  std::vector<int> cameras_;                      // rig cameras served, in order
+  int next_camera_ =
+      0;  // index into cameras_ of the one to serve next; 0: the set is not loaded yet
   int64_t loop_ = 0;
   int64_t id_span_ = 0, time_span_ns_ = 0;  // how much ids and timestamps advance per loop
   bool started_ = false;

@@ -11,6 +11,16 @@
 namespace lumistage {
 namespace {
 
+ReplayOptions replay(ReplayMode mode, bool loop = false, size_t memory_limit = size_t(1) << 30,
+                     std::vector<int> cameras = {}) {
+  ReplayOptions options;
+  options.mode = mode;
+  options.loop = loop;
+  options.memory_limit_bytes = memory_limit;
+  options.cameras = std::move(cameras);
+  return options;
+}
+
 using namespace lumistage::test;
 using std::chrono::milliseconds;
 
@@ -34,7 +44,7 @@ TEST(Replay, EveryModeGivesBackExactlyWhatWasRecorded) {
     for (ReplayMode mode :
          {ReplayMode::kRecordedRate, ReplayMode::kAsFastAsPossible, ReplayMode::kFromMemory}) {
       SCOPED_TRACE(int(mode));
-      SessionSource source(folder, {mode, false});
+      SessionSource source(folder, replay(mode));
       EXPECT_TRUE(source.rig() == rig);
       const auto start = std::chrono::steady_clock::now();
       CameraFrame frame;
@@ -64,7 +74,7 @@ TEST(Replay, LoopsWithIdsAndTimestampsGoingOn) {
   const Rig rig = smallRig();
   const fs::path folder = freshFolder("replay_loop");
   record(folder, rig, PixelFormat::kMono8, 2);
-  SessionSource source(folder, {ReplayMode::kFromMemory, true});
+  SessionSource source(folder, replay(ReplayMode::kFromMemory, true));
   CameraFrame frame;
   for (int i = 0; i < 5 * 3; ++i) {
     ASSERT_TRUE(source.next(frame, milliseconds(0)));
@@ -83,7 +93,7 @@ TEST(Replay, FromMemoryOverTheLimitSaysHowMuchItWouldNeed) {
   const fs::path folder = freshFolder("replay_limit");
   record(folder, rig, PixelFormat::kRgb8, 2);
   try {
-    SessionSource source(folder, {ReplayMode::kFromMemory, false, 10000});
+    SessionSource source(folder, replay(ReplayMode::kFromMemory, false, 10000));
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("replaying from memory needs 0.1 MiB (2 frames of 3 "
@@ -98,7 +108,7 @@ TEST(Replay, AnImageDamagedAfterOpeningEndsTheReplayWithItsName) {
   const Rig rig = smallRig();
   const fs::path folder = freshFolder("replay_damaged");
   record(folder, rig, PixelFormat::kMono8, 3);
-  SessionSource source(folder, {ReplayMode::kAsFastAsPossible, false});
+  SessionSource source(folder, replay(ReplayMode::kAsFastAsPossible));
   std::ofstream(folder / "cam02" / "000001.png", std::ios::trunc) << "not a png";
   CameraFrame frame;
   int got = 0;
@@ -107,6 +117,35 @@ TEST(Replay, AnImageDamagedAfterOpeningEndsTheReplayWithItsName) {
   EXPECT_TRUE(source.finished());
   EXPECT_NE(source.stats(1).last_error.find("cam02/000001.png"), std::string::npos)
       << source.stats(1).last_error;
+  fs::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+TEST(Replay, ANodeReplaysOnlyItsOwnCameras) {
+  const fs::path folder = freshFolder("replay_subset");
+  const Rig rig = smallRig();
+  writeSession(folder, rig, PixelFormat::kBayerRggb8, 4);
+  for (ReplayMode mode : {ReplayMode::kAsFastAsPossible, ReplayMode::kFromMemory}) {
+    SessionSource source(folder, replay(mode, false, size_t(1) << 30, {2, 0}));
+    CameraFrame frame;
+    std::vector<int> served;
+    while (source.next(frame, std::chrono::milliseconds(100))) {
+      served.push_back(frame.camera);
+      const std::vector<Image> expected =
+          frameImages(rig, PixelFormat::kBayerRggb8, frame.frame_id);
+      EXPECT_EQ(frame.image.pixels, expected[frame.camera].pixels);
+    }
+    EXPECT_EQ(served, (std::vector<int>{2, 0, 2, 0, 2, 0, 2, 0}));
+    EXPECT_EQ(source.stats(1).frames, 0);
+  }
+  EXPECT_THROW(
+      SessionSource(folder, replay(ReplayMode::kAsFastAsPossible, false, size_t(1) << 30, {7})),
+      Error);
   fs::remove_all(folder);
 }
 
