@@ -9,6 +9,7 @@
 #include "app/cli/camera_commands.h"
 #include "app/cli/key_commands.h"
 #include "app/cli/rig_commands.h"
+#include "app/cli/run_command.h"
 #include "app/cli/synth_command.h"
 
 int main(int argc, char** argv) {
@@ -17,6 +18,7 @@ int main(int argc, char** argv) {
   lumistage::addRigCommands(app);
   lumistage::addBodyCommands(app);
   lumistage::addCameraCommands(app);
+  lumistage::addRunCommand(app);
   lumistage::addKeyCommands(app);
   lumistage::addSynthCommand(app);
   try {

@@ -1,20 +1,47 @@
-// lumistage-node: the headless worker on each camera PC. In this build it loads the rig and checks
-// that this node is in it, listing the cameras it owns; capture and the link to the studio come
-// with the capture and pipeline work (see README, "Status").
+// lumistage-node: the headless worker on each camera PC. It owns the node's cameras (for now its
+// cameras of a recorded session), connects to the studio and does the node's part
+// of every frame (core/pipeline/camera_node.h). Without --studio it checks its place in the rig.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
 #include <exception>
 
+#include "core/body/human_model.h"
+#include "core/capture/session_source.h"
 #include "core/geometry/rig_file.h"
+#include "core/net/curve_keys.h"
+#include "core/pipeline/camera_node.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+void onSignal(int) {
+  g_stop = true;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Lumistage camera node: owns the cameras of one PC"};
-  std::string rig_path, node_name;
-  app.add_option("--rig", rig_path, "rig file (YAML)")->required();
+  CLI::App app{
+      "Lumistage camera node: owns the cameras of one PC and does the node's part of every frame"};
+  std::string rig_path, node_name, session, replay = "rate", studio, keys;
+  bool plain = false;
+  app.add_option("--rig", rig_path, "rig file (default with --session: the session's)");
   app.add_option("--node", node_name, "this node's name in the rig")->required();
+  app.add_option("--session", session, "serve this node's cameras of a recorded session");
+  app.add_option("--replay", replay,
+                 "session pace: rate (as recorded, looping) or memory (decoded up front)")
+      ->capture_default_str();
+  app.add_option("--studio", studio, "the studio's endpoint, e.g. tcp://studio-pc:5570");
+  app.add_option("--keys", keys,
+                 "key store folder (lumistage keys init): this node's key and the studio's");
+  app.add_flag("--plain", plain, "no encryption or authentication (a closed lab network only)");
   CLI11_PARSE(app, argc, argv);
   try {
+    if (rig_path.empty() && !session.empty()) rig_path = session + "/rig.yaml";
+    if (rig_path.empty()) throw std::runtime_error("give --rig (or --session)");
     const lumistage::Rig rig = lumistage::loadRig(rig_path);
     const std::optional<int> index = rig.findNode(node_name);
     if (!index) {
@@ -25,16 +52,50 @@ int main(int argc, char** argv) {
       return 1;
     }
     const lumistage::RigNode& node = rig.nodes()[*index];
-    fmt::print("node {} ({}): {} cameras\n", node.name,
-               node.host.empty() ? "no host assigned" : node.host, node.cameras.size());
-    for (int c : node.cameras) {
-      const lumistage::Camera& camera = rig.camera(c);
-      fmt::print("  {} {}x{}\n", camera.name(), camera.width(), camera.height());
+    if (studio.empty()) {
+      fmt::print("node {} ({}): {} cameras\n", node.name,
+                 node.host.empty() ? "no host assigned" : node.host, node.cameras.size());
+      for (int c : node.cameras) {
+        fmt::print("  {} {}x{}\n", rig.camera(c).name(), rig.camera(c).width(),
+                   rig.camera(c).height());
+      }
+      fmt::print("configuration is valid; give --studio and --session to serve frames\n");
+      return 0;
     }
-    fmt::print(stderr,
-               "lumistage-node: configuration is valid; this build does not capture or serve "
-               "frames yet (see README, \"Status\")\n");
-    return 2;
+    std::unique_ptr<lumistage::FrameSource> source;
+    if (!session.empty()) {
+      lumistage::ReplayOptions options;
+      options.mode = replay == "memory" ? lumistage::ReplayMode::kFromMemory
+                                        : lumistage::ReplayMode::kRecordedRate;
+      options.loop = true;
+      options.cameras = node.cameras;
+      source = std::make_unique<lumistage::SessionSource>(session, options);
+    } else {
+      throw std::runtime_error(
+          "give --session DIR: the node's cameras (live Aravis cameras on nodes come next)");
+    }
+    lumistage::NodeEndpointConfig endpoint;
+    endpoint.connect = studio;
+    endpoint.name = node.name;
+    if (plain) {
+      endpoint.security = lumistage::TransportSecurity::kPlain;
+    } else {
+      if (keys.empty())
+        throw std::runtime_error("give --keys DIR (or --plain on a closed network)");
+      const lumistage::KeyStore store(keys);
+      endpoint.node_key = store.nodeKey(node.name);
+      endpoint.studio_public_key = store.studioKey().public_key;
+    }
+    lumistage::CameraNode camera_node(rig, node.name, std::move(source), endpoint,
+                                      lumistage::loadGenericHuman());
+    std::signal(SIGINT, onSignal);
+    std::signal(SIGTERM, onSignal);
+    fmt::print("node {}: {} cameras, serving {}\n", node.name, node.cameras.size(), studio);
+    std::fflush(stdout);
+    camera_node.run(g_stop);
+    fmt::print("node {}: sent {} frame sets, {:.1f} MB\n", node.name, camera_node.setsSent(),
+               camera_node.bytesSent() / 1e6);
+    return 0;
   } catch (const std::exception& e) {
     fmt::print(stderr, "lumistage-node: error: {}\n", e.what());
     return 1;

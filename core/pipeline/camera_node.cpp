@@ -1,0 +1,155 @@
+#include "core/pipeline/camera_node.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "core/base/error.h"
+#include "core/pipeline/pipeline.h"
+
+namespace lumistage {
+
+CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<FrameSource> source,
+                       NodeEndpointConfig endpoint, SkinnedMesh body, CameraNodeOptions options)
+    : rig_(rig),
+      name_(name),
+      source_(std::move(source)),
+      endpoint_(std::move(endpoint)),
+      body_(std::move(body)),
+      options_(options) {
+  const std::optional<int> node = rig_.findNode(name_);
+  if (!node) throw Error("camera node: no node '" + name_ + "' in the rig");
+  cameras_ = rig_.nodes()[*node].cameras;
+  keyers_.resize(cameras_.size());
+}
+
+bool CameraNode::send(Message message) {
+  message.sender = name_;
+  const std::span<const uint8_t> bytes = encoder_.encode(message);
+  const bool sent = endpoint_.send(bytes, std::chrono::milliseconds(50));
+  if (sent) bytes_sent_ += static_cast<int64_t>(bytes.size());
+  return sent;
+}
+
+void CameraNode::processSet(int64_t frame_id, int64_t captured_ns) {
+  const std::vector<CameraFrame>& set = sets_[frame_id];
+  SilhouettesData silhouettes;
+  LowResSilhouette s;
+  for (size_t k = 0; k < cameras_.size(); ++k) {
+    computeSilhouette(keyers_[k], set[k].image.view(), cameras_[k], options_.silhouette_step, s);
+    silhouettes.masks.push_back({s.camera, s.width, s.height, {}});
+    // The wire format packs rows without padding: bit i of the mask is pixel i.
+    std::vector<uint8_t>& bits = silhouettes.masks.back().bits;
+    bits.assign((size_t(s.width) * s.height + 7) / 8, 0);
+    for (int y = 0; y < s.height; ++y) {
+      for (int x = 0; x < s.width; ++x) {
+        if (s.at(x, y))
+          bits[(size_t(y) * s.width + x) / 8] |= uint8_t(1u << ((size_t(y) * s.width + x) % 8));
+      }
+    }
+  }
+  Message message;
+  message.frame_id = frame_id;
+  message.sent_ns = captured_ns;
+  message.body = std::move(silhouettes);
+  if (send(std::move(message))) ++sets_sent_;
+}
+
+void CameraNode::answerPose(const Message& message) {
+  const auto it = sets_.find(message.frame_id);
+  if (it == sets_.end() || arrived_[message.frame_id] < static_cast<int>(cameras_.size()))
+    return;  // too old
+  const PoseData& pose_data = std::get<PoseData>(message.body);
+  Pose pose = Pose::rest(body_.skeleton.jointCount());
+  pose.root_translation_m =
+      Eigen::Vector3d(pose_data.root[0], pose_data.root[1], pose_data.root[2]);
+  for (int j = 0;
+       j < body_.skeleton.jointCount() && 3 * j + 2 < static_cast<int>(pose_data.angles.size());
+       ++j) {
+    pose.angles_rad[j] = Eigen::Vector3d(pose_data.angles[3 * j], pose_data.angles[3 * j + 1],
+                                         pose_data.angles[3 * j + 2]);
+  }
+  body_.skeleton.skinningTransforms(pose, transforms_);
+  skinMesh(body_, transforms_, positions_, normals_);
+
+  // Per vertex: the colours of this node's cameras that face it and see it on their image.
+  const uint32_t n = static_cast<uint32_t>(positions_.cols());
+  VertexStatisticsData stats;
+  stats.vertex_count = n;
+  stats.offset_count = 1;
+  stats.sums.assign(size_t(n) * 3, 0.0f);
+  stats.sums_of_squares.assign(size_t(n) * 3, 0.0f);
+  stats.seen.assign(n, 0);
+  stats.inside.assign(n, 0);
+  Eigen::Matrix2Xf pixels;
+  Eigen::VectorXf depths;
+  for (size_t k = 0; k < cameras_.size(); ++k) {
+    const Camera& camera = rig_.camera(cameras_[k]);
+    const ImageView image = it->second[k].image.view();
+    camera.project(positions_, pixels, depths);
+    const Eigen::Vector3f centre = camera.centre().cast<float>();
+    for (uint32_t v = 0; v < n; ++v) {
+      if (depths(v) <= 0 || normals_.col(v).dot(centre - positions_.col(v)) <= 0) continue;
+      const int x = static_cast<int>(pixels(0, v) + 0.5f),
+                y = static_cast<int>(pixels(1, v) + 0.5f);
+      if (x < 0 || y < 0 || x >= image.width || y >= image.height) continue;
+      const Rgb c = colourAt(image, x, y);
+      const float rgb[3] = {float(c.r), float(c.g), float(c.b)};
+      for (int ch = 0; ch < 3; ++ch) {
+        stats.sums[3 * v + ch] += rgb[ch];
+        stats.sums_of_squares[3 * v + ch] += rgb[ch] * rgb[ch];
+      }
+      ++stats.seen[v];
+      stats.inside[v] += keyers_[k].isForeground(image, x, y) ? 1 : 0;
+    }
+  }
+  Message reply;
+  reply.frame_id = message.frame_id;
+  reply.sent_ns = steadyNowNs();
+  reply.body = std::move(stats);
+  send(std::move(reply));
+}
+
+void CameraNode::run(const std::atomic<bool>& stop) {
+  auto last_heartbeat = std::chrono::steady_clock::now() - options_.heartbeat;
+  CameraFrame frame;
+  while (!stop && !source_->finished()) {
+    // Capture: frames arrive camera by camera; a set is complete when all own cameras are in.
+    if (source_->next(frame, std::chrono::milliseconds(5))) {
+      const auto k = std::find(cameras_.begin(), cameras_.end(), frame.camera) - cameras_.begin();
+      if (k < static_cast<long>(cameras_.size())) {
+        std::vector<CameraFrame>& set = sets_[frame.frame_id];
+        set.resize(cameras_.size());
+        std::swap(set[k], frame);
+        if (++arrived_[set[k].frame_id] == static_cast<int>(cameras_.size()))
+          processSet(set[k].frame_id, steadyNowNs());
+        while (static_cast<int>(sets_.size()) > options_.frames_kept) {  // the oldest go
+          arrived_.erase(sets_.begin()->first);
+          sets_.erase(sets_.begin());
+        }
+      }
+    }
+    // The studio's answers.
+    while (std::optional<DecodeResult> received = endpoint_.receive(std::chrono::milliseconds(0))) {
+      if (received->ok() && std::holds_alternative<PoseData>(received->message->body))
+        answerPose(*received->message);
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_heartbeat >= options_.heartbeat) {
+      last_heartbeat = now;
+      HeartbeatData heartbeat;
+      for (int c : cameras_) {
+        const CameraStats s = source_->stats(c);
+        heartbeat.cameras.push_back(
+            {rig_.camera(c).name(), s.frames, s.dropped, float(s.frame_rate_hz), s.last_error});
+      }
+      heartbeat.bytes_sent = bytes_sent_;
+      Message message;
+      message.sent_ns = steadyNowNs();
+      message.body = std::move(heartbeat);
+      send(std::move(message));
+    }
+  }
+}
+
+}  // namespace lumistage

@@ -1,0 +1,239 @@
+#include "core/pipeline/studio_coordinator.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+namespace lumistage {
+
+StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoint,
+                                     int body_joint_count, StudioCoordinatorOptions options)
+    : rig_(rig),
+      endpoint_(std::move(endpoint)),
+      options_(options),
+      locator_(rig, options.silhouette_step),
+      joints_(body_joint_count) {
+  for (const RigNode& node : rig_.nodes()) nodes_[node.name].report.name = node.name;
+}
+
+std::string StudioCoordinator::nodeState(const std::string& node) const {
+  const auto it = nodes_.find(node);
+  if (it == nodes_.end() || it->second.last_ns == 0) return "unknown";
+  return it->second.report.lost ? "lost" : "streaming";
+}
+
+void StudioCoordinator::onMessage(const ReceivedMessage& received) {
+  const auto node_it = nodes_.find(received.node);
+  if (node_it == nodes_.end()) return;  // authorised but not in this rig: ignored
+  NodeState& node = node_it->second;
+  node.peer = received.peer;
+  node.last_ns = steadyNowNs();
+  if (node.report.lost) {
+    node.report.lost = false;
+    spdlog::info("node {} is streaming", node.report.name);
+  }
+  if (!received.result.ok()) {
+    ++node.report.bad_messages;
+    return;
+  }
+  const Message& message = *received.result.message;
+  ++node.report.messages;
+  if (const auto* heartbeat = std::get_if<HeartbeatData>(&message.body)) {
+    node.report.bytes = heartbeat->bytes_sent;  // what the node says it has sent in all
+    return;
+  }
+  if (message.frame_id <= newest_done_) return;  // a frame already done or given up
+  if (const auto* silhouettes = std::get_if<SilhouettesData>(&message.body)) {
+    FrameState& frame = frames_[message.frame_id];
+    if (frame.first_ns == 0) {
+      frame.first_ns = node.last_ns;
+      frame.captured_ns = message.sent_ns;
+    }
+    frame.captured_ns = std::min(frame.captured_ns, message.sent_ns);
+    for (const SilhouetteMaskData& mask : silhouettes->masks) {
+      if (mask.camera < 0 || mask.camera >= rig_.cameraCount()) continue;
+      LowResSilhouette s;
+      s.camera = mask.camera;
+      s.step = options_.silhouette_step;
+      s.width = mask.width;
+      s.height = mask.height;
+      s.bits.assign(size_t(s.bytesPerRow()) * s.height, 0);
+      for (int y = 0; y < s.height; ++y) {
+        for (int x = 0; x < s.width; ++x) {
+          const size_t i = size_t(y) * s.width + x;
+          if ((mask.bits[i / 8] >> (i % 8)) & 1)
+            s.bits[size_t(y) * s.bytesPerRow() + x / 8] |= uint8_t(1u << (x % 8));
+        }
+      }
+      frame.silhouettes.push_back(std::move(s));
+    }
+    frame.silhouette_nodes.insert(node.report.name);
+    int live = 0;
+    for (const auto& [name, n] : nodes_) live += !n.report.lost;
+    if (frame.pose_sent_ns == 0 && static_cast<int>(frame.silhouette_nodes.size()) >= live)
+      runMocap(message.frame_id, frame);
+  } else if (const auto* stats = std::get_if<VertexStatisticsData>(&message.body)) {
+    const auto it = frames_.find(message.frame_id);
+    if (it == frames_.end() || it->second.pose_sent_ns == 0) return;
+    FrameState& frame = it->second;
+    if (frame.seen.empty()) {
+      frame.sums.assign(size_t(stats->vertex_count) * 3, 0.0f);
+      frame.squares.assign(size_t(stats->vertex_count) * 3, 0.0f);
+      frame.seen.assign(stats->vertex_count, 0);
+      frame.inside.assign(stats->vertex_count, 0);
+    }
+    if (stats->vertex_count != frame.seen.size() || stats->offset_count != 1) return;
+    // Sums of every node's cameras add up exactly.
+    for (size_t i = 0; i < frame.sums.size(); ++i) {
+      frame.sums[i] += stats->sums[i];
+      frame.squares[i] += stats->sums_of_squares[i];
+    }
+    for (size_t v = 0; v < frame.seen.size(); ++v) {
+      frame.seen[v] += stats->seen[v];
+      frame.inside[v] += stats->inside[v];
+    }
+    frame.statistics_nodes.insert(node.report.name);
+    if (frame.statistics_nodes.size() >= frame.pose_nodes.size())
+      finishFrame(message.frame_id, frame);
+  }
+}
+
+void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
+  const int64_t start = steadyNowNs();
+  std::vector<const LowResSilhouette*> all;
+  for (const LowResSilhouette& s : frame.silhouettes) all.push_back(&s);
+  const ActorLocation where = locator_.locate(all);
+  PoseData pose;
+  // Until the tracker: the generic human standing where the hull is, in its rest pose.
+  pose.root[0] = float(where.found ? where.centroid.x() : 0.0);
+  pose.root[1] = float(where.found ? where.centroid.y() : 0.0);
+  pose.root[2] = 0.0f;
+  pose.angles.assign(size_t(3) * joints_, 0.0f);
+  mocap_ms_.add((steadyNowNs() - start) / 1e6);
+  Message message;
+  message.sender = "studio";
+  message.frame_id = frame_id;
+  message.sent_ns = steadyNowNs();
+  message.body = std::move(pose);
+  const std::span<const uint8_t> bytes = encoder_.encode(message);
+  for (auto& [name, node] : nodes_) {
+    if (node.report.lost || node.peer.empty()) continue;
+    if (endpoint_.send(node.peer, bytes, std::chrono::milliseconds(5)))
+      frame.pose_nodes.insert(name);
+  }
+  frame.pose_sent_ns = steadyNowNs();
+  if (frame.pose_nodes.empty()) finishFrame(frame_id, frame);
+}
+
+void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
+  const int64_t now = steadyNowNs();
+  const int64_t start = now;
+  // The refinement's combination, for now at the posed vertices: colour variance across every
+  // camera that sees a vertex, and whether all of them see it inside the silhouettes.
+  int agreeing = 0, seen_vertices = 0;
+  for (size_t v = 0; v < frame.seen.size(); ++v) {
+    if (frame.seen[v] == 0) continue;
+    ++seen_vertices;
+    agreeing += frame.inside[v] == frame.seen[v];
+  }
+  combine_ms_.add((steadyNowNs() - start) / 1e6);
+  if (frame.pose_sent_ns > 0) statistics_wait_ms_.add((now - frame.pose_sent_ns) / 1e6);
+  if (seen_vertices > 0) hull_agreement_sum_ += double(agreeing) / seen_vertices;
+  latencies_ms_.add((now - frame.captured_ns) / 1e6);
+  ++frames_done_;
+  if (start_ns_ == 0) start_ns_ = now;
+  last_done_ns_ = now;
+  for (auto& [name, node] : nodes_) {
+    if (!node.report.lost && !frame.silhouette_nodes.count(name)) ++node.report.frames_missed;
+  }
+  // Older frames still open will never be shown: they are dropped.
+  for (auto it = frames_.begin(); it != frames_.end() && it->first <= frame_id;) {
+    if (it->first < frame_id) ++frames_dropped_;
+    it = frames_.erase(it);
+  }
+  newest_done_ = frame_id;
+}
+
+void StudioCoordinator::checkDeadlines(int64_t now_ns) {
+  const int64_t deadline = std::chrono::nanoseconds(options_.deadline).count();
+  for (auto& [name, node] : nodes_) {
+    if (!node.report.lost && node.last_ns > 0 &&
+        now_ns - node.last_ns > std::chrono::nanoseconds(options_.lost_after).count()) {
+      node.report.lost = true;
+      ++node.report.times_lost;
+      spdlog::warn("node {} is lost: nothing for {} ms", name, options_.lost_after.count());
+    }
+  }
+  for (auto it = frames_.begin(); it != frames_.end();) {
+    const int64_t frame_id = it->first;
+    FrameState& frame = it->second;
+    ++it;  // finishFrame may erase this and earlier frames
+    if (frame.pose_sent_ns == 0 && now_ns - frame.first_ns > deadline) {
+      runMocap(frame_id, frame);  // with the nodes that made it
+    } else if (frame.pose_sent_ns > 0 && now_ns - frame.pose_sent_ns > deadline) {
+      finishFrame(frame_id, frame);
+      it = frames_.upper_bound(frame_id);
+    }
+  }
+}
+
+void StudioCoordinator::runFor(std::chrono::milliseconds duration) {
+  const int64_t end = steadyNowNs() + std::chrono::nanoseconds(duration).count();
+  while (steadyNowNs() < end) {
+    if (std::optional<ReceivedMessage> received = endpoint_.receive(std::chrono::milliseconds(10)))
+      onMessage(*received);
+    checkDeadlines(steadyNowNs());
+  }
+}
+
+void StudioCoordinator::run(const std::atomic<bool>& stop) {
+  while (!stop && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
+    if (std::optional<ReceivedMessage> received = endpoint_.receive(std::chrono::milliseconds(10)))
+      onMessage(*received);
+    checkDeadlines(steadyNowNs());
+  }
+}
+
+RunReport StudioCoordinator::report() const {
+  RunReport r;
+  r.frames = frames_done_;
+  r.frames_dropped = frames_dropped_;
+  r.fps = frames_done_ > 1 && last_done_ns_ > start_ns_
+              ? (frames_done_ - 1) / ((last_done_ns_ - start_ns_) / 1e9)
+              : 0;
+  std::vector<double> latencies = latencies_ms_.values();
+  r.latency_ms_p50 = quantile(latencies, 0.5);
+  r.latency_ms_p95 = quantile(latencies, 0.95);
+  auto mean = [](const RecentSamples& s) {
+    double sum = 0;
+    for (double v : s.values()) sum += v;
+    return s.values().empty() ? 0.0 : sum / s.values().size();
+  };
+  r.stage_ms["mocap"] = mean(mocap_ms_);
+  r.stage_ms["node_statistics"] = mean(statistics_wait_ms_);
+  r.stage_ms["combine"] = mean(combine_ms_);
+  r.hull_agreement = frames_done_ > 0 ? hull_agreement_sum_ / frames_done_ : 0;
+  double bytes = 0, raw = 0;
+  int counted = 0;
+  for (const RigNode& node : rig_.nodes()) {
+    const NodeReport& n = nodes_.at(node.name).report;
+    r.nodes.push_back(n);
+    for (int c : node.cameras) {
+      raw +=
+          double(rig_.camera(c).width()) * rig_.camera(c).height() * options_.raw_bytes_per_pixel;
+    }
+    if (n.bytes > 0) {
+      bytes += n.bytes;
+      ++counted;
+    }
+  }
+  r.node_bytes_per_frame = counted > 0 && frames_done_ > 0 ? bytes / counted / frames_done_ : 0;
+  r.raw_bytes_per_frame_per_node = rig_.nodeCount() > 0 ? raw / rig_.nodeCount() : 0;
+  r.refusals = endpoint_.refusalCount();
+  for (NodeReport& n : r.nodes) {
+    const auto bad = endpoint_.badMessages();
+    if (const auto it = bad.find(n.name); it != bad.end()) n.bad_messages = it->second;
+  }
+  return r;
+}
+
+}  // namespace lumistage

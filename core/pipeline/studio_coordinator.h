@@ -1,0 +1,109 @@
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/net/transport.h"
+#include "core/pipeline/pipeline.h"
+#include "core/tracking/visual_hull_locator.h"
+
+namespace lumistage {
+
+struct StudioCoordinatorOptions {
+  int silhouette_step = 8;
+  // A node that has not answered a frame's stage this long after the first node did is left out
+  // of that frame (fewer cameras, not a stall).
+  std::chrono::milliseconds deadline{120};
+  std::chrono::milliseconds lost_after{1000};  // no message for this long: the node is lost
+  int64_t max_frames = 0;                      // stop after this many complete frames; 0: never
+  int raw_bytes_per_pixel = 1;                 // of the cameras' images (Bayer, mono: 1; RGB: 3)
+};
+
+struct NodeReport {
+  std::string name;
+  bool lost = true;  // now
+  int64_t messages = 0, bytes = 0;
+  int64_t frames_missed = 0;  // frames it was left out of
+  int64_t times_lost = 0;     // how often it was marked lost (and came back, or not)
+  int64_t bad_messages = 0;
+};
+
+// What `lumistage run` prints and writes as JSON.
+struct RunReport {
+  double fps = 0;
+  double latency_ms_p50 = 0, latency_ms_p95 = 0;  // node capture to frame done
+  std::map<std::string, double> stage_ms;         // mean per stage
+  double node_bytes_per_frame = 0;                // mean over nodes
+  double raw_bytes_per_frame_per_node = 0;        // what the node's cameras deliver
+  int64_t frames = 0, frames_dropped = 0;
+  double hull_agreement = 0;  // share of posed vertices seen inside the silhouettes
+  std::vector<NodeReport> nodes;
+  int64_t refusals = 0;
+};
+
+// The studio's side of the distributed pipeline (DESIGN.md §1), one frame at a time per stage but
+// several frames in flight: silhouettes of frame f from the nodes -> the motion capture module
+// places the body -> pose(f) to the nodes -> their per-vertex statistics -> the module combines
+// them exactly. Until the tracker and the refinement land, the modules do real work of their
+// size: the visual-hull locator places the generic human, and the combined statistics give each
+// vertex its colour variance and whether every camera saw it inside the silhouettes. Never blocks
+// on one node: each stage waits for the nodes at most `deadline`; a silent node is marked lost
+// and rejoins by itself when it speaks again.
+class StudioCoordinator {
+ public:
+  StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoint, int body_joint_count,
+                    StudioCoordinatorOptions options = {});
+
+  std::string endpoint() const { return endpoint_.endpoint(); }
+  // Runs until `stop`, or `max_frames` frames are done.
+  void run(const std::atomic<bool>& stop);
+  // Handles what arrives within `duration`, then returns (the same work as run(), in slices: a
+  // caller on one thread can look at the state between them).
+  void runFor(std::chrono::milliseconds duration);
+  int64_t framesDone() const { return frames_done_; }
+  RunReport report() const;
+  // "streaming", "lost" or "unknown" (never heard from).
+  std::string nodeState(const std::string& node) const;
+
+ private:
+  struct FrameState {
+    int64_t first_ns = 0;     // steady clock, when the first node's silhouettes arrived
+    int64_t captured_ns = 0;  // the earliest node capture time
+    std::vector<LowResSilhouette> silhouettes;
+    std::set<std::string> silhouette_nodes, pose_nodes, statistics_nodes;
+    int64_t pose_sent_ns = 0;
+    std::vector<float> sums, squares;
+    std::vector<int> seen, inside;
+  };
+  struct NodeState {
+    std::string peer;
+    int64_t last_ns = 0;
+    NodeReport report;
+  };
+
+  void onMessage(const ReceivedMessage& received);
+  void runMocap(int64_t frame_id, FrameState& frame);
+  void finishFrame(int64_t frame_id, FrameState& frame);
+  void checkDeadlines(int64_t now_ns);
+
+  Rig rig_;
+  StudioEndpoint endpoint_;
+  StudioCoordinatorOptions options_;
+  VisualHullLocator locator_;
+  int joints_;
+  std::map<int64_t, FrameState> frames_;
+  std::map<std::string, NodeState> nodes_;
+  MessageEncoder encoder_;
+  int64_t newest_done_ = -1;
+  int64_t start_ns_ = 0, last_done_ns_ = 0;
+  RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_;
+  int64_t frames_done_ = 0, frames_dropped_ = 0;
+  double hull_agreement_sum_ = 0;
+};
+
+}  // namespace lumistage

@@ -1,0 +1,123 @@
+// The distributed pipeline with real processes on loopback: node processes replay their cameras
+// of a session to a studio coordinator over CURVE; one is killed and restarted; a stranger with
+// an unknown key knocks.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/body/human_skeleton.h"
+#include "core/capture/session_reader.h"
+#include "core/net/curve_keys.h"
+#include "core/pipeline/studio_coordinator.h"
+
+namespace lumistage {
+namespace {
+
+namespace fs = std::filesystem;
+
+int runCommand(const std::string& command) {
+  return std::system((command + " > /dev/null 2>&1").c_str());
+}
+
+pid_t startNode(const std::string& name, const fs::path& session, const std::string& studio,
+                const fs::path& keys) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    dup2(null, STDOUT_FILENO);
+    dup2(null, STDERR_FILENO);
+    execl(LUMISTAGE_NODE, LUMISTAGE_NODE, "--node", name.c_str(), "--session", session.c_str(),
+          "--studio", studio.c_str(), "--keys", keys.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+// Runs the studio until `done` holds or `seconds` pass; true if it held.
+template <typename Done>
+bool runUntil(StudioCoordinator& studio, double seconds, Done done) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < end) {
+    studio.runFor(std::chrono::milliseconds(50));
+    if (done()) return true;
+  }
+  return false;
+}
+
+TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
+  const fs::path folder =
+      fs::temp_directory_path() / ("lumistage_pipeline_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  const std::string cli = LUMISTAGE_CLI;
+  ASSERT_EQ(runCommand(
+                cli + " rig ring --cameras 4 --cameras-per-node 2 --width 320 --height 240 --out " +
+                (folder / "rig.yaml").string()),
+            0);
+  std::ofstream(folder / "studio.yaml") << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
+                                           "actor:\n  vertices: 2000\nmotion:\n  clip: walk\n";
+  const fs::path session = folder / "session";
+  ASSERT_EQ(runCommand(cli + " synth --config " + (folder / "studio.yaml").string() +
+                       " --frames 12 --bayer --out " + session.string()),
+            0);
+  const Rig rig = SessionReader(session).rig();
+  ASSERT_EQ(rig.nodeCount(), 2);
+
+  const fs::path keys = folder / "keys";
+  KeyStore(keys).init({"node1", "node2"});
+  StudioEndpointConfig endpoint;
+  endpoint.bind = "tcp://127.0.0.1:*";
+  endpoint.studio_key = KeyStore(keys).studioKey();
+  endpoint.authorized = KeyStore(keys).authorizedNodes();
+  StudioCoordinator studio(rig, endpoint, kHumanJointCount);
+
+  pid_t node1 = startNode("node1", session, studio.endpoint(), keys);
+  pid_t node2 = startNode("node2", session, studio.endpoint(), keys);
+  // Both stream, and frames complete with both nodes' parts.
+  ASSERT_TRUE(runUntil(studio, 20, [&] {
+    return studio.nodeState("node1") == "streaming" && studio.nodeState("node2") == "streaming" &&
+           studio.framesDone() >= 20;
+  }));
+  RunReport report = studio.report();
+  EXPECT_GT(report.hull_agreement, 0.0);
+  for (const NodeReport& n : report.nodes) EXPECT_LT(n.frames_missed, 5) << n.name;
+
+  // kill -9 one node: it is marked lost within about a second, and frames go on without it.
+  kill(node2, SIGKILL);
+  waitpid(node2, nullptr, 0);
+  const auto killed = std::chrono::steady_clock::now();
+  ASSERT_TRUE(runUntil(studio, 3, [&] { return studio.nodeState("node2") == "lost"; }));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count(), 1.6);
+  const int64_t before = studio.framesDone();
+  EXPECT_TRUE(runUntil(studio, 5, [&] { return studio.framesDone() >= before + 15; }));
+
+  // Restarted, it rejoins by itself.
+  node2 = startNode("node2", session, studio.endpoint(), keys);
+  EXPECT_TRUE(runUntil(studio, 10, [&] { return studio.nodeState("node2") == "streaming"; }));
+
+  // A node whose key the studio does not know is refused and reported.
+  // (It knows the studio's public key, as a copied studio folder would; its own key is new.)
+  const fs::path stranger_keys = folder / "stranger";
+  KeyStore(stranger_keys).init({"node1"});
+  fs::copy_file(keys / "studio.key", stranger_keys / "studio.key",
+                fs::copy_options::overwrite_existing);
+  const pid_t stranger = startNode("node1", session, studio.endpoint(), stranger_keys);
+  EXPECT_TRUE(runUntil(studio, 10, [&] { return studio.report().refusals > 0; }));
+
+  for (pid_t pid : {node1, node2, stranger}) kill(pid, SIGTERM);
+  for (pid_t pid : {node1, node2, stranger}) waitpid(pid, nullptr, 0);
+  report = studio.report();
+  EXPECT_GE(report.nodes[1].times_lost, 1);
+  EXPECT_GT(report.node_bytes_per_frame, 0);
+  // (The bandwidth bound is for the reference rig's 1024x768 cameras; these are 320x240.)
+  EXPECT_LT(report.node_bytes_per_frame, report.raw_bytes_per_frame_per_node);
+  fs::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace lumistage
