@@ -67,8 +67,9 @@ int main(int argc, char** argv) {
       lumistage::ReplayOptions options;
       options.mode = replay == "memory" ? lumistage::ReplayMode::kFromMemory
                                         : lumistage::ReplayMode::kRecordedRate;
-      options.loop = true;
       options.cameras = node.cameras;
+      // Every node shows the same recorded instant at the same time, as triggered cameras do.
+      options.synchronized = true;
       source = std::make_unique<lumistage::SessionSource>(session, options);
     } else {
       throw std::runtime_error(

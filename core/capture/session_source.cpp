@@ -31,6 +31,7 @@ SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions 
     }
   }
   cameras_ = options_.cameras;
+  if (options_.synchronized) options_.loop = true;
   if (cameras_.empty()) {
     for (int c = 0; c < reader_.rig().cameraCount(); ++c) cameras_.push_back(c);
   }
@@ -79,9 +80,27 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) 
     started_ = true;
     start_ = now;
   }
+  if (options_.synchronized && next_camera_ == 0) {
+    // The current tick of the shared clock, or the next one when it was served already; a slow
+    // consumer skips ticks, as a slow reader of a real camera misses frames.
+    const int64_t period_ns = int64_t(std::llround(1e9 / reader_.fps()));
+    const int64_t now_ns =
+        std::chrono::duration_cast<std::chrono::nanoseconds>(now.time_since_epoch()).count();
+    const int64_t tick = std::max(tick_ + 1, now_ns / period_ns);
+    const int64_t due_ns = tick * period_ns;
+    if (due_ns - now_ns > std::chrono::nanoseconds(timeout).count()) {
+      std::this_thread::sleep_for(timeout);
+      return false;
+    }
+    std::this_thread::sleep_until(Clock::time_point(std::chrono::nanoseconds(due_ns)));
+    tick_ = tick;
+    next_set_ = static_cast<int>(tick % reader_.frameCount());
+  }
   const int64_t timestamp =
-      reader_.timestampNs(next_set_) + loop_ * time_span_ns_;  // of the set to serve
-  if (options_.mode == ReplayMode::kRecordedRate && next_camera_ == 0) {
+      options_.synchronized
+          ? tick_ * int64_t(std::llround(1e9 / reader_.fps()))
+          : reader_.timestampNs(next_set_) + loop_ * time_span_ns_;  // of the set to serve
+  if (options_.mode == ReplayMode::kRecordedRate && !options_.synchronized && next_camera_ == 0) {
     const Clock::time_point due =
         start_ + std::chrono::nanoseconds(timestamp - reader_.timestampNs(0));
     if (due > now + timeout) {
@@ -100,7 +119,7 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) 
     std::swap(frame.image, set_[c].image);
     frame.camera = c;
   }
-  frame.frame_id = reader_.frameId(next_set_) + loop_ * id_span_;
+  frame.frame_id = options_.synchronized ? tick_ : reader_.frameId(next_set_) + loop_ * id_span_;
   frame.timestamp_ns = timestamp;
 
   const Clock::time_point delivered = Clock::now();

@@ -26,6 +26,12 @@ struct ReplayOptions {
   size_t memory_limit_bytes = size_t(2) << 30;
   // Only these rig cameras (a camera node replays its own); empty: all of them.
   std::vector<int> cameras;
+  // Paced by the machine's monotonic clock instead of from the first call: the set shown at time
+  // t is number floor(t / period) (looping), stamped with that tick as frame id and tick x period
+  // as timestamp. Every process replaying the session on a machine then shows the same frame at
+  // the same instant with the same id, as hardware-triggered cameras do; with kFromMemory it
+  // replays synchronised from memory. Implies looping.
+  bool synchronized = false;
 };
 
 // Replays a recorded session through the FrameSource interface: the frames of a set come out
@@ -56,6 +62,7 @@ class SessionSource : public FrameSource {
   int next_camera_ =
       0;  // index into cameras_ of the one to serve next; 0: the set is not loaded yet
   int64_t loop_ = 0;
+  int64_t tick_ = -1;                       // synchronized: the tick of the set being served
   int64_t id_span_ = 0, time_span_ns_ = 0;  // how much ids and timestamps advance per loop
   bool started_ = false;
   bool finished_ = false;

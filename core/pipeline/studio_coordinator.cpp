@@ -27,6 +27,12 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   NodeState& node = node_it->second;
   node.peer = received.peer;
   node.last_ns = steadyNowNs();
+  if (first_message_ns_ == 0) first_message_ns_ = node.last_ns;
+  if (!counting_) {
+    bool all = true;
+    for (const auto& [name, n] : nodes_) all = all && n.last_ns > 0;
+    counting_ = all || node.last_ns - first_message_ns_ > 3'000'000'000;
+  }
   if (node.report.lost) {
     node.report.lost = false;
     spdlog::info("node {} is streaming", node.report.name);
@@ -100,6 +106,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
 void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   const int64_t start = steadyNowNs();
   std::vector<const LowResSilhouette*> all;
+  all.reserve(frame.silhouettes.size());
   for (const LowResSilhouette& s : frame.silhouettes) all.push_back(&s);
   const ActorLocation where = locator_.locate(all);
   PoseData pose;
@@ -108,7 +115,7 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   pose.root[1] = float(where.found ? where.centroid.y() : 0.0);
   pose.root[2] = 0.0f;
   pose.angles.assign(size_t(3) * joints_, 0.0f);
-  mocap_ms_.add((steadyNowNs() - start) / 1e6);
+  if (counting_) mocap_ms_.add((steadyNowNs() - start) / 1e6);
   Message message;
   message.sender = "studio";
   message.frame_id = frame_id;
@@ -135,19 +142,21 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     ++seen_vertices;
     agreeing += frame.inside[v] == frame.seen[v];
   }
-  combine_ms_.add((steadyNowNs() - start) / 1e6);
-  if (frame.pose_sent_ns > 0) statistics_wait_ms_.add((now - frame.pose_sent_ns) / 1e6);
-  if (seen_vertices > 0) hull_agreement_sum_ += double(agreeing) / seen_vertices;
-  latencies_ms_.add((now - frame.captured_ns) / 1e6);
-  ++frames_done_;
-  if (start_ns_ == 0) start_ns_ = now;
-  last_done_ns_ = now;
-  for (auto& [name, node] : nodes_) {
-    if (!node.report.lost && !frame.silhouette_nodes.count(name)) ++node.report.frames_missed;
+  if (counting_) {
+    combine_ms_.add((steadyNowNs() - start) / 1e6);
+    if (frame.pose_sent_ns > 0) statistics_wait_ms_.add((now - frame.pose_sent_ns) / 1e6);
+    if (seen_vertices > 0) hull_agreement_sum_ += double(agreeing) / seen_vertices;
+    latencies_ms_.add((now - frame.captured_ns) / 1e6);
+    ++frames_done_;
+    if (start_ns_ == 0) start_ns_ = now;
+    last_done_ns_ = now;
+    for (auto& [name, node] : nodes_) {
+      if (!node.report.lost && !frame.silhouette_nodes.count(name)) ++node.report.frames_missed;
+    }
   }
   // Older frames still open will never be shown: they are dropped.
   for (auto it = frames_.begin(); it != frames_.end() && it->first <= frame_id;) {
-    if (it->first < frame_id) ++frames_dropped_;
+    if (it->first < frame_id && counting_) ++frames_dropped_;
     it = frames_.erase(it);
   }
   newest_done_ = frame_id;

@@ -103,6 +103,10 @@ class StudioCoordinator {
   int64_t start_ns_ = 0, last_done_ns_ = 0;
   RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_;
   int64_t frames_done_ = 0, frames_dropped_ = 0;
+  // Figures count once every node has spoken (or a few seconds after the first did): a start-up
+  // with nodes still loading is not the pipeline's speed.
+  bool counting_ = false;
+  int64_t first_message_ns_ = 0;
   double hull_agreement_sum_ = 0;
 };
 
