@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <thread>
 
 #include "core/base/error.h"
 #include "core/pipeline/pipeline.h"
@@ -23,42 +24,38 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
   keyers_.resize(cameras_.size());
 }
 
-bool CameraNode::send(Message message) {
-  message.sender = name_;
-  const std::span<const uint8_t> bytes = encoder_.encode(message);
-  const bool sent = endpoint_.send(bytes, std::chrono::milliseconds(50));
-  if (sent) bytes_sent_ += static_cast<int64_t>(bytes.size());
-  return sent;
-}
-
-void CameraNode::processSet(int64_t frame_id, int64_t captured_ns) {
-  const std::vector<CameraFrame>& set = sets_[frame_id];
+Message CameraNode::silhouettesOf(const Set& set) const {
   SilhouettesData silhouettes;
   LowResSilhouette s;
   for (size_t k = 0; k < cameras_.size(); ++k) {
-    computeSilhouette(keyers_[k], set[k].image.view(), cameras_[k], options_.silhouette_step, s);
+    computeSilhouette(keyers_[k], set.frames[k].image.view(), cameras_[k], options_.silhouette_step,
+                      s);
     silhouettes.masks.push_back({s.camera, s.width, s.height, {}});
     // The wire format packs rows without padding: bit i of the mask is pixel i.
     std::vector<uint8_t>& bits = silhouettes.masks.back().bits;
     bits.assign((size_t(s.width) * s.height + 7) / 8, 0);
     for (int y = 0; y < s.height; ++y) {
       for (int x = 0; x < s.width; ++x) {
-        if (s.at(x, y))
-          bits[(size_t(y) * s.width + x) / 8] |= uint8_t(1u << ((size_t(y) * s.width + x) % 8));
+        const size_t i = size_t(y) * s.width + x;
+        if (s.at(x, y)) bits[i / 8] |= uint8_t(1u << (i % 8));
       }
     }
   }
   Message message;
-  message.frame_id = frame_id;
-  message.sent_ns = captured_ns;
+  message.frame_id = set.frame_id;
+  message.sent_ns = set.captured_ns;
   message.body = std::move(silhouettes);
-  if (send(std::move(message))) ++sets_sent_;
+  return message;
 }
 
-void CameraNode::answerPose(const Message& message) {
-  const auto it = sets_.find(message.frame_id);
-  if (it == sets_.end() || arrived_[message.frame_id] < static_cast<int>(cameras_.size()))
-    return;  // too old
+std::optional<Message> CameraNode::statisticsFor(const Message& message) {
+  std::shared_ptr<const Set> set;
+  {
+    std::lock_guard lock(kept_mutex_);
+    const auto it = kept_.find(message.frame_id);
+    if (it == kept_.end()) return std::nullopt;  // too old: dropped already
+    set = it->second;
+  }
   const PoseData& pose_data = std::get<PoseData>(message.body);
   Pose pose = Pose::rest(body_.skeleton.jointCount());
   pose.root_translation_m =
@@ -85,7 +82,7 @@ void CameraNode::answerPose(const Message& message) {
   Eigen::VectorXf depths;
   for (size_t k = 0; k < cameras_.size(); ++k) {
     const Camera& camera = rig_.camera(cameras_[k]);
-    const ImageView image = it->second[k].image.view();
+    const ImageView image = set->frames[k].image.view();
     camera.project(positions_, pixels, depths);
     const Eigen::Vector3f centre = camera.centre().cast<float>();
     for (uint32_t v = 0; v < n; ++v) {
@@ -107,41 +104,100 @@ void CameraNode::answerPose(const Message& message) {
   reply.frame_id = message.frame_id;
   reply.sent_ns = steadyNowNs();
   reply.body = std::move(stats);
-  send(std::move(reply));
+  return reply;
+}
+
+void CameraNode::captureLoop(const std::atomic<bool>& stop) {
+  // Frames arrive camera by camera; a set is complete when all own cameras are in.
+  std::map<int64_t, std::shared_ptr<Set>> assembling;
+  CameraFrame frame;
+  while (!stop) {
+    bool got = false;
+    {
+      std::lock_guard lock(source_mutex_);
+      if (source_->finished()) break;
+      got = source_->next(frame, std::chrono::milliseconds(5));
+    }
+    if (!got) continue;
+    const auto k = std::find(cameras_.begin(), cameras_.end(), frame.camera) - cameras_.begin();
+    if (k >= static_cast<long>(cameras_.size())) continue;
+    std::shared_ptr<Set>& set = assembling[frame.frame_id];
+    if (!set) {
+      set = std::make_shared<Set>();
+      set->frame_id = frame.frame_id;
+      set->frames.resize(cameras_.size());
+    }
+    std::swap(set->frames[k], frame);
+    int complete = 0;
+    for (const CameraFrame& f : set->frames) complete += f.frame_id == set->frame_id;
+    if (complete == static_cast<int>(cameras_.size())) {
+      set->captured_ns = steadyNowNs();
+      sets_.push(set);
+      assembling.erase(set->frame_id);
+    }
+    while (assembling.size() > 4) assembling.erase(assembling.begin());  // a camera fell behind
+  }
+  source_finished_ = true;
+}
+
+void CameraNode::silhouetteLoop(const std::atomic<bool>& stop) {
+  while (!stop) {
+    std::optional<std::shared_ptr<const Set>> set = sets_.pop(std::chrono::milliseconds(20));
+    if (!set) continue;
+    {
+      std::lock_guard lock(kept_mutex_);
+      kept_[(*set)->frame_id] = *set;
+      while (static_cast<int>(kept_.size()) > options_.frames_kept) kept_.erase(kept_.begin());
+    }
+    outbox_.push(silhouettesOf(**set));
+  }
+}
+
+void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {
+  while (!stop) {
+    std::optional<Message> pose = poses_.pop(std::chrono::milliseconds(20));
+    if (!pose) continue;
+    if (std::optional<Message> reply = statisticsFor(*pose)) outbox_.push(std::move(*reply));
+  }
+}
+
+bool CameraNode::send(Message message) {
+  message.sender = name_;
+  const bool silhouettes = std::holds_alternative<SilhouettesData>(message.body);
+  const std::span<const uint8_t> bytes = encoder_.encode(message);
+  const bool sent = endpoint_.send(bytes, std::chrono::milliseconds(20));
+  if (sent) {
+    bytes_sent_ += static_cast<int64_t>(bytes.size());
+    sets_sent_ += silhouettes;
+  }
+  return sent;
 }
 
 void CameraNode::run(const std::atomic<bool>& stop) {
+  std::atomic<bool> stop_workers{false};
+  std::thread capture([&] { captureLoop(stop_workers); });
+  std::thread silhouettes([&] { silhouetteLoop(stop_workers); });
+  std::thread statistics([&] { statisticsLoop(stop_workers); });
   auto last_heartbeat = std::chrono::steady_clock::now() - options_.heartbeat;
-  CameraFrame frame;
-  while (!stop && !source_->finished()) {
-    // Capture: frames arrive camera by camera; a set is complete when all own cameras are in.
-    if (source_->next(frame, std::chrono::milliseconds(5))) {
-      const auto k = std::find(cameras_.begin(), cameras_.end(), frame.camera) - cameras_.begin();
-      if (k < static_cast<long>(cameras_.size())) {
-        std::vector<CameraFrame>& set = sets_[frame.frame_id];
-        set.resize(cameras_.size());
-        std::swap(set[k], frame);
-        if (++arrived_[set[k].frame_id] == static_cast<int>(cameras_.size()))
-          processSet(set[k].frame_id, steadyNowNs());
-        while (static_cast<int>(sets_.size()) > options_.frames_kept) {  // the oldest go
-          arrived_.erase(sets_.begin()->first);
-          sets_.erase(sets_.begin());
-        }
+  while (!stop && !source_finished_) {
+    while (std::optional<Message> out = outbox_.pop(std::chrono::milliseconds(0)))
+      send(std::move(*out));
+    if (std::optional<DecodeResult> received = endpoint_.receive(std::chrono::milliseconds(2))) {
+      if (received->ok() && std::holds_alternative<PoseData>(received->message->body)) {
+        poses_.push(std::move(*received->message));
       }
-    }
-    // The studio's answers.
-    while (std::optional<DecodeResult> received = endpoint_.receive(std::chrono::milliseconds(0))) {
-      if (received->ok() && std::holds_alternative<PoseData>(received->message->body))
-        answerPose(*received->message);
     }
     const auto now = std::chrono::steady_clock::now();
     if (now - last_heartbeat >= options_.heartbeat) {
       last_heartbeat = now;
       HeartbeatData heartbeat;
-      for (int c : cameras_) {
-        const CameraStats s = source_->stats(c);
-        heartbeat.cameras.push_back(
-            {rig_.camera(c).name(), s.frames, s.dropped, float(s.frame_rate_hz), s.last_error});
+      {
+        std::lock_guard lock(source_mutex_);
+        for (int c : cameras_) {
+          const CameraStats s = source_->stats(c);
+          heartbeat.cameras.push_back(
+              {rig_.camera(c).name(), s.frames, s.dropped, float(s.frame_rate_hz), s.last_error});
+        }
       }
       heartbeat.bytes_sent = bytes_sent_;
       Message message;
@@ -150,6 +206,8 @@ void CameraNode::run(const std::atomic<bool>& stop) {
       send(std::move(message));
     }
   }
+  stop_workers = true;
+  for (std::thread* t : {&capture, &silhouettes, &statistics}) t->join();
 }
 
 }  // namespace lumistage

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +14,7 @@
 #include "core/capture/frame_source.h"
 #include "core/imaging/keyer.h"
 #include "core/net/transport.h"
+#include "core/pipeline/bounded_queue.h"
 #include "core/pipeline/silhouettes.h"
 
 namespace lumistage {
@@ -19,7 +22,7 @@ namespace lumistage {
 struct CameraNodeOptions {
   int silhouette_step = 8;
   std::chrono::milliseconds heartbeat{250};
-  int frames_kept = 8;  // frame sets kept for the later stages (poses arrive a few frames later)
+  int frames_kept = 8;  // frame sets kept for the statistics (poses arrive a few frames later)
 };
 
 // The node's part of every frame, on the PC that owns the cameras (see DESIGN.md §1):
@@ -28,6 +31,11 @@ struct CameraNodeOptions {
 // and send, per vertex, the colour statistics of its cameras that see it (sums, sums of squares,
 // how many see it, how many see it inside the silhouette) — what the studio's modules combine
 // exactly across nodes. Heartbeats carry every camera's counters.
+//
+// Threads joined by drop-oldest bounded queues, so that capture, keying and statistics work on
+// different frames at once and a slow stage loses old frames rather than delaying new ones:
+//   capture -> [sets] -> silhouettes -> [outbox] -> network (this thread: sends, receives poses)
+//   network -> [poses] -> statistics -> [outbox]
 class CameraNode {
  public:
   CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<FrameSource> source,
@@ -40,25 +48,38 @@ class CameraNode {
   int64_t bytesSent() const { return bytes_sent_; }
 
  private:
-  void processSet(int64_t frame_id, int64_t captured_ns);
-  void answerPose(const Message& message);
+  struct Set {
+    int64_t frame_id = -1;
+    int64_t captured_ns = 0;
+    std::vector<CameraFrame> frames;  // per own camera
+  };
+
+  void captureLoop(const std::atomic<bool>& stop);
+  void silhouetteLoop(const std::atomic<bool>& stop);
+  void statisticsLoop(const std::atomic<bool>& stop);
+  Message silhouettesOf(const Set& set) const;
+  std::optional<Message> statisticsFor(const Message& pose);
   bool send(Message message);
 
   Rig rig_;
   std::string name_;
   std::vector<int> cameras_;  // rig indices of this node's cameras
   std::unique_ptr<FrameSource> source_;
-  NodeEndpoint endpoint_;
-  SkinnedMesh body_;
+  std::mutex source_mutex_;  // next() on the capture thread, stats() on the network thread
+  NodeEndpoint endpoint_;    // the network thread's alone
+  SkinnedMesh body_;         // the statistics thread's alone
   CameraNodeOptions options_;
-  std::vector<GreenScreenKeyer> keyers_;  // per own camera
-  // Frames of sets still being assembled or awaiting their pose: frame id -> per own camera.
-  std::map<int64_t, std::vector<CameraFrame>> sets_;
-  std::map<int64_t, int> arrived_;
+  std::vector<GreenScreenKeyer> keyers_;  // per own camera; read only once running
+  BoundedQueue<std::shared_ptr<const Set>> sets_{2};
+  BoundedQueue<Message> poses_{4};
+  BoundedQueue<Message> outbox_{32};
+  std::mutex kept_mutex_;
+  std::map<int64_t, std::shared_ptr<const Set>> kept_;  // sets awaiting their pose
+  std::atomic<bool> source_finished_{false};
   MessageEncoder encoder_;
   std::vector<Eigen::Affine3f> transforms_;
   Eigen::Matrix3Xf positions_, normals_;
-  int64_t sets_sent_ = 0, bytes_sent_ = 0;
+  std::atomic<int64_t> sets_sent_{0}, bytes_sent_{0};
 };
 
 }  // namespace lumistage
