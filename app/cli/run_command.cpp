@@ -29,12 +29,22 @@ std::string reportJson(const RunReport& r) {
     stages += fmt::format("{}\"{}\": {:.3f}", stages.empty() ? "" : ", ", name, ms);
   std::string nodes;
   for (const NodeReport& n : r.nodes) {
+    std::string cameras;
+    for (const CameraHealth& c : n.cameras) {
+      std::string error;
+      for (char ch : c.last_error)
+        error += (ch == '"' || ch == '\\' || ch < ' ') ? ' ' : ch;  // JSON-safe
+      cameras += fmt::format(
+          "{}{{\"camera\": \"{}\", \"frames\": {}, \"dropped\": {}, \"fps\": {:.2f}, "
+          "\"last_error\": \"{}\"}}",
+          cameras.empty() ? "" : ", ", c.camera, c.frames, c.dropped, c.frame_rate_hz, error);
+    }
     nodes += fmt::format(
         "{}\n    {{\"name\": \"{}\", \"lost\": {}, \"messages\": {}, \"bytes\": {}, "
         "\"frames_missed\": {}, "
-        "\"times_lost\": {}, \"bad_messages\": {}}}",
+        "\"times_lost\": {}, \"bad_messages\": {}, \"cameras\": [{}]}}",
         nodes.empty() ? "" : ",", n.name, n.lost ? "true" : "false", n.messages, n.bytes,
-        n.frames_missed, n.times_lost, n.bad_messages);
+        n.frames_missed, n.times_lost, n.bad_messages, cameras);
   }
   return fmt::format(
       "{{\n  \"fps\": {:.3f},\n  \"latency_ms_p50\": {:.3f},\n  \"latency_ms_p95\": {:.3f},\n  "
@@ -158,6 +168,10 @@ void addRunCommand(CLI::App& app) {
           "  node {:<8} {:<9} {} messages, missed {} frames, lost {} times, {} bad messages\n",
           n.name, n.lost ? "lost" : "streaming", n.messages, n.frames_missed, n.times_lost,
           n.bad_messages);
+      for (const CameraHealth& c : n.cameras) {
+        fmt::print("      {:<8} {:6.1f} fps, {} frames, {} dropped{}\n", c.camera, c.frame_rate_hz,
+                   c.frames, c.dropped, c.last_error.empty() ? "" : ", " + c.last_error);
+      }
     }
     if (!a->json.empty()) writeFileAtomically(a->json, reportJson(r));
   });

@@ -45,6 +45,10 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   ++node.report.messages;
   if (const auto* heartbeat = std::get_if<HeartbeatData>(&message.body)) {
     node.report.bytes = heartbeat->bytes_sent;  // what the node says it has sent in all
+    node.report.cameras.clear();
+    for (const CameraHealthData& c : heartbeat->cameras) {
+      node.report.cameras.push_back({c.camera, c.frames, c.dropped, c.frame_rate, c.last_error});
+    }
     return;
   }
   if (message.frame_id <= newest_done_) return;  // a frame already done or given up

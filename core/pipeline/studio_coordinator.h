@@ -24,9 +24,18 @@ struct StudioCoordinatorOptions {
   int raw_bytes_per_pixel = 1;                 // of the cameras' images (Bayer, mono: 1; RGB: 3)
 };
 
+// A camera's health as its node reports it in heartbeats.
+struct CameraHealth {
+  std::string camera;
+  int64_t frames = 0, dropped = 0;
+  double frame_rate_hz = 0;
+  std::string last_error;
+};
+
 struct NodeReport {
   std::string name;
-  bool lost = true;  // now
+  std::vector<CameraHealth> cameras;  // from the latest heartbeat
+  bool lost = true;                   // now
   int64_t messages = 0, bytes = 0;
   int64_t frames_missed = 0;  // frames it was left out of
   int64_t times_lost = 0;     // how often it was marked lost (and came back, or not)

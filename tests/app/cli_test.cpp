@@ -9,6 +9,7 @@
 #include <fstream>
 #include <string>
 
+#include "core/base/atomic_file.h"
 #include "core/geometry/rig_file.h"
 #include "core/geometry/ring_rig.h"
 #include "core/net/curve_keys.h"
@@ -183,6 +184,42 @@ TEST(Cli, SynthWritesACompleteSession) {
           session.string());
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("already exists and is not empty"), std::string::npos) << r.output;
+  fs::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+TEST(Cli, RunWritesTheFiguresAsJson) {
+  const fs::path folder = tempPath("run");
+  fs::create_directories(folder);
+  Result r =
+      run(kCli + " rig ring --cameras 4 --width 320 --height 240 --cameras-per-node 2 --out " +
+          (folder / "rig.yaml").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ofstream(folder / "studio.yaml") << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
+                                           "actor:\n  vertices: 2000\n";
+  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() +
+          " --frames 6 --bayer --out " + (folder / "session").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* security : {"", " --plain"}) {
+    const fs::path json = folder / "run.json";
+    r = run(kCli + " run --session " + (folder / "session").string() +
+            " --frames 20 --seconds 30 --json " + json.string() + security);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("20 frames in all"), std::string::npos) << r.output;
+    const std::string text = readFile(json);
+    for (const char* key :
+         {"\"fps\": ", "\"latency_ms_p50\": ", "\"latency_ms_p95\": ", "\"stage_ms\": {",
+          "\"node_bytes_per_frame\": ", "\"raw_bytes_per_frame_per_node\": 153600.0",
+          "\"frames\": 20", "\"frames_dropped\": ", "\"mocap\": "}) {
+      EXPECT_NE(text.find(key), std::string::npos) << key << " in " << text;
+    }
+    fs::remove(json);
+  }
   fs::remove_all(folder);
 }
 
