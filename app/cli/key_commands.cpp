@@ -14,8 +14,9 @@ namespace {
 
 void printNextSteps(const KeyStore& store) {
   fmt::print(
-      "Copy {}/nodes/<node>.key to each node's PC (and nothing else from this folder); the "
-      "studio reads studio.key and authorized/.\n",
+      "On each node's PC, make a key folder holding nodes/<node>.key and studio.pub from {} (and "
+      "nothing else: studio.key holds the studio's secret); the studio reads studio.key and "
+      "authorized/.\n",
       store.dir().string());
 }
 

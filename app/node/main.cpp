@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
         throw std::runtime_error("give --keys DIR (or --plain on a closed network)");
       const lumistage::KeyStore store(keys);
       endpoint.node_key = store.nodeKey(node.name);
-      endpoint.studio_public_key = store.studioKey().public_key;
+      endpoint.studio_public_key = store.studioPublicKey();
     }
     lumistage::CameraNode camera_node(rig, node.name, std::move(source), endpoint,
                                       lumistage::loadGenericHuman());

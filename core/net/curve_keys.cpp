@@ -185,7 +185,10 @@ void KeyStore::init(const std::vector<std::string>& nodes, bool replace) {
   createDirectories(dir_);
   createDirectories(dir_ / "nodes");
   createDirectories(dir_ / "authorized");
-  saveKeyPair(studioKeyPath(), generateCurveKeyPair(), "Lumistage studio CURVE key pair");
+  const CurveKeyPair studio = generateCurveKeyPair();
+  saveKeyPair(studioKeyPath(), studio, "Lumistage studio CURVE key pair");
+  savePublicKey(studioPublicKeyPath(), studio.public_key,
+                "Lumistage studio: copy this file (not studio.key) to every node's key folder");
   for (const std::string& name : nodes) {
     const CurveKeyPair keys = generateCurveKeyPair();
     saveKeyPair(nodeKeyPath(name), keys, "Lumistage node '" + name + "' CURVE key pair");

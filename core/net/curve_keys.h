@@ -1,9 +1,11 @@
 #pragma once
 
 // CURVE keys of the studio and its nodes, and the folder that keeps them:
-//   keys/studio.key            the studio's key pair (secret: mode 600)
+//   keys/studio.key            the studio's key pair (secret: mode 600); stays on the studio PC
+//   keys/studio.pub            the studio's public key: what every node needs of the studio
 //   keys/nodes/<name>.key      each node's key pair, to copy to that node's PC (mode 600)
 //   keys/authorized/<name>.pub the node public keys the studio admits
+// A node's PC holds a folder of the same layout with studio.pub and its own nodes/<name>.key.
 // Removing a node's .pub file locks that node out without touching the others.
 
 #include <filesystem>
@@ -55,11 +57,14 @@ class KeyStore {
   CurveKeyPair addNode(const std::string& name);
 
   CurveKeyPair studioKey() const { return loadKeyPair(studioKeyPath()); }
+  // What a node needs of the studio: its public key alone (studio.pub), never its secret.
+  std::string studioPublicKey() const { return loadPublicKey(studioPublicKeyPath()); }
   CurveKeyPair nodeKey(const std::string& name) const { return loadKeyPair(nodeKeyPath(name)); }
   // Every keys/authorized/*.pub, sorted by name; the name is the file's stem.
   std::vector<AuthorizedNode> authorizedNodes() const;
 
   std::filesystem::path studioKeyPath() const { return dir_ / "studio.key"; }
+  std::filesystem::path studioPublicKeyPath() const { return dir_ / "studio.pub"; }
   std::filesystem::path nodeKeyPath(const std::string& name) const;
   std::filesystem::path authorizedPath(const std::string& name) const;
   const std::filesystem::path& dir() const { return dir_; }

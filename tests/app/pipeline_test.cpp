@@ -114,7 +114,7 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   // (It knows the studio's public key, as a copied studio folder would; its own key is new.)
   const fs::path stranger_keys = folder / "stranger";
   KeyStore(stranger_keys).init({"node1"});
-  fs::copy_file(keys / "studio.key", stranger_keys / "studio.key",
+  fs::copy_file(keys / "studio.pub", stranger_keys / "studio.pub",
                 fs::copy_options::overwrite_existing);
   const pid_t stranger = startNode("node1", session, studio.endpoint(), stranger_keys);
   EXPECT_TRUE(runUntil(studio, 10, [&] { return studio.report().refusals > 0; }));
