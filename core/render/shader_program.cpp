@@ -10,6 +10,16 @@ namespace lumistage {
 
 namespace {
 
+// The driver's log of a shader or program (glGetShaderiv/InfoLog or their Program twins).
+template <typename GetIv, typename GetLog>
+std::string infoLog(GLuint object, GetIv get_iv, GetLog get_log) {
+  GLint length = 0;
+  get_iv(object, GL_INFO_LOG_LENGTH, &length);
+  std::vector<char> log(std::max(length, 1));
+  get_log(object, length, nullptr, log.data());
+  return log.data();
+}
+
 GLuint compile(GLenum type, std::string_view file) {
   const std::string path = shaderPath(file).string();
   const std::string source = readFile(path);
@@ -20,12 +30,9 @@ GLuint compile(GLenum type, std::string_view file) {
   GLint ok = 0;
   glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
   if (!ok) {
-    GLint length = 0;
-    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-    std::vector<char> log(std::max(length, 1));
-    glGetShaderInfoLog(shader, length, nullptr, log.data());
+    const std::string log = infoLog(shader, glGetShaderiv, glGetShaderInfoLog);
     glDeleteShader(shader);
-    throw Error(path + ": shader does not compile:\n" + log.data());
+    throw Error(path + ": shader does not compile:\n" + log);
   }
   return shader;
 }
@@ -50,13 +57,10 @@ ShaderProgram::ShaderProgram(std::string_view vertex_file, std::string_view frag
   GLint ok = 0;
   glGetProgramiv(program_, GL_LINK_STATUS, &ok);
   if (!ok) {
-    GLint length = 0;
-    glGetProgramiv(program_, GL_INFO_LOG_LENGTH, &length);
-    std::vector<char> log(std::max(length, 1));
-    glGetProgramInfoLog(program_, length, nullptr, log.data());
+    const std::string log = infoLog(program_, glGetProgramiv, glGetProgramInfoLog);
     glDeleteProgram(program_);
     throw Error(std::string(vertex_file) + " + " + std::string(fragment_file) +
-                ": program does not link:\n" + log.data());
+                ": program does not link:\n" + log);
   }
 }
 

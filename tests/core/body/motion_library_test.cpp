@@ -80,8 +80,12 @@ TEST(MotionLibrary, ClipsFitAScaledSkeleton) {
   BodyShape tall;
   tall.height_m = 2.0;
   const Skeleton skeleton = makeHumanSkeleton(tall);
+  EXPECT_GT(skeleton.restPositions()[kHead].z(),
+            1.1 * makeHumanSkeleton().restPositions()[kHead].z());
   for (const std::string& name : builtinClipNames()) {
-    expectWellFormed(skeleton, makeBuiltinClip(name, skeleton));
+    SCOPED_TRACE(name);
+    expectWellFormed(skeleton,
+                     makeBuiltinClip(name, skeleton));  // feet on the floor, limits, smooth
   }
   BodyShape long_legs;
   long_legs.leg_length_scale = 1.15;
