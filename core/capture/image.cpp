@@ -42,19 +42,6 @@ bool isBayer(PixelFormat format) {
   return format != PixelFormat::kMono8 && format != PixelFormat::kRgb8;
 }
 
-BayerLayout bayerLayout(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::kBayerGrbg8:
-      return {1, 0};
-    case PixelFormat::kBayerGbrg8:
-      return {0, 1};
-    case PixelFormat::kBayerBggr8:
-      return {1, 1};
-    default:
-      return {0, 0};
-  }
-}
-
 void rgbaToBayer(const uint8_t* rgba, int width, int height, BayerLayout layout, uint8_t* bayer) {
   for (int y = 0; y < height; ++y) {
     const uint8_t* row = rgba + size_t(y) * width * 4;

@@ -36,7 +36,19 @@ bool isBayer(PixelFormat format);
 struct BayerLayout {
   int red_x = 0, red_y = 0;
 };
-BayerLayout bayerLayout(PixelFormat format);
+// Inline: the keyer asks for it at every pixel it reads.
+inline BayerLayout bayerLayout(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::kBayerGrbg8:
+      return {1, 0};
+    case PixelFormat::kBayerGbrg8:
+      return {0, 1};
+    case PixelFormat::kBayerBggr8:
+      return {1, 1};
+    default:
+      return {0, 0};
+  }
+}
 
 // A view of tightly packed pixels owned elsewhere.
 struct ImageView {
