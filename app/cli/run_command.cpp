@@ -14,6 +14,7 @@
 #include "core/base/error.h"
 #include "core/body/human_skeleton.h"
 #include "core/capture/session_reader.h"
+#include "core/geometry/rig_file.h"
 #include "core/net/curve_keys.h"
 #include "core/pipeline/studio_coordinator.h"
 
@@ -62,7 +63,7 @@ std::string reportJson(const RunReport& r) {
 
 void addRunCommand(CLI::App& app) {
   struct Args {
-    std::string session, json, keys, replay = "rate";
+    std::string session, json, keys, replay = "rate", rig, address;
     int nodes = 0;
     int64_t frames = 150;
     double seconds = 60;
@@ -72,7 +73,10 @@ void addRunCommand(CLI::App& app) {
   CLI::App* run = app.add_subcommand("run",
                                      "Run the distributed pipeline on this machine: a node process "
                                      "per rig node, the studio's modules here");
-  run->add_option("--session", a->session, "recorded session the nodes replay")->required();
+  run->add_option("--session", a->session, "recorded session the nodes replay");
+  run->add_option("--rig", a->rig, "or live Aravis cameras: the rig...");
+  run->add_option("--address", a->address,
+                  "...and its first camera's address (camera i at ADDRESS+i)");
   run->add_option("--nodes", a->nodes, "how many of the rig's nodes to start (default: all)");
   run->add_option("--frames", a->frames, "stop after this many complete frames")
       ->capture_default_str();
@@ -85,8 +89,15 @@ void addRunCommand(CLI::App& app) {
   run->add_flag("--plain", a->plain, "no CURVE encryption and authentication");
   run->add_option("--json", a->json, "write the figures as JSON");
   run->callback([a] {
-    const SessionReader reader(a->session);
-    const Rig& rig = reader.rig();
+    if (a->session.empty() == (a->rig.empty() || a->address.empty())) {
+      throw CLI::ValidationError("--session",
+                                 "give either --session DIR, or --rig FILE with --address A");
+    }
+    std::optional<SessionReader> reader;
+    if (!a->session.empty()) reader.emplace(a->session);
+    const Rig rig = reader ? reader->rig() : loadRig(a->rig);
+    const int raw_bytes_per_pixel =
+        reader ? bytesPerPixel(reader->pixelFormat()) : 1;  // live: Bayer
     const int node_count = a->nodes > 0 ? std::min(a->nodes, rig.nodeCount()) : rig.nodeCount();
     std::vector<std::string> names;
     for (int n = 0; n < node_count; ++n) names.push_back(rig.nodes()[n].name);
@@ -108,7 +119,7 @@ void addRunCommand(CLI::App& app) {
     }
     StudioCoordinatorOptions options;
     options.max_frames = a->frames;
-    options.raw_bytes_per_pixel = bytesPerPixel(reader.pixelFormat());
+    options.raw_bytes_per_pixel = raw_bytes_per_pixel;
     StudioCoordinator studio(rig, endpoint, kHumanJointCount, options);
     fmt::print("studio at {} ({}), starting {} nodes\n", studio.endpoint(),
                a->plain ? "plain" : "CURVE", node_count);
@@ -120,9 +131,13 @@ void addRunCommand(CLI::App& app) {
       const pid_t pid = fork();
       if (pid < 0) throw Error("cannot start a node process");
       if (pid == 0) {
-        std::vector<std::string> args = {node_binary, "--node",   name,
-                                         "--session", a->session, "--replay",
-                                         a->replay,   "--studio", studio.endpoint()};
+        std::vector<std::string> args = {node_binary, "--node", name, "--studio",
+                                         studio.endpoint()};
+        if (a->session.empty()) {
+          args.insert(args.end(), {"--rig", a->rig, "--address", a->address});
+        } else {
+          args.insert(args.end(), {"--session", a->session, "--replay", a->replay});
+        }
         if (a->plain) {
           args.push_back("--plain");
         } else {

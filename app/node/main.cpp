@@ -1,5 +1,5 @@
-// lumistage-node: the headless worker on each camera PC. It owns the node's cameras (for now its
-// cameras of a recorded session), connects to the studio and does the node's part
+// lumistage-node: the headless worker on each camera PC. It owns the node's cameras (Aravis
+// cameras, or its cameras of a recorded session), connects to the studio and does the node's part
 // of every frame (core/pipeline/camera_node.h). Without --studio it checks its place in the rig.
 #include <fmt/format.h>
 
@@ -9,7 +9,9 @@
 #include <exception>
 
 #include "core/body/human_model.h"
+#include "core/capture/aravis_source.h"
 #include "core/capture/session_source.h"
+#include "core/capture/virtual_gige_cameras.h"
 #include "core/geometry/rig_file.h"
 #include "core/net/curve_keys.h"
 #include "core/pipeline/camera_node.h"
@@ -26,7 +28,10 @@ void onSignal(int) {
 int main(int argc, char** argv) {
   CLI::App app{
       "Lumistage camera node: owns the cameras of one PC and does the node's part of every frame"};
-  std::string rig_path, node_name, session, replay = "rate", studio, keys;
+  std::string rig_path, node_name, session, replay = "rate", studio, keys, address,
+                                            pixel_format = "bayer_rggb8";
+  std::vector<std::string> devices;
+  double fps = 25;
   bool plain = false;
   app.add_option("--rig", rig_path, "rig file (default with --session: the session's)");
   app.add_option("--node", node_name, "this node's name in the rig")->required();
@@ -34,6 +39,13 @@ int main(int argc, char** argv) {
   app.add_option("--replay", replay,
                  "session pace: rate (as recorded, looping) or memory (decoded up front)")
       ->capture_default_str();
+  app.add_option("--address", address,
+                 "live Aravis cameras: camera i of the rig at ADDRESS+i (as lumistage stream and "
+                 "virtual-cameras)");
+  app.add_option("--device", devices,
+                 "or its cameras' devices one by one (address, serial or id), in rig order");
+  app.add_option("--pixel-format", pixel_format, "of the Aravis cameras")->capture_default_str();
+  app.add_option("--fps", fps, "frame rate asked of the Aravis cameras")->capture_default_str();
   app.add_option("--studio", studio, "the studio's endpoint, e.g. tcp://studio-pc:5570");
   app.add_option("--keys", keys,
                  "key store folder (lumistage keys init): this node's key and the studio's");
@@ -59,7 +71,9 @@ int main(int argc, char** argv) {
         fmt::print("  {} {}x{}\n", rig.camera(c).name(), rig.camera(c).width(),
                    rig.camera(c).height());
       }
-      fmt::print("configuration is valid; give --studio and --session to serve frames\n");
+      fmt::print(
+          "configuration is valid; give --studio and the cameras (--address, --device or "
+          "--session) to serve\n");
       return 0;
     }
     std::unique_ptr<lumistage::FrameSource> source;
@@ -71,9 +85,29 @@ int main(int argc, char** argv) {
       // Every node shows the same recorded instant at the same time, as triggered cameras do.
       options.synchronized = true;
       source = std::make_unique<lumistage::SessionSource>(session, options);
+    } else if (!address.empty() || !devices.empty()) {
+      if (!devices.empty() && devices.size() != node.cameras.size()) {
+        throw std::runtime_error(fmt::format("--device given {} times for the node's {} cameras",
+                                             devices.size(), node.cameras.size()));
+      }
+      const std::optional<lumistage::PixelFormat> format =
+          lumistage::parsePixelFormat(pixel_format);
+      if (!format)
+        throw std::runtime_error("--pixel-format: expected one of " +
+                                 lumistage::pixelFormatNames());
+      std::vector<lumistage::AravisCameraConfig> configs(rig.cameraCount());  // others' stay empty
+      for (size_t k = 0; k < node.cameras.size(); ++k) {
+        lumistage::AravisCameraConfig& config = configs[node.cameras[k]];
+        config.device = devices.empty()
+                            ? lumistage::VirtualGigeCameras::addressOf(address, node.cameras[k])
+                            : devices[k];
+        config.pixel_format = *format;
+        config.frame_rate_hz = fps;
+      }
+      source = std::make_unique<lumistage::AravisSource>(rig, configs);
     } else {
       throw std::runtime_error(
-          "give --session DIR: the node's cameras (live Aravis cameras on nodes come next)");
+          "give the node's cameras: --session DIR, or --address / --device for Aravis cameras");
     }
     lumistage::NodeEndpointConfig endpoint;
     endpoint.connect = studio;

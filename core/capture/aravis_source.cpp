@@ -85,8 +85,12 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
     device->stats.temperature_c = std::numeric_limits<double>::quiet_NaN();
     devices_.push_back(std::move(device));
   }
+  int opened = 0;
+  for (const auto& d : devices_) opened += !d->config.device.empty();
+  if (opened == 0) throw Error("Aravis source: no camera to open (every device is empty)");
   try {
     for (auto& d : devices_) {
+      if (d->config.device.empty()) continue;  // another node's camera
       GError* error = nullptr;
       auto check = [&](const char* step) {
         if (error) throw Error(fmt::format("camera {}: {}: {}", d->name, step, takeError(error)));
@@ -152,8 +156,9 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
     }
     throw;
   }
-  for (int c = 0; c < rig_.cameraCount(); ++c)
-    devices_[c]->thread = std::thread(&AravisSource::receive, this, c);
+  for (int c = 0; c < rig_.cameraCount(); ++c) {
+    if (devices_[c]->camera) devices_[c]->thread = std::thread(&AravisSource::receive, this, c);
+  }
 }
 
 AravisSource::~AravisSource() {
@@ -263,7 +268,7 @@ CameraStats AravisSource::stats(int camera) const {
 
 void AravisSource::trigger() {
   for (auto& d : devices_) {
-    if (d->config.trigger != TriggerMode::kSoftware) continue;
+    if (!d->camera || d->config.trigger != TriggerMode::kSoftware) continue;
     GError* error = nullptr;
     arv_camera_software_trigger(d->camera, &error);
     if (error) {

@@ -34,7 +34,7 @@ enum class TriggerMode {
 };
 
 struct AravisCameraConfig {
-  std::string device;  // IP address, serial number or Aravis device id
+  std::string device;  // IP address, serial number or Aravis device id; empty: not opened here
   PixelFormat pixel_format = PixelFormat::kBayerRggb8;
   double frame_rate_hz = 25.0;                                    // free running only
   double exposure_us = std::numeric_limits<double>::quiet_NaN();  // NaN: leave as the camera has it
@@ -44,10 +44,10 @@ struct AravisCameraConfig {
   int buffer_count = 8;  // the stream's buffer pool
 };
 
-// Frames from Aravis cameras, one per camera of the rig, each camera configured to the rig's
-// image size. One receiving thread per camera copies completed buffers into a bounded queue
-// (the oldest frame is dropped, and counted, when the consumer falls behind) and hands the
-// buffer straight back to the camera's pool.
+// Frames from Aravis cameras, one per camera of the rig (or those of them with a device: a
+// camera node opens its own), each camera configured to the rig's image size. One receiving thread
+// per camera copies completed buffers into a bounded queue (the oldest frame is dropped, and
+// counted, when the consumer falls behind) and hands the buffer straight back to the camera's pool.
 class AravisSource : public FrameSource {
  public:
   // Opens and configures every camera, then starts streaming. Throws Error naming the camera

@@ -1,8 +1,9 @@
 #!/bin/sh
 # The whole acquisition path with real processes: a synthetic session is served by virtual GigE
 # Vision cameras (lumistage virtual-cameras), streamed and recorded by an Aravis client
-# (lumistage stream --record), and the recording must hold exactly the frames that were served.
-# Run inside tests/in-network-namespace.sh (it needs the 127.0.1.x loopback addresses).
+# (lumistage stream --record), and the recording must hold exactly the frames that were served;
+# then the live cameras feed a camera node and the studio's pipeline (lumistage run).
+# Run inside packaging/in-network-namespace.sh (it needs the 127.0.1.x loopback addresses).
 # Usage: acquisition_test.sh LUMISTAGE_BINARY
 set -eu
 cli=$1
@@ -40,4 +41,8 @@ done
 # The recording replays.
 "$cli" stream --session "$work/recorded" --replay fast --seconds 5 > "$work/replay.log" 2>&1 || fail "replay: $(cat "$work/replay.log")"
 grep -q "^cam03 *$sets " "$work/replay.log" || fail "replay did not give $sets frames of cam03: $(cat "$work/replay.log")"
-echo "acquisition: $sets frame sets served, streamed, recorded bit-exact and replayed"
+# The same cameras, live, through a camera-node process into the studio's pipeline.
+"$cli" run --rig "$work/served/rig.yaml" --address 127.0.1.3 --frames 20 --seconds 15 > "$work/run.log" 2>&1 || fail "run: $(cat "$work/run.log")"
+grep -q "^20 frames in all" "$work/run.log" || fail "the pipeline did not complete 20 frames from live cameras: $(cat "$work/run.log")"
+
+echo "acquisition: $sets frame sets served, streamed, recorded bit-exact and replayed; 20 frames through the pipeline"
