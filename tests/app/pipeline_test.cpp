@@ -102,7 +102,8 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   waitpid(node2, nullptr, 0);
   const auto killed = std::chrono::steady_clock::now();
   ASSERT_TRUE(runUntil(studio, 3, [&] { return studio.nodeState("node2") == "lost"; }));
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count(), 1.6);
+  // Lost after a second of silence (the deadline), noticed within one more slice of work.
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - killed).count(), 2.5);
   const int64_t before = studio.framesDone();
   EXPECT_TRUE(runUntil(studio, 5, [&] { return studio.framesDone() >= before + 15; }));
 
