@@ -118,7 +118,6 @@ void addRunCommand(CLI::App& app) {
       endpoint.authorized = store.authorizedNodes();
     }
     StudioCoordinatorOptions options;
-    options.max_frames = a->frames;
     options.raw_bytes_per_pixel = raw_bytes_per_pixel;
     StudioCoordinator studio(rig, endpoint, kHumanJointCount, options);
     fmt::print("studio at {} ({}), starting {} nodes\n", studio.endpoint(),
@@ -152,18 +151,32 @@ void addRunCommand(CLI::App& app) {
       }
       children.push_back(pid);
     }
-    std::atomic<bool> stop{false};
-    std::thread watchdog([&] {
-      const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);
-      while (!stop && std::chrono::steady_clock::now() < end)
-        std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      stop = true;
-    });
-    studio.run(stop);
-    stop = true;
-    watchdog.join();
-    for (pid_t pid : children) kill(pid, SIGTERM);
-    for (pid_t pid : children) waitpid(pid, nullptr, 0);
+    // Run the studio in slices, watching the clock and the node processes: a node that exits
+    // (bad session, wrong key file...) is reported with its status; when none is left, stop.
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);
+    std::vector<bool> running(children.size(), true);
+    int exited = 0;
+    while (std::chrono::steady_clock::now() < end && exited < static_cast<int>(children.size()) &&
+           (a->frames <= 0 || studio.framesDone() < a->frames)) {
+      studio.runFor(std::chrono::milliseconds(100));
+      for (size_t n = 0; n < children.size(); ++n) {
+        int status = 0;
+        if (running[n] && waitpid(children[n], &status, WNOHANG) == children[n]) {
+          running[n] = false;
+          ++exited;
+          fmt::print(stderr, "lumistage run: node {} exited ({}); see its message above\n",
+                     names[n],
+                     WIFEXITED(status) ? fmt::format("status {}", WEXITSTATUS(status))
+                                       : fmt::format("signal {}", WTERMSIG(status)));
+        }
+      }
+    }
+    for (size_t n = 0; n < children.size(); ++n) {
+      if (running[n]) kill(children[n], SIGTERM);
+    }
+    for (size_t n = 0; n < children.size(); ++n) {
+      if (running[n]) waitpid(children[n], nullptr, 0);
+    }
     if (temporary_keys) fs::remove_all(keys);
 
     const RunReport r = studio.report();
