@@ -118,6 +118,7 @@ void addRunCommand(CLI::App& app) {
       endpoint.authorized = store.authorizedNodes();
     }
     StudioCoordinatorOptions options;
+    options.max_frames = a->frames;
     options.raw_bytes_per_pixel = raw_bytes_per_pixel;
     StudioCoordinator studio(rig, endpoint, kHumanJointCount, options);
     fmt::print("studio at {} ({}), starting {} nodes\n", studio.endpoint(),

@@ -200,7 +200,8 @@ std::optional<ReceivedMessage> StudioEndpoint::receive(std::chrono::milliseconds
     if (!received.result.ok()) s.countBad(received.node, received.result.error);
     return received;
   } catch (const zmq::error_t& e) {
-    spdlog::error("studio: receive failed: {}", e.what());
+    // A signal (the process being told to stop) interrupts the wait: not a failure.
+    if (e.num() != EINTR) spdlog::error("studio: receive failed: {}", e.what());
     return std::nullopt;
   }
 }
@@ -314,7 +315,7 @@ std::optional<DecodeResult> NodeEndpoint::receive(std::chrono::milliseconds time
     }
     return result;
   } catch (const zmq::error_t& e) {
-    spdlog::error("node {}: receive failed: {}", s.config.name, e.what());
+    if (e.num() != EINTR) spdlog::error("node {}: receive failed: {}", s.config.name, e.what());
     return std::nullopt;
   }
 }

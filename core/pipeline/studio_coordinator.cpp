@@ -191,7 +191,7 @@ void StudioCoordinator::checkDeadlines(int64_t now_ns) {
 
 void StudioCoordinator::runFor(std::chrono::milliseconds duration) {
   const int64_t end = steadyNowNs() + std::chrono::nanoseconds(duration).count();
-  while (steadyNowNs() < end) {
+  while (steadyNowNs() < end && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
     if (std::optional<ReceivedMessage> received = endpoint_.receive(std::chrono::milliseconds(10)))
       onMessage(*received);
     checkDeadlines(steadyNowNs());

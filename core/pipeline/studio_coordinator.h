@@ -71,8 +71,8 @@ class StudioCoordinator {
   std::string endpoint() const { return endpoint_.endpoint(); }
   // Runs until `stop`, or `max_frames` frames are done.
   void run(const std::atomic<bool>& stop);
-  // Handles what arrives within `duration`, then returns (the same work as run(), in slices: a
-  // caller on one thread can look at the state between them).
+  // Handles what arrives within `duration` (or until `max_frames` are done), then returns: the
+  // same work as run(), in slices, so a caller on one thread can look at the state between them.
   void runFor(std::chrono::milliseconds duration);
   int64_t framesDone() const { return frames_done_; }
   RunReport report() const;
