@@ -16,6 +16,8 @@ packages=(
   libopencv-dev libeigen3-dev libceres-dev libassimp-dev
   # cameras: Aravis (GigE Vision / USB3 Vision) and its tools (fake GigE camera)
   libaravis-dev aravis-tools libusb-1.0-0-dev
+  # private network namespaces (ip, unshare) for one loopback address per virtual GigE camera
+  iproute2 util-linux
   # transport and messages
   libzmq3-dev cppzmq-dev libflatbuffers-dev flatbuffers-compiler
   # logging, command line, config
