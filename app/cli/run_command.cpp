@@ -1,22 +1,13 @@
 #include "app/cli/run_command.h"
 
 #include <fmt/format.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <atomic>
 #include <filesystem>
 #include <fstream>
-#include <thread>
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
-#include "core/body/human_skeleton.h"
-#include "core/capture/session_reader.h"
-#include "core/geometry/rig_file.h"
-#include "core/net/curve_keys.h"
-#include "core/pipeline/studio_coordinator.h"
+#include "core/pipeline/local_run.h"
 
 namespace lumistage {
 
@@ -93,93 +84,29 @@ void addRunCommand(CLI::App& app) {
       throw CLI::ValidationError("--session",
                                  "give either --session DIR, or --rig FILE with --address A");
     }
-    std::optional<SessionReader> reader;
-    if (!a->session.empty()) reader.emplace(a->session);
-    const Rig rig = reader ? reader->rig() : loadRig(a->rig);
-    const int raw_bytes_per_pixel =
-        reader ? bytesPerPixel(reader->pixelFormat()) : 1;  // live: Bayer
-    const int node_count = a->nodes > 0 ? std::min(a->nodes, rig.nodeCount()) : rig.nodeCount();
-    std::vector<std::string> names;
-    for (int n = 0; n < node_count; ++n) names.push_back(rig.nodes()[n].name);
-
-    StudioEndpointConfig endpoint;
-    endpoint.bind = "tcp://127.0.0.1:*";
-    fs::path keys = a->keys;
-    const bool temporary_keys = keys.empty() && !a->plain;
-    if (a->plain) {
-      endpoint.security = TransportSecurity::kPlain;
-    } else {
-      if (temporary_keys) {
-        keys = fs::temp_directory_path() / fmt::format("lumistage_run_keys_{}", ::getpid());
-        KeyStore(keys).init(names, true);
-      }
-      const KeyStore store(keys);
-      endpoint.studio_key = store.studioKey();
-      endpoint.authorized = store.authorizedNodes();
-    }
-    StudioCoordinatorOptions options;
-    options.max_frames = a->frames;
-    options.raw_bytes_per_pixel = raw_bytes_per_pixel;
-    StudioCoordinator studio(rig, endpoint, kHumanJointCount, options);
+    LocalRunOptions options;
+    options.session = a->session;
+    options.rig = a->rig;
+    options.address = a->address;
+    options.replay = a->replay;
+    options.nodes = a->nodes;
+    options.plain = a->plain;
+    options.keys = a->keys;
+    options.coordinator.max_frames = a->frames;
+    LocalPipelineRun pipeline(options);
+    StudioCoordinator& studio = pipeline.studio();
     fmt::print("studio at {} ({}), starting {} nodes\n", studio.endpoint(),
-               a->plain ? "plain" : "CURVE", node_count);
-
-    const std::string node_binary =
-        (fs::read_symlink("/proc/self/exe").parent_path() / "lumistage-node").string();
-    std::vector<pid_t> children;
-    for (const std::string& name : names) {
-      const pid_t pid = fork();
-      if (pid < 0) throw Error("cannot start a node process");
-      if (pid == 0) {
-        std::vector<std::string> args = {node_binary, "--node", name, "--studio",
-                                         studio.endpoint()};
-        if (a->session.empty()) {
-          args.insert(args.end(), {"--rig", a->rig, "--address", a->address});
-        } else {
-          args.insert(args.end(), {"--session", a->session, "--replay", a->replay});
-        }
-        if (a->plain) {
-          args.push_back("--plain");
-        } else {
-          args.push_back("--keys");
-          args.push_back(keys.string());
-        }
-        std::vector<char*> argv;
-        for (std::string& s : args) argv.push_back(s.data());
-        argv.push_back(nullptr);
-        execv(node_binary.c_str(), argv.data());
-        _exit(127);
-      }
-      children.push_back(pid);
-    }
-    // Run the studio in slices, watching the clock and the node processes: a node that exits
-    // (bad session, wrong key file...) is reported with its status; when none is left, stop.
+               a->plain ? "plain" : "CURVE", pipeline.nodeNames().size());
+    // Run in slices, watching the clock and the node processes: a node that exits (bad session,
+    // wrong key file...) is reported; when none is left, stop.
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);
-    std::vector<bool> running(children.size(), true);
-    int exited = 0;
-    while (std::chrono::steady_clock::now() < end && exited < static_cast<int>(children.size()) &&
+    while (std::chrono::steady_clock::now() < end && pipeline.anyNodeRunning() &&
            (a->frames <= 0 || studio.framesDone() < a->frames)) {
-      studio.runFor(std::chrono::milliseconds(100));
-      for (size_t n = 0; n < children.size(); ++n) {
-        int status = 0;
-        if (running[n] && waitpid(children[n], &status, WNOHANG) == children[n]) {
-          running[n] = false;
-          ++exited;
-          fmt::print(stderr, "lumistage run: node {} exited ({}); see its message above\n",
-                     names[n],
-                     WIFEXITED(status) ? fmt::format("status {}", WEXITSTATUS(status))
-                                       : fmt::format("signal {}", WTERMSIG(status)));
-        }
+      pipeline.runFor(std::chrono::milliseconds(100));
+      for (const std::string& exit : pipeline.takeExits()) {
+        fmt::print(stderr, "lumistage run: {}; see its message above\n", exit);
       }
     }
-    for (size_t n = 0; n < children.size(); ++n) {
-      if (running[n]) kill(children[n], SIGTERM);
-    }
-    for (size_t n = 0; n < children.size(); ++n) {
-      if (running[n]) waitpid(children[n], nullptr, 0);
-    }
-    if (temporary_keys) fs::remove_all(keys);
-
     const RunReport r = studio.report();
     fmt::print(
         "{} frames in all ({} dropped), {:.1f} frames a second; latency {:.1f} ms (median), {:.1f} "

@@ -1,0 +1,119 @@
+#include "core/pipeline/local_run.h"
+
+#include <fmt/format.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <optional>
+#include <utility>
+
+#include "core/base/error.h"
+#include "core/body/human_skeleton.h"
+#include "core/capture/session_reader.h"
+#include "core/geometry/rig_file.h"
+#include "core/net/curve_keys.h"
+
+namespace lumistage {
+
+namespace fs = std::filesystem;
+
+LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move(options)) {
+  if (options_.session.empty() == (options_.rig.empty() || options_.address.empty())) {
+    throw Error("pipeline: give a session, or a rig with the first camera's address");
+  }
+  std::optional<SessionReader> reader;
+  if (!options_.session.empty()) reader.emplace(options_.session);
+  rig_ = reader ? reader->rig() : loadRig(options_.rig);
+  options_.coordinator.raw_bytes_per_pixel =
+      reader ? bytesPerPixel(reader->pixelFormat()) : 1;  // live: Bayer
+  const int node_count =
+      options_.nodes > 0 ? std::min(options_.nodes, rig_.nodeCount()) : rig_.nodeCount();
+  for (int n = 0; n < node_count; ++n) names_.push_back(rig_.nodes()[n].name);
+
+  StudioEndpointConfig endpoint;
+  endpoint.bind = "tcp://127.0.0.1:*";
+  keys_ = options_.keys;
+  if (options_.plain) {
+    endpoint.security = TransportSecurity::kPlain;
+  } else {
+    if (keys_.empty()) {
+      temporary_keys_ = true;
+      keys_ = fs::temp_directory_path() /
+              fmt::format("lumistage_run_keys_{}_{}", ::getpid(), static_cast<void*>(this));
+      KeyStore(keys_).init(names_, true);
+    }
+    const KeyStore store(keys_);
+    endpoint.studio_key = store.studioKey();
+    endpoint.authorized = store.authorizedNodes();
+  }
+  studio_ =
+      std::make_unique<StudioCoordinator>(rig_, endpoint, kHumanJointCount, options_.coordinator);
+
+  std::string node_binary = options_.node_binary.string();
+  if (node_binary.empty())
+    node_binary = (fs::read_symlink("/proc/self/exe").parent_path() / "lumistage-node").string();
+  if (!fs::exists(node_binary)) throw Error("pipeline: no node program at " + node_binary);
+  for (const std::string& name : names_) {
+    std::vector<std::string> args = {node_binary, "--node", name, "--studio", studio_->endpoint()};
+    if (options_.session.empty()) {
+      args.insert(args.end(), {"--rig", options_.rig.string(), "--address", options_.address});
+    } else {
+      args.insert(args.end(),
+                  {"--session", options_.session.string(), "--replay", options_.replay});
+    }
+    if (options_.plain) {
+      args.push_back("--plain");
+    } else {
+      args.insert(args.end(), {"--keys", keys_.string()});
+    }
+    std::vector<char*> argv;
+    for (std::string& s : args) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    const pid_t pid = fork();
+    if (pid < 0) throw Error("pipeline: cannot start the process of node " + name);
+    if (pid == 0) {
+      execv(node_binary.c_str(), argv.data());
+      _exit(127);
+    }
+    children_.push_back(pid);
+    running_.push_back(true);
+  }
+}
+
+LocalPipelineRun::~LocalPipelineRun() {
+  for (size_t n = 0; n < children_.size(); ++n) {
+    if (running_[n]) kill(children_[n], SIGTERM);
+  }
+  for (size_t n = 0; n < children_.size(); ++n) {
+    if (running_[n]) waitpid(children_[n], nullptr, 0);
+  }
+  std::error_code ec;
+  if (temporary_keys_) fs::remove_all(keys_, ec);
+}
+
+void LocalPipelineRun::runFor(std::chrono::milliseconds duration) {
+  studio_->runFor(duration);
+  for (size_t n = 0; n < children_.size(); ++n) {
+    int status = 0;
+    if (running_[n] && waitpid(children_[n], &status, WNOHANG) == children_[n]) {
+      running_[n] = false;
+      exits_.push_back(fmt::format("node {} exited ({})", names_[n],
+                                   WIFEXITED(status) ? fmt::format("status {}", WEXITSTATUS(status))
+                                                     : fmt::format("signal {}", WTERMSIG(status))));
+    }
+  }
+}
+
+std::vector<std::string> LocalPipelineRun::takeExits() {
+  return std::exchange(exits_, {});
+}
+
+bool LocalPipelineRun::anyNodeRunning() const {
+  for (bool r : running_) {
+    if (r) return true;
+  }
+  return false;
+}
+
+}  // namespace lumistage

@@ -1,0 +1,62 @@
+#pragma once
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/pipeline/studio_coordinator.h"
+
+namespace lumistage {
+
+struct LocalRunOptions {
+  // The nodes' cameras: a recorded session, or live Aravis cameras (rig + first address).
+  std::filesystem::path session;
+  std::filesystem::path rig;
+  std::string address;
+  std::string replay = "rate";        // session pace: rate or memory
+  int nodes = 0;                      // the rig's first N nodes; 0: all
+  bool plain = false;                 // no CURVE
+  std::filesystem::path keys;         // key store; empty: fresh keys in a temporary folder
+  std::filesystem::path node_binary;  // lumistage-node; empty: beside this executable
+  StudioCoordinatorOptions coordinator;
+};
+
+// The whole distributed pipeline on one machine: the studio's coordinator in this process and a
+// lumistage-node process per rig node, with keys. What `lumistage run` and the studio's pipeline
+// panel drive. Node processes that exit are reported (their own messages go to stderr); the rest
+// go on.
+class LocalPipelineRun {
+ public:
+  // Throws Error naming what is missing (session, rig, keys) or what cannot start.
+  explicit LocalPipelineRun(LocalRunOptions options);
+  ~LocalPipelineRun();  // stops the nodes, removes temporary keys
+  LocalPipelineRun(const LocalPipelineRun&) = delete;
+  LocalPipelineRun& operator=(const LocalPipelineRun&) = delete;
+
+  // Works for `duration` (or until the coordinator's max_frames), then looks after the nodes.
+  void runFor(std::chrono::milliseconds duration);
+  // "node node3 exited (status 1)" for each node that exited since the last call.
+  std::vector<std::string> takeExits();
+  bool anyNodeRunning() const;
+
+  StudioCoordinator& studio() { return *studio_; }
+  const Rig& rig() const { return rig_; }
+  const std::vector<std::string>& nodeNames() const { return names_; }
+
+ private:
+  LocalRunOptions options_;
+  Rig rig_;
+  std::vector<std::string> names_;
+  std::filesystem::path keys_;
+  bool temporary_keys_ = false;
+  std::unique_ptr<StudioCoordinator> studio_;
+  std::vector<pid_t> children_;
+  std::vector<bool> running_;
+  std::vector<std::string> exits_;
+};
+
+}  // namespace lumistage
