@@ -16,6 +16,7 @@
 
 #include "core/geometry/rig_file.h"
 #include "ui/camera_grid_panel.h"
+#include "ui/pipeline_panel.h"
 #include "ui/rig_panel.h"
 #include "ui/source_worker.h"
 #include "ui/stage_plan_view.h"
@@ -29,6 +30,8 @@ MainWindow::MainWindow(QWidget* parent)
       stage_plan_(new StagePlanView(this)),
       rig_panel_(new RigPanel(this)),
       rig_dock_(new QDockWidget(tr("Cameras"), this)),
+      pipeline_panel_(new PipelinePanel(this)),
+      pipeline_dock_(new QDockWidget(tr("Pipeline"), this)),
       status_(new QLabel(this)) {
   setWindowTitle(tr("Lumistage Studio"));
   qRegisterMetaType<std::shared_ptr<const lumistage::Rig>>();
@@ -40,6 +43,10 @@ MainWindow::MainWindow(QWidget* parent)
   rig_dock_->setObjectName("cameras_dock");
   rig_dock_->setWidget(rig_panel_);
   addDockWidget(Qt::BottomDockWidgetArea, rig_dock_);
+  pipeline_dock_->setObjectName("pipeline_dock");
+  pipeline_dock_->setWidget(pipeline_panel_);
+  addDockWidget(Qt::BottomDockWidgetArea, pipeline_dock_);
+  tabifyDockWidget(rig_dock_, pipeline_dock_);
   connect(rig_panel_, &RigPanel::cameraSelected, stage_plan_, &StagePlanView::setHighlightedCamera);
 
   QMenu* file = menuBar()->addMenu(tr("&File"));
@@ -50,6 +57,7 @@ MainWindow::MainWindow(QWidget* parent)
   quit->setShortcut(QKeySequence::Quit);
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(rig_dock_->toggleViewAction());
+  view->addAction(pipeline_dock_->toggleViewAction());
 
   statusBar()->addWidget(status_, 1);
   status_->setText(tr("No rig loaded"));
@@ -110,6 +118,11 @@ void MainWindow::startSource(const SourceSpec& spec) {
   source_thread_->start();
 }
 
+void MainWindow::showPipeline() {
+  pipeline_dock_->show();
+  pipeline_dock_->raise();
+}
+
 void MainWindow::stopSource() {
   if (!source_thread_) return;
   if (source_worker_) source_worker_->stop();  // the worker is alive until its thread finishes
@@ -132,6 +145,7 @@ void MainWindow::chooseRig() {
 
 void MainWindow::closeEvent(QCloseEvent* event) {
   stopSource();
+  pipeline_panel_->stop();
   QSettings settings("Lumistage", "Studio");
   settings.setValue("window/geometry", saveGeometry());
   settings.setValue("window/state", saveState());

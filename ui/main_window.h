@@ -14,6 +14,7 @@ class QThread;
 namespace lumistage {
 
 class CameraGridPanel;
+class PipelinePanel;
 class RigPanel;
 class SourceWorker;
 class StagePlanView;
@@ -41,6 +42,8 @@ class MainWindow : public QMainWindow {
   RigPanel* rigPanel() const { return rig_panel_; }
   StagePlanView* stagePlan() const { return stage_plan_; }
   CameraGridPanel* cameraGrid() const { return camera_grid_; }
+  PipelinePanel* pipeline() const { return pipeline_panel_; }
+  void showPipeline();  // brings the pipeline panel to the front
 
  signals:
   void sourceFailed(QString error);
@@ -61,6 +64,8 @@ class MainWindow : public QMainWindow {
   SourceWorker* source_worker_ = nullptr;
   RigPanel* rig_panel_;
   QDockWidget* rig_dock_;
+  PipelinePanel* pipeline_panel_;
+  QDockWidget* pipeline_dock_;
   QLabel* status_;
 };
 

@@ -11,6 +11,7 @@
 #include "core/base/resource_path.h"
 #include "ui/camera_grid_panel.h"
 #include "ui/main_window.h"
+#include "ui/pipeline_panel.h"
 #include "ui/source_worker.h"
 
 namespace {
@@ -58,8 +59,13 @@ int main(int argc, char** argv) {
       "screenshot",
       "Save a screenshot of the main window to <png> once every camera shows a picture, then quit.",
       "png");
+  QCommandLineOption pipeline_option(
+      "pipeline",
+      "Also run the distributed pipeline on a recorded session: a node process per rig node.",
+      "session");
   parser.addOption(rig_option);
   parser.addOption(source_option);
+  parser.addOption(pipeline_option);
   parser.addOption(screenshot_option);
   parser.process(app);
 
@@ -89,6 +95,13 @@ int main(int argc, char** argv) {
     }
     spec.rig = parser.value(rig_option);
     window.startSource(spec);
+  }
+  if (parser.isSet(pipeline_option)) {
+    lumistage::LocalRunOptions options;
+    options.session = parser.value(pipeline_option).toStdString();
+    options.replay = "memory";
+    window.pipeline()->start(options);
+    window.showPipeline();
   }
   if (parser.isSet(screenshot_option)) {
     // Once every camera has shown pictures and counters for a few seconds (or after a minute; at

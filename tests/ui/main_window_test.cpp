@@ -10,6 +10,7 @@
 #include "core/capture/session_writer.h"
 #include "core/geometry/ring_rig.h"
 #include "ui/camera_grid_panel.h"
+#include "ui/pipeline_panel.h"
 #include "ui/rig_panel.h"
 #include "ui/source_worker.h"
 #include "ui/stage_plan_view.h"
@@ -124,6 +125,39 @@ class MainWindowTest : public QObject {
     window.stopSource();
     QTRY_COMPARE_WITH_TIMEOUT(grid->state(1), QString("late"), 1500);
     QTRY_COMPARE_WITH_TIMEOUT(grid->state(1), QString("lost"), 3000);
+  }
+
+  void pipelinePanelRunsNodesAndShowsTheirHealth() {
+    QTemporaryDir dir;
+    lumistage::RingRigSpec spec;
+    spec.cameras = 4;
+    spec.cameras_per_node = 2;
+    spec.width = 64;
+    spec.height = 48;
+    const lumistage::Rig rig = lumistage::makeRingRig(spec);
+    {
+      lumistage::SessionWriter writer(dir.filePath("session").toStdString(), rig,
+                                      lumistage::PixelFormat::kBayerRggb8, 20.0, "test");
+      lumistage::Image image;
+      image.resize(lumistage::PixelFormat::kBayerRggb8, 64, 48);
+      for (int f = 0; f < 4; ++f)
+        writer.writeFrame(f, f * 50000000LL,
+                          {image.view(), image.view(), image.view(), image.view()});
+    }
+    MainWindow window;
+    lumistage::LocalRunOptions options;
+    options.session = dir.filePath("session").toStdString();
+    options.node_binary = LUMISTAGE_NODE;
+    window.pipeline()->start(options);
+    QVERIFY(window.pipeline()->running());
+    QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames >= 10, 20000);
+    const lumistage::RunReport report = window.pipeline()->lastReport();
+    QCOMPARE(static_cast<int>(report.nodes.size()), 2);
+    for (const auto& node : report.nodes) QVERIFY2(!node.lost, node.name.c_str());
+    QCOMPARE(window.pipeline()->table()->rowCount(), 4);  // a row per camera
+    QCOMPARE(window.pipeline()->table()->item(0, 1)->text(), QString("streaming"));
+    window.pipeline()->stop();
+    QVERIFY(!window.pipeline()->running());
   }
 
   void unknownSourceIsRefusedWithTheChoices() {
