@@ -3,6 +3,7 @@
 #include <flatbuffers/flatbuffers.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <type_traits>
 
@@ -83,6 +84,15 @@ struct BodyEncoder {
             fb::CreatePartialImage(b, static_cast<uint16_t>(m.view), static_cast<uint16_t>(m.width),
                                    static_cast<uint16_t>(m.height),
                                    static_cast<fb::ImageEncoding>(m.encoding), data)
+                .Union()};
+  }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const ViewData& m) const {
+    const auto rotation = b.CreateVector(m.rotation);
+    const auto translation = b.CreateVector(m.translation);
+    return {fb::Body::View,
+            fb::CreateView(b, static_cast<uint16_t>(m.view), static_cast<uint16_t>(m.width),
+                           static_cast<uint16_t>(m.height), m.fx, m.fy, m.cx, m.cy, rotation,
+                           translation)
                 .Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const FrameTimestampsData& m) const {
@@ -277,6 +287,31 @@ Check decodeVertexStatistics(const fb::VertexStatistics& in, const MessageLimits
   return {};
 }
 
+Check decodeView(const fb::View& in, const MessageLimits& limits, ViewData& out) {
+  if (sizeOf(in.rotation()) != 9 || sizeOf(in.translation()) != 3) {
+    return "view: expected a rotation of 9 numbers and a translation of 3, got " +
+           num(sizeOf(in.rotation())) + " and " + num(sizeOf(in.translation()));
+  }
+  const size_t pixels = size_t(in.width()) * in.height();
+  if (pixels == 0 || pixels > size_t(limits.max_image_pixels)) {
+    return "view: " + num(in.width()) + "x" + num(in.height()) + " pixels, expected 1 to " +
+           num(limits.max_image_pixels);
+  }
+  out.rotation = copyVector(in.rotation());
+  out.translation = copyVector(in.translation());
+  bool finite = std::isfinite(in.fx()) && std::isfinite(in.fy()) && std::isfinite(in.cx()) &&
+                std::isfinite(in.cy());
+  for (float v : out.rotation) finite = finite && std::isfinite(v);
+  for (float v : out.translation) finite = finite && std::isfinite(v);
+  if (!finite || !(in.fx() > 0) || !(in.fy() > 0))
+    return "view: expected finite numbers and positive focal lengths";
+  out.view = in.view();
+  out.width = in.width();
+  out.height = in.height();
+  out.fx = in.fx(), out.fy = in.fy(), out.cx = in.cx(), out.cy = in.cy();
+  return {};
+}
+
 Check decodeOffsets(const fb::Offsets& in, const MessageLimits& limits, OffsetsData& out) {
   const size_t vertices = sizeOf(in.offsets());
   if (vertices > limits.max_vertices) {
@@ -443,6 +478,10 @@ DecodeResult decodeMessage(const uint8_t* data, size_t size, const MessageLimits
                                                                "frame timestamps", limits,
                                                                decodeFrameTimestamps, message.body);
       break;
+    case fb::Body::View:
+      c = decodeBody<fb::View, ViewData>(envelope->body_as_View(), "view", limits, decodeView,
+                                         message.body);
+      break;
     case fb::Body::NONE:
       c = "message without a body";
       break;
@@ -503,7 +542,7 @@ std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_co
 const char* messageTypeName(const MessageBody& body) {
   static constexpr const char* kNames[] = {"hello",         "heartbeat",         "silhouettes",
                                            "pose",          "vertex statistics", "offsets",
-                                           "partial image", "frame timestamps"};
+                                           "partial image", "frame timestamps",  "view"};
   static_assert(std::size(kNames) == std::variant_size_v<MessageBody>);
   return kNames[body.index()];
 }

@@ -107,9 +107,19 @@ struct FrameTimestampsData {
   bool operator==(const FrameTimestampsData&) const = default;
 };
 
+// A virtual camera for the nodes' partial renders: pinhole, x_cam = R x_world + t, R row-major.
+struct ViewData {
+  int view = 0;
+  int width = 0, height = 0;
+  float fx = 0, fy = 0, cx = 0, cy = 0;
+  std::vector<float> rotation;     // 9
+  std::vector<float> translation;  // 3
+  bool operator==(const ViewData&) const = default;
+};
+
 using MessageBody =
     std::variant<HelloData, HeartbeatData, SilhouettesData, PoseData, VertexStatisticsData,
-                 OffsetsData, PartialImageData, FrameTimestampsData>;
+                 OffsetsData, PartialImageData, FrameTimestampsData, ViewData>;
 
 struct Message {
   uint16_t version = kProtocolVersion;

@@ -29,6 +29,8 @@ void writeSeeds(const std::string& dir) {
   stats.inside.assign(6, 1);
   bodies.push_back(stats);
   bodies.push_back(OffsetsData{21, {0, 5, 20}});
+  bodies.push_back(
+      ViewData{0, 320, 240, 300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 3}});
   const std::vector<uint8_t> rgba(4 * 3 * 4, 9);
   bodies.push_back(PartialImageData{0, 4, 3, ImageEncoding::kRawRgba, rgba});
   bodies.push_back(PartialImageData{0, 4, 3, ImageEncoding::kRleRgba, encodeRleRgba(rgba)});

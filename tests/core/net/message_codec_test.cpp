@@ -39,6 +39,8 @@ std::vector<Message> oneOfEach() {
   stats.seen.assign(15, 3);
   stats.inside.assign(15, 2);
   OffsetsData offsets{21, {0, 10, 20, 5, 7}};
+  ViewData view{
+      1, 320, 240, 300.5f, 301, 159.5f, 119.5f, {1, 0, 0, 0, 0, -1, 0, 1, 0}, {0.1f, 1.2f, 4}};
   std::vector<uint8_t> rgba(6 * 4 * 4, 0);
   rgba[0] = 255;
   PartialImageData raw{1, 6, 4, ImageEncoding::kRawRgba, rgba};
@@ -46,7 +48,7 @@ std::vector<Message> oneOfEach() {
   FrameTimestampsData stamps{{{"capture", 100}, {"silhouettes", 250}, {"sent", 300}}};
   std::vector<Message> all;
   for (MessageBody body : std::vector<MessageBody>{hello, heartbeat, silhouettes, pose, stats,
-                                                   offsets, raw, rle, stamps}) {
+                                                   offsets, raw, rle, stamps, view}) {
     all.push_back(envelope(std::move(body)));
   }
   return all;
@@ -201,6 +203,27 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
 
   HelloData nameless{"", {}, kProtocolVersion, {}};
   EXPECT_EQ(decodeError(envelope(nameless)), "hello: the node name is empty");
+}
+
+}  // namespace
+}  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+TEST(MessageCodec, MalformedViewsAreRefusedWithTheirReason) {
+  Message message;
+  message.sender = "studio";
+  message.body = ViewData{0, 320, 240, 300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0}, {0, 0, 3}};
+  std::vector<uint8_t> bytes = encodeMessage(message);
+  DecodeResult result = decodeMessage(bytes.data(), bytes.size());
+  EXPECT_FALSE(result.ok());
+  EXPECT_EQ(result.error,
+            "view: expected a rotation of 9 numbers and a translation of 3, got 8 and 3");
+  message.body = ViewData{0, 320, 240, -300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 3}};
+  bytes = encodeMessage(message);
+  result = decodeMessage(bytes.data(), bytes.size());
+  EXPECT_EQ(result.error, "view: expected finite numbers and positive focal lengths");
 }
 
 }  // namespace
