@@ -4,6 +4,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
@@ -54,7 +56,7 @@ std::string reportJson(const RunReport& r) {
 
 void addRunCommand(CLI::App& app) {
   struct Args {
-    std::string session, json, keys, replay = "rate", rig, address;
+    std::string session, json, keys, replay = "rate", rig, address, image;
     int nodes = 0;
     int64_t frames = 150;
     double seconds = 60;
@@ -79,6 +81,8 @@ void addRunCommand(CLI::App& app) {
                   "key store (lumistage keys init); default: fresh keys in a temporary folder");
   run->add_flag("--plain", a->plain, "no CURVE encryption and authentication");
   run->add_option("--json", a->json, "write the figures as JSON");
+  run->add_option("--image", a->image,
+                  "write the last blended view as PNG (the pipeline's output)");
   run->callback([a] {
     if (a->session.empty() == (a->rig.empty() || a->address.empty())) {
       throw CLI::ValidationError("--session",
@@ -130,6 +134,16 @@ void addRunCommand(CLI::App& app) {
       }
     }
     if (!a->json.empty()) writeFileAtomically(a->json, reportJson(r));
+    if (!a->image.empty()) {
+      const BlendedImage& image = studio.lastImage();
+      if (image.rgba.empty())
+        throw Error("no blended view to write: no frame had the nodes' partial images");
+      cv::Mat rgba(image.height, image.width, CV_8UC4, const_cast<uint8_t*>(image.rgba.data())),
+          bgra;
+      cv::cvtColor(rgba, bgra, cv::COLOR_RGBA2BGRA);
+      if (!cv::imwrite(a->image, bgra)) throw Error(a->image + ": cannot write the image");
+      fmt::print("wrote {} (frame {})\n", a->image, image.frame_id);
+    }
   });
 }
 

@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstring>
 #include <thread>
 
 #include "core/base/error.h"
 #include "core/pipeline/pipeline.h"
+#include "core/render/lumigraph_weights.h"
 
 namespace lumistage {
 
@@ -107,6 +109,76 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   return reply;
 }
 
+Message CameraNode::partialImageFor(const Set& set, int64_t frame_id, const ViewData& view) {
+  const int w = view.width, h = view.height;
+  Eigen::Matrix3f R;
+  for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = view.rotation[i];
+  const Eigen::Vector3f t(view.translation[0], view.translation[1], view.translation[2]);
+  const Eigen::Vector3d desired = (-R.transpose() * t).cast<double>();
+  // Weights over every camera of the rig (the nodes agree on them), applied to our own.
+  std::vector<Eigen::Vector3d> centres;
+  for (const Camera& c : rig_.cameras()) centres.push_back(c.centre());
+  std::vector<char> own(rig_.cameraCount(), 0);
+  for (int c : cameras_) own[c] = 1;
+  LumigraphWeightParams params;
+  params.epsilon_rad = 0.05;  // bounds a weight by 20, so alpha fits a byte
+  const float alpha_scale = 255.0f / float(20 * params.k);
+  std::vector<float> depth(size_t(w) * h, 1e30f);
+  std::vector<uint8_t> rgba(size_t(w) * h * 4, 0);
+  std::vector<double> weights;
+  std::unique_ptr<bool[]> visible(new bool[rig_.cameraCount()]);
+  const int n = static_cast<int>(positions_.cols());
+  for (int v = 0; v < n; ++v) {
+    const Eigen::Vector3f p = positions_.col(v), nrm = normals_.col(v);
+    const Eigen::Vector3f pc = R * p + t;
+    if (pc.z() <= 0.05f) continue;
+    const int x = static_cast<int>(view.fx * pc.x() / pc.z() + view.cx + 0.5f);
+    const int y = static_cast<int>(view.fy * pc.y() / pc.z() + view.cy + 0.5f);
+    if (x < 1 || y < 1 || x >= w - 1 || y >= h - 1) continue;
+    // Which cameras see the vertex on their image (occlusion: with the depth maps of refinement).
+    for (int c = 0; c < rig_.cameraCount(); ++c) {
+      const std::optional<Eigen::Vector2d> px = rig_.camera(c).project(p.cast<double>());
+      visible[c] = px && rig_.camera(c).inImage(*px);
+    }
+    lumigraphWeights(p.cast<double>(), nrm.cast<double>(), desired, centres,
+                     std::span<const bool>(visible.get(), rig_.cameraCount()), params, weights);
+    double sum = 0, colour[3] = {0, 0, 0};
+    for (size_t k = 0; k < cameras_.size(); ++k) {
+      const int c = cameras_[k];
+      if (weights[c] <= 0) continue;
+      const Eigen::Vector2d px = *rig_.camera(c).project(p.cast<double>());
+      const Rgb rgb = colourAt(set.frames[k].image.view(), static_cast<int>(px.x() + 0.5),
+                               static_cast<int>(px.y() + 0.5));
+      colour[0] += weights[c] * rgb.r, colour[1] += weights[c] * rgb.g,
+          colour[2] += weights[c] * rgb.b;
+      sum += weights[c];
+    }
+    if (sum <= 0) continue;
+    const uint8_t out[4] = {uint8_t(colour[0] / sum), uint8_t(colour[1] / sum),
+                            uint8_t(colour[2] / sum),
+                            uint8_t(std::clamp(float(sum) * alpha_scale, 1.0f, 255.0f))};
+    for (int dy = -1; dy <= 1; ++dy) {  // a 3x3 splat: the surface is sampled at its vertices
+      for (int dx = -1; dx <= 1; ++dx) {
+        const size_t i = size_t(y + dy) * w + (x + dx);
+        if (pc.z() >= depth[i]) continue;
+        depth[i] = pc.z();
+        std::memcpy(&rgba[4 * i], out, 4);
+      }
+    }
+  }
+  PartialImageData image;
+  image.view = view.view;
+  image.width = w;
+  image.height = h;
+  image.encoding = ImageEncoding::kRleRgba;
+  image.data = encodeRleRgba(rgba);
+  Message message;
+  message.frame_id = frame_id;
+  message.sent_ns = steadyNowNs();
+  message.body = std::move(image);
+  return message;
+}
+
 void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   // Frames arrive camera by camera; a set is complete when all own cameras are in.
   std::map<int64_t, std::shared_ptr<Set>> assembling;
@@ -157,7 +229,20 @@ void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {
   while (!stop) {
     std::optional<Message> pose = poses_.pop(std::chrono::milliseconds(20));
     if (!pose) continue;
-    if (std::optional<Message> reply = statisticsFor(*pose)) outbox_.push(std::move(*reply));
+    std::shared_ptr<const Set> set;
+    {
+      std::lock_guard lock(kept_mutex_);
+      if (const auto it = kept_.find(pose->frame_id); it != kept_.end()) set = it->second;
+    }
+    std::optional<Message> reply = statisticsFor(*pose);
+    if (!reply) continue;
+    outbox_.push(std::move(*reply));
+    std::optional<ViewData> view;
+    {
+      std::lock_guard lock(view_mutex_);
+      view = view_;
+    }
+    if (view && set) outbox_.push(partialImageFor(*set, pose->frame_id, *view));
   }
 }
 
@@ -185,6 +270,9 @@ void CameraNode::run(const std::atomic<bool>& stop) {
     if (std::optional<DecodeResult> received = endpoint_.receive(std::chrono::milliseconds(2))) {
       if (received->ok() && std::holds_alternative<PoseData>(received->message->body)) {
         poses_.push(std::move(*received->message));
+      } else if (received->ok() && std::holds_alternative<ViewData>(received->message->body)) {
+        std::lock_guard lock(view_mutex_);
+        view_ = std::get<ViewData>(received->message->body);
       }
     }
     const auto now = std::chrono::steady_clock::now();

@@ -59,6 +59,11 @@ class CameraNode {
   void statisticsLoop(const std::atomic<bool>& stop);
   Message silhouettesOf(const Set& set) const;
   std::optional<Message> statisticsFor(const Message& pose);
+  // The node's partial lumigraph image of the posed surface (just skinned by statisticsFor) for
+  // the desired view: per vertex the weighted mean colour of its own cameras and, as alpha, the
+  // sum of their weights (global Buehler weights, so the studio's normalisation is exact), splat
+  // with a depth test and run-length encoded.
+  Message partialImageFor(const Set& set, int64_t frame_id, const ViewData& view);
   bool send(Message message);
 
   Rig rig_;
@@ -73,6 +78,8 @@ class CameraNode {
   BoundedQueue<std::shared_ptr<const Set>> sets_{2};
   BoundedQueue<Message> poses_{4};
   BoundedQueue<Message> outbox_{32};
+  std::mutex view_mutex_;
+  std::optional<ViewData> view_;  // the latest desired view from the studio
   std::mutex kept_mutex_;
   std::map<int64_t, std::shared_ptr<const Set>> kept_;  // sets awaiting their pose
   std::atomic<bool> source_finished_{false};

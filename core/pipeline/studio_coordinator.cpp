@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <Eigen/Geometry>
+
 namespace lumistage {
 
 StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoint,
@@ -13,6 +15,24 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
       locator_(rig, options.silhouette_step),
       joints_(body_joint_count) {
   for (const RigNode& node : rig_.nodes()) nodes_[node.name].report.name = node.name;
+  // Default view: 320x240 from the front-left, 4.5 m out and 1.7 m up, looking at the stage
+  // centre 1 m above the floor (camera axes: x right, y down, z forward).
+  const Eigen::Vector3f centre(-3.2f, -3.2f, 1.7f), target(0, 0, 1.0f);
+  const Eigen::Vector3f z = (target - centre).normalized();
+  const Eigen::Vector3f x = z.cross(Eigen::Vector3f::UnitZ()).normalized();
+  const Eigen::Vector3f y = z.cross(x);
+  view_ = {0, 320, 240, 300, 300, 159.5f, 119.5f, {}, {}};
+  for (const Eigen::Vector3f& row : {x, y, z}) {
+    for (int k = 0; k < 3; ++k) view_.rotation.push_back(row[k]);
+  }
+  view_.translation = {-x.dot(centre), -y.dot(centre), -z.dot(centre)};
+}
+
+void StudioCoordinator::maybeFinish(int64_t frame_id, FrameState& frame) {
+  if (frame.statistics_nodes.size() >= frame.pose_nodes.size() &&
+      frame.image_nodes.size() >= frame.pose_nodes.size()) {
+    finishFrame(frame_id, frame);
+  }
 }
 
 std::string StudioCoordinator::nodeState(const std::string& node) const {
@@ -102,8 +122,31 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       frame.inside[v] += stats->inside[v];
     }
     frame.statistics_nodes.insert(node.report.name);
-    if (frame.statistics_nodes.size() >= frame.pose_nodes.size())
-      finishFrame(message.frame_id, frame);
+    maybeFinish(message.frame_id, frame);
+  } else if (const auto* image = std::get_if<PartialImageData>(&message.body)) {
+    const auto it = frames_.find(message.frame_id);
+    if (it == frames_.end() || it->second.pose_sent_ns == 0) return;
+    if (image->width != view_.width || image->height != view_.height ||
+        image->encoding != ImageEncoding::kRleRgba) {
+      return;  // for another view
+    }
+    FrameState& frame = it->second;
+    const size_t pixels = size_t(image->width) * image->height;
+    const std::vector<uint8_t> rgba = decodeRleRgba(image->data, pixels);
+    if (rgba.size() != pixels * 4) return;
+    if (frame.blend_alpha.empty()) {
+      frame.blend_rgb.assign(pixels * 3, 0.0f);
+      frame.blend_alpha.assign(pixels, 0.0f);
+    }
+    // The paper's blend: alpha is the node's sum of weights; colours add weighted by it.
+    for (size_t i = 0; i < pixels; ++i) {
+      const float a = rgba[4 * i + 3];
+      if (a == 0) continue;
+      for (int k = 0; k < 3; ++k) frame.blend_rgb[3 * i + k] += a * rgba[4 * i + k];
+      frame.blend_alpha[i] += a;
+    }
+    frame.image_nodes.insert(node.report.name);
+    maybeFinish(message.frame_id, frame);
   }
 }
 
@@ -120,6 +163,12 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   pose.root[2] = 0.0f;
   pose.angles.assign(size_t(3) * joints_, 0.0f);
   if (counting_) mocap_ms_.add((steadyNowNs() - start) / 1e6);
+  Message view_message;  // before the pose: the nodes render that frame for this view
+  view_message.sender = "studio";
+  view_message.frame_id = frame_id;
+  view_message.sent_ns = steadyNowNs();
+  view_message.body = view_;
+  const std::vector<uint8_t> view_bytes = encodeMessage(view_message);
   Message message;
   message.sender = "studio";
   message.frame_id = frame_id;
@@ -128,8 +177,10 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   const std::span<const uint8_t> bytes = encoder_.encode(message);
   for (auto& [name, node] : nodes_) {
     if (node.report.lost || node.peer.empty()) continue;
-    if (endpoint_.send(node.peer, bytes, std::chrono::milliseconds(5)))
+    if (endpoint_.send(node.peer, view_bytes, std::chrono::milliseconds(5)) &&
+        endpoint_.send(node.peer, bytes, std::chrono::milliseconds(5))) {
       frame.pose_nodes.insert(name);
+    }
   }
   frame.pose_sent_ns = steadyNowNs();
   if (frame.pose_nodes.empty()) finishFrame(frame_id, frame);
@@ -146,8 +197,24 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     ++seen_vertices;
     agreeing += frame.inside[v] == frame.seen[v];
   }
+  const int64_t combined = steadyNowNs();
+  if (!frame.blend_alpha.empty()) {
+    // Normalise the nodes' alphas per pixel and blend.
+    last_image_.frame_id = frame_id;
+    last_image_.width = view_.width;
+    last_image_.height = view_.height;
+    last_image_.rgba.assign(frame.blend_alpha.size() * 4, 0);
+    for (size_t i = 0; i < frame.blend_alpha.size(); ++i) {
+      const float a = frame.blend_alpha[i];
+      if (a <= 0) continue;
+      for (int k = 0; k < 3; ++k)
+        last_image_.rgba[4 * i + k] = uint8_t(frame.blend_rgb[3 * i + k] / a + 0.5f);
+      last_image_.rgba[4 * i + 3] = 255;  // normalised: opaque wherever a camera contributed
+    }
+  }
   if (counting_) {
-    combine_ms_.add((steadyNowNs() - start) / 1e6);
+    combine_ms_.add((combined - start) / 1e6);
+    blend_ms_.add((steadyNowNs() - combined) / 1e6);
     if (frame.pose_sent_ns > 0) statistics_wait_ms_.add((now - frame.pose_sent_ns) / 1e6);
     if (seen_vertices > 0) hull_agreement_sum_ += double(agreeing) / seen_vertices;
     latencies_ms_.add((now - frame.captured_ns) / 1e6);
@@ -222,8 +289,9 @@ RunReport StudioCoordinator::report() const {
     return s.values().empty() ? 0.0 : sum / s.values().size();
   };
   r.stage_ms["mocap"] = mean(mocap_ms_);
-  r.stage_ms["node_statistics"] = mean(statistics_wait_ms_);
+  r.stage_ms["nodes_statistics_and_render"] = mean(statistics_wait_ms_);
   r.stage_ms["combine"] = mean(combine_ms_);
+  r.stage_ms["blend"] = mean(blend_ms_);
   r.hull_agreement = frames_done_ > 0 ? hull_agreement_sum_ / frames_done_ : 0;
   double bytes = 0, raw = 0;
   int counted = 0;

@@ -42,6 +42,13 @@ struct NodeReport {
   int64_t bad_messages = 0;
 };
 
+// The pipeline's output for a frame: the nodes' partial images normalised and blended.
+struct BlendedImage {
+  int64_t frame_id = -1;
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgba;  // alpha 255 where a camera contributed, 0 elsewhere
+};
+
 // What `lumistage run` prints and writes as JSON.
 struct RunReport {
   double fps = 0;
@@ -76,6 +83,10 @@ class StudioCoordinator {
   void runFor(std::chrono::milliseconds duration);
   int64_t framesDone() const { return frames_done_; }
   RunReport report() const;
+  // The virtual camera the nodes render for (default: a view of the stage from the front-left).
+  void setView(const ViewData& view) { view_ = view; }
+  const ViewData& view() const { return view_; }
+  const BlendedImage& lastImage() const { return last_image_; }
   // "streaming", "lost" or "unknown" (never heard from).
   std::string nodeState(const std::string& node) const;
 
@@ -88,6 +99,8 @@ class StudioCoordinator {
     int64_t pose_sent_ns = 0;
     std::vector<float> sums, squares;
     std::vector<int> seen, inside;
+    std::set<std::string> image_nodes;
+    std::vector<float> blend_rgb, blend_alpha;  // sums of alpha x colour, and of alpha
   };
   struct NodeState {
     std::string peer;
@@ -99,6 +112,7 @@ class StudioCoordinator {
   void runMocap(int64_t frame_id, FrameState& frame);
   void finishFrame(int64_t frame_id, FrameState& frame);
   void checkDeadlines(int64_t now_ns);
+  void maybeFinish(int64_t frame_id, FrameState& frame);
 
   Rig rig_;
   StudioEndpoint endpoint_;
@@ -110,7 +124,9 @@ class StudioCoordinator {
   MessageEncoder encoder_;
   int64_t newest_done_ = -1;
   int64_t start_ns_ = 0, last_done_ns_ = 0;
-  RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_;
+  RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_;
+  ViewData view_;
+  BlendedImage last_image_;
   int64_t frames_done_ = 0, frames_dropped_ = 0;
   // Figures count once every node has spoken (or a few seconds after the first did): a start-up
   // with nodes still loading is not the pipeline's speed.

@@ -89,6 +89,12 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   }));
   RunReport report = studio.report();
   EXPECT_GT(report.hull_agreement, 0.0);
+  // The pipeline's output: the nodes' partial lumigraph images of the view, blended.
+  const BlendedImage& image = studio.lastImage();
+  ASSERT_EQ(image.width, studio.view().width);
+  size_t covered = 0;
+  for (size_t i = 3; i < image.rgba.size(); i += 4) covered += image.rgba[i] > 0;
+  EXPECT_GT(covered, 200u);
   int64_t missed = 0;
   for (const NodeReport& n : report.nodes) {
     missed += n.frames_missed;
