@@ -3,6 +3,7 @@
 #include <QFileDialog>
 #include <QHBoxLayout>
 #include <QHeaderView>
+#include <QPixmap>
 #include <QPushButton>
 #include <QTableWidget>
 #include <QThread>
@@ -24,7 +25,13 @@ void PipelineWorker::run() {
         emit message(QString::fromStdString(exit));
       if (std::chrono::steady_clock::now() - last > std::chrono::milliseconds(500)) {
         last = std::chrono::steady_clock::now();
-        emit report(pipeline.studio().report());
+        const BlendedImage& blended = pipeline.studio().lastImage();
+        QImage view;
+        if (!blended.rgba.empty()) {
+          view = QImage(blended.rgba.data(), blended.width, blended.height, QImage::Format_RGBA8888)
+                     .copy();
+        }
+        emit report(pipeline.studio().report(), view);
       }
     }
   } catch (const std::exception& e) {
@@ -39,6 +46,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
           tr("Not running. Start runs the distributed pipeline on a recorded session: a node "
              "process per rig node, the studio's modules here."),
           this)),
+      view_(new QLabel(this)),
       table_(new QTableWidget(this)),
       start_button_(new QPushButton(tr("Start on a session..."), this)),
       stop_button_(new QPushButton(tr("Stop"), this)) {
@@ -58,7 +66,14 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   auto* layout = new QVBoxLayout(this);
   layout->addWidget(summary_);
   layout->addLayout(buttons);
-  layout->addWidget(table_, 1);
+  auto* row = new QHBoxLayout;
+  row->addWidget(table_, 1);
+  row->addWidget(view_);
+  view_->setFixedSize(320, 240);
+  view_->setAlignment(Qt::AlignCenter);
+  view_->setStyleSheet("background: #202020; color: #aaa;");
+  view_->setText(tr("the blended view"));
+  layout->addLayout(row, 1);
   stop_button_->setEnabled(false);
   connect(start_button_, &QPushButton::clicked, this, &PipelinePanel::chooseSession);
   connect(stop_button_, &QPushButton::clicked, this, &PipelinePanel::stop);
@@ -105,8 +120,9 @@ void PipelinePanel::stop() {
   stop_button_->setEnabled(false);
 }
 
-void PipelinePanel::show(const RunReport& r) {
+void PipelinePanel::show(const RunReport& r, const QImage& view) {
   last_ = r;
+  if (!view.isNull()) view_->setPixmap(QPixmap::fromImage(view));
   summary_->setText(tr("<b>%1 fps</b> &middot; latency %2 ms (median), %3 ms (95%) &middot; %4 "
                        "frames, %5 dropped "
                        "&middot; %6 KB a frame per node against %7 KB raw &middot; %8 refused")

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <QImage>
 #include <QLabel>
 #include <QObject>
 #include <QString>
@@ -27,7 +28,7 @@ class PipelineWorker : public QObject {
   void run();
 
  signals:
-  void report(lumistage::RunReport report);
+  void report(lumistage::RunReport report, QImage view);
   void message(QString text);
   void finished();
 
@@ -53,10 +54,11 @@ class PipelinePanel : public QWidget {
   QTableWidget* table() const { return table_; }
 
  private:
-  void show(const RunReport& report);
+  void show(const RunReport& report, const QImage& view);
   void chooseSession();
 
   QLabel* summary_;
+  QLabel* view_;  // the pipeline's output: the blended view
   QTableWidget* table_;
   QPushButton* start_button_;
   QPushButton* stop_button_;
