@@ -32,16 +32,7 @@ Message CameraNode::silhouettesOf(const Set& set) const {
   for (size_t k = 0; k < cameras_.size(); ++k) {
     computeSilhouette(keyers_[k], set.frames[k].image.view(), cameras_[k], options_.silhouette_step,
                       s);
-    silhouettes.masks.push_back({s.camera, s.width, s.height, {}});
-    // The wire format packs rows without padding: bit i of the mask is pixel i.
-    std::vector<uint8_t>& bits = silhouettes.masks.back().bits;
-    bits.assign((size_t(s.width) * s.height + 7) / 8, 0);
-    for (int y = 0; y < s.height; ++y) {
-      for (int x = 0; x < s.width; ++x) {
-        const size_t i = size_t(y) * s.width + x;
-        if (s.at(x, y)) bits[i / 8] |= uint8_t(1u << (i % 8));
-      }
-    }
+    silhouettes.masks.push_back({s.camera, s.width, s.height, std::move(s.bits)});
   }
   Message message;
   message.frame_id = set.frame_id;
@@ -127,6 +118,7 @@ Message CameraNode::partialImageFor(const Set& set, int64_t frame_id, const View
   std::vector<uint8_t> rgba(size_t(w) * h * 4, 0);
   std::vector<double> weights;
   std::unique_ptr<bool[]> visible(new bool[rig_.cameraCount()]);
+  std::vector<std::optional<Eigen::Vector2d>> pixels(rig_.cameraCount());  // of the vertex
   const int n = static_cast<int>(positions_.cols());
   for (int v = 0; v < n; ++v) {
     const Eigen::Vector3f p = positions_.col(v), nrm = normals_.col(v);
@@ -137,8 +129,8 @@ Message CameraNode::partialImageFor(const Set& set, int64_t frame_id, const View
     if (x < 1 || y < 1 || x >= w - 1 || y >= h - 1) continue;
     // Which cameras see the vertex on their image (occlusion: with the depth maps of refinement).
     for (int c = 0; c < rig_.cameraCount(); ++c) {
-      const std::optional<Eigen::Vector2d> px = rig_.camera(c).project(p.cast<double>());
-      visible[c] = px && rig_.camera(c).inImage(*px);
+      pixels[c] = rig_.camera(c).project(p.cast<double>());
+      visible[c] = pixels[c] && rig_.camera(c).inImage(*pixels[c]);
     }
     lumigraphWeights(p.cast<double>(), nrm.cast<double>(), desired, centres,
                      std::span<const bool>(visible.get(), rig_.cameraCount()), params, weights);
@@ -146,7 +138,7 @@ Message CameraNode::partialImageFor(const Set& set, int64_t frame_id, const View
     for (size_t k = 0; k < cameras_.size(); ++k) {
       const int c = cameras_[k];
       if (weights[c] <= 0) continue;
-      const Eigen::Vector2d px = *rig_.camera(c).project(p.cast<double>());
+      const Eigen::Vector2d& px = *pixels[c];
       const Rgb rgb = colourAt(set.frames[k].image.view(), static_cast<int>(px.x() + 0.5),
                                static_cast<int>(px.y() + 0.5));
       colour[0] += weights[c] * rgb.r, colour[1] += weights[c] * rgb.g,

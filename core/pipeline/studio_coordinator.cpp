@@ -81,19 +81,18 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     frame.captured_ns = std::min(frame.captured_ns, message.sent_ns);
     for (const SilhouetteMaskData& mask : silhouettes->masks) {
       if (mask.camera < 0 || mask.camera >= rig_.cameraCount()) continue;
+      // The locator indexes cells by the camera's size: a mask of another size is not used.
+      const Camera& camera = rig_.camera(mask.camera);
+      if (mask.width != camera.width() / options_.silhouette_step ||
+          mask.height != camera.height() / options_.silhouette_step) {
+        continue;
+      }
       LowResSilhouette s;
       s.camera = mask.camera;
       s.step = options_.silhouette_step;
       s.width = mask.width;
       s.height = mask.height;
-      s.bits.assign(size_t(s.bytesPerRow()) * s.height, 0);
-      for (int y = 0; y < s.height; ++y) {
-        for (int x = 0; x < s.width; ++x) {
-          const size_t i = size_t(y) * s.width + x;
-          if ((mask.bits[i / 8] >> (i % 8)) & 1)
-            s.bits[size_t(y) * s.bytesPerRow() + x / 8] |= uint8_t(1u << (x % 8));
-        }
-      }
+      s.bits = mask.bits;  // the same packing on the wire and in memory
       frame.silhouettes.push_back(std::move(s));
     }
     frame.silhouette_nodes.insert(node.report.name);

@@ -39,6 +39,25 @@ class MainWindowTest : public QObject {
     return count;
   }
 
+  // A small Bayer session of a ring of 64x48 cameras; frame f is flat grey 40 f.
+  static void writeSession(const QString& folder, int cameras, int cameras_per_node, double fps,
+                           int frames) {
+    lumistage::RingRigSpec spec;
+    spec.cameras = cameras;
+    spec.cameras_per_node = cameras_per_node;
+    spec.width = 64;
+    spec.height = 48;
+    lumistage::SessionWriter writer(folder.toStdString(), lumistage::makeRingRig(spec),
+                                    lumistage::PixelFormat::kBayerRggb8, fps, "test");
+    lumistage::Image image;
+    image.resize(lumistage::PixelFormat::kBayerRggb8, 64, 48);
+    for (int f = 0; f < frames; ++f) {
+      std::fill(image.pixels.begin(), image.pixels.end(), uint8_t(40 * f));
+      writer.writeFrame(f, static_cast<int64_t>(f * 1e9 / fps),
+                        std::vector<lumistage::ImageView>(cameras, image.view()));
+    }
+  }
+
  private slots:
   void opensTheReferenceRig() {
     MainWindow window;
@@ -96,21 +115,7 @@ class MainWindowTest : public QObject {
   void liveSessionShowsEveryCameraAndNoticesWhenFramesStop() {
     // A small recorded session of two cameras, replayed as the studio's source.
     QTemporaryDir dir;
-    lumistage::RingRigSpec spec;
-    spec.cameras = 2;
-    spec.width = 64;
-    spec.height = 48;
-    const lumistage::Rig rig = lumistage::makeRingRig(spec);
-    {
-      lumistage::SessionWriter writer(dir.filePath("session").toStdString(), rig,
-                                      lumistage::PixelFormat::kBayerRggb8, 10.0, "test");
-      lumistage::Image image;
-      image.resize(lumistage::PixelFormat::kBayerRggb8, 64, 48);
-      for (int f = 0; f < 5; ++f) {
-        std::fill(image.pixels.begin(), image.pixels.end(), uint8_t(40 * f));
-        writer.writeFrame(f, f * 100000000LL, {image.view(), image.view()});
-      }
-    }
+    writeSession(dir.filePath("session"), 2, 2, 10.0, 5);
     MainWindow window;
     window.resize(900, 700);
     window.show();
@@ -129,21 +134,7 @@ class MainWindowTest : public QObject {
 
   void pipelinePanelRunsNodesAndShowsTheirHealth() {
     QTemporaryDir dir;
-    lumistage::RingRigSpec spec;
-    spec.cameras = 4;
-    spec.cameras_per_node = 2;
-    spec.width = 64;
-    spec.height = 48;
-    const lumistage::Rig rig = lumistage::makeRingRig(spec);
-    {
-      lumistage::SessionWriter writer(dir.filePath("session").toStdString(), rig,
-                                      lumistage::PixelFormat::kBayerRggb8, 20.0, "test");
-      lumistage::Image image;
-      image.resize(lumistage::PixelFormat::kBayerRggb8, 64, 48);
-      for (int f = 0; f < 4; ++f)
-        writer.writeFrame(f, f * 50000000LL,
-                          {image.view(), image.view(), image.view(), image.view()});
-    }
+    writeSession(dir.filePath("session"), 4, 2, 20.0, 4);
     MainWindow window;
     lumistage::LocalRunOptions options;
     options.session = dir.filePath("session").toStdString();
