@@ -3,40 +3,32 @@
 #include <gtest/gtest.h>
 
 #include "core/base/error.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
-
-std::string errorOf(auto&& call) {
-  try {
-    call();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
 
 TEST(YamlReader, NumbersMustBeWholeAndFinite) {
   const YamlReader in("test.yaml");
   const YAML::Node root = in.parseDocument("a: 1.5\nb: 12abc\nc: .inf\nd: [1]\ne: 3\n");
   EXPECT_DOUBLE_EQ(in.number(root["a"], "a"), 1.5);
   EXPECT_EQ(in.integer(root["e"], "e"), 3);
-  EXPECT_EQ(errorOf([&] { in.number(root["b"], "b"); }),
+  EXPECT_EQ(testing::errorOf([&] { in.number(root["b"], "b"); }),
             "test.yaml:2: b: expected a finite number, got '12abc'");
-  EXPECT_EQ(errorOf([&] { in.number(root["c"], "c"); }),
+  EXPECT_EQ(testing::errorOf([&] { in.number(root["c"], "c"); }),
             "test.yaml:3: c: expected a finite number, got '.inf'");
-  EXPECT_EQ(errorOf([&] { in.number(root["d"], "d"); }),
+  EXPECT_EQ(testing::errorOf([&] { in.number(root["d"], "d"); }),
             "test.yaml:4: d: expected a finite number, got a list");
-  EXPECT_EQ(errorOf([&] { in.integer(root["a"], "a"); }),
+  EXPECT_EQ(testing::errorOf([&] { in.integer(root["a"], "a"); }),
             "test.yaml:1: a: expected a whole number, got '1.5'");
 }
 
 TEST(YamlReader, MissingAndUnknownKeys) {
   const YamlReader in("test.yaml");
   const YAML::Node root = in.parseDocument("outer:\n  alpha: 1\n  betta: 2\n");
-  EXPECT_EQ(errorOf([&] { in.required(root["outer"], "outer", "gamma", "a number"); }),
+  EXPECT_EQ(testing::errorOf([&] { in.required(root["outer"], "outer", "gamma", "a number"); }),
             "test.yaml:2: outer.gamma: missing key 'gamma': expected a number");
-  EXPECT_EQ(errorOf([&] {
+  EXPECT_EQ(testing::errorOf([&] {
               in.checkKeys(root["outer"], "outer", {"alpha", "beta"});
             }),
             "test.yaml:3: outer.betta: unknown key 'betta'; expected one of: alpha, beta");
@@ -44,7 +36,7 @@ TEST(YamlReader, MissingAndUnknownKeys) {
 
 TEST(YamlReader, SyntaxErrorsCarryTheirLine) {
   const YamlReader in("test.yaml");
-  const std::string e = errorOf([&] { in.parseDocument("a: 1\nb: [1, 2\nc: 3\n"); });
+  const std::string e = testing::errorOf([&] { in.parseDocument("a: 1\nb: [1, 2\nc: 3\n"); });
   EXPECT_EQ(e.rfind("test.yaml:", 0), 0u) << e;
   EXPECT_NE(e.find("YAML syntax error"), std::string::npos) << e;
 }

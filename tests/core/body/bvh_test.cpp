@@ -11,7 +11,7 @@
 
 #include "core/base/error.h"
 #include "core/body/human_skeleton.h"
-#include "tests/test_folder.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -25,16 +25,6 @@ fs::path testFolder() {
 
 void writeText(const fs::path& path, const std::string& text) {
   std::ofstream(path) << text;
-}
-
-std::string messageOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no Error thrown";
-  return {};
 }
 
 // CMU-style names, Y up, centimetres, the actor facing +Z (so its right is -X). RHipJoint has no
@@ -209,7 +199,7 @@ TEST(Bvh, MalformedFilesNameFileLineAndWhatWasExpected) {
   const std::string good = kCmuStyle;
   auto load = [&](const std::string& text) {
     writeText(folder / "bad.bvh", text);
-    return messageOf([&] { loadBvh(folder / "bad.bvh", s); });
+    return testing::errorOf([&] { loadBvh(folder / "bad.bvh", s); });
   };
   auto contains = [](const std::string& m, const std::string& part) {
     return m.find(part) != std::string::npos;
@@ -253,7 +243,7 @@ TEST(Bvh, MalformedFilesNameFileLineAndWhatWasExpected) {
   // Not a BVH file, and no file at all.
   m = load("hello\n");
   EXPECT_TRUE(contains(m, "bad.bvh:1: expected 'HIERARCHY', found 'hello'")) << m;
-  m = messageOf([&] { loadBvh(folder / "missing.bvh", s); });
+  m = testing::errorOf([&] { loadBvh(folder / "missing.bvh", s); });
   EXPECT_TRUE(contains(m, "missing.bvh")) << m;
   fs::remove_all(folder);
 }

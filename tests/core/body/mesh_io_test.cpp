@@ -14,7 +14,7 @@
 
 #include "core/base/error.h"
 #include "core/body/human_skeleton.h"
-#include "tests/test_folder.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -24,16 +24,6 @@ constexpr double kPi = std::numbers::pi;
 
 fs::path testFolder() {
   return testing::testFolder("mesh_io");
-}
-
-std::string messageOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no Error thrown";
-  return {};
 }
 
 // A closed square tube around a 3-joint chain (z up, 2 m), rings of 4 vertices every 0.5 m; the
@@ -270,7 +260,7 @@ TEST(MeshIo, HumanMeshRoundTripsWithLimitsByName) {
 
 TEST(MeshIo, BadFilesGiveClearErrors) {
   const fs::path folder = testFolder();
-  std::string m = messageOf([&] { loadSkinnedMesh(folder / "missing.glb"); });
+  std::string m = testing::errorOf([&] { loadSkinnedMesh(folder / "missing.glb"); });
   EXPECT_NE(m.find("missing.glb"), std::string::npos) << m;
   EXPECT_NE(m.find("no such file"), std::string::npos) << m;
 
@@ -279,7 +269,7 @@ TEST(MeshIo, BadFilesGiveClearErrors) {
     std::mt19937 rng(3);
     for (int i = 0; i < 4096; ++i) out.put(static_cast<char>(rng() & 0xff));
   }
-  m = messageOf([&] { loadSkinnedMesh(folder / "garbage.glb"); });
+  m = testing::errorOf([&] { loadSkinnedMesh(folder / "garbage.glb"); });
   EXPECT_NE(m.find("garbage.glb"), std::string::npos) << m;
   EXPECT_NE(m.find("cannot read"), std::string::npos) << m;
 
@@ -287,7 +277,7 @@ TEST(MeshIo, BadFilesGiveClearErrors) {
     std::ofstream out(folder / "static.obj");
     out << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
   }
-  m = messageOf([&] { loadSkinnedMesh(folder / "static.obj"); });
+  m = testing::errorOf([&] { loadSkinnedMesh(folder / "static.obj"); });
   EXPECT_NE(m.find("static.obj"), std::string::npos) << m;
   EXPECT_NE(m.find("no skeleton"), std::string::npos) << m;
 
@@ -295,11 +285,11 @@ TEST(MeshIo, BadFilesGiveClearErrors) {
     std::ofstream out(folder / "points.obj");
     out << "v 0 0 0\nv 1 0 0\np 1 2\n";
   }
-  m = messageOf([&] { loadSkinnedMesh(folder / "points.obj"); });
+  m = testing::errorOf([&] { loadSkinnedMesh(folder / "points.obj"); });
   EXPECT_NE(m.find("points.obj"), std::string::npos) << m;
   EXPECT_NE(m.find("no mesh"), std::string::npos) << m;
 
-  m = messageOf([&] { saveSkinnedMeshGltf(makeChainMesh(), folder / "chain.fbx"); });
+  m = testing::errorOf([&] { saveSkinnedMeshGltf(makeChainMesh(), folder / "chain.fbx"); });
   EXPECT_NE(m.find("chain.fbx"), std::string::npos) << m;
   EXPECT_NE(m.find("expected .glb or .gltf"), std::string::npos) << m;
   fs::remove_all(folder);
@@ -308,12 +298,12 @@ TEST(MeshIo, BadFilesGiveClearErrors) {
 TEST(MeshIo, BadWeightsGiveClearErrors) {
   const fs::path folder = testFolder();
   writeRiggedTriangle(folder / "crowded.assbin", 6, true);
-  std::string m = messageOf([&] { loadSkinnedMesh(folder / "crowded.assbin"); });
+  std::string m = testing::errorOf([&] { loadSkinnedMesh(folder / "crowded.assbin"); });
   EXPECT_NE(m.find("crowded.assbin"), std::string::npos) << m;
   EXPECT_NE(m.find("1 vertices have more than 4 bone influences (up to 6)"), std::string::npos)
       << m;
   writeRiggedTriangle(folder / "unweighted.assbin", 2, false);
-  m = messageOf([&] { loadSkinnedMesh(folder / "unweighted.assbin"); });
+  m = testing::errorOf([&] { loadSkinnedMesh(folder / "unweighted.assbin"); });
   EXPECT_NE(m.find("1 of 3 vertices have no bone weights"), std::string::npos) << m;
   // Well-formed: the skeleton is the bones and their common ancestor, weights normalised.
   writeRiggedTriangle(folder / "good.assbin", 3, true);

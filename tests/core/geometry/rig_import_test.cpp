@@ -10,6 +10,7 @@
 
 #include "core/base/error.h"
 #include "tests/core/geometry/test_cameras.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -54,15 +55,6 @@ std::string radText(const Eigen::Matrix3d& K, const Distortion& d) {
   out << "\nkc1 = " << d.k1 << "\nkc2 = " << d.k2 << "\nkc3 = " << d.p1 << "\nkc4 = " << d.p2
       << "\n";
   return out.str();
-}
-
-std::string errorOf(auto&& call) {
-  try {
-    call();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
 }
 
 // Cameras of one size (Svoboda's output has one size for all).
@@ -151,15 +143,18 @@ TEST(SvobodaImport, BadFoldersAndFilesAreNamed) {
   options.width = 1024;
   options.height = 768;
   TempFolder empty;
-  EXPECT_NE(errorOf([&] { importSvobodaRig(empty.path(), options); }).find("no *.Pmat.cal files"),
+  EXPECT_NE(testing::errorOf([&] {
+              importSvobodaRig(empty.path(), options);
+            }).find("no *.Pmat.cal files"),
             std::string::npos);
-  EXPECT_NE(
-      errorOf([&] { importSvobodaRig(empty.path() / "missing", options); }).find("no such folder"),
-      std::string::npos);
+  EXPECT_NE(testing::errorOf([&] {
+              importSvobodaRig(empty.path() / "missing", options);
+            }).find("no such folder"),
+            std::string::npos);
 
   TempFolder short_p;
   short_p.write("camera1.Pmat.cal", "1 0 0 0\n0 1 0 0\n");
-  const std::string e = errorOf([&] { importSvobodaRig(short_p.path(), options); });
+  const std::string e = testing::errorOf([&] { importSvobodaRig(short_p.path(), options); });
   EXPECT_NE(
       e.find(
           "camera1.Pmat.cal: expected 12 numbers (a 3x4 projection matrix, row by row), found 8"),
@@ -168,27 +163,28 @@ TEST(SvobodaImport, BadFoldersAndFilesAreNamed) {
 
   TempFolder bad_number;
   bad_number.write("camera1.Pmat.cal", "1 0 0 0\n0 1 x0 0\n0 0 1 1\n");
-  EXPECT_NE(errorOf([&] {
+  EXPECT_NE(testing::errorOf([&] {
               importSvobodaRig(bad_number.path(), options);
             }).find("camera1.Pmat.cal:2: expected a number, got 'x0'"),
             std::string::npos);
 
   TempFolder singular;
   singular.write("camera1.Pmat.cal", "1 0 0 0\n2 0 0 0\n0 0 1 1\n");
-  EXPECT_NE(errorOf([&] { importSvobodaRig(singular.path(), options); }).find("singular"),
+  EXPECT_NE(testing::errorOf([&] { importSvobodaRig(singular.path(), options); }).find("singular"),
             std::string::npos);
 
   TempFolder bad_rad;
   bad_rad.write("camera1.Pmat.cal", "800 0 512 0\n0 800 384 0\n0 0 1 3\n");
   bad_rad.write("camera1.rad", "K11 = 800\nK12 = 0\n");
-  EXPECT_NE(errorOf([&] {
+  EXPECT_NE(testing::errorOf([&] {
               importSvobodaRig(bad_rad.path(), options);
             }).find("camera1.rad: missing key 'K13'"),
             std::string::npos);
 
   RigImportOptions no_size;
-  EXPECT_NE(errorOf([&] { importSvobodaRig(bad_rad.path(), no_size); }).find("no image size"),
-            std::string::npos);
+  EXPECT_NE(
+      testing::errorOf([&] { importSvobodaRig(bad_rad.path(), no_size); }).find("no image size"),
+      std::string::npos);
 }
 
 TEST(OpenCvImport, ReadsFileStorageCamerasWithRotationMatrixOrRodrigues) {
@@ -249,7 +245,7 @@ TEST(OpenCvImport, ReadsFileStorageCamerasWithRotationMatrixOrRodrigues) {
 TEST(OpenCvImport, MissingKeysAndUnsupportedModelsAreNamed) {
   TempFolder folder;
   folder.write("no_k.yaml", "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n");
-  const std::string e = errorOf([&] { importOpenCvRig(folder.path() / "no_k.yaml", {}); });
+  const std::string e = testing::errorOf([&] { importOpenCvRig(folder.path() / "no_k.yaml", {}); });
   EXPECT_NE(e.find("no_k.yaml: camera 0 ('cam01'): missing key 'camera_matrix'"), std::string::npos)
       << e;
 
@@ -259,14 +255,16 @@ TEST(OpenCvImport, MissingKeysAndUnsupportedModelsAreNamed) {
                "  data: [500, 0, 320, 0, 500, 240, 0, 0, 1]\n"
                "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 8\n  dt: d\n"
                "  data: [0.1, 0, 0, 0, 0, 0.3, 0, 0]\n");
-  const std::string r = errorOf([&] { importOpenCvRig(folder.path() / "rational.yaml", {}); });
+  const std::string r =
+      testing::errorOf([&] { importOpenCvRig(folder.path() / "rational.yaml", {}); });
   EXPECT_NE(r.find("coefficient 6 is 0.3; only k1 k2 p1 p2 k3 are supported"), std::string::npos)
       << r;
 
   folder.write("garbage.yaml", "%YAML:1.0\n---\ncamera_matrix: [1, 2\n");
-  EXPECT_NE(
-      errorOf([&] { importOpenCvRig(folder.path() / "garbage.yaml", {}); }).find("garbage.yaml"),
-      std::string::npos);
+  EXPECT_NE(testing::errorOf([&] {
+              importOpenCvRig(folder.path() / "garbage.yaml", {});
+            }).find("garbage.yaml"),
+            std::string::npos);
 }
 
 }  // namespace
