@@ -7,6 +7,7 @@
 
 #include "app/cli/body_commands.h"
 #include "app/cli/camera_commands.h"
+#include "app/cli/info_command.h"
 #include "app/cli/key_commands.h"
 #include "app/cli/rig_commands.h"
 #include "app/cli/run_command.h"
@@ -14,6 +15,8 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"Lumistage: live free-viewpoint video of people from a calibrated camera stage"};
+  app.set_version_flag("--version", LUMISTAGE_VERSION);
+  app.set_help_all_flag("--help-all", "Print this help with every subcommand's options, and exit");
   app.require_subcommand(1);
   lumistage::addRigCommands(app);
   lumistage::addBodyCommands(app);
@@ -21,6 +24,7 @@ int main(int argc, char** argv) {
   lumistage::addRunCommand(app);
   lumistage::addKeyCommands(app);
   lumistage::addSynthCommand(app);
+  lumistage::addInfoCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -28,6 +28,7 @@ void onSignal(int) {
 int main(int argc, char** argv) {
   CLI::App app{
       "Lumistage camera node: owns the cameras of one PC and does the node's part of every frame"};
+  app.set_version_flag("--version", LUMISTAGE_VERSION);
   std::string rig_path, node_name, session, replay = "rate", studio, keys, address,
                                             pixel_format = "bayer_rggb8";
   std::vector<std::string> devices;
