@@ -1,12 +1,17 @@
 #include "app/cli/run_command.h"
 
 #include <fmt/format.h>
+#include <sys/resource.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
+#include "app/cli/machine_info.h"
+#include "app/cli/run_plot.h"
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/pipeline/local_run.h"
@@ -17,7 +22,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string reportJson(const RunReport& r) {
+// What the machine spent on the run, in cores (1.0: one core busy all the time).
+struct CpuUse {
+  double studio_cores = 0, nodes_cores = 0;
+};
+
+double processCpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
+         (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) / 1e6;
+}
+
+std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string& machine,
+                       const ViewData& view) {
   std::string stages;
   for (const auto& [name, ms] : r.stage_ms)
     stages += fmt::format("{}\"{}\": {:.3f}", stages.empty() ? "" : ", ", name, ms);
@@ -45,18 +63,19 @@ std::string reportJson(const RunReport& r) {
       "\"stage_ms\": {{{}}},\n"
       "  \"node_bytes_per_frame\": {:.1f},\n  \"raw_bytes_per_frame_per_node\": {:.1f},\n  "
       "\"frames\": {},\n"
-      "  \"frames_dropped\": {},\n  \"hull_agreement\": {:.4f},\n  \"refusals\": {},\n  \"nodes\": "
-      "[{}\n  ]\n}}\n",
+      "  \"frames_dropped\": {},\n  \"hull_agreement\": {:.4f},\n  \"refusals\": {},\n"
+      "  \"view\": \"{}x{}\",\n  \"cpu_cores_studio\": {:.3f},\n  \"cpu_cores_nodes\": {:.3f},\n"
+      "  \"machine\": {},\n  \"nodes\": [{}\n  ]\n}}\n",
       r.fps, r.latency_ms_p50, r.latency_ms_p95, stages, r.node_bytes_per_frame,
       r.raw_bytes_per_frame_per_node, r.frames, r.frames_dropped, r.hull_agreement, r.refusals,
-      nodes);
+      view.width, view.height, cpu.studio_cores, cpu.nodes_cores, machine, nodes);
 }
 
 }  // namespace
 
 void addRunCommand(CLI::App& app) {
   struct Args {
-    std::string session, json, keys, replay = "rate", rig, address, image;
+    std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size;
     int nodes = 0;
     int64_t frames = 150;
     double seconds = 60;
@@ -81,6 +100,10 @@ void addRunCommand(CLI::App& app) {
                   "key store (lumistage keys init); default: fresh keys in a temporary folder");
   run->add_flag("--plain", a->plain, "no CURVE encryption and authentication");
   run->add_option("--json", a->json, "write the figures as JSON");
+  run->add_option("--plot", a->plot,
+                  "write a PNG plot of every frame's latency and the frame rate over time");
+  run->add_option("--view-size", a->view_size,
+                  "the virtual view's size, WxH (default 320x240), the same field of view");
   run->add_option("--image", a->image,
                   "write the last blended view as PNG (the pipeline's output)");
   run->callback([a] {
@@ -99,6 +122,27 @@ void addRunCommand(CLI::App& app) {
     options.coordinator.max_frames = a->frames;
     LocalPipelineRun pipeline(options);
     StudioCoordinator& studio = pipeline.studio();
+    if (!a->view_size.empty()) {
+      int width = 0, height = 0;
+      char x = 0;
+      std::istringstream in(a->view_size);
+      if (!(in >> width >> x >> height) || x != 'x' || width < 16 || height < 16 || width > 7680 ||
+          height > 4320)
+        throw CLI::ValidationError("--view-size",
+                                   "expected WxH, e.g. 640x480, got " + a->view_size);
+      ViewData view = studio.view();
+      const float scale = float(width) / view.width;
+      view.fx *= scale;
+      view.fy *= float(height) / view.height;
+      view.cx = view.cx * scale;
+      view.cy = view.cy * float(height) / view.height;
+      view.width = width;
+      view.height = height;
+      studio.setView(view);
+    }
+    const double cpu_start = processCpuSeconds();
+    const auto wall_start = std::chrono::steady_clock::now();
+    double nodes_cpu = 0;
     fmt::print("studio at {} ({}), starting {} nodes\n", studio.endpoint(),
                a->plain ? "plain" : "CURVE", pipeline.nodeNames().size());
     // Run in slices, watching the clock and the node processes: a node that exits (bad session,
@@ -107,11 +151,15 @@ void addRunCommand(CLI::App& app) {
     while (std::chrono::steady_clock::now() < end && pipeline.anyNodeRunning() &&
            (a->frames <= 0 || studio.framesDone() < a->frames)) {
       pipeline.runFor(std::chrono::milliseconds(100));
+      nodes_cpu = std::max(nodes_cpu, pipeline.nodeCpuSeconds());
       for (const std::string& exit : pipeline.takeExits()) {
         fmt::print(stderr, "lumistage run: {}; see its message above\n", exit);
       }
     }
     const RunReport r = studio.report();
+    const double wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    const CpuUse cpu{(processCpuSeconds() - cpu_start) / wall_s, nodes_cpu / wall_s};
     fmt::print(
         "{} frames in all ({} dropped), {:.1f} frames a second; latency {:.1f} ms (median), {:.1f} "
         "ms (95%)\n",
@@ -123,6 +171,8 @@ void addRunCommand(CLI::App& app) {
                    ? r.node_bytes_per_frame / r.raw_bytes_per_frame_per_node
                    : 0.0,
                r.refusals);
+    fmt::print("CPU: the studio {:.2f} cores, the nodes {:.2f} cores (over {:.1f} s)\n",
+               cpu.studio_cores, cpu.nodes_cores, wall_s);
     for (const NodeReport& n : r.nodes) {
       fmt::print(
           "  node {:<8} {:<9} {} messages, missed {} frames, lost {} times, {} bad messages\n",
@@ -133,7 +183,20 @@ void addRunCommand(CLI::App& app) {
                    c.frames, c.dropped, c.last_error.empty() ? "" : ", " + c.last_error);
       }
     }
-    if (!a->json.empty()) writeFileAtomically(a->json, reportJson(r));
+    if (!a->json.empty() || !a->plot.empty()) {
+      const MachineInfo machine = describeMachine();
+      if (!a->json.empty())
+        writeFileAtomically(a->json, reportJson(r, cpu, machineJson(machine), studio.view()));
+      if (!a->plot.empty()) {
+        const std::string source = a->session.empty() ? "Aravis cameras" : a->session;
+        writeRunPlot(r,
+                     fmt::format("{}, {} nodes, view {}x{}; {}, {} threads; OpenGL {}", source,
+                                 pipeline.nodeNames().size(), studio.view().width,
+                                 studio.view().height, machine.cpu, machine.cores, machine.opengl),
+                     a->plot);
+        fmt::print("wrote {}\n", a->plot);
+      }
+    }
     if (!a->image.empty()) {
       const BlendedImage& image = studio.lastImage();
       if (image.rgba.empty())

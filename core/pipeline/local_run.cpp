@@ -5,7 +5,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <fstream>
 #include <optional>
+#include <sstream>
 #include <utility>
 
 #include "core/base/error.h"
@@ -107,6 +109,30 @@ void LocalPipelineRun::runFor(std::chrono::milliseconds duration) {
 
 std::vector<std::string> LocalPipelineRun::takeExits() {
   return std::exchange(exits_, {});
+}
+
+double LocalPipelineRun::nodeCpuSeconds() const {
+  double seconds = 0;
+  const double ticks = double(sysconf(_SC_CLK_TCK));
+  for (size_t n = 0; n < children_.size(); ++n) {
+    if (!running_[n]) continue;
+    // /proc/PID/stat: "pid (comm) state ..." with utime and stime the 14th and 15th fields; comm
+    // may hold spaces, so count from its closing parenthesis.
+    std::ifstream stat("/proc/" + std::to_string(children_[n]) + "/stat");
+    std::string line;
+    if (!std::getline(stat, line)) continue;
+    const size_t close = line.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream fields(line.substr(close + 2));
+    std::string field;
+    unsigned long long utime = 0, stime = 0;
+    for (int i = 3; i <= 15 && fields >> field; ++i) {
+      if (i == 14) utime = std::stoull(field);
+      if (i == 15) stime = std::stoull(field);
+    }
+    seconds += (utime + stime) / ticks;
+  }
+  return seconds;
 }
 
 bool LocalPipelineRun::anyNodeRunning() const {

@@ -42,6 +42,8 @@ class LocalPipelineRun {
   // "node node3 exited (status 1)" for each node that exited since the last call.
   std::vector<std::string> takeExits();
   bool anyNodeRunning() const;
+  // CPU time (user + system, seconds) the running node processes have used so far.
+  double nodeCpuSeconds() const;
 
   StudioCoordinator& studio() { return *studio_; }
   const Rig& rig() const { return rig_; }

@@ -15,6 +15,7 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
       locator_(rig, options.silhouette_step),
       joints_(body_joint_count) {
   for (const RigNode& node : rig_.nodes()) nodes_[node.name].report.name = node.name;
+  timeline_.reserve(4096);
   // Default view: 320x240 from the front-left, 4.5 m out and 1.7 m up, looking at the stage
   // centre 1 m above the floor (camera axes: x right, y down, z forward).
   const Eigen::Vector3f centre(-3.2f, -3.2f, 1.7f), target(0, 0, 1.0f);
@@ -217,6 +218,8 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     if (frame.pose_sent_ns > 0) statistics_wait_ms_.add((now - frame.pose_sent_ns) / 1e6);
     if (seen_vertices > 0) hull_agreement_sum_ += double(agreeing) / seen_vertices;
     latencies_ms_.add((now - frame.captured_ns) / 1e6);
+    if (timeline_.size() < kTimelineFrames)
+      timeline_.emplace_back(now, float((now - frame.captured_ns) / 1e6));
     ++frames_done_;
     if (start_ns_ == 0) start_ns_ = now;
     last_done_ns_ = now;
@@ -282,6 +285,9 @@ RunReport StudioCoordinator::report() const {
   std::vector<double> latencies = latencies_ms_.values();
   r.latency_ms_p50 = quantile(latencies, 0.5);
   r.latency_ms_p95 = quantile(latencies, 0.95);
+  r.timeline.reserve(timeline_.size());
+  for (const auto& [done_ns, latency_ms] : timeline_)
+    r.timeline.push_back({(done_ns - start_ns_) / 1e9, latency_ms});
   auto mean = [](const RecentSamples& s) {
     double sum = 0;
     for (double v : s.values()) sum += v;

@@ -49,6 +49,12 @@ struct BlendedImage {
   std::vector<uint8_t> rgba;  // alpha 255 where a camera contributed, 0 elsewhere
 };
 
+// When a frame was done, from the first counted frame, and its latency (for plots).
+struct FrameTiming {
+  double done_s = 0;
+  double latency_ms = 0;
+};
+
 // What `lumistage run` prints and writes as JSON.
 struct RunReport {
   double fps = 0;
@@ -60,6 +66,7 @@ struct RunReport {
   double hull_agreement = 0;  // share of posed vertices seen inside the silhouettes
   std::vector<NodeReport> nodes;
   int64_t refusals = 0;
+  std::vector<FrameTiming> timeline;  // every counted frame, up to kTimelineFrames
 };
 
 // The studio's side of the distributed pipeline (DESIGN.md §1), one frame at a time per stage but
@@ -124,6 +131,8 @@ class StudioCoordinator {
   MessageEncoder encoder_;
   int64_t newest_done_ = -1;
   int64_t start_ns_ = 0, last_done_ns_ = 0;
+  static constexpr size_t kTimelineFrames = 1 << 16;
+  std::vector<std::pair<int64_t, float>> timeline_;  // done (steady ns), latency (ms)
   RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_;
   ViewData view_;
   BlendedImage last_image_;
