@@ -13,6 +13,7 @@
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/body/mesh_sequence_io.h"
 #include "core/geometry/rig_file.h"
 
 namespace lumistage {
@@ -38,25 +39,6 @@ size_t writeImageAtomically(const fs::path& path, const cv::Mat& image) {
       path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()),
       {.sync = false});
   return encoded.size();
-}
-
-void writePly(const fs::path& path, const TriangleMesh& mesh) {
-  std::string data = fmt::format(
-      "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float "
-      "y\n"
-      "property float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
-      mesh.vertexCount(), mesh.triangles.size());
-  const size_t header = data.size();
-  data.resize(header + size_t(mesh.vertexCount()) * 12 + mesh.triangles.size() * 13);
-  char* out = data.data() + header;
-  for (int v = 0; v < mesh.vertexCount(); ++v, out += 12)
-    std::memcpy(out, mesh.positions.col(v).data(), 12);
-  for (const Eigen::Vector3i& t : mesh.triangles) {
-    *out++ = 3;
-    std::memcpy(out, t.data(), 12);
-    out += 12;
-  }
-  writeFileAtomically(path, data);
 }
 
 }  // namespace
@@ -151,7 +133,8 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
   }
   if (truth) {
     if (truth->surface)
-      writePly(folder_ / "truth" / "surface" / fmt::format("{:06}.ply", frame_id), *truth->surface);
+      saveMeshPly(folder_ / "truth" / "surface" / fmt::format("{:06}.ply", frame_id),
+                  *truth->surface);
     joints_ << frame_id;
     for (const Eigen::Vector3d& j : truth->joints)
       joints_ << fmt::format(",{},{},{}", j.x(), j.y(), j.z());
