@@ -213,8 +213,34 @@ void CameraNode::silhouetteLoop(const std::atomic<bool>& stop) {
       kept_[(*set)->frame_id] = *set;
       while (static_cast<int>(kept_.size()) > options_.frames_kept) kept_.erase(kept_.begin());
     }
-    outbox_.push(silhouettesOf(**set));
+    Message silhouettes = silhouettesOf(**set);
+    {
+      std::lock_guard lock(monitor_mutex_);
+      monitor_set_ = *set;
+      monitor_silhouettes_ = std::get<SilhouettesData>(silhouettes.body).masks;
+    }
+    outbox_.push(std::move(silhouettes));
   }
+}
+
+CameraNode::MonitorState CameraNode::monitorState() {
+  MonitorState state;
+  {
+    std::lock_guard lock(monitor_mutex_);
+    if (monitor_set_) {
+      state.frame_id = monitor_set_->frame_id;
+      state.keep_alive = monitor_set_;
+      for (const CameraFrame& f : monitor_set_->frames) state.frames.push_back(&f);
+    }
+    state.silhouettes = monitor_silhouettes_;
+  }
+  {
+    std::lock_guard lock(source_mutex_);
+    for (int c : cameras_) state.stats.push_back(source_->stats(c));
+  }
+  state.sets_sent = sets_sent_;
+  state.bytes_sent = bytes_sent_;
+  return state;
 }
 
 void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {

@@ -47,6 +47,20 @@ class CameraNode {
   int64_t setsSent() const { return sets_sent_; }
   int64_t bytesSent() const { return bytes_sent_; }
 
+  // What a monitor window on the node's PC shows: the latest frame set, its low-resolution
+  // silhouettes (as sent) and the cameras' counters. Thread-safe; the frames are shared, not
+  // copied.
+  struct MonitorState {
+    int64_t frame_id = -1;
+    std::shared_ptr<const void> keep_alive;  // holds `frames`
+    std::vector<const CameraFrame*> frames;  // per own camera
+    std::vector<SilhouetteMaskData> silhouettes;
+    std::vector<CameraStats> stats;  // per own camera
+    int64_t sets_sent = 0, bytes_sent = 0;
+  };
+  MonitorState monitorState();
+  const std::vector<int>& cameras() const { return cameras_; }
+
  private:
   struct Set {
     int64_t frame_id = -1;
@@ -87,6 +101,9 @@ class CameraNode {
   std::vector<Eigen::Affine3f> transforms_;
   Eigen::Matrix3Xf positions_, normals_;
   std::atomic<int64_t> sets_sent_{0}, bytes_sent_{0};
+  std::mutex monitor_mutex_;
+  std::shared_ptr<const Set> monitor_set_;
+  std::vector<SilhouetteMaskData> monitor_silhouettes_;
 };
 
 }  // namespace lumistage

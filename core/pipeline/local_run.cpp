@@ -142,4 +142,24 @@ bool LocalPipelineRun::anyNodeRunning() const {
   return false;
 }
 
+bool LocalPipelineRun::nodeRunning(const std::string& name) const {
+  for (size_t n = 0; n < names_.size(); ++n) {
+    if (names_[n] == name) return running_[n];
+  }
+  return false;
+}
+
+bool LocalPipelineRun::killNode(const std::string& name) {
+  for (size_t n = 0; n < names_.size(); ++n) {
+    if (names_[n] != name || !running_[n]) continue;
+    kill(children_[n], SIGKILL);
+    int status = 0;
+    waitpid(children_[n], &status, 0);
+    running_[n] = false;
+    exits_.push_back(fmt::format("node {} was stopped (killed)", name));
+    return true;
+  }
+  return false;
+}
+
 }  // namespace lumistage

@@ -44,6 +44,11 @@ class LocalPipelineRun {
   bool anyNodeRunning() const;
   // CPU time (user + system, seconds) the running node processes have used so far.
   double nodeCpuSeconds() const;
+  // Whether the process of a node is still running (false for a name not run here).
+  bool nodeRunning(const std::string& name) const;
+  // Kills a node's process at once (SIGKILL), as pulling its plug would stop it: what a test or a
+  // technician uses to check that the studio notices. False when it is not running.
+  bool killNode(const std::string& name);
 
   StudioCoordinator& studio() { return *studio_; }
   const Rig& rig() const { return rig_; }

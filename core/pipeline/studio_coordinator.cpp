@@ -162,6 +162,8 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   pose.root[1] = float(where.found ? where.centroid.y() : 0.0);
   pose.root[2] = 0.0f;
   pose.angles.assign(size_t(3) * joints_, 0.0f);
+  last_pose_ = pose;
+  last_pose_frame_ = frame_id;
   if (counting_) mocap_ms_.add((steadyNowNs() - start) / 1e6);
   Message view_message;  // before the pose: the nodes render that frame for this view
   view_message.sender = "studio";
@@ -315,6 +317,12 @@ RunReport StudioCoordinator::report() const {
   r.node_bytes_per_frame = counted > 0 && frames_done_ > 0 ? bytes / counted / frames_done_ : 0;
   r.raw_bytes_per_frame_per_node = rig_.nodeCount() > 0 ? raw / rig_.nodeCount() : 0;
   r.refusals = endpoint_.refusalCount();
+  r.frames_in_flight = static_cast<int>(frames_.size());
+  const int64_t now = steadyNowNs();
+  for (NodeReport& n : r.nodes) {
+    const int64_t last = nodes_.at(n.name).last_ns;
+    n.silent_ms = last > 0 ? (now - last) / 1e6 : -1;
+  }
   for (NodeReport& n : r.nodes) {
     const auto bad = endpoint_.badMessages();
     if (const auto it = bad.find(n.name); it != bad.end()) n.bad_messages = it->second;

@@ -40,6 +40,7 @@ struct NodeReport {
   int64_t frames_missed = 0;  // frames it was left out of
   int64_t times_lost = 0;     // how often it was marked lost (and came back, or not)
   int64_t bad_messages = 0;
+  double silent_ms = -1;  // since its last message, when reported; < 0: never heard from
 };
 
 // The pipeline's output for a frame: the nodes' partial images normalised and blended.
@@ -67,6 +68,7 @@ struct RunReport {
   std::vector<NodeReport> nodes;
   int64_t refusals = 0;
   std::vector<FrameTiming> timeline;  // every counted frame, up to kTimelineFrames
+  int frames_in_flight = 0;  // frames begun and not yet done or given up
 };
 
 // The studio's side of the distributed pipeline (DESIGN.md §1), one frame at a time per stage but
@@ -94,6 +96,9 @@ class StudioCoordinator {
   void setView(const ViewData& view) { view_ = view; }
   const ViewData& view() const { return view_; }
   const BlendedImage& lastImage() const { return last_image_; }
+  // The body pose the motion capture module sent the nodes last (for overlays); its frame id.
+  const PoseData& lastPose() const { return last_pose_; }
+  int64_t lastPoseFrame() const { return last_pose_frame_; }
   // "streaming", "lost" or "unknown" (never heard from).
   std::string nodeState(const std::string& node) const;
 
@@ -136,6 +141,8 @@ class StudioCoordinator {
   RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_;
   ViewData view_;
   BlendedImage last_image_;
+  PoseData last_pose_;
+  int64_t last_pose_frame_ = -1;
   int64_t frames_done_ = 0, frames_dropped_ = 0;
   // Figures count once every node has spoken (or a few seconds after the first did): a start-up
   // with nodes still loading is not the pipeline's speed.
