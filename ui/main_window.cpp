@@ -15,61 +15,154 @@
 #include <exception>
 
 #include "core/geometry/rig_file.h"
+#include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
+#include "ui/clone_panel.h"
+#include "ui/demo_session.h"
+#include "ui/health_panel.h"
+#include "ui/overlay_panel.h"
 #include "ui/pipeline_panel.h"
 #include "ui/rig_panel.h"
 #include "ui/source_worker.h"
 #include "ui/stage_plan_view.h"
+#include "ui/viewport_panel.h"
 
 namespace lumistage {
+
+namespace {
+constexpr int kLayoutVersion = 2;  // of saveState: panels added since version 1
+}
 
 MainWindow::MainWindow(QWidget* parent)
     : QMainWindow(parent),
       tabs_(new QTabWidget(this)),
+      viewport_panel_(new ViewportPanel(&clones_, this)),
       camera_grid_(new CameraGridPanel(this)),
       stage_plan_(new StagePlanView(this)),
       rig_panel_(new RigPanel(this)),
-      rig_dock_(new QDockWidget(tr("Cameras"), this)),
       pipeline_panel_(new PipelinePanel(this)),
-      pipeline_dock_(new QDockWidget(tr("Pipeline"), this)),
+      health_panel_(new HealthPanel(this)),
+      overlay_panel_(new OverlayPanel(this)),
+      calibration_panel_(new CalibrationPanel(this)),
+      clone_panel_(new ClonePanel(&clones_, this)),
+      demo_session_(new DemoSession(this)),
       status_(new QLabel(this)) {
   setWindowTitle(tr("Lumistage Studio"));
+  setDockNestingEnabled(true);
   qRegisterMetaType<std::shared_ptr<const lumistage::Rig>>();
   qRegisterMetaType<QVector<lumistage::CameraStatus>>();
+  tabs_->addTab(viewport_panel_, tr("Viewport"));
   tabs_->addTab(camera_grid_, tr("Cameras"));
   tabs_->addTab(stage_plan_, tr("Stage"));
   setCentralWidget(tabs_);
 
-  rig_dock_->setObjectName("cameras_dock");
-  rig_dock_->setWidget(rig_panel_);
-  addDockWidget(Qt::BottomDockWidgetArea, rig_dock_);
-  pipeline_dock_->setObjectName("pipeline_dock");
-  pipeline_dock_->setWidget(pipeline_panel_);
-  addDockWidget(Qt::BottomDockWidgetArea, pipeline_dock_);
-  tabifyDockWidget(rig_dock_, pipeline_dock_);
+  health_dock_ =
+      addDock(tr("Camera health"), "health_dock", health_panel_, Qt::RightDockWidgetArea);
+  clone_dock_ = addDock(tr("Clones"), "clones_dock", clone_panel_, Qt::RightDockWidgetArea);
+  overlay_dock_ =
+      addDock(tr("Skeleton overlay"), "overlay_dock", overlay_panel_, Qt::RightDockWidgetArea);
+  calibration_dock_ = addDock(tr("Calibration check"), "calibration_dock", calibration_panel_,
+                              Qt::BottomDockWidgetArea);
+  pipeline_dock_ =
+      addDock(tr("Pipeline"), "pipeline_dock", pipeline_panel_, Qt::BottomDockWidgetArea);
+  rig_dock_ = addDock(tr("Cameras"), "cameras_dock", rig_panel_, Qt::BottomDockWidgetArea);
+  tabifyDockWidget(overlay_dock_, clone_dock_);
+  tabifyDockWidget(pipeline_dock_, calibration_dock_);
+  tabifyDockWidget(pipeline_dock_, rig_dock_);
+  pipeline_dock_->raise();
+  overlay_dock_->raise();
+  resizeDocks({health_dock_}, {560}, Qt::Horizontal);
+  resizeDocks({pipeline_dock_}, {260}, Qt::Vertical);
+
   connect(rig_panel_, &RigPanel::cameraSelected, stage_plan_, &StagePlanView::setHighlightedCamera);
+  connect(viewport_panel_, &ViewportPanel::viewChanged, pipeline_panel_, &PipelinePanel::setView);
+  connect(pipeline_panel_, &PipelinePanel::snapshot, viewport_panel_->viewport(),
+          &ViewportWidget::showSnapshot);
+  connect(pipeline_panel_, &PipelinePanel::snapshot, health_panel_, &HealthPanel::showSnapshot);
+  connect(pipeline_panel_, &PipelinePanel::snapshot, overlay_panel_, &OverlayPanel::showSnapshot);
+  connect(pipeline_panel_, &PipelinePanel::demoSessionWanted, this, &MainWindow::startDemo);
+  connect(viewport_panel_->viewport(), &ViewportWidget::clonesChanged, clone_panel_,
+          &ClonePanel::refresh);
+  connect(clone_panel_, &ClonePanel::clonesChanged, viewport_panel_->viewport(),
+          &ViewportWidget::refresh);
+  connect(demo_session_, &DemoSession::made, this, &MainWindow::startDemoOn);
+  connect(demo_session_, &DemoSession::failed, this, [this](const QString& error) {
+    status_->setText(tr("No demo session: %1").arg(error));
+    if (error != tr("cancelled")) {
+      QMessageBox::warning(this, tr("Cannot make the demo session"), error);
+    }
+    emit demoFailed(error);
+  });
 
   QMenu* file = menuBar()->addMenu(tr("&File"));
   QAction* open = file->addAction(tr("&Open rig..."), this, &MainWindow::chooseRig);
   open->setShortcut(QKeySequence::Open);
+  file->addAction(tr("Run the &demo (virtual studio)"), this, &MainWindow::startDemo);
   file->addSeparator();
   QAction* quit = file->addAction(tr("&Quit"), this, &QWidget::close);
   quit->setShortcut(QKeySequence::Quit);
   QMenu* view = menuBar()->addMenu(tr("&View"));
-  view->addAction(rig_dock_->toggleViewAction());
-  view->addAction(pipeline_dock_->toggleViewAction());
+  for (QDockWidget* dock :
+       {health_dock_, overlay_dock_, calibration_dock_, clone_dock_, pipeline_dock_, rig_dock_})
+    view->addAction(dock->toggleViewAction());
+  view->addSeparator();
+  view->addAction(tr("&Reset layout"), this, &MainWindow::resetLayout);
 
   statusBar()->addWidget(status_, 1);
   status_->setText(tr("No rig loaded"));
 
+  default_state_ = saveState(kLayoutVersion);
   QSettings settings("Lumistage", "Studio");
   restoreGeometry(settings.value("window/geometry").toByteArray());
-  restoreState(settings.value("window/state").toByteArray());
-  if (!settings.contains("window/geometry")) resize(1100, 820);
+  restoreState(settings.value("window/state").toByteArray(), kLayoutVersion);
+  if (!settings.contains("window/geometry")) resize(1500, 950);
 }
 
 MainWindow::~MainWindow() {
   stopSource();
+}
+
+QDockWidget* MainWindow::addDock(const QString& title, const QString& name, QWidget* panel,
+                                 Qt::DockWidgetArea area) {
+  auto* dock = new QDockWidget(title, this);
+  dock->setObjectName(name);
+  dock->setWidget(panel);
+  addDockWidget(area, dock);
+  return dock;
+}
+
+void MainWindow::resetLayout() {
+  restoreState(default_state_, kLayoutVersion);
+  for (QDockWidget* dock :
+       {health_dock_, overlay_dock_, calibration_dock_, clone_dock_, pipeline_dock_, rig_dock_})
+    dock->show();
+}
+
+QWidget* MainWindow::showPanel(const QString& name) {
+  const struct {
+    const char* name;
+    QDockWidget* dock;
+  } docks[] = {{"health", health_dock_},           {"overlay", overlay_dock_},
+               {"calibration", calibration_dock_}, {"clones", clone_dock_},
+               {"pipeline", pipeline_dock_},       {"rig", rig_dock_}};
+  for (const auto& d : docks) {
+    if (name == d.name) {
+      d.dock->show();
+      d.dock->raise();
+      return d.dock->widget();
+    }
+  }
+  const struct {
+    const char* name;
+    QWidget* tab;
+  } tabs[] = {{"viewport", viewport_panel_}, {"cameras", camera_grid_}, {"stage", stage_plan_}};
+  for (const auto& t : tabs) {
+    if (name == t.name) {
+      tabs_->setCurrentWidget(t.tab);
+      return t.tab;
+    }
+  }
+  return nullptr;
 }
 
 void MainWindow::showRig(std::unique_ptr<Rig> rig, const QString& origin) {
@@ -77,6 +170,10 @@ void MainWindow::showRig(std::unique_ptr<Rig> rig, const QString& origin) {
   stage_plan_->setRig(rig.get());
   rig_panel_->setRig(rig.get());
   camera_grid_->setRig(*rig);
+  viewport_panel_->setRig(*rig);
+  health_panel_->setRig(*rig);
+  overlay_panel_->setRig(*rig);
+  calibration_panel_->setRig(*rig);
   rig_ = std::move(rig);
   status_->setText(
       tr("%1: %2 cameras on %3 nodes").arg(origin).arg(rig_->cameraCount()).arg(rig_->nodeCount()));
@@ -92,6 +189,14 @@ QString MainWindow::openRig(const QString& path) {
   }
   rig_path_ = path;
   showRig(std::move(rig), tr("Rig %1").arg(QFileInfo(path).fileName()));
+  // A calibration report beside the rig gives the calibration check its reprojection errors.
+  const QString report = QFileInfo(path).absolutePath() + "/calibration_report.json";
+  ReprojectionErrors errors;
+  if (QFileInfo::exists(report)) {
+    if (const QString error = loadCalibrationReport(report, errors); !error.isEmpty())
+      status_->setText(tr("Calibration report ignored: %1").arg(error));
+  }
+  calibration_panel_->setReprojectionErrors(errors);
   return {};
 }
 
@@ -113,9 +218,37 @@ void MainWindow::startSource(const SourceSpec& spec) {
     emit sourceFailed(error);
   });
   connect(worker, &SourceWorker::frame, camera_grid_, &CameraGridPanel::showFrame);
+  connect(worker, &SourceWorker::frame, health_panel_, &HealthPanel::showFrame);
+  connect(worker, &SourceWorker::frame, overlay_panel_, &OverlayPanel::showFrame);
+  connect(worker, &SourceWorker::frame, calibration_panel_, &CalibrationPanel::showFrame);
   connect(worker, &SourceWorker::status, camera_grid_, &CameraGridPanel::showStatus);
+  connect(worker, &SourceWorker::status, health_panel_, &HealthPanel::showStatus);
   status_->setText(tr("Opening %1...").arg(spec.describe()));
   source_thread_->start();
+}
+
+void MainWindow::startDemo() {
+  if (DemoSession::exists()) {
+    startDemoOn(DemoSession::folder());
+    return;
+  }
+  status_->setText(tr("Filming the virtual studio for the demo (once)..."));
+  demo_session_->make(this);
+}
+
+void MainWindow::startDemoOn(const QString& session) {
+  pipeline_panel_->setDemoSession(session);
+  SourceSpec spec;
+  if (const QString error = SourceSpec::parse("session:" + session, spec); !error.isEmpty()) {
+    emit demoFailed(error);
+    return;
+  }
+  startSource(spec);
+  LocalRunOptions options;
+  options.session = session.toStdString();
+  options.replay = "memory";  // decoded up front, then looped at its frame rate
+  pipeline_panel_->setView(viewport_panel_->viewport()->viewData());
+  pipeline_panel_->start(options);
 }
 
 void MainWindow::showPipeline() {
@@ -146,9 +279,10 @@ void MainWindow::chooseRig() {
 void MainWindow::closeEvent(QCloseEvent* event) {
   stopSource();
   pipeline_panel_->stop();
+  demo_session_->cancel();
   QSettings settings("Lumistage", "Studio");
   settings.setValue("window/geometry", saveGeometry());
-  settings.setValue("window/state", saveState());
+  settings.setValue("window/state", saveState(kLayoutVersion));
   event->accept();
 }
 

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "core/geometry/rig.h"
+#include "core/render/clone_set.h"
 
 class QDockWidget;
 class QLabel;
@@ -13,15 +14,23 @@ class QThread;
 
 namespace lumistage {
 
+class CalibrationPanel;
 class CameraGridPanel;
+class ClonePanel;
+class DemoSession;
+class HealthPanel;
+class OverlayPanel;
 class PipelinePanel;
 class RigPanel;
 class SourceWorker;
 class StagePlanView;
+class ViewportPanel;
 struct SourceSpec;
 
-// The studio's main window: the live cameras and the stage plan in the centre, dockable panels
-// around them, the layout remembered between runs (QSettings "Lumistage/Studio").
+// The studio's main window: the free-viewpoint viewport, the live cameras and the stage plan in
+// the centre; dockable panels around them (camera health, skeleton overlay, calibration check,
+// clones, pipeline, camera list), the layout remembered between runs (QSettings
+// "Lumistage/Studio").
 class MainWindow : public QMainWindow {
   Q_OBJECT
 
@@ -38,15 +47,29 @@ class MainWindow : public QMainWindow {
   // rig replaces the loaded one. Errors arrive in sourceFailed and in the status bar.
   void startSource(const SourceSpec& spec);
   void stopSource();
+  // The demo: the virtual studio's demo session (made first if needed, with progress) replayed
+  // as the cameras' source and run through the distributed pipeline.
+  void startDemo();
 
   RigPanel* rigPanel() const { return rig_panel_; }
   StagePlanView* stagePlan() const { return stage_plan_; }
   CameraGridPanel* cameraGrid() const { return camera_grid_; }
   PipelinePanel* pipeline() const { return pipeline_panel_; }
+  ViewportPanel* viewport() const { return viewport_panel_; }
+  HealthPanel* health() const { return health_panel_; }
+  OverlayPanel* overlay() const { return overlay_panel_; }
+  CalibrationPanel* calibration() const { return calibration_panel_; }
+  ClonePanel* clonePanel() const { return clone_panel_; }
+  CloneSet& clones() { return clones_; }
   void showPipeline();  // brings the pipeline panel to the front
+  // Shows a panel by name ("viewport", "cameras", "stage", "health", "overlay", "calibration",
+  // "clones", "pipeline", "rig") and returns its widget (nullptr for an unknown name).
+  QWidget* showPanel(const QString& name);
+  void resetLayout();
 
  signals:
   void sourceFailed(QString error);
+  void demoFailed(QString error);
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -54,18 +77,29 @@ class MainWindow : public QMainWindow {
  private:
   void chooseRig();
   void showRig(std::unique_ptr<Rig> rig, const QString& origin);
+  QDockWidget* addDock(const QString& title, const QString& name, QWidget* panel,
+                       Qt::DockWidgetArea area);
+  void startDemoOn(const QString& session);
 
   std::unique_ptr<Rig> rig_;
   QString rig_path_;
+  CloneSet clones_;
   QTabWidget* tabs_;
+  ViewportPanel* viewport_panel_;
   CameraGridPanel* camera_grid_;
   StagePlanView* stage_plan_;
   QThread* source_thread_ = nullptr;
   SourceWorker* source_worker_ = nullptr;
   RigPanel* rig_panel_;
-  QDockWidget* rig_dock_;
   PipelinePanel* pipeline_panel_;
-  QDockWidget* pipeline_dock_;
+  HealthPanel* health_panel_;
+  OverlayPanel* overlay_panel_;
+  CalibrationPanel* calibration_panel_;
+  ClonePanel* clone_panel_;
+  DemoSession* demo_session_;
+  QDockWidget *rig_dock_, *pipeline_dock_, *health_dock_, *overlay_dock_, *calibration_dock_,
+      *clone_dock_;
+  QByteArray default_state_;
   QLabel* status_;
 };
 

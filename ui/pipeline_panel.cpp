@@ -1,8 +1,12 @@
 #include "ui/pipeline_panel.h"
 
+#include <QComboBox>
 #include <QFileDialog>
 #include <QHBoxLayout>
 #include <QHeaderView>
+#include <QInputDialog>
+#include <QMessageBox>
+#include <QMutexLocker>
 #include <QPixmap>
 #include <QPushButton>
 #include <QTableWidget>
@@ -10,7 +14,19 @@
 #include <QVBoxLayout>
 #include <exception>
 
+#include "core/body/human_model.h"
+
 namespace lumistage {
+
+void PipelineWorker::setView(const ViewData& view) {
+  QMutexLocker lock(&mutex_);
+  commands_.push_back([view](LocalPipelineRun& run) { run.studio().setView(view); });
+}
+
+void PipelineWorker::killNode(const QString& name) {
+  QMutexLocker lock(&mutex_);
+  commands_.push_back([name](LocalPipelineRun& run) { run.killNode(name.toStdString()); });
+}
 
 void PipelineWorker::run() {
   try {
@@ -18,21 +34,64 @@ void PipelineWorker::run() {
     emit message(tr("Pipeline running: %1 nodes, studio at %2")
                      .arg(pipeline.nodeNames().size())
                      .arg(QString::fromStdString(pipeline.studio().endpoint())));
-    auto last = std::chrono::steady_clock::now();
+    // The body the studio places, to draw over the views: the generic human (as the nodes use).
+    const SkinnedMesh human = loadGenericHuman();
+    std::vector<int> parents;
+    for (const Joint& j : human.skeleton.joints()) parents.push_back(j.parent);
+    std::vector<Eigen::Affine3f> transforms;
+    const auto start = std::chrono::steady_clock::now();
+    auto last = start;
+    int64_t posed_frame = -1;
+    std::vector<Eigen::Vector3d> joints;
+    std::shared_ptr<TriangleMesh> mesh;
     while (!stop_) {
-      pipeline.runFor(std::chrono::milliseconds(100));
+      {
+        std::vector<std::function<void(LocalPipelineRun&)>> commands;
+        {
+          QMutexLocker lock(&mutex_);
+          commands.swap(commands_);
+        }
+        for (auto& command : commands) command(pipeline);
+      }
+      pipeline.runFor(std::chrono::milliseconds(50));
       for (const std::string& exit : pipeline.takeExits())
         emit message(QString::fromStdString(exit));
-      if (std::chrono::steady_clock::now() - last > std::chrono::milliseconds(500)) {
-        last = std::chrono::steady_clock::now();
-        const BlendedImage& blended = pipeline.studio().lastImage();
-        QImage view;
-        if (!blended.rgba.empty()) {
-          view = QImage(blended.rgba.data(), blended.width, blended.height, QImage::Format_RGBA8888)
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last < std::chrono::milliseconds(200)) continue;
+      last = now;
+      PipelineSnapshot s;
+      s.report = pipeline.studio().report();
+      s.time_s = std::chrono::duration<double>(now - start).count();
+      const BlendedImage& blended = pipeline.studio().lastImage();
+      if (!blended.rgba.empty()) {
+        s.view = QImage(blended.rgba.data(), blended.width, blended.height, QImage::Format_RGBA8888)
                      .copy();
-        }
-        emit report(pipeline.studio().report(), view);
       }
+      for (const std::string& name : pipeline.nodeNames()) {
+        if (!pipeline.nodeRunning(name)) s.exited << QString::fromStdString(name);
+      }
+      const PoseData& pose_data = pipeline.studio().lastPose();
+      if (pipeline.studio().lastPoseFrame() != posed_frame &&
+          pose_data.angles.size() == size_t(3) * human.skeleton.jointCount()) {
+        posed_frame = pipeline.studio().lastPoseFrame();
+        Pose pose = Pose::rest(human.skeleton.jointCount());
+        pose.root_translation_m =
+            Eigen::Vector3d(pose_data.root[0], pose_data.root[1], pose_data.root[2]);
+        for (int j = 0; j < human.skeleton.jointCount(); ++j) {
+          pose.angles_rad[j] = Eigen::Vector3d(pose_data.angles[3 * j], pose_data.angles[3 * j + 1],
+                                               pose_data.angles[3 * j + 2]);
+        }
+        human.skeleton.jointPositions(pose, joints);
+        human.skeleton.skinningTransforms(pose, transforms);
+        mesh = std::make_shared<TriangleMesh>();
+        skinMesh(human, transforms, mesh->positions, mesh->normals);
+        mesh->triangles = human.rest.triangles;
+      }
+      s.pose_frame = posed_frame;
+      s.joints = joints;
+      s.parents = parents;
+      s.mesh = mesh;
+      emit snapshot(s);
     }
   } catch (const std::exception& e) {
     emit message(tr("Pipeline stopped: %1").arg(QString::fromStdString(e.what())));
@@ -43,15 +102,21 @@ void PipelineWorker::run() {
 PipelinePanel::PipelinePanel(QWidget* parent)
     : QWidget(parent),
       summary_(new QLabel(
-          tr("Not running. Start runs the distributed pipeline on a recorded session: a node "
-             "process per rig node, the studio's modules here."),
+          tr("Not running. Start runs the distributed pipeline: a node process per rig node, "
+             "the studio's modules here."),
           this)),
       view_(new QLabel(this)),
       table_(new QTableWidget(this)),
-      start_button_(new QPushButton(tr("Start on a session..."), this)),
+      stages_(new QTableWidget(this)),
+      source_(new QComboBox(this)),
+      start_button_(new QPushButton(tr("Start"), this)),
       stop_button_(new QPushButton(tr("Stop"), this)) {
   qRegisterMetaType<lumistage::RunReport>();
+  qRegisterMetaType<lumistage::PipelineSnapshot>();
   summary_->setWordWrap(true);
+  summary_->setObjectName("pipeline_summary");
+  source_->addItems(
+      {tr("Virtual studio (demo session)"), tr("Recorded session..."), tr("Aravis cameras...")});
   table_->setColumnCount(7);
   table_->setHorizontalHeaderLabels({tr("Node"), tr("State"), tr("Camera"), tr("fps"), tr("Frames"),
                                      tr("Dropped"), tr("Last error")});
@@ -59,7 +124,15 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
   table_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
   table_->horizontalHeader()->setStretchLastSection(true);
+  stages_->setColumnCount(2);
+  stages_->setHorizontalHeaderLabels({tr("Stage"), tr("ms (mean)")});
+  stages_->verticalHeader()->setVisible(false);
+  stages_->setEditTriggers(QAbstractItemView::NoEditTriggers);
+  stages_->horizontalHeader()->setStretchLastSection(true);
+  stages_->setMaximumWidth(260);
   auto* buttons = new QHBoxLayout;
+  buttons->addWidget(new QLabel(tr("Source:"), this));
+  buttons->addWidget(source_);
   buttons->addWidget(start_button_);
   buttons->addWidget(stop_button_);
   buttons->addStretch(1);
@@ -68,14 +141,15 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   layout->addLayout(buttons);
   auto* row = new QHBoxLayout;
   row->addWidget(table_, 1);
+  row->addWidget(stages_);
   row->addWidget(view_);
-  view_->setFixedSize(320, 240);
+  view_->setFixedSize(240, 180);
   view_->setAlignment(Qt::AlignCenter);
   view_->setStyleSheet("background: #202020; color: #aaa;");
   view_->setText(tr("the blended view"));
   layout->addLayout(row, 1);
   stop_button_->setEnabled(false);
-  connect(start_button_, &QPushButton::clicked, this, &PipelinePanel::chooseSession);
+  connect(start_button_, &QPushButton::clicked, this, &PipelinePanel::startChosen);
   connect(stop_button_, &QPushButton::clicked, this, &PipelinePanel::stop);
 }
 
@@ -83,12 +157,37 @@ PipelinePanel::~PipelinePanel() {
   stop();
 }
 
-void PipelinePanel::chooseSession() {
-  const QString folder = QFileDialog::getExistingDirectory(this, tr("Recorded session to run"));
-  if (folder.isEmpty()) return;
+void PipelinePanel::startChosen() {
   LocalRunOptions options;
-  options.session = folder.toStdString();
   options.replay = "memory";
+  switch (source_->currentIndex()) {
+    case 0:
+      if (demo_session_.isEmpty()) {
+        emit demoSessionWanted();  // the studio makes it, then starts
+        return;
+      }
+      options.session = demo_session_.toStdString();
+      break;
+    case 1: {
+      const QString folder = QFileDialog::getExistingDirectory(this, tr("Recorded session to run"));
+      if (folder.isEmpty()) return;
+      options.session = folder.toStdString();
+      break;
+    }
+    default: {
+      const QString rig = QFileDialog::getOpenFileName(this, tr("The cameras' rig file"), {},
+                                                       tr("Rig files (*.yaml *.yml)"));
+      if (rig.isEmpty()) return;
+      bool ok = false;
+      const QString address = QInputDialog::getText(
+          this, tr("Aravis cameras"), tr("First camera's address (camera i at address + i):"),
+          QLineEdit::Normal, "127.0.0.2", &ok);
+      if (!ok || address.isEmpty()) return;
+      options.rig = rig.toStdString();
+      options.address = address.toStdString();
+      break;
+    }
+  }
   start(options);
 }
 
@@ -97,15 +196,17 @@ void PipelinePanel::start(LocalRunOptions options) {
   thread_ = new QThread(this);
   worker_ = new PipelineWorker(std::move(options));
   worker_->moveToThread(thread_);
+  if (view_data_) worker_->setView(*view_data_);
   connect(thread_, &QThread::started, worker_, &PipelineWorker::run);
   connect(worker_, &PipelineWorker::finished, thread_, &QThread::quit);
   connect(thread_, &QThread::finished, worker_, &QObject::deleteLater);
-  connect(worker_, &PipelineWorker::report, this, &PipelinePanel::show);
+  connect(worker_, &PipelineWorker::snapshot, this, &PipelinePanel::show);
   connect(worker_, &PipelineWorker::message, summary_, &QLabel::setText);
   start_button_->setEnabled(false);
   stop_button_->setEnabled(true);
   summary_->setText(tr("Starting the nodes..."));
   thread_->start();
+  emit started();
 }
 
 void PipelinePanel::stop() {
@@ -120,11 +221,22 @@ void PipelinePanel::stop() {
   stop_button_->setEnabled(false);
 }
 
-void PipelinePanel::show(const RunReport& r, const QImage& view) {
-  last_ = r;
-  if (!view.isNull()) view_->setPixmap(QPixmap::fromImage(view));
+void PipelinePanel::setView(const ViewData& view) {
+  view_data_ = view;
+  if (worker_) worker_->setView(view);
+}
+
+void PipelinePanel::killNode(const QString& name) {
+  if (worker_) worker_->killNode(name);
+}
+
+void PipelinePanel::show(const PipelineSnapshot& s) {
+  last_ = s;
+  const RunReport& r = s.report;
+  if (!s.view.isNull())
+    view_->setPixmap(QPixmap::fromImage(s.view).scaled(view_->size(), Qt::KeepAspectRatio));
   summary_->setText(tr("<b>%1 fps</b> &middot; latency %2 ms (median), %3 ms (95%) &middot; %4 "
-                       "frames, %5 dropped "
+                       "frames, %5 dropped, %9 in flight "
                        "&middot; %6 KB a frame per node against %7 KB raw &middot; %8 refused")
                         .arg(r.fps, 0, 'f', 1)
                         .arg(r.latency_ms_p50, 0, 'f', 1)
@@ -133,20 +245,29 @@ void PipelinePanel::show(const RunReport& r, const QImage& view) {
                         .arg(r.frames_dropped)
                         .arg(r.node_bytes_per_frame / 1000, 0, 'f', 1)
                         .arg(r.raw_bytes_per_frame_per_node / 1000, 0, 'f', 0)
-                        .arg(r.refusals));
+                        .arg(r.refusals)
+                        .arg(r.frames_in_flight));
+  stages_->setRowCount(static_cast<int>(r.stage_ms.size()));
+  int stage_row = 0;
+  for (const auto& [stage, ms] : r.stage_ms) {
+    stages_->setItem(stage_row, 0, new QTableWidgetItem(QString::fromStdString(stage)));
+    stages_->setItem(stage_row, 1, new QTableWidgetItem(QString::number(ms, 'f', 2)));
+    ++stage_row;
+  }
   int rows = 0;
   for (const NodeReport& n : r.nodes) rows += std::max<int>(1, static_cast<int>(n.cameras.size()));
   table_->setRowCount(rows);
   int row = 0;
   for (const NodeReport& n : r.nodes) {
-    const QColor state_colour = n.lost ? QColor(0xe3, 0x33, 0x33) : QColor(0x2a, 0xa0, 0x2a);
+    const bool gone = n.lost || s.exited.contains(QString::fromStdString(n.name));
+    const QColor state_colour = gone ? QColor(0xe3, 0x33, 0x33) : QColor(0x2a, 0xa0, 0x2a);
     const int count = std::max<int>(1, static_cast<int>(n.cameras.size()));
     for (int k = 0; k < count; ++k, ++row) {
       auto set = [&](int column, const QString& text) {
         table_->setItem(row, column, new QTableWidgetItem(text));
       };
       set(0, k == 0 ? QString::fromStdString(n.name) : QString());
-      set(1, k == 0 ? (n.lost ? tr("lost") : tr("streaming")) : QString());
+      set(1, k == 0 ? (gone ? tr("lost") : tr("streaming")) : QString());
       table_->item(row, 1)->setForeground(state_colour);
       if (k < static_cast<int>(n.cameras.size())) {
         const CameraHealth& c = n.cameras[k];
@@ -158,6 +279,7 @@ void PipelinePanel::show(const RunReport& r, const QImage& view) {
       }
     }
   }
+  emit snapshot(s);
 }
 
 }  // namespace lumistage

@@ -2,44 +2,74 @@
 
 #include <QImage>
 #include <QLabel>
+#include <QMutex>
 #include <QObject>
 #include <QString>
+#include <QStringList>
 #include <QWidget>
 #include <atomic>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <vector>
 
+#include "core/body/skinned_mesh.h"
 #include "core/pipeline/local_run.h"
 
+class QComboBox;
 class QPushButton;
 class QTableWidget;
 class QThread;
 
 namespace lumistage {
 
-// Runs a LocalPipelineRun on its own thread (move to a QThread, call run()), reporting its figures
-// twice a second and the node processes that exit.
+// What the studio's panels see of the pipeline, five times a second: its figures, its output
+// (the blended view), the body it placed (the generic human posed, world coordinates) and the
+// node processes that are gone.
+struct PipelineSnapshot {
+  RunReport report;
+  QImage view;  // the blended image; null before the first frame
+  int64_t pose_frame = -1;
+  std::vector<Eigen::Vector3d> joints;       // the placed body's joints
+  std::vector<int> parents;                  // per joint, -1 for the root
+  std::shared_ptr<const TriangleMesh> mesh;  // the placed body's surface
+  QStringList exited;                        // nodes whose process is no longer running
+  double time_s = 0;                         // since the pipeline started
+};
+
+// Runs a LocalPipelineRun on its own thread (move to a QThread, call run()), reporting a snapshot
+// five times a second and the node processes that exit. Commands from other threads (the view,
+// killing a node) are queued and done between two slices of work.
 class PipelineWorker : public QObject {
   Q_OBJECT
 
  public:
   explicit PipelineWorker(LocalRunOptions options) : options_(std::move(options)) {}
   void stop() { stop_ = true; }
+  // Thread-safe: the view the nodes render from the next frame on.
+  void setView(const ViewData& view);
+  // Thread-safe: kills a node's process (as if unplugged).
+  void killNode(const QString& name);
 
  public slots:
   void run();
 
  signals:
-  void report(lumistage::RunReport report, QImage view);
+  void snapshot(lumistage::PipelineSnapshot snapshot);
   void message(QString text);
   void finished();
 
  private:
   LocalRunOptions options_;
   std::atomic<bool> stop_{false};
+  QMutex mutex_;
+  std::vector<std::function<void(LocalPipelineRun&)>> commands_;  // guarded by mutex_
 };
 
-// The pipeline for technicians: frames a second, latency, bytes per node against the cameras'
-// raw bytes, and every node and camera with its state (streaming or lost, in colour), rate,
-// drops and last error. A killed node turns red within about a second.
+// The pipeline for technicians: frames a second, latency, per-stage times, frames in flight,
+// bytes per node against the cameras' raw bytes, and every node and camera with its state; the
+// source it runs on (the virtual studio's demo session, a recorded session, Aravis cameras);
+// start and stop. Its snapshots feed the viewport, the health and overlay panels.
 class PipelinePanel : public QWidget {
   Q_OBJECT
 
@@ -50,23 +80,40 @@ class PipelinePanel : public QWidget {
   void start(LocalRunOptions options);
   void stop();
   bool running() const { return thread_ != nullptr; }
-  const RunReport& lastReport() const { return last_; }
+  const RunReport& lastReport() const { return last_.report; }
+  const PipelineSnapshot& lastSnapshot() const { return last_; }
   QTableWidget* table() const { return table_; }
+  QTableWidget* stageTable() const { return stages_; }
+  void setView(const ViewData& view);
+  void killNode(const QString& name);
+  // The session "Virtual studio" runs (set by the studio once its demo session exists).
+  void setDemoSession(const QString& folder) { demo_session_ = folder; }
+
+ signals:
+  void snapshot(const lumistage::PipelineSnapshot& snapshot);
+  void started();
+  // Asks the studio to make the virtual studio's demo session (a long action with progress).
+  void demoSessionWanted();
 
  private:
-  void show(const RunReport& report, const QImage& view);
-  void chooseSession();
+  void show(const PipelineSnapshot& snapshot);
+  void startChosen();
 
   QLabel* summary_;
   QLabel* view_;  // the pipeline's output: the blended view
   QTableWidget* table_;
+  QTableWidget* stages_;
+  QComboBox* source_;
   QPushButton* start_button_;
   QPushButton* stop_button_;
   QThread* thread_ = nullptr;
   PipelineWorker* worker_ = nullptr;
-  RunReport last_;
+  PipelineSnapshot last_;
+  std::optional<ViewData> view_data_;
+  QString demo_session_;
 };
 
 }  // namespace lumistage
 
 Q_DECLARE_METATYPE(lumistage::RunReport)
+Q_DECLARE_METATYPE(lumistage::PipelineSnapshot)

@@ -7,7 +7,9 @@
 #include <atomic>
 #include <csignal>
 #include <exception>
+#include <thread>
 
+#include "app/node/node_monitor.h"
 #include "core/body/human_model.h"
 #include "core/capture/aravis_source.h"
 #include "core/capture/session_source.h"
@@ -33,7 +35,8 @@ int main(int argc, char** argv) {
                                             pixel_format = "bayer_rggb8";
   std::vector<std::string> devices;
   double fps = 25;
-  bool plain = false;
+  bool plain = false, monitor = false;
+  std::string monitor_screenshot;
   app.add_option("--rig", rig_path, "rig file (default with --session: the session's)");
   app.add_option("--node", node_name, "this node's name in the rig")->required();
   app.add_option("--session", session, "serve this node's cameras of a recorded session");
@@ -51,6 +54,11 @@ int main(int argc, char** argv) {
   app.add_option("--keys", keys,
                  "key store folder (lumistage keys init): this node's key and the studio's");
   app.add_flag("--plain", plain, "no encryption or authentication (a closed lab network only)");
+  app.add_flag("--monitor", monitor,
+               "open a small window on this PC: the node's cameras, silhouettes and counters");
+  app.add_option("--monitor-screenshot", monitor_screenshot,
+                 "with --monitor: save the window to this PNG once it shows every camera, then "
+                 "stop");
   CLI11_PARSE(app, argc, argv);
   try {
     if (rig_path.empty() && !session.empty()) rig_path = session + "/rig.yaml";
@@ -128,7 +136,20 @@ int main(int argc, char** argv) {
     std::signal(SIGTERM, onSignal);
     fmt::print("node {}: {} cameras, serving {}\n", node.name, node.cameras.size(), studio);
     std::fflush(stdout);
-    camera_node.run(g_stop);
+    if (monitor) {
+      // The node works on its own threads; the window lives on this one (GLFW wants the main
+      // thread). Closing the window stops the node.
+      std::thread worker([&camera_node] { camera_node.run(g_stop); });
+      try {
+        lumistage::runNodeMonitor(camera_node, rig, node.name, g_stop, monitor_screenshot);
+      } catch (const std::exception& e) {
+        fmt::print(stderr, "lumistage-node: {}\n", e.what());
+      }
+      g_stop = true;
+      worker.join();
+    } else {
+      camera_node.run(g_stop);
+    }
     fmt::print("node {}: sent {} frame sets, {:.1f} MB\n", node.name, camera_node.setsSent(),
                camera_node.bytesSent() / 1e6);
     return 0;

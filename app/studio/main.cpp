@@ -1,18 +1,24 @@
 // lumistage-studio: the Qt6 coordinator of the stage.
 #include <QApplication>
 #include <QCommandLineParser>
+#include <QDir>
 #include <QElapsedTimer>
 #include <QMessageBox>
 #include <QTimer>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <functional>
 
 #include "core/base/resource_path.h"
+#include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
+#include "ui/clone_panel.h"
+#include "ui/health_panel.h"
 #include "ui/main_window.h"
 #include "ui/pipeline_panel.h"
 #include "ui/source_worker.h"
+#include "ui/viewport_panel.h"
 
 namespace {
 
@@ -63,6 +69,19 @@ int main(int argc, char** argv) {
       "pipeline",
       "Also run the distributed pipeline on a recorded session: a node process per rig node.",
       "session");
+  QCommandLineOption demo_option(
+      "demo",
+      "The demo: film the virtual studio once (a short session, kept in the cache folder), replay "
+      "it as the cameras and run the distributed pipeline on it, every panel alive.");
+  QCommandLineOption screenshots_option(
+      "screenshots",
+      "With --demo: once the pipeline has shown frames, save the main window and each panel to "
+      "<dir> (main_window.png, viewport.png, viewport_behind.png, health.png, overlay.png, "
+      "calibration.png, clones.png, pipeline.png), kill a node and save health_node_lost.png once "
+      "its cameras show lost, then quit.",
+      "dir");
+  parser.addOption(demo_option);
+  parser.addOption(screenshots_option);
   parser.addOption(rig_option);
   parser.addOption(source_option);
   parser.addOption(pipeline_option);
@@ -87,7 +106,13 @@ int main(int argc, char** argv) {
     }
   }
   const QString source = parser.value(source_option);
-  if (source != "none") {
+  if (parser.isSet(demo_option)) {
+    QObject::connect(&window, &lumistage::MainWindow::demoFailed, &app, [&](const QString& error) {
+      std::fprintf(stderr, "lumistage-studio: demo: %s\n", qPrintable(error));
+      if (parser.isSet(screenshots_option)) QApplication::exit(1);
+    });
+    window.startDemo();
+  } else if (source != "none") {
     lumistage::SourceSpec spec;
     if (const QString error = lumistage::SourceSpec::parse(source, spec); !error.isEmpty()) {
       std::fprintf(stderr, "lumistage-studio: %s\n", qPrintable(error));
@@ -102,6 +127,116 @@ int main(int argc, char** argv) {
     options.replay = "memory";
     window.pipeline()->start(options);
     window.showPipeline();
+  }
+  if (parser.isSet(screenshots_option)) {
+    const QString dir = parser.value(screenshots_option);
+    QDir().mkpath(dir);
+    // Steps a few hundred milliseconds apart, so that each panel is painted before it is grabbed.
+    auto steps = std::make_shared<std::vector<std::function<bool()>>>();
+    auto save = [&window, dir](const QString& panel, const QString& file) {
+      return [&window, dir, panel, file] {
+        QWidget* widget = panel.isEmpty() ? &window : window.showPanel(panel);
+        const bool ok = widget && widget->grab().save(dir + "/" + file);
+        std::fprintf(ok ? stdout : stderr, "%s %s/%s\n", ok ? "saved" : "cannot save",
+                     qPrintable(dir), qPrintable(file));
+        return true;
+      };
+    };
+    auto* pipeline = window.pipeline();
+    QElapsedTimer clock;
+    clock.start();
+    // Wait for the pipeline's frames with the placed body and every camera's picture.
+    steps->push_back([&window, pipeline, clock] {
+      const bool ready =
+          pipeline->lastReport().frames >= 20 && pipeline->lastSnapshot().pose_frame >= 0 &&
+          !pipeline->lastSnapshot().view.isNull() && window.cameraGrid()->cameraCount() > 0 &&
+          window.cameraGrid()->camerasWithPictures() == window.cameraGrid()->cameraCount();
+      if (!ready && clock.elapsed() > 240000) {
+        std::fprintf(stderr, "lumistage-studio: no pipeline frames after 4 minutes\n");
+        QApplication::exit(1);
+      }
+      return ready;
+    });
+    steps->push_back([&window] {
+      window.showPanel("viewport");
+      window.showPanel("overlay");
+      window.showPanel("pipeline");
+      return true;
+    });
+    steps->push_back(save("", "main_window.png"));
+    steps->push_back(save("viewport", "viewport.png"));
+    steps->push_back(save("health", "health.png"));
+    steps->push_back(save("overlay", "overlay.png"));
+    steps->push_back(save("pipeline", "pipeline.png"));
+    steps->push_back([&window] {
+      // A point on the chest (spine3) in the first camera: its epipolar lines in the others.
+      auto* cal = window.calibration();
+      const lumistage::Rig* rig = window.rig();
+      if (rig && rig->cameraCount() > 1) {
+        const auto& snap = window.pipeline()->lastSnapshot();
+        const Eigen::Vector3d chest =
+            snap.joints.size() > 3 ? snap.joints[3] : Eigen::Vector3d(0, 0, 1.3);
+        if (const auto p = rig->camera(0).project(chest)) cal->pickPoint(0, *p);
+      }
+      return true;
+    });
+    steps->push_back(save("calibration", "calibration.png"));
+    steps->push_back([&window] {
+      // Two clones, the view from behind the actor (a half turn from the default).
+      window.showPanel("clones");
+      window.clonePanel()->addClone();
+      window.clonePanel()->addClone();
+      window.clonePanel()->turnSelected(3.14159265 / 2);
+      window.showPanel("viewport");
+      return true;
+    });
+    steps->push_back(save("clones", "clones.png"));
+    steps->push_back([&window, pipeline] {
+      lumistage::OrbitView view = lumistage::OrbitView::studioDefault();
+      view.orbit(3.14159265, 0);
+      window.viewport()->viewport()->setView(view);
+      (void)pipeline;
+      return true;
+    });
+    // The nodes render the new view: wait for a frame of it.
+    auto turned_at = std::make_shared<int64_t>(-1);
+    steps->push_back([pipeline, turned_at] {
+      if (*turned_at < 0) *turned_at = pipeline->lastReport().frames;
+      return pipeline->lastReport().frames > *turned_at + 10;
+    });
+    steps->push_back(save("viewport", "viewport_behind.png"));
+    // A technician's check: kill a node and time how long its cameras take to show "lost".
+    auto killed = std::make_shared<QElapsedTimer>();
+    steps->push_back([&window, killed] {
+      window.showPanel("health");
+      window.pipeline()->killNode("node2");
+      killed->start();
+      return true;
+    });
+    steps->push_back([&window, killed] {
+      auto* health = window.health();
+      const lumistage::Rig* rig = window.rig();
+      int camera = -1;
+      for (int c = 0; rig && c < rig->cameraCount(); ++c) {
+        if (rig->camera(c).node() == "node2") camera = c;
+      }
+      if (camera < 0) return true;
+      if (health->verdict(camera).state != lumistage::HealthState::kLost) return false;
+      std::printf("node2 killed: its cameras show lost after %lld ms\n",
+                  static_cast<long long>(killed->elapsed()));
+      return true;
+    });
+    steps->push_back(save("health", "health_node_lost.png"));
+    steps->push_back([] {
+      QApplication::exit(0);
+      return true;
+    });
+    auto* timer = new QTimer(&window);
+    auto index = std::make_shared<size_t>(0);
+    QObject::connect(timer, &QTimer::timeout, &window, [steps, index] {
+      if (*index < steps->size() && (*steps)[*index]()) ++*index;
+    });
+    timer->start(150);
   }
   if (parser.isSet(screenshot_option)) {
     // Once every camera has shown pictures and counters for a few seconds (or after a minute; at

@@ -2,18 +2,29 @@
 #include "ui/main_window.h"
 
 #include <QDockWidget>
+#include <QElapsedTimer>
 #include <QImage>
+#include <QListWidget>
+#include <QMouseEvent>
+#include <QSettings>
 #include <QTableWidget>
 #include <QTemporaryDir>
 #include <QtTest>
 
 #include "core/capture/session_writer.h"
+#include "core/geometry/epipolar.h"
 #include "core/geometry/ring_rig.h"
+#include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
+#include "ui/camera_overlay_view.h"
+#include "ui/clone_panel.h"
+#include "ui/health_panel.h"
+#include "ui/overlay_panel.h"
 #include "ui/pipeline_panel.h"
 #include "ui/rig_panel.h"
 #include "ui/source_worker.h"
 #include "ui/stage_plan_view.h"
+#include "ui/viewport_panel.h"
 
 using lumistage::MainWindow;
 
@@ -170,6 +181,215 @@ class MainWindowTest : public QObject {
     QVERIFY2(error.contains("bad.yaml") && error.contains("YAML syntax error"), qPrintable(error));
     QCOMPARE(window.rig()->cameraCount(), 12);
     QCOMPARE(window.rigPanel()->table()->rowCount(), 12);
+  }
+
+  // A left drag over the viewport (QTest's mouseMove carries no buttons in Qt 6: send events).
+  static void drag(QWidget* widget, QPoint from, QPoint to, Qt::MouseButton button,
+                   Qt::KeyboardModifiers modifiers = Qt::NoModifier) {
+    QMouseEvent press(QEvent::MouseButtonPress, from, widget->mapToGlobal(from), button, button,
+                      modifiers);
+    QApplication::sendEvent(widget, &press);
+    for (int k = 1; k <= 4; ++k) {
+      const QPoint p = from + (to - from) * k / 4;
+      QMouseEvent move(QEvent::MouseMove, p, widget->mapToGlobal(p), Qt::NoButton, button,
+                       modifiers);
+      QApplication::sendEvent(widget, &move);
+    }
+    QMouseEvent release(QEvent::MouseButtonRelease, to, widget->mapToGlobal(to), button,
+                        Qt::NoButton, modifiers);
+    QApplication::sendEvent(widget, &release);
+  }
+
+  void viewportDragOrbitsToTheActorsBack() {
+    MainWindow window;
+    window.resize(1200, 900);
+    window.show();
+    QCOMPARE(window.openRig(reference_), QString());
+    lumistage::ViewportWidget* viewport = window.viewport()->viewport();
+    QSignalSpy sent(window.viewport(), &lumistage::ViewportPanel::viewChanged);
+    const Eigen::Vector3d before = viewport->view().eye();
+    // A drag across the viewport's full height turns the view half way round the target.
+    const int h = viewport->height();
+    drag(viewport, QPoint(10, h / 2), QPoint(10 + h, h / 2), Qt::LeftButton);
+    const Eigen::Vector3d after = viewport->view().eye();
+    const Eigen::Vector3d target = viewport->view().target();
+    QVERIFY((before - target).head<2>().dot((after - target).head<2>()) < 0);  // other side
+    QVERIFY(sent.count() >= 4);  // every move sends the view on for the nodes to render
+    const lumistage::ViewData last = sent.last().at(0).value<lumistage::ViewData>();
+    QCOMPARE(last.width, 320);
+    QVERIFY(last.rotation.size() == 9);
+    // Right drag pans, the wheel zooms.
+    const Eigen::Vector3d target_before = viewport->view().target();
+    drag(viewport, QPoint(100, 100), QPoint(160, 100), Qt::RightButton);
+    QVERIFY((viewport->view().target() - target_before).norm() > 0.1);
+    const double distance = viewport->view().distance();
+    QWheelEvent wheel(QPointF(50, 50), viewport->mapToGlobal(QPointF(50, 50)), QPoint(),
+                      QPoint(0, 120), Qt::NoButton, Qt::NoModifier, Qt::NoScrollPhase, false);
+    QApplication::sendEvent(viewport, &wheel);
+    QVERIFY(viewport->view().distance() < distance);
+  }
+
+  void viewportSnapsToACameraAndPlaysAPath() {
+    MainWindow window;
+    QCOMPARE(window.openRig(reference_), QString());
+    lumistage::ViewportPanel* panel = window.viewport();
+    QVERIFY(panel->snapToCamera(3));
+    QVERIFY((panel->viewport()->view().eye() - window.rig()->camera(3).centre()).norm() < 1e-6);
+    QVERIFY(!panel->snapToCamera(99));
+    panel->setTime(0);
+    panel->addKey();
+    panel->setTime(1.0);  // moving along the timeline follows the path: snap after it
+    QVERIFY(panel->snapToCamera(9));
+    panel->addKey();
+    QCOMPARE(panel->path().keys().size(), size_t(2));
+    panel->setTime(0);
+    QVERIFY((panel->viewport()->view().eye() - window.rig()->camera(3).centre()).norm() < 1e-6);
+    panel->play(true);
+    QVERIFY(panel->playing());
+    QTRY_VERIFY_WITH_TIMEOUT(!panel->playing(), 3000);  // stops at the last key
+    QVERIFY((panel->viewport()->view().eye() - window.rig()->camera(9).centre()).norm() < 1e-6);
+    panel->setTime(1.0);
+    QVERIFY(panel->removeKey());
+    QCOMPARE(panel->path().keys().size(), size_t(1));
+  }
+
+  void calibrationCheckDrawsEpipolarLinesThroughTheSamePoint() {
+    MainWindow window;
+    QCOMPARE(window.openRig(reference_), QString());
+    lumistage::CalibrationPanel* cal = window.calibration();
+    QCOMPARE(cal->cameraCount(), 12);
+    const Eigen::Vector3d point(0.2, -0.1, 1.4);
+    const auto pixel = window.rig()->camera(0).project(point);
+    QVERIFY(pixel.has_value());
+    QVERIFY(cal->pickPoint(0, *pixel));
+    QVERIFY(cal->cameraView(0)->marker().has_value());
+    int crossing = 0;
+    for (int c = 1; c < 12; ++c) {
+      const auto& curves = cal->cameraView(c)->curves();
+      QCOMPARE(curves.size(), size_t(1));
+      const auto seen = window.rig()->camera(c).project(point);
+      if (seen && window.rig()->camera(c).inImage(*seen)) {
+        QVERIFY(lumistage::distanceToPolyline(curves[0], *seen) < 1.0);
+        ++crossing;
+      }
+    }
+    QVERIFY(crossing >= 8);
+  }
+
+  void calibrationReportGivesReprojectionErrors() {
+    QTemporaryDir dir;
+    QFile file(dir.filePath("report.json"));
+    QVERIFY(file.open(QIODevice::WriteOnly));
+    file.write(R"({"cameras": [{"name": "cam01", "rms_px": 0.25}, {"camera": "cam02",
+                "reprojection_error_px": 0.5}]})");
+    file.close();
+    lumistage::ReprojectionErrors errors;
+    QCOMPARE(lumistage::loadCalibrationReport(dir.filePath("report.json"), errors), QString());
+    QCOMPARE(errors.value("cam02"), 0.5);
+    QFile bad(dir.filePath("bad.json"));
+    QVERIFY(bad.open(QIODevice::WriteOnly));
+    bad.write(R"({"cameras": [{"name": "cam01"}]})");
+    bad.close();
+    QVERIFY(lumistage::loadCalibrationReport(dir.filePath("bad.json"), errors).contains("rms_px"));
+  }
+
+  void clonesAreAddedDraggedTurnedAndRemoved() {
+    MainWindow window;
+    window.resize(1200, 900);
+    window.show();
+    QCOMPARE(window.openRig(reference_), QString());
+    lumistage::ClonePanel* panel = window.clonePanel();
+    const int a = panel->addClone();
+    panel->addClone();
+    QCOMPARE(panel->list()->count(), 2);
+    QVERIFY(panel->turnSelected(0.5));
+    // Shift+drag in the viewport moves the clone under the cursor along the floor.
+    lumistage::ViewportWidget* viewport = window.viewport()->viewport();
+    const lumistage::Camera view = viewport->view().camera(viewport->width(), viewport->height());
+    const lumistage::Clone before = *window.clones().find(a);
+    const auto at = view.project(before.transform() * Eigen::Vector3d::Zero());
+    QVERIFY(at.has_value());
+    const QPoint from(int(at->x()), int(at->y()));
+    drag(viewport, from, from + QPoint(40, 0), Qt::LeftButton, Qt::ShiftModifier);
+    QVERIFY((window.clones().find(a)->offset_m - before.offset_m).norm() > 0.05);
+    QVERIFY(panel->list()->item(0)->text().contains("clone 1"));
+    panel->list()->setCurrentRow(0);
+    QVERIFY(panel->removeSelected());
+    QCOMPARE(panel->list()->count(), 1);
+    QVERIFY(window.clones().find(a) == nullptr);
+  }
+
+  void overlayShowsTheChosenCamera() {
+    MainWindow window;
+    QCOMPARE(window.openRig(reference_), QString());
+    lumistage::OverlayPanel* overlay = window.overlay();
+    QVERIFY(overlay->selectCamera(5));
+    QCOMPARE(overlay->view()->camera().name(), std::string("cam06"));
+    QVERIFY(!overlay->selectCamera(12));
+    // The silhouette is keyed from the green screen.
+    QImage image(4, 1, QImage::Format_RGB888);
+    image.setPixelColor(0, 0, QColor(40, 150, 60));    // screen
+    image.setPixelColor(1, 0, QColor(180, 140, 120));  // skin
+    const QImage mask = lumistage::CameraOverlayView::keySilhouette(image);
+    QCOMPARE(qAlpha(mask.pixel(0, 0)), 0);
+    QVERIFY(qAlpha(mask.pixel(1, 0)) > 0);
+  }
+
+  void layoutIsRememberedBetweenRuns() {
+    {
+      MainWindow window;
+      window.show();
+      window.resetLayout();
+      window.showPanel("health")->parentWidget()->hide();  // the health dock
+      window.close();
+    }
+    {
+      MainWindow window;
+      window.show();
+      QVERIFY(!window.health()->parentWidget()->isVisible());
+      window.resetLayout();
+      QVERIFY(window.health()->parentWidget()->isVisible());
+      window.close();
+    }
+  }
+
+  void healthShowsAKilledNodeLostWithinASecond() {
+    // A technician's check: a node stops (its plug pulled); its cameras turn red, in words,
+    // within a second, and the other node's stay green.
+    QTemporaryDir dir;
+    writeSession(dir.filePath("session"), 4, 2, 20.0, 4);
+    MainWindow window;
+    window.resize(1200, 900);
+    window.show();
+    QCOMPARE(window.openRig(dir.filePath("session") + "/rig.yaml"), QString());
+    lumistage::LocalRunOptions options;
+    options.session = dir.filePath("session").toStdString();
+    options.node_binary = LUMISTAGE_NODE;
+    window.pipeline()->start(options);
+    lumistage::HealthPanel* health = window.health();
+    QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames >= 10, 20000);
+    int kept = -1, killed = -1, killed_too = -1;  // cameras of node1, two of node2
+    for (int c = 0; c < window.rig()->cameraCount(); ++c) {
+      const std::string node = window.rig()->camera(c).node();
+      if (node == "node1") kept = c;
+      if (node == "node2") (killed < 0 ? killed : killed_too) = c;
+    }
+    QVERIFY(kept >= 0 && killed >= 0 && killed_too >= 0);
+    QTRY_COMPARE_WITH_TIMEOUT(health->verdict(kept).state, lumistage::HealthState::kStreaming,
+                              3000);
+    QTRY_COMPARE_WITH_TIMEOUT(health->verdict(killed).state, lumistage::HealthState::kStreaming,
+                              3000);
+    QVERIFY(!health->history().samples("cam01/fps").empty());
+    window.pipeline()->killNode("node2");
+    QElapsedTimer clock;
+    clock.start();
+    QTRY_COMPARE_WITH_TIMEOUT(health->verdict(killed).state, lumistage::HealthState::kLost, 1000);
+    QVERIFY(clock.elapsed() < 1000);
+    QVERIFY2(QString::fromStdString(health->verdict(killed_too).words).contains("exited"),
+             health->verdict(killed_too).words.c_str());
+    QCOMPARE(health->verdict(kept).state, lumistage::HealthState::kStreaming);
+    QTRY_COMPARE_WITH_TIMEOUT(health->table()->item(killed, 2)->text(), QString("lost"), 500);
+    window.pipeline()->stop();
   }
 };
 

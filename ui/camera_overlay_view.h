@@ -1,0 +1,76 @@
+#pragma once
+
+#include <QImage>
+#include <QWidget>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "core/body/skinned_mesh.h"
+#include "core/geometry/camera.h"
+
+namespace lumistage {
+
+// One camera's image with overlays drawn in its own pixels: the actor's silhouette (keyed from
+// the green screen), the projected skeleton and mesh, epipolar curves and a marked point. Clicks
+// come out in the camera's pixels.
+class CameraOverlayView : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit CameraOverlayView(QWidget* parent = nullptr);
+
+  void setCamera(const Camera& camera);
+  const Camera& camera() const { return camera_; }
+  void setImage(const QImage& image);  // any size: stretched over the camera's pixels
+  bool hasImage() const { return !image_.isNull(); }
+  void setCaption(const QString& caption);
+  void showSilhouette(bool on) {
+    silhouette_ = on;
+    update();
+  }
+  void showSkeleton(bool on) {
+    skeleton_ = on;
+    update();
+  }
+  void showMesh(bool on) {
+    mesh_on_ = on;
+    update();
+  }
+  void setBody(const std::vector<Eigen::Vector3d>& joints, const std::vector<int>& parents,
+               std::shared_ptr<const TriangleMesh> mesh);
+  void setCurves(std::vector<std::vector<Eigen::Vector2d>> curves) {
+    curves_ = std::move(curves);
+    update();
+  }
+  void setMarker(std::optional<Eigen::Vector2d> pixel) {
+    marker_ = pixel;
+    update();
+  }
+  const std::vector<std::vector<Eigen::Vector2d>>& curves() const { return curves_; }
+  const std::optional<Eigen::Vector2d>& marker() const { return marker_; }
+  // The actor's mask of the image (255 where the green-screen key says actor), at image size.
+  static QImage keySilhouette(const QImage& image, int threshold = 30);
+
+ signals:
+  void clicked(Eigen::Vector2d pixel);
+
+ protected:
+  void paintEvent(QPaintEvent* event) override;
+  void mousePressEvent(QMouseEvent* event) override;
+
+ private:
+  QRectF imageRect() const;  // where the camera's pixels go in the widget
+
+  Camera camera_;
+  QImage image_, mask_;
+  QString caption_;
+  bool silhouette_ = false, skeleton_ = false, mesh_on_ = false;
+  std::vector<Eigen::Vector3d> joints_;
+  std::vector<int> parents_;
+  std::shared_ptr<const TriangleMesh> mesh_;
+  std::vector<std::vector<Eigen::Vector2d>> curves_;
+  std::optional<Eigen::Vector2d> marker_;
+};
+
+}  // namespace lumistage

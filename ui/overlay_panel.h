@@ -1,0 +1,40 @@
+#pragma once
+
+#include <QImage>
+#include <QVector>
+#include <QWidget>
+
+#include "core/geometry/rig.h"
+#include "ui/camera_overlay_view.h"
+#include "ui/pipeline_panel.h"
+
+class QListWidget;
+
+namespace lumistage {
+
+// Skeleton overlay: any camera's image with the actor's silhouette, the projected skeleton and
+// the projected mesh of the body the pipeline placed. The camera is picked from a grid of all.
+class OverlayPanel : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit OverlayPanel(QWidget* parent = nullptr);
+
+  void setRig(const Rig& rig);
+  bool selectCamera(int camera);  // false for an unknown camera
+  int selectedCamera() const { return selected_; }
+  CameraOverlayView* view() const { return view_; }
+
+ public slots:
+  void showFrame(int camera, const QImage& preview, qint64 frame_id);
+  void showSnapshot(const lumistage::PipelineSnapshot& snapshot);
+
+ private:
+  Rig rig_;
+  QListWidget* grid_;
+  CameraOverlayView* view_;
+  QVector<QImage> latest_;
+  int selected_ = -1;
+};
+
+}  // namespace lumistage

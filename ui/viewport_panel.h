@@ -1,0 +1,134 @@
+#pragma once
+
+#include <QImage>
+#include <QPoint>
+#include <QWidget>
+#include <memory>
+#include <optional>
+
+#include "core/geometry/rig.h"
+#include "core/render/camera_path.h"
+#include "core/render/clone_set.h"
+#include "core/render/orbit_view.h"
+#include "ui/pipeline_panel.h"
+
+class QCheckBox;
+class QComboBox;
+class QLabel;
+class QPushButton;
+class QSlider;
+class QTimer;
+
+namespace lumistage {
+
+// What the viewport draws over the live rendering.
+struct ViewportLayers {
+  bool image = true;  // the pipeline's blended view (the lumigraph rendering)
+  bool mesh = false;  // the placed body's surface, shaded
+  bool wireframe = false;
+  bool skeleton = true;
+  bool frusta = true;  // the input cameras
+  bool floor = true;   // the stage floor, a 0.5 m grid
+};
+
+// The free-viewpoint viewport: the pipeline's rendering for the director's virtual camera with
+// overlays drawn from the same camera. Left drag orbits, right or middle drag pans, the wheel
+// zooms; with Shift a left drag moves the clone under the cursor on the floor, with Ctrl it turns
+// it. Every change of the view is sent on (viewChanged) for the nodes to render. It paints on a
+// QOpenGLWidget where the platform has OpenGL, on a plain widget otherwise (Qt's offscreen
+// platform, for tests).
+class ViewportWidget : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit ViewportWidget(CloneSet* clones, QWidget* parent = nullptr);
+  bool usesOpenGL() const { return uses_gl_; }
+  // Paints the scene (called by the canvas).
+  void paintScene(QPainter& painter, int width, int height);
+
+  OrbitView& view() { return view_; }
+  const OrbitView& view() const { return view_; }
+  void setView(const OrbitView& view);
+  ViewportLayers& layers() { return layers_; }
+  void setRig(const Rig& rig) {
+    rig_ = rig;
+    refresh();
+  }
+  void showSnapshot(const PipelineSnapshot& snapshot);
+  // The size the nodes render at: 320 wide, the widget's aspect.
+  QSize renderSize() const;
+  ViewData viewData() const {
+    return toViewData(view_.pose(), renderSize().width(), renderSize().height());
+  }
+  // Where the actor stands now (the placed body's root on the floor), for clones.
+  Eigen::Vector3d actorFloorPoint() const;
+  const PipelineSnapshot& snapshot() const { return snapshot_; }
+
+ public slots:
+  void refresh();  // repaints
+
+ signals:
+  void viewChanged();
+  void clonesChanged();
+
+ protected:
+  void mousePressEvent(QMouseEvent* event) override;
+  void mouseMoveEvent(QMouseEvent* event) override;
+  void mouseReleaseEvent(QMouseEvent* event) override;
+  void wheelEvent(QWheelEvent* event) override;
+  void resizeEvent(QResizeEvent* event) override;
+
+ private:
+  QWidget* canvas_;
+  bool uses_gl_ = false;
+  OrbitView view_ = OrbitView::studioDefault();
+  ViewportLayers layers_;
+  Rig rig_;
+  PipelineSnapshot snapshot_;
+  CloneSet* clones_;
+  QPoint last_mouse_;
+  Qt::MouseButton dragging_ = Qt::NoButton;
+  std::optional<int> dragged_clone_;
+  bool turning_clone_ = false;
+};
+
+// The viewport with its controls: layer toggles, snap to an input camera, and a camera path on a
+// timeline (keyframes of the view, played back).
+class ViewportPanel : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit ViewportPanel(CloneSet* clones, QWidget* parent = nullptr);
+
+  ViewportWidget* viewport() const { return viewport_; }
+  void setRig(const Rig& rig);
+  // Commands, as the controls do them:
+  bool snapToCamera(int camera);  // false for an unknown camera
+  void addKey();                  // the current view at the timeline's time
+  bool removeKey();               // the key at the timeline's time
+  void play(bool on);
+  void setTime(double time_s);
+  double time() const { return time_s_; }
+  const CameraPath& path() const { return path_; }
+  bool playing() const;
+
+ signals:
+  void viewChanged(const lumistage::ViewData& view);
+
+ private:
+  void refreshTimeline();
+
+  ViewportWidget* viewport_;
+  QComboBox* snap_;
+  QSlider* timeline_;
+  QLabel* time_label_;
+  QPushButton* play_;
+  QTimer* player_;
+  CameraPath path_;
+  double time_s_ = 0;
+  Rig rig_;
+};
+
+}  // namespace lumistage
+
+Q_DECLARE_METATYPE(lumistage::ViewData)
