@@ -8,7 +8,7 @@
 namespace lumistage {
 
 CameraOverlayView::CameraOverlayView(QWidget* parent) : QWidget(parent) {
-  setMinimumSize(160, 120);
+  setMinimumSize(120, 90);
   setCursor(Qt::CrossCursor);
 }
 

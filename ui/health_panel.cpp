@@ -27,13 +27,13 @@ QColor stateColour(HealthState state) {
   return QColor(0x88, 0x88, 0x88);
 }
 
-enum Column { kCamera, kNode, kState, kProblem, kFps, kDropped, kLatency, kBytes, kExposure };
+enum Column { kCamera, kState, kProblem, kFps, kDropped, kLatency, kBytes, kExposure };
 
 }  // namespace
 
 HistoryPlot::HistoryPlot(const HealthHistory* history, QWidget* parent)
     : QWidget(parent), history_(history) {
-  setMinimumHeight(110);
+  setMinimumHeight(90);
 }
 
 void HistoryPlot::setCamera(const QString& camera) {
@@ -94,23 +94,27 @@ HealthPanel::HealthPanel(QWidget* parent)
       plot_(new HistoryPlot(&history_, this)),
       legend_(new QLabel(this)) {
   clock_.start();
-  table_->setColumnCount(9);
-  table_->setHorizontalHeaderLabels({tr("Camera"), tr("Node"), tr("State"), tr("Problem"),
-                                     tr("fps"), tr("Dropped"), tr("Latency ms"), tr("KB/frame"),
-                                     tr("Exposure / gain")});
+  table_->setColumnCount(8);
+  table_->setHorizontalHeaderLabels({tr("Camera"), tr("State"), tr("Problem"), tr("fps"),
+                                     tr("Drops"), tr("Latency"), tr("KB/fr"), tr("Exp/gain")});
+  table_->horizontalHeaderItem(kLatency)->setToolTip(tr("The pipeline's latency, ms (median)"));
+  table_->horizontalHeaderItem(kBytes)->setToolTip(tr("Bytes the node sends a frame, per camera"));
+  table_->horizontalHeaderItem(kExposure)->setToolTip(
+      tr("Exposure and gain, where the camera reports them"));
   table_->verticalHeader()->setVisible(false);
   table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
   table_->setSelectionBehavior(QAbstractItemView::SelectRows);
   table_->setSelectionMode(QAbstractItemView::SingleSelection);
-  table_->setIconSize(QSize(64, 48));
-  table_->verticalHeader()->setDefaultSectionSize(52);
+  table_->setIconSize(QSize(48, 36));
+  table_->verticalHeader()->setDefaultSectionSize(40);
   table_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
   table_->horizontalHeader()->setSectionResizeMode(kProblem, QHeaderView::Stretch);
   legend_->setText(
       tr("<span style='color:#2ab02a'>&#9679; streaming</span> &nbsp; "
-         "<span style='color:#e09000'>&#9679; late: nothing for 0.3 s, slow or dropping</span> "
+         "<span style='color:#e09000'>&#9679; late: nothing for 0.5 s, slow or dropping</span> "
          "&nbsp; <span style='color:#e33333'>&#9679; lost: nothing for 1 s, or its node "
          "stopped</span>"));
+  legend_->setWordWrap(true);
   auto* layout = new QVBoxLayout(this);
   layout->setContentsMargins(2, 2, 2, 2);
   layout->addWidget(legend_);
@@ -136,8 +140,7 @@ void HealthPanel::setRig(const Rig& rig) {
   table_->setRowCount(rows_.size());
   for (int r = 0; r < rows_.size(); ++r) {
     for (int c = 0; c < table_->columnCount(); ++c) table_->setItem(r, c, new QTableWidgetItem);
-    table_->item(r, kCamera)->setText(rows_[r].camera);
-    table_->item(r, kNode)->setText(rows_[r].node);
+    table_->item(r, kCamera)->setText(rows_[r].camera + "\n" + rows_[r].node);
   }
   if (!rows_.isEmpty()) {
     table_->setCurrentCell(0, 0);
@@ -179,10 +182,13 @@ void HealthPanel::showSnapshot(const PipelineSnapshot& s) {
 void HealthPanel::showFrame(int camera, const QImage& preview, qint64) {
   if (camera < 0 || camera >= rows_.size()) return;
   Row& row = rows_[camera];
-  row.thumbnail = QPixmap::fromImage(preview.scaled(64, 48, Qt::KeepAspectRatio));
   row.has_frame = true;
   row.since_frame.restart();
-  table_->item(camera, kCamera)->setIcon(row.thumbnail);
+  if (!row.since_thumbnail.isValid() || row.since_thumbnail.elapsed() > 1000) {
+    row.since_thumbnail.restart();  // a live thumbnail once a second
+    row.thumbnail = QPixmap::fromImage(preview.scaled(48, 36, Qt::KeepAspectRatio));
+    table_->item(camera, kCamera)->setIcon(row.thumbnail);
+  }
 }
 
 void HealthPanel::showStatus(const QVector<CameraStatus>& cameras) {
@@ -246,7 +252,7 @@ void HealthPanel::refresh() {
     table_->item(r, kBytes)->setText(row.bytes_per_frame >= 0
                                          ? QString::number(row.bytes_per_frame / 1000, 'f', 1)
                                          : QString("-"));
-    table_->item(r, kExposure)->setText(tr("not reported"));
+    table_->item(r, kExposure)->setText("-");
   }
 }
 

@@ -36,7 +36,7 @@ class HistoryPlot : public QWidget {
 // (streaming / late / lost) in colour and its problem in words, frame rate, drops, latency, bytes
 // a frame, exposure and gain where the camera reports them; below, the history of the selected
 // camera's frame rate and the latency. States come from the pipeline's node reports (a node whose
-// process exits is lost at once; a silent one late after 300 ms, lost after a second) or, without
+// process exits is lost at once; a silent one late after 500 ms, lost after a second) or, without
 // a pipeline, from the live source's frames.
 class HealthPanel : public QWidget {
   Q_OBJECT
@@ -68,7 +68,7 @@ class HealthPanel : public QWidget {
     QElapsedTimer since_drop;  // valid once a frame was dropped
     QString last_error;
     bool has_frame = false;
-    QElapsedTimer since_frame;
+    QElapsedTimer since_frame, since_thumbnail;
   };
   void refresh();
   HealthInput input(const Row& row) const;

@@ -56,23 +56,27 @@ MainWindow::MainWindow(QWidget* parent)
   tabs_->addTab(stage_plan_, tr("Stage"));
   setCentralWidget(tabs_);
 
+  // Right: camera health above the skeleton overlay (and the clones); bottom: the pipeline, the
+  // calibration check and the camera list.
   health_dock_ =
       addDock(tr("Camera health"), "health_dock", health_panel_, Qt::RightDockWidgetArea);
-  clone_dock_ = addDock(tr("Clones"), "clones_dock", clone_panel_, Qt::RightDockWidgetArea);
   overlay_dock_ =
       addDock(tr("Skeleton overlay"), "overlay_dock", overlay_panel_, Qt::RightDockWidgetArea);
-  calibration_dock_ = addDock(tr("Calibration check"), "calibration_dock", calibration_panel_,
-                              Qt::BottomDockWidgetArea);
+  clone_dock_ = addDock(tr("Clones"), "clones_dock", clone_panel_, Qt::RightDockWidgetArea);
   pipeline_dock_ =
       addDock(tr("Pipeline"), "pipeline_dock", pipeline_panel_, Qt::BottomDockWidgetArea);
+  calibration_dock_ = addDock(tr("Calibration check"), "calibration_dock", calibration_panel_,
+                              Qt::BottomDockWidgetArea);
   rig_dock_ = addDock(tr("Cameras"), "cameras_dock", rig_panel_, Qt::BottomDockWidgetArea);
+  splitDockWidget(health_dock_, overlay_dock_, Qt::Vertical);
   tabifyDockWidget(overlay_dock_, clone_dock_);
   tabifyDockWidget(pipeline_dock_, calibration_dock_);
   tabifyDockWidget(pipeline_dock_, rig_dock_);
   pipeline_dock_->raise();
   overlay_dock_->raise();
-  resizeDocks({health_dock_}, {560}, Qt::Horizontal);
-  resizeDocks({pipeline_dock_}, {260}, Qt::Vertical);
+  resizeDocks({health_dock_}, {600}, Qt::Horizontal);
+  resizeDocks({health_dock_, overlay_dock_}, {520, 380}, Qt::Vertical);
+  resizeDocks({pipeline_dock_}, {270}, Qt::Vertical);
 
   connect(rig_panel_, &RigPanel::cameraSelected, stage_plan_, &StagePlanView::setHighlightedCamera);
   connect(viewport_panel_, &ViewportPanel::viewChanged, pipeline_panel_, &PipelinePanel::setView);
@@ -115,7 +119,7 @@ MainWindow::MainWindow(QWidget* parent)
   QSettings settings("Lumistage", "Studio");
   restoreGeometry(settings.value("window/geometry").toByteArray());
   restoreState(settings.value("window/state").toByteArray(), kLayoutVersion);
-  if (!settings.contains("window/geometry")) resize(1500, 950);
+  if (!settings.contains("window/geometry")) resize(1600, 1000);
 }
 
 MainWindow::~MainWindow() {
@@ -133,6 +137,9 @@ QDockWidget* MainWindow::addDock(const QString& title, const QString& name, QWid
 
 void MainWindow::resetLayout() {
   restoreState(default_state_, kLayoutVersion);
+  resizeDocks({health_dock_}, {620}, Qt::Horizontal);
+  resizeDocks({health_dock_, overlay_dock_}, {520, 380}, Qt::Vertical);
+  resizeDocks({pipeline_dock_}, {270}, Qt::Vertical);
   for (QDockWidget* dock :
        {health_dock_, overlay_dock_, calibration_dock_, clone_dock_, pipeline_dock_, rig_dock_})
     dock->show();
@@ -243,6 +250,7 @@ void MainWindow::startDemoOn(const QString& session) {
     emit demoFailed(error);
     return;
   }
+  spec.from_memory = true;  // decoding 12 cameras' PNGs at 30 Hz would take a core
   startSource(spec);
   LocalRunOptions options;
   options.session = session.toStdString();

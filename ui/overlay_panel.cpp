@@ -5,6 +5,7 @@
 #include <QListWidget>
 #include <QPixmap>
 #include <QVBoxLayout>
+#include <cstdlib>
 
 namespace lumistage {
 
@@ -42,7 +43,7 @@ OverlayPanel::OverlayPanel(QWidget* parent)
 
 void OverlayPanel::setRig(const Rig& rig) {
   rig_ = rig;
-  latest_ = QVector<QImage>(rig.cameraCount());
+  recent_ = QVector<QVector<Picture>>(rig.cameraCount());
   grid_->clear();
   for (const Camera& c : rig.cameras()) {
     QPixmap blank(96, 72);
@@ -61,20 +62,44 @@ bool OverlayPanel::selectCamera(int camera) {
   view_->setCaption(tr("%1 (%2): silhouette, skeleton and mesh of the placed body")
                         .arg(QString::fromStdString(rig_.camera(camera).name()),
                              QString::fromStdString(rig_.camera(camera).node())));
-  view_->setImage(latest_[camera]);
+  showBestPicture();
   return true;
 }
 
-void OverlayPanel::showFrame(int camera, const QImage& preview, qint64) {
-  if (camera < 0 || camera >= latest_.size()) return;
-  latest_[camera] = preview;
-  if (QListWidgetItem* item = grid_->item(camera))
+void OverlayPanel::showBestPicture() {
+  if (selected_ < 0 || selected_ >= recent_.size() || recent_[selected_].isEmpty()) {
+    view_->setImage({});
+    return;
+  }
+  const QVector<Picture>& pictures = recent_[selected_];
+  const Picture* best = &pictures.back();
+  if (pose_frame_ >= 0) {
+    for (const Picture& p : pictures) {
+      if (std::abs(p.frame_id - pose_frame_) < std::abs(best->frame_id - pose_frame_)) best = &p;
+    }
+  }
+  view_->setImage(best->image);
+}
+
+void OverlayPanel::showFrame(int camera, const QImage& preview, qint64 frame_id) {
+  if (camera < 0 || camera >= recent_.size()) return;
+  QVector<Picture>& pictures = recent_[camera];
+  pictures.push_back({frame_id, preview});
+  while (pictures.size() > 16) pictures.removeFirst();
+  // The grid's thumbnails once a second are plenty.
+  QListWidgetItem* item = grid_->item(camera);
+  if (item && (item->data(Qt::UserRole).toLongLong() == 0 ||
+               frame_id - item->data(Qt::UserRole).toLongLong() > 25)) {
+    item->setData(Qt::UserRole, frame_id);
     item->setIcon(QPixmap::fromImage(preview.scaled(96, 72, Qt::KeepAspectRatio)));
-  if (camera == selected_) view_->setImage(preview);
+  }
+  if (camera == selected_ && pose_frame_ < 0) showBestPicture();
 }
 
 void OverlayPanel::showSnapshot(const PipelineSnapshot& s) {
   view_->setBody(s.joints, s.parents, s.mesh);
+  pose_frame_ = s.pose_frame;
+  showBestPicture();
 }
 
 }  // namespace lumistage

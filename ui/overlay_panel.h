@@ -14,6 +14,8 @@ namespace lumistage {
 
 // Skeleton overlay: any camera's image with the actor's silhouette, the projected skeleton and
 // the projected mesh of the body the pipeline placed. The camera is picked from a grid of all.
+// The picture shown is the camera's preview nearest the frame the body was placed for (the
+// studio's previews and the nodes replay a session in step, with the same frame ids).
 class OverlayPanel : public QWidget {
   Q_OBJECT
 
@@ -33,8 +35,15 @@ class OverlayPanel : public QWidget {
   Rig rig_;
   QListWidget* grid_;
   CameraOverlayView* view_;
-  QVector<QImage> latest_;
+  void showBestPicture();
+
+  struct Picture {
+    qint64 frame_id;
+    QImage image;
+  };
+  QVector<QVector<Picture>> recent_;  // per camera, the last few previews
   int selected_ = -1;
+  qint64 pose_frame_ = -1;
 };
 
 }  // namespace lumistage

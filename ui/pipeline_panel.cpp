@@ -45,6 +45,7 @@ void PipelineWorker::run() {
     std::vector<Eigen::Vector3d> joints;
     std::shared_ptr<TriangleMesh> mesh;
     while (!stop_) {
+      bool acted = false;
       {
         std::vector<std::function<void(LocalPipelineRun&)>> commands;
         {
@@ -52,12 +53,14 @@ void PipelineWorker::run() {
           commands.swap(commands_);
         }
         for (auto& command : commands) command(pipeline);
+        acted = !commands.empty();
       }
-      pipeline.runFor(std::chrono::milliseconds(50));
+      if (!acted) pipeline.runFor(std::chrono::milliseconds(50));
       for (const std::string& exit : pipeline.takeExits())
         emit message(QString::fromStdString(exit));
       const auto now = std::chrono::steady_clock::now();
-      if (now - last < std::chrono::milliseconds(200)) continue;
+      // Five times a second, and at once after a command (a killed node shows at once).
+      if (!acted && now - last < std::chrono::milliseconds(200)) continue;
       last = now;
       PipelineSnapshot s;
       s.report = pipeline.studio().report();

@@ -75,8 +75,11 @@ void SourceWorker::run() {
       source = std::move(studio);
     } else if (spec_.kind == SourceSpec::Kind::kSession) {
       ReplayOptions options;
-      options.mode = ReplayMode::kRecordedRate;
+      options.mode = spec_.from_memory ? ReplayMode::kFromMemory : ReplayMode::kRecordedRate;
       options.loop = true;
+      // Paced by the machine's clock: the same instant, with the same frame ids, as the pipeline's
+      // nodes replaying the session, so that overlays of the pipeline's body match the pictures.
+      options.synchronized = true;
       source = std::make_unique<SessionSource>(spec_.path.toStdString(), options);
     } else {
       if (spec_.rig.isEmpty()) throw std::runtime_error("Aravis cameras need a rig file (--rig)");
@@ -96,7 +99,7 @@ void SourceWorker::run() {
       if (source->next(frame, std::chrono::milliseconds(100))) {
         // A few previews a second per camera are plenty for a person; the rest is not drawn.
         const auto now = Clock::now();
-        if (now - last_preview[frame.camera] > std::chrono::milliseconds(150)) {
+        if (now - last_preview[frame.camera] > std::chrono::milliseconds(250)) {
           last_preview[frame.camera] = now;
           emit this->frame(frame.camera, preview(frame.image), frame.frame_id);
         }

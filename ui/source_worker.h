@@ -15,9 +15,10 @@ namespace lumistage {
 struct SourceSpec {
   enum class Kind { kVirtualStudio, kSession, kAravis };
   Kind kind = Kind::kVirtualStudio;
-  QString path;     // studio config (virtual studio) or session folder
-  QString rig;      // rig file (Aravis)
-  QString address;  // first camera's address (Aravis): camera i at address + i
+  QString path;              // studio config (virtual studio) or session folder
+  QString rig;               // rig file (Aravis)
+  QString address;           // first camera's address (Aravis): camera i at address + i
+  bool from_memory = false;  // a session decoded up front (then nothing but previews to make)
 
   // "virtual", "virtual:CONFIG", "session:DIR", "aravis:ADDRESS"; empty string on success, else
   // what is wrong.

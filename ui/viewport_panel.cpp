@@ -94,7 +94,7 @@ class GlCanvas : public QOpenGLWidget {
  protected:
   void paintGL() override {
     QPainter painter(this);
-    owner_->paintScene(painter, width(), height());
+    owner_->paintTo(painter, width(), height());
   }
 
  private:
@@ -108,7 +108,7 @@ class RasterCanvas : public QWidget {
  protected:
   void paintEvent(QPaintEvent*) override {
     QPainter painter(this);
-    owner_->paintScene(painter, width(), height());
+    owner_->paintTo(painter, width(), height());
   }
 
  private:
@@ -150,7 +150,18 @@ void ViewportWidget::resizeEvent(QResizeEvent*) {
 }
 
 void ViewportWidget::refresh() {
+  dirty_ = true;
   canvas_->update();
+}
+
+void ViewportWidget::paintTo(QPainter& painter, int w, int h) {
+  if (dirty_ || frame_.size() != QSize(w, h)) {
+    frame_ = QImage(std::max(1, w), std::max(1, h), QImage::Format_ARGB32_Premultiplied);
+    QPainter raster(&frame_);
+    paintScene(raster, w, h);
+    dirty_ = false;
+  }
+  painter.drawImage(0, 0, frame_);
 }
 
 Eigen::Vector3d ViewportWidget::actorFloorPoint() const {
@@ -165,6 +176,7 @@ void ViewportWidget::showSnapshot(const PipelineSnapshot& snapshot) {
 
 void ViewportWidget::paintScene(QPainter& painter, int w, int h) {
   painter.setRenderHint(QPainter::Antialiasing);
+  painter.setRenderHint(QPainter::SmoothPixmapTransform);
   const QRect area(0, 0, w, h);
   painter.fillRect(area, QColor(24, 26, 30));
   const Camera camera = view_.camera(std::max(1, w), std::max(1, h));

@@ -43,7 +43,9 @@ class ViewportWidget : public QWidget {
  public:
   explicit ViewportWidget(CloneSet* clones, QWidget* parent = nullptr);
   bool usesOpenGL() const { return uses_gl_; }
-  // Paints the scene (called by the canvas).
+  // Paints the scene (called by the canvas): drawn with Qt's raster engine into an image, redrawn
+  // only after refresh(), then put on the canvas.
+  void paintTo(QPainter& painter, int width, int height);
   void paintScene(QPainter& painter, int width, int height);
 
   OrbitView& view() { return view_; }
@@ -81,6 +83,8 @@ class ViewportWidget : public QWidget {
  private:
   QWidget* canvas_;
   bool uses_gl_ = false;
+  QImage frame_;
+  bool dirty_ = true;
   OrbitView view_ = OrbitView::studioDefault();
   ViewportLayers layers_;
   Rig rig_;

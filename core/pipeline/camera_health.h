@@ -13,11 +13,11 @@ enum class HealthState { kUnknown, kStreaming, kLate, kLost };
 const char* healthStateName(HealthState state);  // "unknown", "streaming", "late", "lost"
 
 // When a source counts as late or lost. A node sends several messages a frame (silhouettes,
-// statistics, partial images) and a heartbeat twice a second, so 300 ms of silence is several
-// missed frames: late; a second of it: lost (the coordinator's lost_after). A node process that
-// exited is lost at once.
+// statistics, partial images) and a heartbeat four times a second, so half a second of silence is
+// many missed frames: late; a second of it: lost (the coordinator's lost_after). A node process
+// that exited is lost at once.
 struct HealthThresholds {
-  double late_after_ms = 300;
+  double late_after_ms = 500;
   double lost_after_ms = 1000;
   double min_rate_share = 0.75;  // a frame rate below this share of the expected one: late
 };

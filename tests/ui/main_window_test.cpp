@@ -388,7 +388,7 @@ class MainWindowTest : public QObject {
     QVERIFY2(QString::fromStdString(health->verdict(killed_too).words).contains("exited"),
              health->verdict(killed_too).words.c_str());
     QCOMPARE(health->verdict(kept).state, lumistage::HealthState::kStreaming);
-    QTRY_COMPARE_WITH_TIMEOUT(health->table()->item(killed, 2)->text(), QString("lost"), 500);
+    QTRY_COMPARE_WITH_TIMEOUT(health->table()->item(killed, 1)->text(), QString("lost"), 500);
     window.pipeline()->stop();
   }
 };

@@ -30,7 +30,7 @@ TEST(CameraHealth, ClassifiesBySilenceRateAndErrors) {
   EXPECT_NE(v.words.find("camera timeout"), std::string::npos);
   in.last_error.clear();
 
-  in.silent_ms = 400;
+  in.silent_ms = 600;
   EXPECT_EQ(classifyHealth(in).state, HealthState::kLate);
   in.silent_ms = 1500;
   v = classifyHealth(in);
