@@ -109,6 +109,8 @@ HealthPanel::HealthPanel(QWidget* parent)
   table_->verticalHeader()->setDefaultSectionSize(40);
   table_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
   table_->horizontalHeader()->setSectionResizeMode(kProblem, QHeaderView::Stretch);
+  table_->horizontalHeader()->setMinimumSectionSize(40);
+  setMinimumWidth(600);  // the problem in words must be readable
   legend_->setText(
       tr("<span style='color:#2ab02a'>&#9679; streaming</span> &nbsp; "
          "<span style='color:#e09000'>&#9679; late: nothing for 0.5 s, slow or dropping</span> "

@@ -16,6 +16,7 @@
 #include "ui/clone_panel.h"
 #include "ui/health_panel.h"
 #include "ui/main_window.h"
+#include "ui/overlay_panel.h"
 #include "ui/pipeline_panel.h"
 #include "ui/source_worker.h"
 #include "ui/viewport_panel.h"
@@ -168,6 +169,10 @@ int main(int argc, char** argv) {
     steps->push_back(save("", "main_window.png"));
     steps->push_back(save("viewport", "viewport.png"));
     steps->push_back(save("health", "health.png"));
+    steps->push_back([&window] {
+      window.overlay()->selectCamera(2);  // cam03 sees the actor's side: the arms spread
+      return true;
+    });
     steps->push_back(save("overlay", "overlay.png"));
     steps->push_back(save("pipeline", "pipeline.png"));
     steps->push_back([&window] {
@@ -209,13 +214,20 @@ int main(int argc, char** argv) {
     steps->push_back(save("viewport", "viewport_behind.png"));
     // A technician's check: kill a node and time how long its cameras take to show "lost".
     auto killed = std::make_shared<QElapsedTimer>();
-    steps->push_back([&window, killed] {
+    auto shown_after_ms = std::make_shared<qint64>(-1);
+    steps->push_back([&window, killed, shown_after_ms] {
       window.showPanel("health");
+      // When the health panel (connected before this) first says "lost" for node2's cameras.
+      QObject::connect(window.pipeline(), &lumistage::PipelinePanel::snapshot, &window,
+                       [killed, shown_after_ms](const lumistage::PipelineSnapshot& s) {
+                         if (*shown_after_ms < 0 && killed->isValid() && s.exited.contains("node2"))
+                           *shown_after_ms = killed->elapsed();
+                       });
       window.pipeline()->killNode("node2");
       killed->start();
       return true;
     });
-    steps->push_back([&window, killed] {
+    steps->push_back([&window, killed, shown_after_ms] {
       auto* health = window.health();
       const lumistage::Rig* rig = window.rig();
       int camera = -1;
@@ -224,8 +236,10 @@ int main(int argc, char** argv) {
       }
       if (camera < 0) return true;
       if (health->verdict(camera).state != lumistage::HealthState::kLost) return false;
-      std::printf("node2 killed: its cameras show lost after %lld ms\n",
-                  static_cast<long long>(killed->elapsed()));
+      std::printf(
+          "node2 killed: the health panel had it lost after %lld ms (seen by this check after "
+          "%lld ms)\n",
+          static_cast<long long>(*shown_after_ms), static_cast<long long>(killed->elapsed()));
       return true;
     });
     steps->push_back(save("health", "health_node_lost.png"));
