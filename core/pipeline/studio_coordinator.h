@@ -68,7 +68,7 @@ struct RunReport {
   std::vector<NodeReport> nodes;
   int64_t refusals = 0;
   std::vector<FrameTiming> timeline;  // every counted frame, up to kTimelineFrames
-  int frames_in_flight = 0;  // frames begun and not yet done or given up
+  int frames_in_flight = 0;           // frames begun and not yet done or given up
 };
 
 // The studio's side of the distributed pipeline (DESIGN.md §1), one frame at a time per stage but
