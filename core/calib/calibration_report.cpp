@@ -1,0 +1,118 @@
+#include "core/calib/calibration_report.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "core/base/atomic_file.h"
+
+namespace lumistage {
+
+CameraCalibrationReport makeCameraReport(const Camera& camera,
+                                         const std::vector<Eigen::Vector2d>& observed,
+                                         const std::vector<Eigen::Vector2d>& residuals,
+                                         int observations, int coverage_cols, int coverage_rows) {
+  CameraCalibrationReport r;
+  r.name = camera.name();
+  r.width = camera.width(), r.height = camera.height();
+  r.observations = observations;
+  r.inliers = static_cast<int>(observed.size());
+  double sum = 0;
+  for (const Eigen::Vector2d& e : residuals) {
+    sum += e.squaredNorm();
+    r.max_px = std::max(r.max_px, e.norm());
+  }
+  r.rms_px = residuals.empty() ? 0 : std::sqrt(sum / residuals.size());
+  r.coverage_cols = coverage_cols, r.coverage_rows = coverage_rows;
+  r.coverage.assign(static_cast<size_t>(coverage_cols) * coverage_rows, 0);
+  for (const Eigen::Vector2d& p : observed) {
+    const int col = std::clamp(static_cast<int>((p.x() + 0.5) * coverage_cols / camera.width()), 0,
+                               coverage_cols - 1);
+    const int row = std::clamp(static_cast<int>((p.y() + 0.5) * coverage_rows / camera.height()), 0,
+                               coverage_rows - 1);
+    ++r.coverage[static_cast<size_t>(row) * coverage_cols + col];
+  }
+  int covered = 0;
+  for (int n : r.coverage) covered += n > 0;
+  r.coverage_fraction = r.coverage.empty() ? 0 : double(covered) / r.coverage.size();
+  const Intrinsics& k = camera.intrinsics();
+  r.focal_px = k.fx, r.cx = k.cx, r.cy = k.cy;
+  r.k1 = camera.distortion().k1, r.k2 = camera.distortion().k2;
+  return r;
+}
+
+void finishReport(CalibrationReport& report) {
+  double sum = 0;
+  int n = 0;
+  for (const CameraCalibrationReport& c : report.cameras) {
+    sum += c.rms_px * c.rms_px * c.inliers;
+    n += c.inliers;
+  }
+  report.rms_px = n ? std::sqrt(sum / n) : 0;
+}
+
+namespace {
+
+std::string quoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+std::string formatCalibrationReport(const CalibrationReport& report) {
+  std::string out = "# lumistage calibration report (docs/calibration.md)\n";
+  out += fmt::format("method: {}\nsamples: {}\nrms_px: {:.4f}\nsolve_s: {:.3f}\nmetric: {}\n",
+                     report.method, report.samples, report.rms_px, report.solve_s,
+                     report.metric ? "true" : "false");
+  out += "notes:";
+  if (report.notes.empty()) out += " []";
+  out += "\n";
+  for (const std::string& n : report.notes) out += "  - " + quoted(n) + "\n";
+  out += "cameras:\n";
+  for (const CameraCalibrationReport& c : report.cameras) {
+    out += fmt::format("  - name: {}\n    image_size: [{}, {}]\n", c.name, c.width, c.height);
+    out += fmt::format("    observations: {}\n    inliers: {}\n", c.observations, c.inliers);
+    out += fmt::format("    rms_px: {:.4f}\n    max_px: {:.4f}\n", c.rms_px, c.max_px);
+    out += fmt::format("    focal_px: {:.3f}\n    principal_point_px: [{:.3f}, {:.3f}]\n",
+                       c.focal_px, c.cx, c.cy);
+    out += fmt::format("    k1_k2: [{:.6f}, {:.6f}]\n", c.k1, c.k2);
+    out += fmt::format("    coverage_fraction: {:.4f}\n    coverage_grid: [{}, {}]\n",
+                       c.coverage_fraction, c.coverage_cols, c.coverage_rows);
+    out += "    coverage:\n";
+    for (int row = 0; row < c.coverage_rows; ++row) {
+      std::string line;
+      for (int col = 0; col < c.coverage_cols; ++col) {
+        line += (col ? ", " : "") +
+                std::to_string(c.coverage[static_cast<size_t>(row) * c.coverage_cols + col]);
+      }
+      out += "      - [" + line + "]\n";
+    }
+  }
+  return out;
+}
+
+void saveCalibrationReport(const CalibrationReport& report, const std::filesystem::path& path) {
+  writeFileAtomically(path, formatCalibrationReport(report));
+}
+
+std::string summarizeCalibrationReport(const CalibrationReport& report) {
+  std::string out = fmt::format("{} calibration: {} samples, RMS {:.3f} px, {:.2f} s{}\n",
+                                report.method, report.samples, report.rms_px, report.solve_s,
+                                report.metric ? "" : " (scale unknown)");
+  out += fmt::format("{:<10} {:>6} {:>7} {:>8} {:>8} {:>9} {:>9}\n", "camera", "seen", "inliers",
+                     "rms px", "max px", "coverage", "focal px");
+  for (const CameraCalibrationReport& c : report.cameras) {
+    out += fmt::format("{:<10} {:>6} {:>7} {:>8.3f} {:>8.3f} {:>8.0f}% {:>9.1f}\n", c.name,
+                       c.observations, c.inliers, c.rms_px, c.max_px, 100 * c.coverage_fraction,
+                       c.focal_px);
+  }
+  for (const std::string& n : report.notes) out += "note: " + n + "\n";
+  return out;
+}
+
+}  // namespace lumistage
