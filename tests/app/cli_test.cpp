@@ -125,6 +125,42 @@ TEST(Cli, RingThenImportOfSvobodaFilesRoundTrips) {
   fs::remove(imported);
 }
 
+TEST(Cli, CalibrateWandSolvesASimulatedSessionAndWritesRigAndReport) {
+  const fs::path folder = tempPath("wand");
+  fs::create_directories(folder);
+  const std::string points = (folder / "wand.txt").string();
+  Result r = run(kCli + " calibrate synth-wand --samples 300 --seed 4 --out " + points +
+                 " --multicamselfcal " + (folder / "mcsc").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(folder / "mcsc" / "points.dat"));
+  const std::string rig = (folder / "rig.yaml").string(),
+                    report = (folder / "report.yaml").string();
+  r = run(kCli + " calibrate wand --points " + points + " --out " + rig + " --report " + report +
+          " --truth " + kReference);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("camera centres: max"), std::string::npos) << r.output;
+  EXPECT_EQ(loadRig(rig).cameraCount(), 12);
+  std::ifstream in(report);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("method: wand"), std::string::npos);
+  EXPECT_NE(text.find("coverage_fraction"), std::string::npos);
+
+  // A camera that saw nothing: the error names it, and nothing is written.
+  std::ifstream src(points);
+  std::string line, without;
+  while (std::getline(src, line)) {
+    if (line.rfind("point ", 0) == 0 && line.find(" cam07 ") != std::string::npos) continue;
+    without += line + "\n";
+  }
+  std::ofstream(folder / "dark.txt") << without;
+  r = run(kCli + " calibrate wand --points " + (folder / "dark.txt").string() + " --out " +
+          (folder / "dark.yaml").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("camera cam07 saw nothing"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(folder / "dark.yaml"));
+  fs::remove_all(folder);
+}
+
 TEST(Cli, NodeChecksItsPlaceInTheRig) {
   Result r = run(kNode + " --rig " + kReference + " --node node2");
   EXPECT_EQ(r.exit_code, 0) << r.output;
