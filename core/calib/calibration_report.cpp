@@ -3,8 +3,12 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 #include "core/base/atomic_file.h"
+#include "core/base/error.h"
+#include "core/base/yaml_reader.h"
 
 namespace lumistage {
 
@@ -98,6 +102,82 @@ std::string formatCalibrationReport(const CalibrationReport& report) {
 
 void saveCalibrationReport(const CalibrationReport& report, const std::filesystem::path& path) {
   writeFileAtomically(path, formatCalibrationReport(report));
+}
+
+CalibrationReport parseCalibrationReport(std::string_view yaml_text, std::string_view source_name) {
+  const YamlReader y{std::string(source_name)};
+  const YAML::Node root = y.parseDocument(yaml_text);
+  y.requireMap(root, "");
+  CalibrationReport r;
+  r.method = y.string(y.required(root, "", "method", "wand or board"), "method");
+  r.samples = y.integer(y.required(root, "", "samples", "a count"), "samples");
+  r.rms_px = y.number(y.required(root, "", "rms_px", "pixels"), "rms_px");
+  if (root["solve_s"]) r.solve_s = y.number(root["solve_s"], "solve_s");
+  if (root["metric"]) {
+    try {
+      r.metric = root["metric"].as<bool>();
+    } catch (const YAML::Exception&) {
+      y.fail(root["metric"], "metric", "expected true or false");
+    }
+  }
+  if (const YAML::Node notes = root["notes"]) {
+    y.requireSequence(notes, "notes");
+    for (size_t i = 0; i < notes.size(); ++i)
+      r.notes.push_back(y.string(notes[i], YamlReader::item("notes", i)));
+  }
+  const YAML::Node cameras = y.required(root, "", "cameras", "a sequence of cameras");
+  y.requireSequence(cameras, "cameras");
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const std::string key = YamlReader::item("cameras", i);
+    const YAML::Node c = cameras[i];
+    y.requireMap(c, key);
+    auto get = [&](const char* name) { return y.required(c, key, name, "a value"); };
+    auto at = [&](const char* name) { return YamlReader::child(key, name); };
+    CameraCalibrationReport cr;
+    cr.name = y.string(get("name"), at("name"));
+    const YAML::Node size = get("image_size");
+    y.requireSequence(size, at("image_size"), 2);
+    cr.width = y.integer(size[0], at("image_size")),
+    cr.height = y.integer(size[1], at("image_size"));
+    cr.observations = y.integer(get("observations"), at("observations"));
+    cr.inliers = y.integer(get("inliers"), at("inliers"));
+    cr.rms_px = y.number(get("rms_px"), at("rms_px"));
+    cr.max_px = y.number(get("max_px"), at("max_px"));
+    cr.focal_px = y.number(get("focal_px"), at("focal_px"));
+    const YAML::Node pp = get("principal_point_px");
+    y.requireSequence(pp, at("principal_point_px"), 2);
+    cr.cx = y.number(pp[0], at("principal_point_px")),
+    cr.cy = y.number(pp[1], at("principal_point_px"));
+    const YAML::Node k = get("k1_k2");
+    y.requireSequence(k, at("k1_k2"), 2);
+    cr.k1 = y.number(k[0], at("k1_k2")), cr.k2 = y.number(k[1], at("k1_k2"));
+    cr.coverage_fraction = y.number(get("coverage_fraction"), at("coverage_fraction"));
+    const YAML::Node grid = get("coverage_grid");
+    y.requireSequence(grid, at("coverage_grid"), 2);
+    cr.coverage_cols = y.integer(grid[0], at("coverage_grid"));
+    cr.coverage_rows = y.integer(grid[1], at("coverage_grid"));
+    if (cr.coverage_cols <= 0 || cr.coverage_rows <= 0 || cr.coverage_cols > 1000 ||
+        cr.coverage_rows > 1000)
+      y.fail(grid, at("coverage_grid"), "expected two positive sizes up to 1000");
+    const YAML::Node rows = get("coverage");
+    y.requireSequence(rows, at("coverage"), cr.coverage_rows);
+    for (int row = 0; row < cr.coverage_rows; ++row) {
+      const std::string row_key = YamlReader::item(at("coverage"), row);
+      y.requireSequence(rows[row], row_key, cr.coverage_cols);
+      for (int col = 0; col < cr.coverage_cols; ++col)
+        cr.coverage.push_back(y.integer(rows[row][col], row_key));
+    }
+    r.cameras.push_back(std::move(cr));
+  }
+  return r;
+}
+
+CalibrationReport loadCalibrationReport(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path.string() + ": cannot open the calibration report");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseCalibrationReport(text.str(), path.string());
 }
 
 std::string summarizeCalibrationReport(const CalibrationReport& report) {

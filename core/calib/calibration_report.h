@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/geometry/camera.h"
@@ -47,6 +48,10 @@ void finishReport(CalibrationReport& report);  // overall RMS from the cameras'
 
 std::string formatCalibrationReport(const CalibrationReport& report);  // YAML
 void saveCalibrationReport(const CalibrationReport& report, const std::filesystem::path& path);
+// Back from the file (for the studio's calibration panel); Error with file:line: key for anything
+// malformed.
+CalibrationReport loadCalibrationReport(const std::filesystem::path& path);
+CalibrationReport parseCalibrationReport(std::string_view yaml_text, std::string_view source_name);
 // A table for a terminal.
 std::string summarizeCalibrationReport(const CalibrationReport& report);
 
