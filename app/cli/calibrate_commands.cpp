@@ -18,6 +18,7 @@
 #include "core/calib/wand_detector.h"
 #include "core/calib/wand_simulation.h"
 #include "core/capture/session_reader.h"
+#include "core/capture/session_writer.h"
 #include "core/geometry/rig_file.h"
 #include "core/geometry/ring_rig.h"
 
@@ -194,7 +195,7 @@ void addCalibrateCommands(CLI::App& app) {
 
   // ---- synth-wand ----
   struct SynthWandArgs {
-    std::string rig, out, multicamselfcal;
+    std::string rig, out, multicamselfcal, session;
     WandSimulationOptions sim;
   };
   auto sw = std::make_shared<SynthWandArgs>();
@@ -210,6 +211,10 @@ void addCalibrateCommands(CLI::App& app) {
                          "> 0: a two-LED wand of this length (pairs of samples)");
   synth_wand->add_option("--seed", sw->sim.seed)->capture_default_str();
   synth_wand->add_option("-o,--out", sw->out, "wand points file to write")->required();
+  synth_wand->add_option("--session", sw->session,
+                         "also film it: a recorded session (docs/session-format.md) of the dark "
+                         "stage with the wand's LED, a frame a sample, for `calibrate wand "
+                         "--session`");
   synth_wand->add_option(
       "--multicamselfcal", sw->multicamselfcal,
       "also write MultiCamSelfCal's input (points.dat, IdMat.dat, Res.dat) here");
@@ -222,6 +227,25 @@ void addCalibrateCommands(CLI::App& app) {
       observations += sim.session.observationCount(c);
     fmt::print("wrote {}: {} samples, {} observations by {} cameras\n", sw->out,
                sim.session.sampleCount(), observations, sim.session.cameraCount());
+    if (!sw->session.empty()) {
+      SessionWriter writer(sw->session, rig, PixelFormat::kMono8, 30.0,
+                           "lumistage calibrate synth-wand");
+      std::vector<Image> images(rig.cameraCount());
+      std::vector<ImageView> views(rig.cameraCount());
+      const int frames = static_cast<int>(sim.points_m.size());
+      for (int f = 0; f < frames; ++f) {
+        for (int c = 0; c < rig.cameraCount(); ++c) {
+          std::vector<Eigen::Vector2d> spots;
+          const std::optional<Eigen::Vector2d> p = rig.camera(c).project(sim.points_m[f]);
+          if (p && rig.camera(c).inImage(*p)) spots.push_back(*p);
+          renderWandFrame(rig.camera(c), spots, images[c]);
+          views[c] = images[c].view();
+        }
+        writer.writeFrame(f, static_cast<int64_t>(f) * 33'333'333, views);
+        printProgress("film", f + 1, frames);
+      }
+      fmt::print("wrote the session {} ({} frames)\n", sw->session, frames);
+    }
     if (!sw->multicamselfcal.empty()) {
       writeMultiCamSelfCalInput(sim.session, sw->multicamselfcal);
       fmt::print("wrote MultiCamSelfCal input to {}\n", sw->multicamselfcal);

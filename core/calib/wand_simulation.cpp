@@ -1,6 +1,8 @@
 #include "core/calib/wand_simulation.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 namespace lumistage {
@@ -68,6 +70,25 @@ SimulatedWandSession simulateWandSession(const Rig& rig, const WandSimulationOpt
     }
   }
   return sim;
+}
+
+void renderWandFrame(const Camera& camera, const std::vector<Eigen::Vector2d>& spots_px,
+                     Image& out) {
+  out.resize(PixelFormat::kMono8, camera.width(), camera.height());
+  std::fill(out.pixels.begin(), out.pixels.end(), uint8_t{10});
+  for (const Eigen::Vector2d& spot : spots_px) {
+    const int x0 = std::max(0, static_cast<int>(spot.x()) - 7);
+    const int x1 = std::min(camera.width(), static_cast<int>(spot.x()) + 8);
+    const int y0 = std::max(0, static_cast<int>(spot.y()) - 7);
+    const int y1 = std::min(camera.height(), static_cast<int>(spot.y()) + 8);
+    for (int y = y0; y < y1; ++y) {
+      for (int x = x0; x < x1; ++x) {
+        const double d2 = (Eigen::Vector2d(x, y) - spot).squaredNorm();
+        uint8_t& v = out.pixels[static_cast<size_t>(y) * camera.width() + x];
+        v = static_cast<uint8_t>(std::min(255.0, v + 240 * std::exp(-d2 / 8.0)));
+      }
+    }
+  }
 }
 
 }  // namespace lumistage

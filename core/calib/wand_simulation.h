@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/calib/wand_session.h"
+#include "core/capture/image.h"
 #include "core/geometry/rig.h"
 
 namespace lumistage {
@@ -38,5 +39,10 @@ struct SimulatedWandSession {
 };
 
 SimulatedWandSession simulateWandSession(const Rig& rig, const WandSimulationOptions& options);
+
+// A camera's mono8 frame of the dark stage (level 10) with bright spots (the wand's LED where the
+// lens puts it, reflections): Gaussian, 2 px standard deviation, peak 250. Reuses `out`.
+void renderWandFrame(const Camera& camera, const std::vector<Eigen::Vector2d>& spots_px,
+                     Image& out);
 
 }  // namespace lumistage

@@ -161,6 +161,24 @@ TEST(Cli, CalibrateWandSolvesASimulatedSessionAndWritesRigAndReport) {
   fs::remove_all(folder);
 }
 
+TEST(Cli, CalibrateWandFromAFilmedSessionThroughTheDetector) {
+  const fs::path folder = tempPath("wand_session");
+  fs::create_directories(folder);
+  const std::string rig = (folder / "truth.yaml").string();
+  Result r = run(kCli + " rig ring --cameras 8 --width 320 --height 240 --out " + rig);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run(kCli + " calibrate synth-wand --rig " + rig +
+          " --samples 150 --noise-px 0 --outliers 0 " + "--out " + (folder / "w.txt").string() +
+          " --session " + (folder / "dark").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run(kCli + " calibrate wand --session " + (folder / "dark").string() + " --out " +
+          (folder / "rig.yaml").string() + " --truth " + rig);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("wand calibration: 153 samples"), std::string::npos) << r.output;
+  EXPECT_EQ(loadRig(folder / "rig.yaml").cameraCount(), 8);
+  fs::remove_all(folder);
+}
+
 TEST(Cli, NodeChecksItsPlaceInTheRig) {
   Result r = run(kNode + " --rig " + kReference + " --node node2");
   EXPECT_EQ(r.exit_code, 0) << r.output;

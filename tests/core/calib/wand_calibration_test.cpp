@@ -194,22 +194,10 @@ TEST(WandCalibration, EndToEndThroughTheDetector) {
   for (size_t s = 0; s < path.points_m.size(); ++s) {
     for (int c = 0; c < truth.cameraCount(); ++c) {
       const Camera& cam = truth.camera(c);
-      image.resize(PixelFormat::kMono8, cam.width(), cam.height());
-      std::fill(image.pixels.begin(), image.pixels.end(), uint8_t{10});
       std::vector<Eigen::Vector2d> spots;
       if (auto p = cam.project(path.points_m[s]); p && cam.inImage(*p)) spots.push_back(*p);
       if (u(rng) < 0.03) spots.emplace_back(u(rng) * cam.width(), u(rng) * cam.height());
-      for (const Eigen::Vector2d& spot : spots) {
-        for (int y = std::max(0, int(spot.y()) - 6); y < std::min(cam.height(), int(spot.y()) + 7);
-             ++y) {
-          for (int x = std::max(0, int(spot.x()) - 6); x < std::min(cam.width(), int(spot.x()) + 7);
-               ++x) {
-            const double d2 = (Eigen::Vector2d(x, y) - spot).squaredNorm();
-            uint8_t& v = image.pixels[static_cast<size_t>(y) * cam.width() + x];
-            v = static_cast<uint8_t>(std::min(255.0, v + 240 * std::exp(-d2 / 8.0)));
-          }
-        }
-      }
+      renderWandFrame(cam, spots, image);
       const WandDetection d = detector.detect(image.view());
       if (d.status == WandDetection::Status::kFound && cam.inImage(d.pixel))
         session.set(s, c, d.pixel);
