@@ -137,7 +137,7 @@ void addCalibrateCommands(CLI::App& app) {
 
   // ---- wand ----
   struct WandArgs {
-    std::string points, session, out, report, initial_rig, truth;
+    std::string points, session, out, report, initial_rig, truth, save_points;
     double wand_length_m = 0, hfov_deg = 60;
     int cameras_per_node = 3, threshold = 160;
     bool refine_principal_point = false;
@@ -151,6 +151,9 @@ void addCalibrateCommands(CLI::App& app) {
                                    "recorded session of the dark stage and the wand (the detector "
                                    "finds the point in every image)");
   points->excludes(session);
+  wand->add_option("--save-points", w->save_points,
+                   "with --session: also write the detected points file (add pair and floor lines "
+                   "to it for the scale and the floor, then solve it with --points)");
   wand->add_option("-o,--out", w->out, "rig file to write")->required();
   wand->add_option("--report", w->report, "calibration report to write (YAML)");
   wand->add_option("--wand-length", w->wand_length_m,
@@ -178,6 +181,10 @@ void addCalibrateCommands(CLI::App& app) {
       WandDetectorOptions detector;
       detector.threshold = w->threshold;
       data = detectWandSession(w->session, detector);
+      if (!w->save_points.empty()) {
+        saveWandSession(data, w->save_points);
+        fmt::print("wrote {}\n", w->save_points);
+      }
     }
     WandCalibrationOptions options;
     if (!w->initial_rig.empty()) options.initial_rig = loadRig(w->initial_rig);

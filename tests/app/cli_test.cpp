@@ -172,10 +172,15 @@ TEST(Cli, CalibrateWandFromAFilmedSessionThroughTheDetector) {
           " --session " + (folder / "dark").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   r = run(kCli + " calibrate wand --session " + (folder / "dark").string() + " --out " +
-          (folder / "rig.yaml").string() + " --truth " + rig);
+          (folder / "rig.yaml").string() + " --truth " + rig + " --save-points " +
+          (folder / "detected.txt").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("wand calibration: 153 samples"), std::string::npos) << r.output;
   EXPECT_EQ(loadRig(folder / "rig.yaml").cameraCount(), 8);
+  // The detected points, to be completed with floor marks and solved again.
+  r = run(kCli + " calibrate wand --points " + (folder / "detected.txt").string() + " --out " +
+          (folder / "rig2.yaml").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
   fs::remove_all(folder);
 }
 
