@@ -6,6 +6,7 @@
 #include <exception>
 
 #include "app/cli/body_commands.h"
+#include "app/cli/calibrate_commands.h"
 #include "app/cli/camera_commands.h"
 #include "app/cli/info_command.h"
 #include "app/cli/key_commands.h"
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
   lumistage::addKeyCommands(app);
   lumistage::addSynthCommand(app);
   lumistage::addInfoCommand(app);
+  lumistage::addCalibrateCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

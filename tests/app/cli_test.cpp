@@ -125,6 +125,65 @@ TEST(Cli, RingThenImportOfSvobodaFilesRoundTrips) {
   fs::remove(imported);
 }
 
+TEST(Cli, CalibrateWandSolvesASimulatedSessionAndWritesRigAndReport) {
+  const fs::path folder = tempPath("wand");
+  fs::create_directories(folder);
+  const std::string points = (folder / "wand.txt").string();
+  Result r = run(kCli + " calibrate synth-wand --samples 300 --seed 4 --out " + points +
+                 " --multicamselfcal " + (folder / "mcsc").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(folder / "mcsc" / "points.dat"));
+  const std::string rig = (folder / "rig.yaml").string(),
+                    report = (folder / "report.yaml").string();
+  r = run(kCli + " calibrate wand --points " + points + " --out " + rig + " --report " + report +
+          " --truth " + kReference);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("camera centres: max"), std::string::npos) << r.output;
+  EXPECT_EQ(loadRig(rig).cameraCount(), 12);
+  std::ifstream in(report);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("method: wand"), std::string::npos);
+  EXPECT_NE(text.find("coverage_fraction"), std::string::npos);
+
+  // A camera that saw nothing: the error names it, and nothing is written.
+  std::ifstream src(points);
+  std::string line, without;
+  while (std::getline(src, line)) {
+    if (line.rfind("point ", 0) == 0 && line.find(" cam07 ") != std::string::npos) continue;
+    without += line + "\n";
+  }
+  std::ofstream(folder / "dark.txt") << without;
+  r = run(kCli + " calibrate wand --points " + (folder / "dark.txt").string() + " --out " +
+          (folder / "dark.yaml").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("camera cam07 saw nothing"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(folder / "dark.yaml"));
+  fs::remove_all(folder);
+}
+
+TEST(Cli, CalibrateWandFromAFilmedSessionThroughTheDetector) {
+  const fs::path folder = tempPath("wand_session");
+  fs::create_directories(folder);
+  const std::string rig = (folder / "truth.yaml").string();
+  Result r = run(kCli + " rig ring --cameras 8 --width 320 --height 240 --out " + rig);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run(kCli + " calibrate synth-wand --rig " + rig +
+          " --samples 150 --noise-px 0 --outliers 0 " + "--out " + (folder / "w.txt").string() +
+          " --session " + (folder / "dark").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run(kCli + " calibrate wand --session " + (folder / "dark").string() + " --out " +
+          (folder / "rig.yaml").string() + " --truth " + rig + " --save-points " +
+          (folder / "detected.txt").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("wand calibration: 153 samples"), std::string::npos) << r.output;
+  EXPECT_EQ(loadRig(folder / "rig.yaml").cameraCount(), 8);
+  // The detected points, to be completed with floor marks and solved again.
+  r = run(kCli + " calibrate wand --points " + (folder / "detected.txt").string() + " --out " +
+          (folder / "rig2.yaml").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  fs::remove_all(folder);
+}
+
 TEST(Cli, NodeChecksItsPlaceInTheRig) {
   Result r = run(kNode + " --rig " + kReference + " --node node2");
   EXPECT_EQ(r.exit_code, 0) << r.output;

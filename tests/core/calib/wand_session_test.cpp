@@ -1,0 +1,55 @@
+#include "core/calib/wand_session.h"
+
+#include <gtest/gtest.h>
+
+#include "core/calib/wand_simulation.h"
+#include "core/geometry/ring_rig.h"
+#include "tests/test_util.h"
+
+namespace lumistage {
+namespace {
+
+TEST(WandSession, SavesAndLoadsBack) {
+  WandSimulationOptions sim;
+  sim.samples = 40;
+  sim.wand_length_m = 0.4;
+  const SimulatedWandSession s = simulateWandSession(makeRingRig(RingRigSpec{}), sim);
+  const std::filesystem::path file = testing::testFolder("wand") / "points.txt";
+  saveWandSession(s.session, file);
+  const WandSession back = loadWandSession(file);
+  ASSERT_EQ(back.cameraCount(), s.session.cameraCount());
+  ASSERT_EQ(back.sampleCount(), s.session.sampleCount());
+  EXPECT_EQ(back.wand_pairs, s.session.wand_pairs);
+  ASSERT_EQ(back.floor_marks.size(), 3u);
+  EXPECT_EQ(back.floor_marks[1].world_m, Eigen::Vector3d(1, 0, 0));
+  for (int sp = 0; sp < back.sampleCount(); ++sp) {
+    for (int c = 0; c < back.cameraCount(); ++c) {
+      ASSERT_EQ(back.has(sp, c), s.session.has(sp, c));
+      if (back.has(sp, c)) {
+        EXPECT_LT((back.pixel(sp, c) - s.session.pixel(sp, c)).norm(), 1e-4);
+      }
+    }
+  }
+}
+
+TEST(WandSession, ErrorsNameTheLine) {
+  const std::string head = "# lumistage wand points 1\ncamera cam01 640 480\n";
+  auto error = [](const std::string& text) {
+    return testing::errorOf([&] { parseWandSession(text, "w.txt"); });
+  };
+  EXPECT_NE(error(head + "point 0 cam02 1 2\n").find("w.txt:3"), std::string::npos);
+  EXPECT_NE(error(head + "point 0 cam02 1 2\n").find("unknown camera 'cam02'"), std::string::npos);
+  EXPECT_NE(error(head + "point 0 cam01 700 2\n").find("outside camera cam01's 640x480"),
+            std::string::npos);
+  EXPECT_NE(error(head + "point x cam01 1 2\n").find("sample: expected a non-negative integer"),
+            std::string::npos);
+  EXPECT_NE(error("camera cam01 640 480\n").find("w.txt:1"), std::string::npos);
+  EXPECT_NE(error(head + "blob 1\n").find("unknown line kind 'blob'"), std::string::npos);
+  const WandSession ok = parseWandSession(head + "point 3 cam01 10.5 20.25\n", "w.txt");
+  EXPECT_EQ(ok.sampleCount(), 4);
+  EXPECT_TRUE(ok.has(3, 0));
+  EXPECT_FALSE(ok.has(2, 0));
+}
+
+}  // namespace
+}  // namespace lumistage
