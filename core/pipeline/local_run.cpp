@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -72,9 +73,15 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
     std::vector<char*> argv;
     for (std::string& s : args) argv.push_back(s.data());
     argv.push_back(nullptr);
+    const pid_t parent = ::getpid();
     const pid_t pid = fork();
     if (pid < 0) throw Error("pipeline: cannot start the process of node " + name);
     if (pid == 0) {
+      // A node started here dies with this process, even when it crashes or is killed (a
+      // destructor that never runs must not leave nodes replaying forever). The thread that
+      // forked must outlive the run: the run is owned where it was made.
+      prctl(PR_SET_PDEATHSIG, SIGTERM);
+      if (::getppid() != parent) _exit(0);  // the parent already died before prctl
       execv(node_binary.c_str(), argv.data());
       _exit(127);
     }
