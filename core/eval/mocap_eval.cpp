@@ -1,0 +1,108 @@
+#include "core/eval/mocap_eval.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/base/error.h"
+#include "core/imaging/keyer.h"
+#include "core/pipeline/silhouettes.h"
+
+namespace lumistage {
+
+MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& generic,
+                              const MocapEvalOptions& options, EvalReport& report) {
+  const Rig& rig = session.rig();
+  const int all = rig.cameraCount();
+  const int count = options.camera_count > 0 ? std::min(options.camera_count, all) : all;
+  std::vector<int> cameras;
+  for (int k = 0; k < count; ++k) cameras.push_back(k * all / count);
+  PoseTrackerOptions tracker_options = options.tracker;
+  tracker_options.silhouette_step = options.silhouette_step;
+  PoseTracker tracker(rig, generic, tracker_options);
+
+  std::vector<std::vector<Eigen::Vector3d>> truth;
+  std::vector<std::string> names;
+  if (session.hasTruth()) truth = session.readTruthJoints(&names);
+  // The truth's joints by the tracker's joint order (same names).
+  std::vector<int> truth_index;
+  if (!truth.empty()) {
+    for (int j = 0; j < tracker.skeleton().jointCount(); ++j) {
+      const auto it = std::find(names.begin(), names.end(), tracker.skeleton().joint(j).name);
+      if (it == names.end())
+        throw Error(session.folder().string() + "/truth/joints.csv: no joint '" +
+                    tracker.skeleton().joint(j).name + "'");
+      truth_index.push_back(int(it - names.begin()));
+    }
+  }
+
+  const int frames = options.max_frames > 0 ? std::min(options.max_frames, session.frameCount())
+                                            : session.frameCount();
+  MocapEvalResult result;
+  std::vector<CameraFrame> images;
+  std::vector<LowResSilhouette> silhouettes(all);
+  std::vector<const LowResSilhouette*> pointers;
+  const GreenScreenKeyer keyer;
+  std::vector<double> errors_mm, times_ms;
+  int tracked = 0;
+  bool initialised = false;
+  for (int f = 0; f < frames; ++f) {
+    session.readFrame(f, images, cameras);
+    pointers.clear();
+    for (int c : cameras) {
+      computeSilhouette(keyer, images[c].image.view(), c, options.silhouette_step, silhouettes[c]);
+      pointers.push_back(&silhouettes[c]);
+    }
+    const auto start = std::chrono::steady_clock::now();
+    const TrackResult& r = tracker.track(pointers);
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    times_ms.push_back(ms);
+    report.setFrame(f, "pose_ms", ms);
+    report.setFrame(f, "tracked", r.valid() ? 1 : 0);
+    result.valid.push_back(r.valid());
+    result.poses.push_back(r.pose);
+    result.joints.push_back(r.valid() ? r.joints : std::vector<Eigen::Vector3d>{});
+    if (!r.valid()) continue;
+    ++tracked;
+    report.setFrame(f, "fit_rms_mm", r.fit_rms_m * 1e3);
+    if (!truth.empty()) {
+      double sum = 0;
+      for (size_t j = 0; j < truth_index.size(); ++j)
+        sum += (r.joints[j] - truth[f][truth_index[j]]).norm();
+      const double mm = 1e3 * sum / truth_index.size();
+      report.setFrame(f, "mpjpe_mm", mm);
+      // The initialising frame itself is reported but not held to the tracking bound.
+      if (initialised || r.state == TrackState::kTracking) errors_mm.push_back(mm);
+      initialised = true;
+    }
+  }
+  result.skeleton = tracker.skeleton();
+
+  const std::string section = "mocap";
+  report.set(section, "frames", frames);
+  report.set(section, "frames_tracked", tracked);
+  report.set(section, "cameras", count);
+  auto mean = [](const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return v.empty() ? std::nan("") : s / v.size();
+  };
+  if (!truth.empty()) {
+    report.set(section, "mpjpe_mm", mean(errors_mm));
+    report.set(
+        section, "mpjpe_mm_max",
+        errors_mm.empty() ? std::nan("") : *std::max_element(errors_mm.begin(), errors_mm.end()));
+    std::vector<double> sorted = errors_mm;
+    std::sort(sorted.begin(), sorted.end());
+    report.set(section, "mpjpe_mm_p95",
+               sorted.empty() ? std::nan("") : sorted[size_t(0.95 * (sorted.size() - 1))]);
+  }
+  report.set(section, "pose_ms", mean(times_ms));
+  report.set(section, "pose_ms_max",
+             times_ms.empty() ? std::nan("") : *std::max_element(times_ms.begin(), times_ms.end()));
+  report.set(section, "actor_height_m", tracker.shape().height_m);
+  return result;
+}
+
+}  // namespace lumistage

@@ -1,0 +1,38 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/body/skinned_mesh.h"
+#include "core/capture/session_reader.h"
+#include "core/eval/eval_report.h"
+#include "core/tracking/pose_tracker.h"
+
+namespace lumistage {
+
+struct MocapEvalOptions {
+  int silhouette_step = 8;  // as the nodes send
+  int camera_count = 0;     // use this many of the rig's cameras, evenly spread; 0: all
+  int max_frames = 0;       // 0: every readable frame
+  PoseTrackerOptions tracker;
+};
+
+// The tracked motion of a session, frame by frame (what later stages of the evaluation use).
+struct MocapEvalResult {
+  std::vector<bool> valid;                           // the tracker had the actor
+  std::vector<Pose> poses;                           // of `skeleton`
+  std::vector<std::vector<Eigen::Vector3d>> joints;  // world, metres
+  Skeleton skeleton;                                 // calibrated to the actor
+};
+
+// Replays a session as the studio sees it: every camera's image keyed at low resolution
+// (GreenScreenKeyer at the cells' centres, as CameraNode does), the silhouettes fed to a
+// PoseTracker, and the tracked joints compared with truth/joints.csv when the session has it.
+// Adds section "mocap" to `report`: frames, frames_tracked, cameras, mpjpe_mm (mean over tracked
+// frames of the mean per-joint error), mpjpe_mm_max (the worst frame after initialisation),
+// mpjpe_mm_p95, pose_ms (mean fit time per frame, one core), pose_ms_max, actor_height_m; and
+// per-frame columns mpjpe_mm, pose_ms, fit_rms_mm, tracked. Throws Error on unreadable files.
+MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& generic,
+                              const MocapEvalOptions& options, EvalReport& report);
+
+}  // namespace lumistage

@@ -1,0 +1,877 @@
+#include "core/tracking/pose_tracker.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace lumistage {
+
+namespace {
+
+constexpr uint16_t kUnseen = 0xffff;
+
+// A capsule hung on joint `joint`: the segment from the joint to `b` (rest-aligned offset, turned
+// with the joint) and a radius.
+// A capsule hung on joint `joint`, along its segment: to its child `child`, or along `end_dir`
+// (1 m in the generic skeleton) for an end joint. The axis runs from fraction a_frac to b_frac of
+// the segment, shifted sideways by `lateral_m` (the torso is two capsules side by side); all
+// measured on the generic mesh, then scaled with the calibrated skeleton.
+struct Capsule {
+  int joint = 0;
+  int child = -1;
+  Eigen::Vector3d end_dir = Eigen::Vector3d::UnitZ();
+  double a_frac = 0, b_frac = 1;
+  Eigen::Vector3d lateral_m = Eigen::Vector3d::Zero();
+  double generic_radius_m = 0;
+  // For the current skeleton: the axis relative to the joint (rest-aligned frame).
+  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+  double radius_m = 0;
+};
+
+struct Sample {  // an axis sample that must project inside every silhouette
+  int joint;
+  Eigen::Vector3d local;
+};
+
+// One degree of freedom of the fit: root translation axis, root rotation axis (applied on the
+// left, about the root), or one Euler angle of a joint.
+struct Dof {
+  enum Kind { kTranslation, kRootRotation, kEuler } kind;
+  int joint;
+  int axis;
+};
+
+double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                       Eigen::Vector3d& closest) {
+  const Eigen::Vector3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  double t = len2 > 0 ? (p - a).dot(ab) / len2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  closest = a + t * ab;
+  return (p - closest).norm();
+}
+
+// Squared Euclidean distance transform in 1D (Felzenszwalb & Huttenlocher).
+void edt1d(const float* f, int n, float* d, int* v, float* z) {
+  int k = 0;
+  v[0] = 0;
+  z[0] = -std::numeric_limits<float>::infinity();
+  z[1] = std::numeric_limits<float>::infinity();
+  for (int q = 1; q < n; ++q) {
+    float s;
+    while (true) {
+      s = ((f[q] + float(q) * q) - (f[v[k]] + float(v[k]) * v[k])) / (2.0f * (q - v[k]));
+      if (s <= z[k] && k > 0) {
+        --k;
+      } else {
+        break;
+      }
+    }
+    if (s <= z[k]) {  // k == 0
+      v[0] = q;
+      z[0] = -std::numeric_limits<float>::infinity();
+      z[1] = std::numeric_limits<float>::infinity();
+      continue;
+    }
+    ++k;
+    v[k] = q;
+    z[k] = s;
+    z[k + 1] = std::numeric_limits<float>::infinity();
+  }
+  k = 0;
+  for (int q = 0; q < n; ++q) {
+    while (z[k + 1] < q) ++k;
+    d[q] = float(q - v[k]) * float(q - v[k]) + f[v[k]];
+  }
+}
+
+}  // namespace
+
+struct PoseTracker::Impl {
+  PoseTrackerOptions opt;
+  Rig rig;
+  int cameras = 0;
+  std::vector<int> cell_w, cell_h;
+  // Hull grid.
+  Eigen::Vector3d lower;
+  Eigen::Vector3i dims;
+  std::vector<uint16_t> cell;  // [voxel * cameras + camera]
+  std::vector<uint8_t> occupied;
+  std::vector<Eigen::Vector3d> surface_all, hull;
+  // Silhouette distance transforms (cells), per camera; present[c] when this frame has one.
+  std::vector<std::vector<float>> dt;
+  std::vector<uint8_t> present;
+  std::vector<float> dt_f, dt_d, dt_z, dt_col;
+  std::vector<int> dt_v;
+  // Body model.
+  Skeleton generic;
+  Skeleton skeleton;
+  BodyShape shape;
+  double foot_scale =
+      getenv("FOOT") ? atof(getenv("FOOT")) : 1.0;  // the feet's radii over the body's (shoes)
+  bool shape_calibrated = false;
+  double generic_head_z = 1, generic_top_z = 1;
+  std::vector<Capsule> capsules;
+  std::vector<Sample> samples;
+  std::vector<Dof> dofs;
+  std::vector<std::vector<int>> chain;  // dofs moving each joint, ascending
+  // Per evaluation.
+  std::vector<Eigen::Isometry3d> global;
+  std::vector<Eigen::Vector3d> dof_axis, dof_centre;
+  std::vector<Eigen::Vector3d> cap_a, cap_b;
+  Eigen::MatrixXd H, H_new;
+  Eigen::VectorXd g, g_new, delta;
+  Eigen::MatrixXd damped;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt;
+  Pose candidate, predicted, fitted;
+  std::vector<double> row;
+  std::vector<int> row_index;
+  // Tracking state.
+  bool tracking = false;
+  int bad_frames = 0;
+  Pose pose, previous;
+  bool has_previous = false;
+  Pose prior_pose;
+  bool use_prior = false;
+  double prior_weight = 0;
+
+  Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTrackerOptions& o);
+  void buildModel(const SkinnedMesh& mesh);
+  void setShape(const BodyShape& s);
+  void prepareSilhouettes(const std::vector<const LowResSilhouette*>& silhouettes);
+  // Carves voxels [lo, hi] (inclusive) and samples the hull's surface; returns the volume.
+  double carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid, double* top_z);
+  double evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h, Eigen::VectorXd& grad);
+  double fit(Pose& p, int iterations);
+  double fitRms(const Pose& p);
+  void apply(Pose& p, const Eigen::VectorXd& delta) const;
+  bool initialise(TrackResult& out);
+};
+
+PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTrackerOptions& o)
+    : opt(o), rig(r), cameras(r.cameraCount()), generic(mesh.skeleton) {
+  if (generic.jointCount() != kHumanJointCount)
+    throw std::invalid_argument("PoseTracker: the generic skeleton must be the human skeleton");
+  const int step = opt.silhouette_step;
+  for (int c = 0; c < cameras; ++c) {
+    cell_w.push_back(rig.camera(c).width() / step);
+    cell_h.push_back(rig.camera(c).height() / step);
+    if (cell_w.back() * cell_h.back() >= kUnseen)
+      throw std::invalid_argument("PoseTracker: too many silhouette cells for camera " +
+                                  rig.camera(c).name());
+  }
+  lower = opt.stage_lower;
+  dims = ((opt.stage_upper - opt.stage_lower) / opt.voxel_m).array().ceil().cast<int>();
+  const size_t voxels = size_t(dims.x()) * dims.y() * dims.z();
+  cell.assign(voxels * cameras, kUnseen);
+  occupied.assign(voxels, 0);
+  // Projects one z slab at a time (bounded temporary memory).
+  const size_t slab = size_t(dims.x()) * dims.y();
+  Eigen::Matrix3Xd centres(3, slab);
+  Eigen::Matrix2Xd pixels;
+  Eigen::VectorXd depths;
+  for (int z = 0; z < dims.z(); ++z) {
+    for (int y = 0; y < dims.y(); ++y) {
+      for (int x = 0; x < dims.x(); ++x) {
+        centres.col(size_t(y) * dims.x() + x) =
+            lower + opt.voxel_m * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
+      }
+    }
+    for (int c = 0; c < cameras; ++c) {
+      rig.camera(c).project(centres, pixels, depths);
+      for (size_t i = 0; i < slab; ++i) {
+        if (depths(i) <= 0) continue;
+        const int x = int(std::floor(pixels(0, i) / step)),
+                  y = int(std::floor(pixels(1, i) / step));
+        if (x >= 0 && y >= 0 && x < cell_w[c] && y < cell_h[c])
+          cell[(size_t(z) * slab + i) * cameras + c] = uint16_t(y * cell_w[c] + x);
+      }
+    }
+  }
+  dt.resize(cameras);
+  for (int c = 0; c < cameras; ++c) dt[c].assign(size_t(cell_w[c]) * cell_h[c], 0.0f);
+  present.assign(cameras, 0);
+  const int longest = std::max(*std::max_element(cell_w.begin(), cell_w.end()),
+                               *std::max_element(cell_h.begin(), cell_h.end()));
+  dt_f.resize(longest);
+  dt_d.resize(longest);
+  dt_z.resize(longest + 1);
+  dt_v.resize(longest);
+  dt_col.resize(longest);
+
+  buildModel(mesh);
+  // Degrees of freedom, parents first (so every chain is ascending).
+  for (int k = 0; k < 3; ++k) dofs.push_back({Dof::kTranslation, 0, k});
+  for (int k = 0; k < 3; ++k) dofs.push_back({Dof::kRootRotation, 0, k});
+  chain.resize(generic.jointCount());
+  for (int k = 0; k < 6; ++k) chain[0].push_back(k);
+  for (int j = 1; j < generic.jointCount(); ++j) {
+    chain[j] = chain[generic.joint(j).parent];
+    const JointLimits& l = generic.joint(j).limits;
+    for (int k = 0; k < 3; ++k) {
+      if (l.upper_rad[k] > l.lower_rad[k]) {
+        chain[j].push_back(int(dofs.size()));
+        dofs.push_back({Dof::kEuler, j, k});
+      }
+    }
+  }
+  const int n = int(dofs.size());
+  H.setZero(n, n);
+  H_new.setZero(n, n);
+  g.setZero(n);
+  g_new.setZero(n);
+  delta.setZero(n);
+  damped.setZero(n, n);
+  ldlt = Eigen::LDLT<Eigen::MatrixXd>(n);
+  row.resize(n);
+  row_index.resize(n);
+  dof_axis.resize(n);
+  dof_centre.resize(n);
+  pose = previous = prior_pose = candidate = predicted = fitted = Pose::rest(generic.jointCount());
+  surface_all.reserve(voxels / 16);
+  hull.reserve(opt.max_hull_points + 1);
+}
+
+namespace {
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const size_t k = size_t(q * double(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
+
+}  // namespace
+
+void PoseTracker::Impl::buildModel(const SkinnedMesh& mesh) {
+  const Skeleton& s = generic;
+  const auto& rest = s.restPositions();
+  std::vector<std::vector<int>> children(s.jointCount());
+  for (int j = 1; j < s.jointCount(); ++j) children[s.joint(j).parent].push_back(j);
+  // Each joint's segments: to each child, or along its own bone for an end joint.
+  std::vector<Capsule> segments;
+  std::vector<std::vector<int>> of_joint(s.jointCount());
+  auto segment = [&](const Capsule& c) -> Eigen::Vector3d {
+    return c.child >= 0 ? Eigen::Vector3d(s.joint(c.child).offset_m) : c.end_dir;
+  };
+  for (int j = 0; j < s.jointCount(); ++j) {
+    if (children[j].empty()) {
+      Capsule c;
+      c.joint = j;
+      const Eigen::Vector3d off = s.joint(j).offset_m;
+      c.end_dir = off.norm() > 0 ? Eigen::Vector3d(off.normalized()) : Eigen::Vector3d::UnitZ();
+      of_joint[j].push_back(int(segments.size()));
+      segments.push_back(c);
+    } else {
+      for (int child : children[j]) {
+        Capsule c;
+        c.joint = j;
+        c.child = child;
+        of_joint[j].push_back(int(segments.size()));
+        segments.push_back(c);
+      }
+    }
+  }
+  // Vertices by their dominant joint, then by the nearest of its segments.
+  std::vector<std::vector<Eigen::Vector3d>> verts(segments.size());
+  for (int v = 0; v < mesh.rest.vertexCount(); ++v) {
+    const auto& w = mesh.skin.weights[v];
+    const int k = int(std::max_element(w.begin(), w.end()) - w.begin());
+    const int j = mesh.skin.joints[v][k];
+    const Eigen::Vector3d p = mesh.rest.positions.col(v).cast<double>() - rest[j];
+    int best = -1;
+    double best_d = 1e9;
+    for (int ci : of_joint[j]) {
+      Eigen::Vector3d closest;
+      const Eigen::Vector3d seg =
+          segments[ci].child >= 0 ? segment(segments[ci]) : Eigen::Vector3d(segment(segments[ci]));
+      const double d = segmentDistance(p, Eigen::Vector3d::Zero(), seg, closest);
+      if (d < best_d) best_d = d, best = ci;
+    }
+    if (best >= 0) verts[best].push_back(p);
+  }
+  for (size_t ci = 0; ci < segments.size(); ++ci) {
+    const std::vector<Eigen::Vector3d>& pts = verts[ci];
+    if (pts.size() < 8) continue;  // a segment no surface hangs on
+    const Eigen::Vector3d seg = segment(segments[ci]);
+    const double len = seg.norm();
+    const Eigen::Vector3d u = seg / len;
+    std::vector<double> t, dist, lat, depth;
+    for (const Eigen::Vector3d& p : pts) {
+      const double along = p.dot(u);
+      const Eigen::Vector3d perp = p - along * u;
+      t.push_back(along);
+      dist.push_back(perp.norm());
+      lat.push_back(std::abs(perp.x()));
+      depth.push_back(std::abs(perp.y()));
+    }
+    const double t_lo = percentile(t, 0.03), t_hi = percentile(t, 0.97);
+    // Wide and flat around a vertical segment (the torso): two capsules side by side.
+    const double sx = percentile(lat, 0.9), sy = percentile(depth, 0.9);
+    std::vector<double> offsets = {0.0};
+    if (std::abs(u.z()) > 0.8 && sx > 1.3 * sy) offsets = {sx - sy, -(sx - sy)};
+    double r = percentile(dist, 0.5);
+    if (offsets.size() == 2) {
+      std::vector<double> d2;
+      for (const Eigen::Vector3d& p : pts) {
+        const Eigen::Vector3d perp = p - p.dot(u) * u;
+        const double o = perp.x() > 0 ? offsets[0] : offsets[1];
+        d2.push_back((perp - Eigen::Vector3d(o, 0, 0)).norm());
+      }
+      r = percentile(d2, 0.5);
+    }
+    double a_t = t_lo + r, b_t = t_hi - r;
+    if (a_t > b_t) a_t = b_t = 0.5 * (t_lo + t_hi);
+    for (double o : offsets) {
+      Capsule c = segments[ci];
+      c.a_frac = a_t / len;
+      c.b_frac = b_t / len;
+      c.lateral_m = Eigen::Vector3d(o, 0, 0);
+      c.generic_radius_m = r;
+      capsules.push_back(c);
+    }
+  }
+  generic_head_z = rest[kHead].z();
+  generic_top_z = mesh.rest.positions.row(2).maxCoeff();
+  cap_a.resize(capsules.size());
+  cap_b.resize(capsules.size());
+  setShape(BodyShape{});
+}
+
+void PoseTracker::Impl::setShape(const BodyShape& s) {
+  shape = s;
+  skeleton = makeHumanSkeleton(s);
+  const double scale = skeleton.restPositions()[kHead].z() / generic_head_z;
+  samples.clear();
+  for (Capsule& c : capsules) {
+    Eigen::Vector3d seg;
+    if (c.child >= 0) {
+      seg = skeleton.joint(c.child).offset_m;
+    } else {
+      const double g = generic.joint(c.joint).offset_m.norm();
+      const double ratio = g > 0 ? skeleton.joint(c.joint).offset_m.norm() / g : scale;
+      seg = c.end_dir * ratio;
+    }
+    const Eigen::Vector3d lateral = c.lateral_m * scale * s.girth_scale;
+    c.a = c.a_frac * seg + lateral;
+    c.b = c.b_frac * seg + lateral;
+    const bool foot = c.joint == kRightAnkle || c.joint == kLeftAnkle || c.joint == kRightFoot ||
+                      c.joint == kLeftFoot;
+    c.radius_m = c.generic_radius_m * scale * s.girth_scale * (foot ? foot_scale : 1.0);
+    for (double t : {0.0, 0.5, 1.0}) samples.push_back({c.joint, c.a + t * (c.b - c.a)});
+  }
+}
+
+void PoseTracker::Impl::prepareSilhouettes(
+    const std::vector<const LowResSilhouette*>& silhouettes) {
+  std::fill(present.begin(), present.end(), 0);
+  const float inf = 1e10f;
+  for (const LowResSilhouette* s : silhouettes) {
+    if (!s || s->camera < 0 || s->camera >= cameras || s->step != opt.silhouette_step ||
+        s->width != cell_w[s->camera] || s->height != cell_h[s->camera] ||
+        s->bits.size() * 8 < size_t(s->width) * s->height) {
+      continue;
+    }
+    const int c = s->camera, w = s->width, h = s->height;
+    present[c] = 1;
+    std::vector<float>& d = dt[c];
+    // Columns, then rows: squared distance to the nearest cell inside the silhouette.
+    for (int x = 0; x < w; ++x) {
+      for (int y = 0; y < h; ++y) dt_f[y] = s->at(x, y) ? 0.0f : inf;
+      edt1d(dt_f.data(), h, dt_d.data(), dt_v.data(), dt_z.data());
+      for (int y = 0; y < h; ++y) d[size_t(y) * w + x] = dt_d[y];
+    }
+    for (int y = 0; y < h; ++y) {
+      float* r = &d[size_t(y) * w];
+      std::copy(r, r + w, dt_f.begin());
+      edt1d(dt_f.data(), w, dt_d.data(), dt_v.data(), dt_z.data());
+      for (int x = 0; x < w; ++x) r[x] = std::sqrt(std::min(dt_d[x], 1e6f));
+    }
+  }
+}
+
+double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid,
+                                double* top_z) {
+  lo = lo.cwiseMax(Eigen::Vector3i::Zero());
+  hi = hi.cwiseMin(dims - Eigen::Vector3i::Ones());
+  surface_all.clear();
+  hull.clear();
+  if ((hi.array() < lo.array()).any()) return 0;
+  const size_t sx = 1, sy = size_t(dims.x()), sz = size_t(dims.x()) * dims.y();
+  int count = 0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double top = 0;
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      size_t v = z * sz + y * sy + lo.x() * sx;
+      for (int x = lo.x(); x <= hi.x(); ++x, ++v) {
+        const uint16_t* cells = &cell[v * cameras];
+        int seen = 0;
+        bool inside = true;
+        for (int c = 0; c < cameras; ++c) {
+          if (!present[c] || cells[c] == kUnseen) continue;
+          ++seen;
+          const float d = dt[c][cells[c]];
+          if (d > 0) {
+            inside = false;
+            break;
+          }
+        }
+        const bool keep = inside && seen >= 2;
+        occupied[v] = keep;
+        if (keep) {
+          ++count;
+          sum += Eigen::Vector3d(x, y, z);
+          top = std::max(top, double(z));
+        }
+      }
+    }
+  }
+  // Surface voxels: kept, with a 6-neighbour that is not (the region's border and the floor
+  // count as empty). The sample moves half a voxel toward its empty neighbours: onto the hull's
+  // boundary, on average, rather than inside it.
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const size_t v = z * sz + y * sy + x;
+        if (!occupied[v]) continue;
+        Eigen::Vector3d n = Eigen::Vector3d::Zero();
+        if (x == lo.x() || !occupied[v - 1]) n.x() -= 1;
+        if (x == hi.x() || !occupied[v + 1]) n.x() += 1;
+        if (y == lo.y() || !occupied[v - sy]) n.y() -= 1;
+        if (y == hi.y() || !occupied[v + sy]) n.y() += 1;
+        if (z == lo.z() || !occupied[v - sz]) n.z() -= 1;
+        if (z == hi.z() || !occupied[v + sz]) n.z() += 1;
+        const double len = n.norm();
+        if (len == 0) continue;
+        surface_all.push_back(
+            lower + opt.voxel_m * (Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5) + 0.5 * n / len));
+      }
+    }
+  }
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y)
+      std::fill_n(&occupied[z * sz + y * sy + lo.x()], hi.x() - lo.x() + 1, 0);
+  }
+  const size_t n = surface_all.size(), m = size_t(opt.max_hull_points);
+  if (n <= m) {
+    hull = surface_all;
+  } else {
+    for (size_t i = 0; i < m; ++i) hull.push_back(surface_all[i * n / m]);
+  }
+  if (centroid && count > 0)
+    *centroid = lower + opt.voxel_m * (sum / count + Eigen::Vector3d::Constant(0.5));
+  if (top_z) *top_z = lower.z() + opt.voxel_m * (top + 1.0);
+  return count * std::pow(opt.voxel_m, 3);
+}
+
+double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h,
+                                   Eigen::VectorXd& grad) {
+  skeleton.forwardKinematics(p, global);
+  const int n = int(dofs.size());
+  if (jacobian) {
+    h.setZero();
+    grad.setZero();
+    for (int d = 0; d < n; ++d) {
+      const Dof& dof = dofs[d];
+      if (dof.kind == Dof::kTranslation) {
+        dof_axis[d] = Eigen::Vector3d::Unit(dof.axis);
+      } else if (dof.kind == Dof::kRootRotation) {
+        dof_axis[d] = Eigen::Vector3d::Unit(dof.axis);
+        dof_centre[d] = global[0].translation();
+      } else {
+        const Eigen::Matrix3d rp = global[skeleton.joint(dof.joint).parent].linear();
+        const Eigen::Vector3d& a = p.angles_rad[dof.joint];
+        if (dof.axis == 0) {
+          dof_axis[d] = rp.col(0);
+        } else if (dof.axis == 1) {
+          dof_axis[d] =
+              rp * Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()) * Eigen::Vector3d::UnitY();
+        } else {
+          dof_axis[d] = rp * Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()) *
+                        Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                        Eigen::Vector3d::UnitZ();
+        }
+        dof_centre[d] = global[dof.joint].translation();
+      }
+    }
+  }
+  // Accumulates w * J^T J and w * J^T r for a residual whose Jacobian is dr/dp . dp/dtheta, p a
+  // point moving with `joint`.
+  auto accumulate = [&](int joint, const Eigen::Vector3d& point, const Eigen::Vector3d& dr_dp,
+                        double r, double w) {
+    const std::vector<int>& ch = chain[joint];
+    const int k = int(ch.size());
+    for (int i = 0; i < k; ++i) {
+      const int d = ch[i];
+      const Dof& dof = dofs[d];
+      const Eigen::Vector3d dp = dof.kind == Dof::kTranslation
+                                     ? dof_axis[d]
+                                     : Eigen::Vector3d(dof_axis[d].cross(point - dof_centre[d]));
+      row[i] = dr_dp.dot(dp);
+    }
+    for (int i = 0; i < k; ++i) {
+      const double wi = w * row[i];
+      if (wi == 0) continue;
+      grad(ch[i]) += wi * r;
+      for (int j = i; j < k; ++j) h(ch[i], ch[j]) += wi * row[j];
+    }
+  };
+  for (size_t c = 0; c < capsules.size(); ++c) {
+    const Eigen::Isometry3d& t = global[capsules[c].joint];
+    cap_a[c] = t * capsules[c].a;
+    cap_b[c] = t * capsules[c].b;
+  }
+  double cost = 0;
+  // Hull surface samples on the model's surface.
+  const double delta_out = opt.huber_m, delta_in = 4 * opt.huber_m;
+  for (const Eigen::Vector3d& v : hull) {
+    double best = 1e9;
+    int best_c = -1;
+    Eigen::Vector3d best_closest = Eigen::Vector3d::Zero();
+    for (size_t c = 0; c < capsules.size(); ++c) {
+      Eigen::Vector3d closest;
+      const double d = segmentDistance(v, cap_a[c], cap_b[c], closest) - capsules[c].radius_m;
+      if (d < best) best = d, best_c = int(c), best_closest = closest;
+    }
+    // The hull holds the body: a model surface beyond the hull (r < 0) is wrong, a hull beyond
+    // the model (r > 0) may be a phantom of the carving (between the legs, under the arms).
+    const double r = best, ar = std::abs(r);
+    const double delta = r < 0 ? delta_in : delta_out;
+    cost += ar <= delta ? 0.5 * r * r : delta * (ar - 0.5 * delta);
+    if (jacobian) {
+      const Eigen::Vector3d diff = v - best_closest;
+      const double len = diff.norm();
+      if (len < 1e-9 || best_c < 0) continue;
+      const double w = ar <= delta ? 1.0 : delta / ar;
+      accumulate(capsules[best_c].joint, best_closest, -diff / len, r, w);
+    }
+  }
+  // Axis samples inside every silhouette.
+  const double ws = opt.silhouette_weight;
+  const int step = opt.silhouette_step;
+  for (const Sample& s : samples) {
+    const Eigen::Vector3d q = global[s.joint] * s.local;
+    for (int c = 0; c < cameras; ++c) {
+      if (!present[c]) continue;
+      const Camera& cam = rig.camera(c);
+      const Eigen::Vector3d x = cam.toCamera(q);
+      if (x.z() <= 0.1) continue;
+      const auto pix = cam.project(q);
+      if (!pix) continue;
+      const double cx = ((*pix)(0) - step / 2) / step, cy = ((*pix)(1) - step / 2) / step;
+      const int w = cell_w[c], hgt = cell_h[c];
+      if (cx < 0 || cy < 0 || cx > w - 1 || cy > hgt - 1) continue;
+      const int x0 = std::min(int(cx), w - 2), y0 = std::min(int(cy), hgt - 2);
+      const double fx = cx - x0, fy = cy - y0;
+      const float* d = &dt[c][size_t(y0) * w + x0];
+      const double d00 = d[0], d10 = d[1], d01 = d[w], d11 = d[w + 1];
+      const double value =
+          (1 - fy) * ((1 - fx) * d00 + fx * d10) + fy * ((1 - fx) * d01 + fx * d11);
+      if (value <= 0) continue;
+      const double m_per_cell = step * x.z() / cam.intrinsics().fx;
+      const double r = value * m_per_cell;
+      cost += 0.5 * ws * r * r;
+      if (!jacobian) continue;
+      const double gx = (1 - fy) * (d10 - d00) + fy * (d11 - d01);
+      const double gy = (1 - fx) * (d01 - d00) + fx * (d11 - d10);
+      const Intrinsics& k = cam.intrinsics();
+      const double iz = 1.0 / x.z();
+      // d(cell)/d(camera coordinates), pinhole (the lens distortion is left out of the slope).
+      const Eigen::Vector3d du(k.fx * iz, 0, -k.fx * x.x() * iz * iz),
+          dv(0, k.fy * iz, -k.fy * x.y() * iz * iz);
+      const Eigen::Vector3d dr_dx = m_per_cell / step * (gx * du + gy * dv);
+      accumulate(s.joint, q, cam.rotation().transpose() * dr_dx, r, ws);
+    }
+  }
+  // Temporal prior.
+  if (use_prior) {
+    const double w = prior_weight;
+    Eigen::Vector3d e = p.root_translation_m - prior_pose.root_translation_m;
+    const Eigen::Matrix3d r_now = global[0].linear();
+    const double a = prior_pose.angles_rad[0].norm();
+    const Eigen::Matrix3d r_prior =
+        a > 0 ? Eigen::AngleAxisd(a, prior_pose.angles_rad[0] / a).toRotationMatrix()
+              : Eigen::Matrix3d::Identity();
+    const Eigen::AngleAxisd rot(r_now * r_prior.transpose());
+    const Eigen::Vector3d er = rot.angle() * rot.axis();
+    cost += 0.5 * w * (e.squaredNorm() + er.squaredNorm());
+    for (int d = 0; d < n; ++d) {
+      const Dof& dof = dofs[d];
+      double err;
+      if (dof.kind == Dof::kTranslation) {
+        err = e[dof.axis];
+      } else if (dof.kind == Dof::kRootRotation) {
+        err = er[dof.axis];
+      } else {
+        err = p.angles_rad[dof.joint][dof.axis] - prior_pose.angles_rad[dof.joint][dof.axis];
+        cost += 0.5 * w * err * err;
+      }
+      if (jacobian) {
+        h(d, d) += w;
+        grad(d) += w * err;
+      }
+    }
+  }
+  if (jacobian) h.triangularView<Eigen::StrictlyLower>() = h.transpose();
+  return cost;
+}
+
+void PoseTracker::Impl::apply(Pose& p, const Eigen::VectorXd& delta) const {
+  for (size_t d = 0; d < dofs.size(); ++d) {
+    const Dof& dof = dofs[d];
+    if (dof.kind == Dof::kTranslation) {
+      p.root_translation_m[dof.axis] += delta(d);
+    } else if (dof.kind == Dof::kEuler) {
+      p.angles_rad[dof.joint][dof.axis] += delta(d);
+    }
+  }
+  const Eigen::Vector3d w = delta.segment<3>(3);
+  if (w.norm() > 0) {
+    const double a = p.angles_rad[0].norm();
+    const Eigen::Matrix3d r0 = a > 0 ? Eigen::AngleAxisd(a, p.angles_rad[0] / a).toRotationMatrix()
+                                     : Eigen::Matrix3d::Identity();
+    const Eigen::AngleAxisd r(Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix() * r0);
+    p.angles_rad[0] = r.angle() * r.axis();
+  }
+  skeleton.clampToLimits(p);
+}
+
+double PoseTracker::Impl::fit(Pose& p, int iterations) {
+  double cost = evaluate(p, true, H, g);
+  double lambda = 1e-3;
+  for (int it = 0; it < iterations; ++it) {
+    damped = H;
+    for (int d = 0; d < damped.rows(); ++d) damped(d, d) += lambda * H(d, d) + 1e-6;
+    ldlt.compute(damped);
+    delta = g;
+    ldlt.solveInPlace(delta);
+    delta = -delta;
+    candidate = p;
+    apply(candidate, delta);
+    const double c = evaluate(candidate, true, H_new, g_new);
+    if (c < cost) {
+      const double gain = cost - c;
+      p = candidate;
+      cost = c;
+      std::swap(H, H_new);
+      std::swap(g, g_new);
+      lambda = std::max(1e-6, lambda / 3);
+      if (gain < 1e-7 * std::max(1.0, cost)) break;
+    } else {
+      lambda *= 8;
+      if (lambda > 1e4) break;
+    }
+  }
+  return cost;
+}
+
+double PoseTracker::Impl::fitRms(const Pose& p) {
+  skeleton.forwardKinematics(p, global);
+  for (size_t c = 0; c < capsules.size(); ++c) {
+    cap_a[c] = global[capsules[c].joint] * capsules[c].a;
+    cap_b[c] = global[capsules[c].joint] * capsules[c].b;
+  }
+  double sum = 0;
+  for (const Eigen::Vector3d& v : hull) {
+    double best = 1e9;
+    for (size_t c = 0; c < capsules.size(); ++c) {
+      Eigen::Vector3d closest;
+      best = std::min(best, segmentDistance(v, cap_a[c], cap_b[c], closest) - capsules[c].radius_m);
+    }
+    best = std::min(std::abs(best), 0.2);
+    sum += best * best;
+  }
+  return hull.empty() ? 1.0 : std::sqrt(sum / hull.size());
+}
+
+bool PoseTracker::Impl::initialise(TrackResult& out) {
+  Eigen::Vector3d centroid;
+  double top_z = 0;
+  const double volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z);
+  out.hull_points = int(hull.size());
+  if (volume < opt.min_volume_m3 || top_z < 1.0) return false;
+  if (!shape_calibrated) {
+    BodyShape s;
+    s.height_m = std::clamp(s.height_m * top_z / generic_top_z, 1.3, 2.3);
+    setShape(s);
+  }
+  use_prior = false;
+  const int joints = skeleton.jointCount();
+  Pose best_pose;
+  double best = std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d root = skeleton.restPositions()[0];
+  for (int arms = 0; arms < 2; ++arms) {
+    for (int heading = 0; heading < 4; ++heading) {
+      Pose p = Pose::rest(joints);
+      p.angles_rad[0] = Eigen::Vector3d(0, 0, heading * M_PI / 2);
+      p.root_translation_m = Eigen::Vector3d(centroid.x() - root.x(), centroid.y() - root.y(), 0);
+      if (arms == 1) {
+        p.angles_rad[kRightShoulder].y() = 0.8;
+        p.angles_rad[kLeftShoulder].y() = -0.8;
+      }
+      const double c = fit(p, opt.init_iterations);
+      if (c < best) best = c, best_pose = p;
+    }
+  }
+  if (opt.calibrate_shape && !shape_calibrated) {
+    // Coordinate search over the body's proportions, refitting the pose for every trial.
+    constexpr int kParams = 7;
+    const int calibrated_params = getenv("CALIB") ? atoi(getenv("CALIB")) : 0x60;
+    double k[kParams] = {shape.height_m,
+                         shape.arm_length_scale,
+                         shape.leg_length_scale,
+                         shape.shoulder_width_scale,
+                         shape.hip_width_scale,
+                         shape.girth_scale,
+                         foot_scale};
+    double steps[kParams] = {0.06, 0.06, 0.06, 0.08, 0.08, 0.12, 0.2};
+    const double lo[kParams] = {1.3, 0.8, 0.8, 0.7, 0.7, 0.7, 0.8},
+                 hi[kParams] = {2.3, 1.25, 1.25, 1.4, 1.4, 1.6, 2.0};
+    auto make = [&](const double* v) {
+      foot_scale = v[6];
+      BodyShape s;
+      s.height_m = v[0];
+      s.arm_length_scale = v[1];
+      s.leg_length_scale = v[2];
+      s.shoulder_width_scale = v[3];
+      s.hip_width_scale = v[4];
+      s.girth_scale = v[5];
+      return s;
+    };
+    for (int round = 0; round < 5; ++round) {
+      for (int i = 0; i < kParams; ++i) {
+        if (!((calibrated_params >> i) & 1)) continue;
+        for (double sign : {1.0, -1.0}) {
+          double trial[kParams];
+          std::copy(k, k + kParams, trial);
+          trial[i] = std::clamp(trial[i] + sign * steps[i], lo[i], hi[i]);
+          if (trial[i] == k[i]) continue;
+          setShape(make(trial));
+          Pose p = best_pose;
+          const double c = fit(p, 12);
+          if (c < best) {
+            best = c;
+            best_pose = p;
+            std::copy(trial, trial + kParams, k);
+            break;
+          }
+        }
+      }
+      for (double& s : steps) s *= 0.5;
+    }
+    setShape(make(k));
+    best = fit(best_pose, opt.init_iterations);
+    shape_calibrated = true;
+  }
+  const double rms = fitRms(best_pose);
+  out.fit_rms_m = rms;
+  if (rms > opt.lost_rms_m) return false;
+  pose = previous = best_pose;
+  has_previous = false;
+  return true;
+}
+
+PoseTracker::PoseTracker(const Rig& rig, const SkinnedMesh& generic, PoseTrackerOptions options)
+    : options_(options), impl_(new Impl(rig, generic, options)) {
+  result_.pose = Pose::rest(kHumanJointCount);
+}
+
+PoseTracker::~PoseTracker() {
+  delete impl_;
+}
+
+const Skeleton& PoseTracker::skeleton() const {
+  return impl_->skeleton;
+}
+const BodyShape& PoseTracker::shape() const {
+  return impl_->shape;
+}
+
+void PoseTracker::setShape(const BodyShape& shape) {
+  impl_->setShape(shape);
+  impl_->shape_calibrated = true;
+  impl_->tracking = false;
+}
+
+void PoseTracker::reset() {
+  impl_->tracking = false;
+  impl_->foot_scale = 1.0;
+  impl_->shape_calibrated = false;
+  impl_->bad_frames = 0;
+  result_.state = TrackState::kNoActor;
+}
+
+const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>& silhouettes) {
+  Impl& m = *impl_;
+  m.prepareSilhouettes(silhouettes);
+  result_.hull_points = 0;
+  if (!m.tracking) {
+    if (m.initialise(result_)) {
+      m.tracking = true;
+      m.bad_frames = 0;
+      result_.state = TrackState::kInitialised;
+    } else {
+      result_.state = TrackState::kNoActor;
+    }
+  } else {
+    // Constant-velocity prediction, damped, as the starting point and the prior.
+    Pose& predicted = m.predicted;
+    predicted = m.pose;
+    if (m.has_previous) {
+      predicted.root_translation_m +=
+          0.5 * (m.pose.root_translation_m - m.previous.root_translation_m);
+      for (int j = 1; j < int(predicted.angles_rad.size()); ++j)
+        predicted.angles_rad[j] += 0.5 * (m.pose.angles_rad[j] - m.previous.angles_rad[j]);
+      m.skeleton.clampToLimits(predicted);
+    }
+    // Carve only around the predicted body.
+    m.skeleton.forwardKinematics(predicted, m.global);
+    Eigen::Vector3d lo = m.global[0].translation(), hi = lo;
+    for (const auto& t : m.global) {
+      lo = lo.cwiseMin(t.translation());
+      hi = hi.cwiseMax(t.translation());
+    }
+    const double margin = 0.35;
+    lo -= Eigen::Vector3d::Constant(margin);
+    hi += Eigen::Vector3d::Constant(margin);
+    lo.z() = m.lower.z();
+    const Eigen::Vector3i vlo = ((lo - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
+    const Eigen::Vector3i vhi = ((hi - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
+    const double volume = m.carve(vlo, vhi, nullptr, nullptr);
+    result_.hull_points = int(m.hull.size());
+    if (volume < m.opt.min_volume_m3) {
+      m.tracking = false;
+      result_.state = TrackState::kLost;
+    } else {
+      m.use_prior = true;
+      m.prior_pose = predicted;
+      m.prior_weight = m.opt.prior_weight;
+      Pose& p = m.fitted;
+      p = predicted;
+      m.fit(p, m.opt.iterations);
+      m.use_prior = false;
+      result_.fit_rms_m = m.fitRms(p);
+      m.previous = m.pose;
+      m.pose = p;
+      m.has_previous = true;
+      if (result_.fit_rms_m > m.opt.lost_rms_m) {
+        if (++m.bad_frames >= m.opt.lost_frames) m.tracking = false;
+      } else {
+        m.bad_frames = 0;
+      }
+      result_.state = m.tracking ? TrackState::kTracking : TrackState::kLost;
+    }
+  }
+  if (result_.valid()) {
+    result_.pose = m.pose;
+    m.skeleton.forwardKinematics(m.pose, m.global);
+    result_.joints.resize(m.global.size());
+    for (size_t j = 0; j < m.global.size(); ++j) result_.joints[j] = m.global[j].translation();
+  }
+  return result_;
+}
+
+}  // namespace lumistage

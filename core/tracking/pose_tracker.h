@@ -1,0 +1,84 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "core/body/human_skeleton.h"
+#include "core/body/skinned_mesh.h"
+#include "core/geometry/rig.h"
+#include "core/pipeline/silhouettes.h"
+
+namespace lumistage {
+
+struct PoseTrackerOptions {
+  int silhouette_step = 8;  // the nodes' LowResSilhouette step
+  double voxel_m = 0.03;    // the hull's grid
+  Eigen::Vector3d stage_lower{-1.5, -1.5, 0.0}, stage_upper{1.5, 1.5, 2.2};
+  int iterations = 6;              // Levenberg-Marquardt iterations per tracked frame
+  int init_iterations = 20;        // per initialisation hypothesis
+  int max_hull_points = 900;       // hull surface samples per frame (evenly thinned)
+  double silhouette_weight = 0.5;  // of a sample's silhouette residual (metres) per camera
+  double prior_weight = 2e-3;      // temporal prior, per radian² (per m² for the root)
+  double huber_m = 0.02;           // robust loss of hull samples outside the model (4x inside)
+  double min_volume_m3 = 0.02;     // less hull than this: nobody on stage
+  double lost_rms_m = 0.05;        // hull fit error above this...
+  int lost_frames = 3;             // ...for this many frames in a row: lost, re-initialise
+  bool calibrate_shape = true;     // scale the generic skeleton to the actor at initialisation
+};
+
+enum class TrackState { kNoActor, kInitialised, kTracking, kLost };
+
+struct TrackResult {
+  TrackState state = TrackState::kNoActor;
+  bool valid() const { return state == TrackState::kInitialised || state == TrackState::kTracking; }
+  Pose pose;                            // of skeleton() (the calibrated one)
+  std::vector<Eigen::Vector3d> joints;  // world positions, metres
+  double fit_rms_m = 0;                 // hull samples to the model's surface
+  int hull_points = 0;
+};
+
+// Markerless motion capture from every camera's low-resolution silhouette (DESIGN.md §2): each
+// frame the visual hull is carved on a fine voxel grid around the previous pose (precomputed
+// voxel -> cell lookups), its surface voxels are sampled, and a body model of capsules hung on the
+// skeleton's bones (radii measured on the generic mesh) is fitted to them by Levenberg-Marquardt
+// over the pose (root translation and rotation, every joint's Euler angles within its box
+// limits), with analytic Jacobians and three terms: hull samples on the model's surface (Huber),
+// the bones' axis samples inside every silhouette (a distance transform of each silhouette), and
+// a temporal prior toward the constant-velocity prediction.
+//
+// Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
+// is fitted from T- and A-pose templates at its centroid in four headings, the best fit wins, and
+// (once per actor) the body shape is calibrated: height, arm and leg length, shoulder width and
+// girth, by a coordinate search that refits the pose for each trial. A fit error above
+// lost_rms_m for lost_frames frames, or an empty stage, loses the actor; the next frames
+// re-initialise. No ground truth at run time. Not thread-safe; reuses its buffers (no allocation
+// per tracked frame once warm).
+class PoseTracker {
+ public:
+  // `generic`: the generic human (makeHumanSkeleton's joints), whose mesh gives the bones' radii.
+  PoseTracker(const Rig& rig, const SkinnedMesh& generic, PoseTrackerOptions options = {});
+  ~PoseTracker();
+  PoseTracker(const PoseTracker&) = delete;
+  PoseTracker& operator=(const PoseTracker&) = delete;
+
+  // One frame. `silhouettes`: any subset of the rig's cameras (null entries are skipped).
+  const TrackResult& track(const std::vector<const LowResSilhouette*>& silhouettes);
+  // Forget the actor (and the calibrated shape): the next frame initialises.
+  void reset();
+  // Use a known body shape (from an earlier session): no calibration at the next initialisation.
+  void setShape(const BodyShape& shape);
+
+  const TrackResult& last() const { return result_; }
+  const Skeleton& skeleton() const;  // the generic one scaled to the actor
+  const BodyShape& shape() const;
+  const PoseTrackerOptions& options() const { return options_; }
+
+ private:
+  struct Impl;
+  PoseTrackerOptions options_;
+  Impl* impl_;
+  TrackResult result_;
+};
+
+}  // namespace lumistage

@@ -1,0 +1,44 @@
+// The motion-capture fit per frame (DESIGN.md §2; target: under 10 ms a frame on one core), on
+// the reference rig's 12 low-resolution silhouettes of the reference actor walking. The
+// silhouettes are rasterised beforehand; the measured call is PoseTracker::track while tracking
+// (hull carving, distance transforms, Levenberg-Marquardt). Run: ./studio bench
+#include <benchmark/benchmark.h>
+
+#include "core/base/resource_path.h"
+#include "core/body/motion_library.h"
+#include "core/tracking/pose_tracker.h"
+#include "tests/core/tracking/synthetic_stage.h"
+
+namespace {
+
+void trackWalkingActor(benchmark::State& state) {
+  using namespace lumistage;
+  testing::SyntheticStage stage(resourcePath("studio/reference.yaml").string());
+  const int cameras = int(state.range(0));
+  std::vector<int> used;
+  for (int k = 0; k < cameras; ++k) used.push_back(k * stage.config.rig.cameraCount() / cameras);
+  const MotionClip clip = makeBuiltinClip("walk", stage.actor.skeleton, 30, 3);
+  const int frames = 60;
+  std::vector<std::vector<LowResSilhouette>> all(frames);
+  for (int f = 0; f < frames; ++f) {
+    stage.render(clip.sample(f / 30.0), used);
+    for (int c : used) all[f].push_back(stage.silhouettes[c]);
+  }
+  std::vector<std::vector<const LowResSilhouette*>> pointers(frames);
+  for (int f = 0; f < frames; ++f) {
+    for (const auto& s : all[f]) pointers[f].push_back(&s);
+  }
+  PoseTracker tracker(stage.config.rig, makeHumanModel({}));
+  tracker.track(pointers[0]);  // initialises and calibrates the body's shape
+  int f = 1;
+  for (auto _ : state) {
+    const TrackResult& r = tracker.track(pointers[f]);
+    benchmark::DoNotOptimize(r.joints.data());
+    if (++f == frames) {  // replay the walk: the jump back is a fast move, tracked too
+      f = 1;
+    }
+  }
+}
+BENCHMARK(trackWalkingActor)->Arg(12)->Arg(6)->Unit(benchmark::kMillisecond);
+
+}  // namespace
