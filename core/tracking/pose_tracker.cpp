@@ -43,6 +43,12 @@ struct Dof {
   int axis;
 };
 
+Eigen::Matrix3d rotationOf(const Eigen::Vector3d& rotation_vector) {
+  const double a = rotation_vector.norm();
+  return a > 0 ? Eigen::AngleAxisd(a, rotation_vector / a).toRotationMatrix()
+               : Eigen::Matrix3d::Identity();
+}
+
 double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                        Eigen::Vector3d& closest) {
   const Eigen::Vector3d ab = b - a;
@@ -109,8 +115,7 @@ struct PoseTracker::Impl {
   Skeleton generic;
   Skeleton skeleton;
   BodyShape shape;
-  double foot_scale =
-      getenv("FOOT") ? atof(getenv("FOOT")) : 1.0;  // the feet's radii over the body's (shoes)
+  double foot_scale = 1.0;  // the feet's radii over the body's (shoes)
   bool shape_calibrated = false;
   double generic_head_z = 1, generic_top_z = 1;
   std::vector<Capsule> capsules;
@@ -719,7 +724,10 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
   if (opt.calibrate_shape && !shape_calibrated) {
     // Coordinate search over the body's proportions, refitting the pose for every trial.
     constexpr int kParams = 7;
-    const int calibrated_params = getenv("CALIB") ? atoi(getenv("CALIB")) : 0x60;
+    // Which of them: the girth and the feet (shoes). The height comes from the hull's top; the
+    // limbs' proportions stay the generic ones (searching them too lowered the fit's cost but
+    // raised the joints' error: the capsules are too coarse to tell bone lengths apart).
+    const int calibrated_params = 0x60;
     double k[kParams] = {shape.height_m,
                          shape.arm_length_scale,
                          shape.leg_length_scale,
@@ -821,10 +829,16 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
     Pose& predicted = m.predicted;
     predicted = m.pose;
     if (m.has_previous) {
+      const double k = m.opt.velocity_gain;
       predicted.root_translation_m +=
-          0.5 * (m.pose.root_translation_m - m.previous.root_translation_m);
+          k * (m.pose.root_translation_m - m.previous.root_translation_m);
+      const Eigen::Matrix3d now = rotationOf(m.pose.angles_rad[0]),
+                            before = rotationOf(m.previous.angles_rad[0]);
+      const Eigen::AngleAxisd turn(now * before.transpose());
+      const Eigen::AngleAxisd root(Eigen::AngleAxisd(k * turn.angle(), turn.axis()) * now);
+      predicted.angles_rad[0] = root.angle() * root.axis();
       for (int j = 1; j < int(predicted.angles_rad.size()); ++j)
-        predicted.angles_rad[j] += 0.5 * (m.pose.angles_rad[j] - m.previous.angles_rad[j]);
+        predicted.angles_rad[j] += k * (m.pose.angles_rad[j] - m.previous.angles_rad[j]);
       m.skeleton.clampToLimits(predicted);
     }
     // Carve only around the predicted body.
