@@ -30,8 +30,10 @@ struct MocapEvalResult {
 // PoseTracker, and the tracked joints compared with truth/joints.csv when the session has it.
 // Adds section "mocap" to `report`: frames, frames_tracked, cameras, mpjpe_mm (mean over tracked
 // frames of the mean per-joint error), mpjpe_mm_max (the worst frame after initialisation),
-// mpjpe_mm_p95, pose_ms (mean fit time per frame, one core), pose_ms_max, actor_height_m; and
-// per-frame columns mpjpe_mm, pose_ms, fit_rms_mm, tracked. Throws Error on unreadable files.
+// mpjpe_mm_p95, pose_ms (mean CPU time of the fit per tracked frame, on one core; initialising
+// frames excluded), pose_ms_max, pose_wall_ms (mean wall time, every frame), init_ms (the longest
+// initialising frame), actor_height_m; and per-frame columns pose_ms, tracked, fit_rms_mm,
+// mpjpe_mm. Throws Error on unreadable files.
 MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& generic,
                               const MocapEvalOptions& options, EvalReport& report);
 
