@@ -5,6 +5,8 @@
 
 #include <Eigen/Geometry>
 
+#include "core/body/human_model.h"
+
 namespace lumistage {
 
 StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoint,
@@ -14,6 +16,14 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
       options_(options),
       locator_(rig, options.silhouette_step),
       joints_(body_joint_count) {
+  if (body_joint_count == kHumanJointCount) {
+    // The nodes pose the generic human: the tracker fits (a calibrated copy of) its skeleton.
+    const SkinnedMesh generic = loadGenericHuman();
+    PoseTrackerOptions tracking;
+    tracking.silhouette_step = options.silhouette_step;
+    tracker_ = std::make_unique<PoseTracker>(rig, generic, tracking);
+    generic_root_m_ = generic.skeleton.restPositions()[0];
+  }
   for (const RigNode& node : rig_.nodes()) nodes_[node.name].report.name = node.name;
   timeline_.reserve(4096);
   // Default view: 320x240 from the front-left, 4.5 m out and 1.7 m up, looking at the stage
@@ -155,13 +165,27 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   std::vector<const LowResSilhouette*> all;
   all.reserve(frame.silhouettes.size());
   for (const LowResSilhouette& s : frame.silhouettes) all.push_back(&s);
-  const ActorLocation where = locator_.locate(all);
   PoseData pose;
-  // Until the tracker: the generic human standing where the hull is, in its rest pose.
-  pose.root[0] = float(where.found ? where.centroid.x() : 0.0);
-  pose.root[1] = float(where.found ? where.centroid.y() : 0.0);
-  pose.root[2] = 0.0f;
-  pose.angles.assign(size_t(3) * joints_, 0.0f);
+  const TrackResult* tracked = tracker_ ? &tracker_->track(all) : nullptr;
+  if (tracked && tracked->valid()) {
+    // The tracked angles on the nodes' generic skeleton, its pelvis where the actor's is (the
+    // calibrated bone lengths stay in the studio).
+    const Eigen::Vector3d root = tracked->joints[0] - generic_root_m_;
+    pose.root[0] = float(root.x());
+    pose.root[1] = float(root.y());
+    pose.root[2] = float(root.z());
+    pose.angles.resize(size_t(3) * joints_);
+    for (int j = 0; j < joints_; ++j) {
+      for (int k = 0; k < 3; ++k) pose.angles[3 * j + k] = float(tracked->pose.angles_rad[j][k]);
+    }
+  } else {
+    // Nobody tracked: the generic human standing where the hull is, in its rest pose.
+    const ActorLocation where = locator_.locate(all);
+    pose.root[0] = float(where.found ? where.centroid.x() : 0.0);
+    pose.root[1] = float(where.found ? where.centroid.y() : 0.0);
+    pose.root[2] = 0.0f;
+    pose.angles.assign(size_t(3) * joints_, 0.0f);
+  }
   last_pose_ = pose;
   last_pose_frame_ = frame_id;
   if (counting_) mocap_ms_.add((steadyNowNs() - start) / 1e6);

@@ -4,12 +4,14 @@
 #include <chrono>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "core/net/transport.h"
 #include "core/pipeline/pipeline.h"
+#include "core/tracking/pose_tracker.h"
 #include "core/tracking/visual_hull_locator.h"
 
 namespace lumistage {
@@ -74,8 +76,8 @@ struct RunReport {
 // The studio's side of the distributed pipeline (DESIGN.md §1), one frame at a time per stage but
 // several frames in flight: silhouettes of frame f from the nodes -> the motion capture module
 // places the body -> pose(f) to the nodes -> their per-vertex statistics -> the module combines
-// them exactly. Until the tracker and the refinement land, the modules do real work of their
-// size: the visual-hull locator places the generic human, and the combined statistics give each
+// them exactly. Motion capture is the PoseTracker (the visual-hull locator places the generic
+// human while nobody is tracked); until the refinement lands, the combined statistics give each
 // vertex its colour variance and whether every camera saw it inside the silhouettes. Never blocks
 // on one node: each stage waits for the nodes at most `deadline`; a silent node is marked lost
 // and rejoins by itself when it speaks again.
@@ -129,7 +131,9 @@ class StudioCoordinator {
   Rig rig_;
   StudioEndpoint endpoint_;
   StudioCoordinatorOptions options_;
-  VisualHullLocator locator_;
+  VisualHullLocator locator_;             // places the generic human while nobody is tracked
+  std::unique_ptr<PoseTracker> tracker_;  // the human skeleton's mocap (null for another body)
+  Eigen::Vector3d generic_root_m_ = Eigen::Vector3d::Zero();  // the nodes' skeleton's rest root
   int joints_;
   std::map<int64_t, FrameState> frames_;
   std::map<std::string, NodeState> nodes_;
