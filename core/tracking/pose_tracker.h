@@ -15,12 +15,12 @@ struct PoseTrackerOptions {
   int silhouette_step = 8;  // the nodes' LowResSilhouette step
   double voxel_m = 0.03;    // the hull's grid
   Eigen::Vector3d stage_lower{-1.5, -1.5, 0.0}, stage_upper{1.5, 1.5, 2.2};
-  int iterations = 8;              // Levenberg-Marquardt iterations per tracked frame
+  int iterations = 10;             // Levenberg-Marquardt iterations per tracked frame
   double velocity_gain = 0.8;      // of the constant-velocity prediction (0: the previous pose)
   int init_iterations = 20;        // per initialisation hypothesis
   int max_hull_points = 1200;      // hull surface samples per frame (evenly thinned)
   double silhouette_weight = 0.5;  // of a sample's silhouette residual (metres) per camera
-  double prior_weight = 0.05;      // temporal prior, per radian² (per m² for the root)
+  double prior_weight = 0.2;       // temporal prior, per radian² (per m² for the root)
   double huber_m = 0.02;           // robust loss of hull samples outside the model (4x inside)
   double min_volume_m3 = 0.02;     // less hull than this: nobody on stage
   double lost_rms_m = 0.05;        // hull fit error above this...
