@@ -50,8 +50,10 @@ struct TrackResult {
 //
 // Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
 // is fitted from T- and A-pose templates at its centroid in four headings, the best fit wins, and
-// (once per actor) the body shape is calibrated: height, arm and leg length, shoulder width and
-// girth, by a coordinate search that refits the pose for each trial. A fit error above
+// (once per actor) the body shape is calibrated: the generic skeleton's bones scaled to the
+// height of the hull's top, then the capsules' girth and the feet's radius (shoes) by a
+// coordinate search that refits the pose for each trial. The limbs keep the generic proportions:
+// searching them too lowered the fit's cost but not the joints' error. A fit error above
 // lost_rms_m for lost_frames frames, or an empty stage, loses the actor; the next frames
 // re-initialise. No ground truth at run time. Not thread-safe; reuses its buffers (no allocation
 // per tracked frame once warm).
