@@ -8,6 +8,7 @@
 #include "app/cli/body_commands.h"
 #include "app/cli/calibrate_commands.h"
 #include "app/cli/camera_commands.h"
+#include "app/cli/eval_command.h"
 #include "app/cli/info_command.h"
 #include "app/cli/key_commands.h"
 #include "app/cli/rig_commands.h"
@@ -27,6 +28,7 @@ int main(int argc, char** argv) {
   lumistage::addSynthCommand(app);
   lumistage::addInfoCommand(app);
   lumistage::addCalibrateCommands(app);
+  lumistage::addEvalCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
