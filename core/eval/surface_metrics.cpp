@@ -219,7 +219,7 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
   MeshRefiner refiner(config, generic.rest.vertexCount(), generic.rest.triangles);
   std::vector<GreenScreenKeyer> keyers(rig.cameraCount());
   std::vector<CameraFrame> frames;
-  RefinementStatistics node_stats, decoded, combined;
+  RefinementStatistics node_stats, combined;
   std::vector<uint8_t> wire, offsets;
   std::vector<SamplerCamera> inputs;
   Eigen::Matrix3Xf positions, normals, refined;
@@ -253,9 +253,9 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
       encodeRefinementStatistics(node_stats, wire);
       bytes += double(wire.size());
       std::string error;
-      if (!decodeRefinementStatistics(wire, decoded, &error)) throw Error(error);
-      combined.add(decoded);
+      if (!addEncodedRefinementStatistics(wire, combined, &error)) throw Error(error);
     }
+    combined.dropColourOutside();
     refiner.refine(combined, offsets);
     applyOffsets(config, offsets, positions, normals, refined);
 

@@ -81,8 +81,32 @@ int MeshRefiner::choose(const float* e) const {
 bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>& offsets) {
   const int m = config_.offset_count;
   if (stats.vertex_count != vertex_count_ || stats.offset_count != m) return false;
-  for (int v = 0; v < vertex_count_; ++v) {
-    for (int i = 0; i < m; ++i) data_[size_t(v) * m + i] = dataError(stats, size_t(v) * m + i, i);
+  // The data terms (as dataError(), inlined for speed: every sample every frame).
+  const float outside_w = float(config_.outside_weight), colour_w = float(config_.colour_weight);
+  const float unseen = colour_w * float(config_.unseen_colour);
+  const float unit = float(1 << (8 - stats.colour_bits));
+  const float sigma2 = float(config_.colour_sigma * config_.colour_sigma) / (unit * unit);
+  for (int i = 0; i < m; ++i) {
+    total_[i] = config_.t_max_m > 0
+                    ? -float(config_.outward_weight) * offsets_m_[i] / float(config_.t_max_m)
+                    : 0.0f;
+  }
+  const size_t samples = size_t(vertex_count_) * m;
+  for (size_t s = 0, i = 0; s < samples; ++s, i = (i + 1 == size_t(m) ? 0 : i + 1)) {
+    float e = total_[i];
+    const int n = stats.colour_count[s];
+    if (stats.outside[s] > 0) {
+      e += outside_w * float(stats.outside[s]) + colour_w;
+    } else if (n < 2) {
+      e += unseen;
+    } else {
+      const float r = stats.sums[3 * s], g = stats.sums[3 * s + 1], b = stats.sums[3 * s + 2];
+      const float variance =
+          std::max(0.0f, (float(stats.squares[s]) - (r * r + g * g + b * b) / float(n)) /
+                             (3.0f * float(n - 1)));
+      e += colour_w * variance / (variance + sigma2);
+    }
+    data_[s] = e;
   }
   const float inv_t = config_.t_max_m > 0 ? 1.0f / float(config_.t_max_m) : 0.0f;
   const float temporal = has_previous_ ? float(config_.temporal_weight) : 0.0f;
@@ -109,13 +133,16 @@ bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>
       if (begin == end) continue;
       std::copy_n(&data_[size_t(v) * m], m, total);
       addTemporal(v, total);
-      const float w = smooth / float(end - begin);
+      // Σ_k (t - t_k)² = K t² - 2 t Σ t_k + Σ t_k²: one pass over the neighbours.
+      float s1 = 0, s2 = 0;
       for (int k = begin; k < end; ++k) {
-        const float tn = offsets_m_[current_[neighbours_[k]]];
-        for (int i = 0; i < m; ++i) {
-          const float d = (offsets_m_[i] - tn) * inv_t;
-          total[i] += w * d * d;
-        }
+        const float tn = offsets_m_[current_[neighbours_[k]]] * inv_t;
+        s1 += tn, s2 += tn * tn;
+      }
+      const float w = smooth / float(end - begin), count = float(end - begin);
+      for (int i = 0; i < m; ++i) {
+        const float t = offsets_m_[i] * inv_t;
+        total[i] += w * (count * t * t - 2 * t * s1 + s2);
       }
       const uint8_t chosen = uint8_t(choose(total));
       changed = changed || chosen != current_[v];

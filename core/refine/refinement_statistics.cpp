@@ -67,15 +67,17 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
   const size_t n = stats.outside.size();
   uint32_t max_sum = 0, max_square = 0;
   size_t coloured = 0;
+  size_t squared = 0;
   for (size_t s = 0; s < n; ++s) {
     if (stats.colour_count[s] == 0) continue;
     ++coloured;
+    squared += stats.colour_count[s] > 1;
     max_sum = std::max({max_sum, uint32_t(stats.sums[3 * s]), uint32_t(stats.sums[3 * s + 1]),
                         uint32_t(stats.sums[3 * s + 2])});
     max_square = std::max(max_square, stats.squares[s]);
   }
   const int sum_bytes = std::min(2, bytesFor(max_sum)), square_bytes = bytesFor(max_square);
-  out.resize(kHeaderBytes + n + coloured * (3 * sum_bytes + square_bytes));
+  out.resize(kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes);
   size_t at = 0;
   put(out, at, uint32_t(stats.vertex_count), 4);
   out[at++] = uint8_t(stats.offset_count);
@@ -89,7 +91,7 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
   for (size_t s = 0; s < n; ++s) {
     if (stats.colour_count[s] == 0) continue;
     for (int c = 0; c < 3; ++c) put(out, at, stats.sums[3 * s + c], sum_bytes);
-    put(out, at, stats.squares[s], square_bytes);
+    if (stats.colour_count[s] > 1) put(out, at, stats.squares[s], square_bytes);
   }
 }
 
@@ -109,9 +111,9 @@ bool decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatist
   const size_t n = size_t(vertices) * offsets;
   if (data.size() < kHeaderBytes + n) return fail("truncated counts");
   const uint8_t* counts = data.data() + kHeaderBytes;
-  size_t coloured = 0;
-  for (size_t s = 0; s < n; ++s) coloured += (counts[s] >> 4) != 0;
-  if (data.size() != kHeaderBytes + n + coloured * (3 * sum_bytes + square_bytes))
+  size_t coloured = 0, squared = 0;
+  for (size_t s = 0; s < n; ++s) coloured += (counts[s] >> 4) != 0, squared += (counts[s] >> 4) > 1;
+  if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes)
     return fail("size does not match its counts");
   out.reset(int(vertices), offsets, bits);
   const uint8_t* p = counts + n;
@@ -120,8 +122,58 @@ bool decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatist
     out.colour_count[s] = counts[s] >> 4;
     if (out.colour_count[s] == 0) continue;
     for (int c = 0; c < 3; ++c, p += sum_bytes) out.sums[3 * s + c] = uint16_t(get(p, sum_bytes));
+    if (out.colour_count[s] == 1) {  // one camera: its colour is the sum
+      uint32_t q = 0;
+      for (int c = 0; c < 3; ++c) q += uint32_t(out.sums[3 * s + c]) * out.sums[3 * s + c];
+      out.squares[s] = q;
+      continue;
+    }
     out.squares[s] = get(p, square_bytes);
     p += square_bytes;
+  }
+  return true;
+}
+
+bool addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& sum,
+                                    std::string* error) {
+  auto fail = [&](const char* why) {
+    if (error) *error = std::string("refinement statistics: ") + why;
+    return false;
+  };
+  if (data.size() < kHeaderBytes) return fail("shorter than its header");
+  const uint32_t vertices = get(data.data(), 4);
+  const int offsets = data[4], bits = data[5], sum_bytes = data[6], square_bytes = data[7];
+  if (int(vertices) != sum.vertex_count || offsets != sum.offset_count || bits != sum.colour_bits)
+    return fail("sizes differ from the mesh's");
+  if (sum_bytes < 1 || sum_bytes > 2 || square_bytes < 1 || square_bytes > 4)
+    return fail("bad value widths");
+  const size_t n = size_t(vertices) * offsets;
+  if (data.size() < kHeaderBytes + n) return fail("truncated counts");
+  const uint8_t* counts = data.data() + kHeaderBytes;
+  size_t coloured = 0, squared = 0;
+  for (size_t s = 0; s < n; ++s) {
+    const int c = counts[s] >> 4;
+    coloured += c != 0, squared += c > 1;
+  }
+  if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes)
+    return fail("size does not match its counts");
+  const uint8_t* p = counts + n;
+  for (size_t s = 0; s < n; ++s) {
+    const int outside = counts[s] & 15, colour = counts[s] >> 4;
+    if (outside) sum.outside[s] = uint8_t(std::min(255, sum.outside[s] + outside));
+    if (colour == 0) continue;
+    sum.colour_count[s] = uint8_t(std::min(255, sum.colour_count[s] + colour));
+    uint32_t q = 0;
+    for (int c = 0; c < 3; ++c, p += sum_bytes) {
+      const uint32_t v = sum_bytes == 1 ? p[0] : uint32_t(p[0] | (p[1] << 8));
+      sum.sums[3 * s + c] = uint16_t(sum.sums[3 * s + c] + v);
+      q += v * v;
+    }
+    if (colour > 1) {
+      q = get(p, square_bytes);
+      p += square_bytes;
+    }
+    sum.squares[s] += q;
   }
   return true;
 }

@@ -37,12 +37,18 @@ struct RefinementStatistics {
 
 // The compact wire form: a header (vertex count, offset count, colour bits, the byte widths of
 // sums and squares), then one byte a sample (outside count in the low nibble, colour count in the
-// high one, each at most 15), then sums and square of the samples with colour only, little endian,
-// in the narrowest widths their largest values need. `out` is reused.
+// high one, each at most 15), then the sums of the samples with colour and the squares of those
+// seen by two cameras or more (one camera's square follows from its sum), little endian, in the
+// narrowest widths their largest values need. `out` is reused.
 void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<uint8_t>& out);
 // Empty (with `error` set when given) for a malformed or truncated buffer, or sizes above
 // max_samples. `out` is reused.
 bool decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& out,
                                 std::string* error = nullptr, int max_samples = 1 << 22);
+// The module's fast path: adds a node's wire form to `sum` (of the same sizes) without decoding it
+// first; call sum.dropColourOutside() after the last node. The result is what decoding and add()
+// give. False (`sum` unchanged) for a malformed buffer or other sizes.
+bool addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& sum,
+                                    std::string* error = nullptr);
 
 }  // namespace lumistage

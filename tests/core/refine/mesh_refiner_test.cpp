@@ -66,6 +66,13 @@ TEST(MeshRefiner, ColourTermAloneFindsTheConsistentOffset) {
   OneVertex one(c);
   for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, i == 13 ? 1 : 40);
   EXPECT_EQ(refineOne(c, one.stats), 13);
+  {  // The refiner's fast path computes what dataError() says.
+    MeshRefiner refiner(c, 1, {});
+    std::vector<uint8_t> offsets;
+    ASSERT_TRUE(refiner.refine(one.stats, offsets));
+    for (int i = 0; i < c.offset_count; ++i)
+      EXPECT_NEAR(refiner.dataErrors()[i], refiner.dataError(one.stats, i, i), 1e-5) << i;
+  }
   // A point outside the hull has no colour consistency, whatever the colours say.
   one.stats.outside[13] = 1;
   one.stats.dropColourOutside();
@@ -239,6 +246,12 @@ TEST_F(EllipsoidScene, DistributedCombinationEqualsOneProcess) {
       ASSERT_TRUE(combined.add(decoded));
     }
     EXPECT_TRUE(combined == single);
+    // The module's fast path, straight from the wire.
+    RefinementStatistics fast;
+    fast.reset(sphere.vertexCount(), config.offset_count, config.colour_bits);
+    for (int n : order) ASSERT_TRUE(addEncodedRefinementStatistics(wire[n], fast));
+    fast.dropColourOutside();
+    EXPECT_TRUE(fast == single);
     MeshRefiner a(config, sphere.vertexCount(), sphere.triangles),
         b(config, sphere.vertexCount(), sphere.triangles);
     std::vector<uint8_t> oa, ob;
