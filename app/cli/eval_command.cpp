@@ -41,19 +41,21 @@ void addEvalCommand(CLI::App& app) {
         "surface, {} frames (generic mesh posed by a fit to the true joints, rms {:.1f} mm):\n"
         "  unrefined: mean {:.1f} mm, p95 {:.1f} mm\n"
         "  refined:   mean {:.1f} mm, p95 {:.1f} mm ({:+.0f}%)\n"
+        "  offsets change {:.2f} mm a vertex from frame to frame\n"
         "  refinement statistics: {:.0f} bytes per node per frame\n"
         "({:.1f} s)\n",
         e.frames, e.joint_fit_rms_mm, e.unrefined.mean_mm, e.unrefined.p95_mm, e.refined.mean_mm,
         e.refined.p95_mm, 100.0 * (e.refined.mean_mm / e.unrefined.mean_mm - 1.0),
-        e.statistics_bytes_per_node, seconds);
+        e.offset_change_mm, e.statistics_bytes_per_node, seconds);
     if (!args->json.empty()) {
       const std::string json = fmt::format(
           "{{\n  \"frames\": {},\n  \"surface_mm_unrefined\": {:.3f},\n"
           "  \"surface_mm_unrefined_p95\": {:.3f},\n  \"surface_mm_refined\": {:.3f},\n"
           "  \"surface_mm_refined_p95\": {:.3f},\n  \"joint_fit_rms_mm\": {:.3f},\n"
+          "  \"refine_offset_change_mm\": {:.3f},\n"
           "  \"refine_bytes_per_node_per_frame\": {:.1f}\n}}\n",
           e.frames, e.unrefined.mean_mm, e.unrefined.p95_mm, e.refined.mean_mm, e.refined.p95_mm,
-          e.joint_fit_rms_mm, e.statistics_bytes_per_node);
+          e.joint_fit_rms_mm, e.offset_change_mm, e.statistics_bytes_per_node);
       writeFileAtomically(args->json, json);
     }
   });

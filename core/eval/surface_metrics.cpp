@@ -220,7 +220,9 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
   std::vector<GreenScreenKeyer> keyers(rig.cameraCount());
   std::vector<CameraFrame> frames;
   RefinementStatistics node_stats, combined;
-  std::vector<uint8_t> wire, offsets;
+  std::vector<uint8_t> wire, offsets, previous;
+  double change_sum = 0;
+  int changes = 0;
   std::vector<SamplerCamera> inputs;
   Eigen::Matrix3Xf positions, normals, refined;
   std::vector<std::vector<double>> before, after;
@@ -257,6 +259,14 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
     }
     combined.dropColourOutside();
     refiner.refine(combined, offsets);
+    if (!previous.empty()) {
+      double change = 0;
+      for (size_t v = 0; v < offsets.size(); ++v)
+        change += std::abs(config.offsetAt(offsets[v]) - config.offsetAt(previous[v]));
+      change_sum += 1000.0 * change / double(offsets.size());
+      ++changes;
+    }
+    previous = offsets;
     applyOffsets(config, offsets, positions, normals, refined);
 
     const TriangleMesh truth = readTruthSurface(folder / "truth" / "surface" /
@@ -274,6 +284,7 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
   result.unrefined = poolSurfaceErrors(before);
   result.refined = poolSurfaceErrors(after);
   result.joint_fit_rms_mm = 1000.0 * fit_rms / result.frames;
+  result.offset_change_mm = changes > 0 ? change_sum / changes : 0.0;
   result.statistics_bytes_per_node = bytes / (double(result.frames) * rig.nodeCount());
   return result;
 }

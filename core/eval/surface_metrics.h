@@ -57,6 +57,8 @@ struct SurfaceEvaluation {
   std::vector<SurfaceError> unrefined_per_frame, refined_per_frame;
   double joint_fit_rms_mm = 0;           // mean over frames of the pose fit's joint rms
   double statistics_bytes_per_node = 0;  // mean encoded size per node and frame
+  // Shimmer: the mean change of a vertex's chosen offset from one evaluated frame to the next.
+  double offset_change_mm = 0;
   int frames = 0;
 };
 

@@ -35,7 +35,7 @@ struct RefineConfig {
   double colour_sigma = 20.0;  // 8-bit levels
   double unseen_colour = 0.6;
   double smooth_weight = 1.5;
-  double temporal_weight = 0.1;
+  double temporal_weight = 1.0;
   double tie_margin = 0.05;
   int smooth_iterations = 3;
   // Visibility: low-resolution depth maps of the posed mesh, 1/depth_map_step of the image in
