@@ -64,14 +64,11 @@ struct BodyEncoder {
             fb::CreatePose(b, m.root[0], m.root[1], m.root[2], joints, angles).Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const VertexStatisticsData& m) const {
-    const auto sums = b.CreateVector(m.sums);
-    const auto squares = b.CreateVector(m.sums_of_squares);
-    const auto seen = b.CreateVector(m.seen);
-    const auto inside = b.CreateVector(m.inside);
-    return {fb::Body::VertexStatistics,
-            fb::CreateVertexStatistics(b, m.vertex_count, static_cast<uint8_t>(m.offset_count),
-                                       sums, squares, seen, inside)
-                .Union()};
+    const auto packed = b.CreateVector(m.packed);
+    return {
+        fb::Body::VertexStatistics,
+        fb::CreateVertexStatistics(b, m.vertex_count, static_cast<uint8_t>(m.offset_count), packed)
+            .Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const OffsetsData& m) const {
     const auto offsets = b.CreateVector(m.offsets);
@@ -256,34 +253,25 @@ Check decodeVertexStatistics(const fb::VertexStatistics& in, const MessageLimits
     return "vertex statistics: " + num(offsets) + " offsets, expected 1 to " +
            num(limits.max_offsets);
   }
-  const uint64_t samples = vertices * offsets;
-  const std::string counts =
-      "vertex statistics: " + num(vertices) + " vertices x " + num(offsets) + " offsets needs ";
-  if (sizeOf(in.sums()) != samples * 3) {
-    return counts + num(samples * 3) + " floats of sums, got " + num(sizeOf(in.sums()));
+  // The packed form: an 8-byte header (vertex count, offset count, colour bits, value widths),
+  // a byte a sample, then at most 10 bytes a sample of sums and squares. Its contents are checked
+  // where it is combined (addEncodedRefinementStatistics).
+  const uint64_t samples = vertices * offsets, size = sizeOf(in.packed());
+  if (size < 8 + samples || size > 8 + samples * 11) {
+    return "vertex statistics: " + num(vertices) + " vertices x " + num(offsets) +
+           " offsets needs " + num(8 + samples) + " to " + num(8 + samples * 11) +
+           " packed bytes, got " + num(size);
   }
-  if (sizeOf(in.sums_of_squares()) != samples * 3) {
-    return counts + num(samples * 3) + " floats of sums of squares, got " +
-           num(sizeOf(in.sums_of_squares()));
-  }
-  if (sizeOf(in.seen()) != samples) {
-    return counts + num(samples) + " seen counts, got " + num(sizeOf(in.seen()));
-  }
-  if (sizeOf(in.inside()) != samples) {
-    return counts + num(samples) + " inside counts, got " + num(sizeOf(in.inside()));
-  }
-  for (uint64_t i = 0; i < samples; ++i) {
-    if (in.inside()->Get(static_cast<flatbuffers::uoffset_t>(i)) >
-        in.seen()->Get(static_cast<flatbuffers::uoffset_t>(i))) {
-      return "vertex statistics: sample " + num(i) + " is inside in more cameras than see it";
-    }
+  const auto* p = in.packed()->data();
+  const uint32_t packed_vertices =
+      uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+  if (packed_vertices != vertices || p[4] != offsets) {
+    return "vertex statistics: the packed header says " + num(packed_vertices) + " vertices x " +
+           num(p[4]) + " offsets";
   }
   out.vertex_count = in.vertex_count();
   out.offset_count = in.offset_count();
-  out.sums = copyVector(in.sums());
-  out.sums_of_squares = copyVector(in.sums_of_squares());
-  out.seen = copyVector(in.seen());
-  out.inside = copyVector(in.inside());
+  out.packed = copyVector(in.packed());
   return {};
 }
 

@@ -22,7 +22,7 @@ class FlatBufferBuilder;
 namespace lumistage {
 
 // Raised whenever a table changes in a way an older peer would misread.
-inline constexpr uint16_t kProtocolVersion = 1;
+inline constexpr uint16_t kProtocolVersion = 2;  // 2: compact refinement statistics
 
 struct HelloData {
   std::string node_name;
@@ -68,14 +68,12 @@ struct PoseData {
   bool operator==(const PoseData&) const = default;
 };
 
-// Per vertex v and offset t, at index (v * offset_count + t) (times 3 for the colour sums).
+// A node's refinement statistics: `packed` as encodeRefinementStatistics writes it
+// (core/refine/refinement_statistics.h); its header must agree with the counts here.
 struct VertexStatisticsData {
   uint32_t vertex_count = 0;
   int offset_count = 0;
-  std::vector<float> sums;
-  std::vector<float> sums_of_squares;
-  std::vector<uint8_t> seen;
-  std::vector<uint8_t> inside;
+  std::vector<uint8_t> packed;
   bool operator==(const VertexStatisticsData&) const = default;
 };
 

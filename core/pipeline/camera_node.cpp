@@ -8,6 +8,7 @@
 
 #include "core/base/error.h"
 #include "core/pipeline/pipeline.h"
+#include "core/refine/mesh_refiner.h"
 #include "core/render/lumigraph_weights.h"
 
 namespace lumistage {
@@ -19,7 +20,8 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
       source_(std::move(source)),
       endpoint_(std::move(endpoint)),
       body_(std::move(body)),
-      options_(options) {
+      options_(options),
+      sampler_(options.refine) {
   const std::optional<int> node = rig_.findNode(name_);
   if (!node) throw Error("camera node: no node '" + name_ + "' in the rig");
   cameras_ = rig_.nodes()[*node].cameras;
@@ -62,37 +64,23 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   body_.skeleton.skinningTransforms(pose, transforms_);
   skinMesh(body_, transforms_, positions_, normals_);
 
-  // Per vertex: the colours of this node's cameras that face it and see it on their image.
-  const uint32_t n = static_cast<uint32_t>(positions_.cols());
-  VertexStatisticsData stats;
-  stats.vertex_count = n;
-  stats.offset_count = 1;
-  stats.sums.assign(size_t(n) * 3, 0.0f);
-  stats.sums_of_squares.assign(size_t(n) * 3, 0.0f);
-  stats.seen.assign(n, 0);
-  stats.inside.assign(n, 0);
-  Eigen::Matrix2Xf pixels;
-  Eigen::VectorXf depths;
+  // The refinement's samples: every vertex's offsets along its normal in this node's cameras.
+  sampler_cameras_.resize(cameras_.size());
   for (size_t k = 0; k < cameras_.size(); ++k) {
-    const Camera& camera = rig_.camera(cameras_[k]);
-    const ImageView image = set->frames[k].image.view();
-    camera.project(positions_, pixels, depths);
-    const Eigen::Vector3f centre = camera.centre().cast<float>();
-    for (uint32_t v = 0; v < n; ++v) {
-      if (depths(v) <= 0 || normals_.col(v).dot(centre - positions_.col(v)) <= 0) continue;
-      const int x = static_cast<int>(pixels(0, v) + 0.5f),
-                y = static_cast<int>(pixels(1, v) + 0.5f);
-      if (x < 0 || y < 0 || x >= image.width || y >= image.height) continue;
-      const Rgb c = colourAt(image, x, y);
-      const float rgb[3] = {float(c.r), float(c.g), float(c.b)};
-      for (int ch = 0; ch < 3; ++ch) {
-        stats.sums[3 * v + ch] += rgb[ch];
-        stats.sums_of_squares[3 * v + ch] += rgb[ch] * rgb[ch];
-      }
-      ++stats.seen[v];
-      stats.inside[v] += keyers_[k].isForeground(image, x, y) ? 1 : 0;
-    }
+    sampler_cameras_[k] = {&rig_.camera(cameras_[k]), set->frames[k].image.view(), &keyers_[k],
+                           nullptr};
   }
+  sampler_.sample(sampler_cameras_, positions_, normals_, body_.rest.triangles, refine_stats_);
+  VertexStatisticsData stats;
+  stats.vertex_count = static_cast<uint32_t>(positions_.cols());
+  stats.offset_count = options_.refine.offset_count;
+  encodeRefinementStatistics(refine_stats_, stats.packed);
+  // Kept until the studio's offsets for the frame arrive.
+  Posed& posed = posed_[message.frame_id];
+  posed.set = set;
+  posed.positions = positions_;
+  posed.normals = normals_;
+  while (static_cast<int>(posed_.size()) > options_.frames_kept) posed_.erase(posed_.begin());
   Message reply;
   reply.frame_id = message.frame_id;
   reply.sent_ns = steadyNowNs();
@@ -245,23 +233,37 @@ CameraNode::MonitorState CameraNode::monitorState() {
 
 void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {
   while (!stop) {
-    std::optional<Message> pose = poses_.pop(std::chrono::milliseconds(20));
-    if (!pose) continue;
-    std::shared_ptr<const Set> set;
-    {
-      std::lock_guard lock(kept_mutex_);
-      if (const auto it = kept_.find(pose->frame_id); it != kept_.end()) set = it->second;
+    while (std::optional<Message> offsets = offsets_.pop(std::chrono::milliseconds(0))) {
+      if (std::optional<Message> image = partialImageWithOffsets(*offsets))
+        outbox_.push(std::move(*image));
     }
+    std::optional<Message> pose = poses_.pop(std::chrono::milliseconds(2));
+    if (!pose) continue;
     std::optional<Message> reply = statisticsFor(*pose);
     if (!reply) continue;
     outbox_.push(std::move(*reply));
-    std::optional<ViewData> view;
-    {
-      std::lock_guard lock(view_mutex_);
-      view = view_;
-    }
-    if (view && set) outbox_.push(partialImageFor(*set, pose->frame_id, *view));
   }
+}
+
+std::optional<Message> CameraNode::partialImageWithOffsets(const Message& message) {
+  const auto it = posed_.find(message.frame_id);
+  if (it == posed_.end()) return std::nullopt;  // too old: dropped already
+  const OffsetsData& offsets = std::get<OffsetsData>(message.body);
+  Posed posed = std::move(it->second);
+  posed_.erase(posed_.begin(), std::next(it));
+  if (offsets.offsets.size() != size_t(posed.positions.cols()) ||
+      offsets.offset_count != options_.refine.offset_count) {
+    return std::nullopt;  // for another mesh or configuration
+  }
+  applyOffsets(options_.refine, offsets.offsets, posed.positions, posed.normals, positions_);
+  normals_ = posed.normals;
+  std::optional<ViewData> view;
+  {
+    std::lock_guard lock(view_mutex_);
+    view = view_;
+  }
+  if (!view || !posed.set) return std::nullopt;
+  return partialImageFor(*posed.set, message.frame_id, *view);
 }
 
 bool CameraNode::send(Message message) {
@@ -288,6 +290,8 @@ void CameraNode::run(const std::atomic<bool>& stop) {
     if (std::optional<DecodeResult> received = endpoint_.receive(std::chrono::milliseconds(2))) {
       if (received->ok() && std::holds_alternative<PoseData>(received->message->body)) {
         poses_.push(std::move(*received->message));
+      } else if (received->ok() && std::holds_alternative<OffsetsData>(received->message->body)) {
+        offsets_.push(std::move(*received->message));
       } else if (received->ok() && std::holds_alternative<ViewData>(received->message->body)) {
         std::lock_guard lock(view_mutex_);
         view_ = std::get<ViewData>(received->message->body);

@@ -16,6 +16,7 @@
 #include "core/net/transport.h"
 #include "core/pipeline/bounded_queue.h"
 #include "core/pipeline/silhouettes.h"
+#include "core/refine/refinement_sampler.h"
 
 namespace lumistage {
 
@@ -23,19 +24,22 @@ struct CameraNodeOptions {
   int silhouette_step = 8;
   std::chrono::milliseconds heartbeat{250};
   int frames_kept = 8;  // frame sets kept for the statistics (poses arrive a few frames later)
+  RefineConfig refine;  // the mesh refinement's parameters (offsets, depth maps, colour bits)
 };
 
 // The node's part of every frame, on the PC that owns the cameras (see DESIGN.md §1):
 // capture a set of its cameras' frames; key them at low resolution and send the silhouettes;
 // when the studio's pose for that frame arrives, pose the generic human (linear blend skinning)
-// and send, per vertex, the colour statistics of its cameras that see it (sums, sums of squares,
-// how many see it, how many see it inside the silhouette) — what the studio's modules combine
-// exactly across nodes. Heartbeats carry every camera's counters.
+// and send, per vertex and offset along its normal, the refinement statistics of its cameras
+// (RefinementSampler: outside-silhouette counts, colour counts, sums and squares, compact) —
+// what the studio's refinement module combines exactly across nodes; when the studio's chosen
+// offsets arrive, move the vertices and render the partial image of the refined mesh.
+// Heartbeats carry every camera's counters.
 //
 // Threads joined by drop-oldest bounded queues, so that capture, keying and statistics work on
 // different frames at once and a slow stage loses old frames rather than delaying new ones:
 //   capture -> [sets] -> silhouettes -> [outbox] -> network (this thread: sends, receives poses)
-//   network -> [poses] -> statistics -> [outbox]
+//   network -> [poses, offsets] -> statistics / partial images -> [outbox]
 class CameraNode {
  public:
   CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<FrameSource> source,
@@ -73,6 +77,8 @@ class CameraNode {
   void statisticsLoop(const std::atomic<bool>& stop);
   Message silhouettesOf(const Set& set) const;
   std::optional<Message> statisticsFor(const Message& pose);
+  // Applies the studio's offsets to that frame's posed mesh and renders its partial image.
+  std::optional<Message> partialImageWithOffsets(const Message& offsets);
   // The node's partial lumigraph image of the posed surface (just skinned by statisticsFor) for
   // the desired view: per vertex the weighted mean colour of its own cameras and, as alpha, the
   // sum of their weights (global Buehler weights, so the studio's normalisation is exact), splat
@@ -91,6 +97,7 @@ class CameraNode {
   std::vector<GreenScreenKeyer> keyers_;  // per own camera; read only once running
   BoundedQueue<std::shared_ptr<const Set>> sets_{2};
   BoundedQueue<Message> poses_{4};
+  BoundedQueue<Message> offsets_{4};
   BoundedQueue<Message> outbox_{32};
   std::mutex view_mutex_;
   std::optional<ViewData> view_;  // the latest desired view from the studio
@@ -100,6 +107,14 @@ class CameraNode {
   MessageEncoder encoder_;
   std::vector<Eigen::Affine3f> transforms_;
   Eigen::Matrix3Xf positions_, normals_;
+  RefinementSampler sampler_;
+  RefinementStatistics refine_stats_;
+  std::vector<SamplerCamera> sampler_cameras_;
+  struct Posed {
+    std::shared_ptr<const Set> set;
+    Eigen::Matrix3Xf positions, normals;
+  };
+  std::map<int64_t, Posed> posed_;  // frames awaiting their offsets (statistics thread's alone)
   std::atomic<int64_t> sets_sent_{0}, bytes_sent_{0};
   std::mutex monitor_mutex_;
   std::shared_ptr<const Set> monitor_set_;

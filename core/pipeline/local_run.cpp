@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "core/base/error.h"
+#include "core/body/human_model.h"
 #include "core/body/human_skeleton.h"
 #include "core/capture/session_reader.h"
 #include "core/geometry/rig_file.h"
@@ -50,6 +51,9 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
     endpoint.studio_key = store.studioKey();
     endpoint.authorized = store.authorizedNodes();
   }
+  // The nodes pose the generic human: the refinement's smoothness needs its triangles.
+  if (options_.coordinator.body_triangles.empty())
+    options_.coordinator.body_triangles = loadGenericHuman().rest.triangles;
   studio_ =
       std::make_unique<StudioCoordinator>(rig_, endpoint, kHumanJointCount, options_.coordinator);
 

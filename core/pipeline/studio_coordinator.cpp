@@ -40,8 +40,11 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
 }
 
 void StudioCoordinator::maybeFinish(int64_t frame_id, FrameState& frame) {
-  if (frame.statistics_nodes.size() >= frame.pose_nodes.size() &&
-      frame.image_nodes.size() >= frame.pose_nodes.size()) {
+  if (frame.offsets_sent_ns == 0 && frame.statistics_nodes.size() >= frame.pose_nodes.size()) {
+    runRefinement(frame_id, frame);
+    return;
+  }
+  if (frame.offsets_sent_ns > 0 && frame.image_nodes.size() >= frame.statistics_nodes.size()) {
     finishFrame(frame_id, frame);
   }
 }
@@ -113,23 +116,22 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       runMocap(message.frame_id, frame);
   } else if (const auto* stats = std::get_if<VertexStatisticsData>(&message.body)) {
     const auto it = frames_.find(message.frame_id);
-    if (it == frames_.end() || it->second.pose_sent_ns == 0) return;
+    if (it == frames_.end() || it->second.pose_sent_ns == 0 || it->second.offsets_sent_ns > 0)
+      return;
     FrameState& frame = it->second;
-    if (frame.seen.empty()) {
-      frame.sums.assign(size_t(stats->vertex_count) * 3, 0.0f);
-      frame.squares.assign(size_t(stats->vertex_count) * 3, 0.0f);
-      frame.seen.assign(stats->vertex_count, 0);
-      frame.inside.assign(stats->vertex_count, 0);
+    if (frame.statistics_nodes.count(node.report.name)) return;
+    if (stats->offset_count != options_.refine.offset_count || stats->packed.size() < 8) {
+      ++node.report.bad_messages;
+      return;
     }
-    if (stats->vertex_count != frame.seen.size() || stats->offset_count != 1) return;
-    // Sums of every node's cameras add up exactly.
-    for (size_t i = 0; i < frame.sums.size(); ++i) {
-      frame.sums[i] += stats->sums[i];
-      frame.squares[i] += stats->sums_of_squares[i];
-    }
-    for (size_t v = 0; v < frame.seen.size(); ++v) {
-      frame.seen[v] += stats->seen[v];
-      frame.inside[v] += stats->inside[v];
+    if (frame.refine_sum.vertex_count == 0)
+      frame.refine_sum.reset(int(stats->vertex_count), stats->offset_count, stats->packed[5]);
+    // Integer sums of every node's cameras add up exactly, in any order.
+    std::string error;
+    if (!addEncodedRefinementStatistics(stats->packed, frame.refine_sum, &error)) {
+      spdlog::warn("node {}: frame {}: {}", node.report.name, message.frame_id, error);
+      ++node.report.bad_messages;
+      return;
     }
     frame.statistics_nodes.insert(node.report.name);
     maybeFinish(message.frame_id, frame);
@@ -212,16 +214,56 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   if (frame.pose_nodes.empty()) finishFrame(frame_id, frame);
 }
 
+void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
+  const int64_t start = steadyNowNs();
+  frame.offsets_sent_ns = start;
+  RefinementStatistics& sum = frame.refine_sum;
+  if (sum.vertex_count == 0) {  // no node's statistics: nothing to refine or render
+    finishFrame(frame_id, frame);
+    return;
+  }
+  sum.dropColourOutside();
+  if (!refiner_ || refiner_->config().offset_count != sum.offset_count ||
+      refiner_->dataErrors().size() != size_t(sum.sampleCount())) {
+    bool fits = true;
+    for (const Eigen::Vector3i& t : options_.body_triangles)
+      fits = fits && t.maxCoeff() < sum.vertex_count;
+    refiner_ = std::make_unique<MeshRefiner>(
+        options_.refine, sum.vertex_count,
+        fits ? options_.body_triangles : std::vector<Eigen::Vector3i>{});
+  }
+  if (!refiner_->refine(sum, chosen_offsets_)) {
+    finishFrame(frame_id, frame);
+    return;
+  }
+  Message message;
+  message.sender = "studio";
+  message.frame_id = frame_id;
+  message.sent_ns = steadyNowNs();
+  message.body = OffsetsData{sum.offset_count, chosen_offsets_};
+  const std::span<const uint8_t> bytes = encoder_.encode(message);
+  if (counting_) refine_ms_.add((steadyNowNs() - start) / 1e6);
+  int sent = 0;
+  for (const std::string& name : frame.statistics_nodes) {
+    NodeState& node = nodes_.at(name);
+    if (node.report.lost || node.peer.empty()) continue;
+    sent += endpoint_.send(node.peer, bytes, std::chrono::milliseconds(5));
+  }
+  if (sent == 0) finishFrame(frame_id, frame);
+}
+
 void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   const int64_t now = steadyNowNs();
   const int64_t start = now;
-  // The refinement's combination, for now at the posed vertices: colour variance across every
-  // camera that sees a vertex, and whether all of them see it inside the silhouettes.
+  // Hull agreement at the posed vertices (offset 0): the share seen by some camera and outside
+  // none of their silhouettes.
   int agreeing = 0, seen_vertices = 0;
-  for (size_t v = 0; v < frame.seen.size(); ++v) {
-    if (frame.seen[v] == 0) continue;
+  const RefinementStatistics& sum = frame.refine_sum;
+  for (int v = 0; v < sum.vertex_count; ++v) {
+    const size_t s = size_t(v) * sum.offset_count + sum.offset_count / 2;
+    if (sum.colour_count[s] == 0 && sum.outside[s] == 0) continue;
     ++seen_vertices;
-    agreeing += frame.inside[v] == frame.seen[v];
+    agreeing += sum.outside[s] == 0;
   }
   const int64_t combined = steadyNowNs();
   if (!frame.blend_alpha.empty()) {
@@ -277,7 +319,11 @@ void StudioCoordinator::checkDeadlines(int64_t now_ns) {
     ++it;  // finishFrame may erase this and earlier frames
     if (frame.pose_sent_ns == 0 && now_ns - frame.first_ns > deadline) {
       runMocap(frame_id, frame);  // with the nodes that made it
-    } else if (frame.pose_sent_ns > 0 && now_ns - frame.pose_sent_ns > deadline) {
+    } else if (frame.pose_sent_ns > 0 && frame.offsets_sent_ns == 0 &&
+               now_ns - frame.pose_sent_ns > deadline) {
+      runRefinement(frame_id, frame);  // with the nodes' statistics that made it
+      it = frames_.upper_bound(frame_id);
+    } else if (frame.offsets_sent_ns > 0 && now_ns - frame.offsets_sent_ns > deadline) {
       finishFrame(frame_id, frame);
       it = frames_.upper_bound(frame_id);
     }
@@ -321,6 +367,7 @@ RunReport StudioCoordinator::report() const {
   };
   r.stage_ms["mocap"] = mean(mocap_ms_);
   r.stage_ms["nodes_statistics_and_render"] = mean(statistics_wait_ms_);
+  r.stage_ms["refine"] = mean(refine_ms_);
   r.stage_ms["combine"] = mean(combine_ms_);
   r.stage_ms["blend"] = mean(blend_ms_);
   r.hull_agreement = frames_done_ > 0 ? hull_agreement_sum_ / frames_done_ : 0;

@@ -12,6 +12,7 @@
 #include "core/net/transport.h"
 #include "core/pipeline/pipeline.h"
 #include "core/tracking/pose_tracker.h"
+#include "core/refine/mesh_refiner.h"
 #include "core/tracking/visual_hull_locator.h"
 
 namespace lumistage {
@@ -24,6 +25,10 @@ struct StudioCoordinatorOptions {
   std::chrono::milliseconds lost_after{1000};  // no message for this long: the node is lost
   int64_t max_frames = 0;                      // stop after this many complete frames; 0: never
   int raw_bytes_per_pixel = 1;                 // of the cameras' images (Bayer, mono: 1; RGB: 3)
+  RefineConfig refine;                         // the refinement module's parameters
+  // The nodes' body mesh's triangles, for the refinement's smoothness between neighbours (empty:
+  // no smoothness).
+  std::vector<Eigen::Vector3i> body_triangles;
 };
 
 // A camera's health as its node reports it in heartbeats.
@@ -111,8 +116,8 @@ class StudioCoordinator {
     std::vector<LowResSilhouette> silhouettes;
     std::set<std::string> silhouette_nodes, pose_nodes, statistics_nodes;
     int64_t pose_sent_ns = 0;
-    std::vector<float> sums, squares;
-    std::vector<int> seen, inside;
+    RefinementStatistics refine_sum;  // the nodes' statistics, combined exactly
+    int64_t offsets_sent_ns = 0;
     std::set<std::string> image_nodes;
     std::vector<float> blend_rgb, blend_alpha;  // sums of alpha x colour, and of alpha
   };
@@ -124,6 +129,9 @@ class StudioCoordinator {
 
   void onMessage(const ReceivedMessage& received);
   void runMocap(int64_t frame_id, FrameState& frame);
+  // The refinement module: chooses every vertex's offset from the combined statistics and sends
+  // the offsets to the nodes.
+  void runRefinement(int64_t frame_id, FrameState& frame);
   void finishFrame(int64_t frame_id, FrameState& frame);
   void checkDeadlines(int64_t now_ns);
   void maybeFinish(int64_t frame_id, FrameState& frame);
@@ -134,6 +142,8 @@ class StudioCoordinator {
   VisualHullLocator locator_;             // places the generic human while nobody is tracked
   std::unique_ptr<PoseTracker> tracker_;  // the human skeleton's mocap (null for another body)
   Eigen::Vector3d generic_root_m_ = Eigen::Vector3d::Zero();  // the nodes' skeleton's rest root
+  std::unique_ptr<MeshRefiner> refiner_;  // made for the first statistics' vertex count
+  std::vector<uint8_t> chosen_offsets_;
   int joints_;
   std::map<int64_t, FrameState> frames_;
   std::map<std::string, NodeState> nodes_;
@@ -142,7 +152,7 @@ class StudioCoordinator {
   int64_t start_ns_ = 0, last_done_ns_ = 0;
   static constexpr size_t kTimelineFrames = 1 << 16;
   std::vector<std::pair<int64_t, float>> timeline_;  // done (steady ns), latency (ms)
-  RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_;
+  RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_, refine_ms_;
   ViewData view_;
   BlendedImage last_image_;
   PoseData last_pose_;

@@ -14,7 +14,7 @@ StudioConfig loadStudioConfig(const std::filesystem::path& path) {
   const YamlReader in(path.string());
   const YAML::Node root = in.parseDocument(readFile(path));
   in.requireMap(root, "");
-  in.checkKeys(root, "", {"format", "version", "rig", "actor", "motion", "look", "seed"});
+  in.checkKeys(root, "", {"format", "version", "rig", "actor", "motion", "look", "seed", "refine"});
   const YAML::Node format = in.required(root, "", "format", "'lumistage-studio'");
   if (in.string(format, "format") != "lumistage-studio") {
     in.fail(format, "format", "expected 'lumistage-studio': not a Lumistage studio config");
@@ -109,6 +109,8 @@ StudioConfig loadStudioConfig(const std::filesystem::path& path) {
       config.pixel_format = *format;
     }
   }
+  if (const YAML::Node refine = root["refine"])
+    config.refine = readRefineConfig(in, refine, "refine");
   if (root["seed"]) config.seed = static_cast<uint32_t>(in.integer(root["seed"], "seed"));
   return config;
 }

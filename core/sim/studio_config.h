@@ -7,6 +7,7 @@
 #include "core/body/human_model.h"
 #include "core/capture/session_writer.h"
 #include "core/geometry/rig.h"
+#include "core/refine/refine_config.h"
 #include "core/sim/studio_renderer.h"
 
 namespace lumistage {
@@ -24,6 +25,7 @@ struct StudioConfig {
   StudioLook look;
   PixelFormat pixel_format = PixelFormat::kRgb8;
   uint32_t seed = 1;
+  RefineConfig refine;  // the `refine:` section: the mesh refinement's parameters
 };
 
 // Throws Error with file:line: key for anything malformed (see YamlReader).

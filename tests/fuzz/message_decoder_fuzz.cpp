@@ -23,10 +23,7 @@ void writeSeeds(const std::string& dir) {
   VertexStatisticsData stats;
   stats.vertex_count = 2;
   stats.offset_count = 3;
-  stats.sums.assign(18, 1.f);
-  stats.sums_of_squares.assign(18, 1.f);
-  stats.seen.assign(6, 2);
-  stats.inside.assign(6, 1);
+  stats.packed = {2, 0, 0, 0, 3, 6, 1, 2, 0x20, 0x01, 0, 0, 0x10, 0, 4, 5, 6, 9, 9, 9, 200, 1};
   bodies.push_back(stats);
   bodies.push_back(OffsetsData{21, {0, 5, 20}});
   bodies.push_back(

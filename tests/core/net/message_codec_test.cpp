@@ -32,12 +32,8 @@ std::vector<Message> oneOfEach() {
   VertexStatisticsData stats;
   stats.vertex_count = 5;
   stats.offset_count = 3;
-  for (int i = 0; i < 5 * 3 * 3; ++i) {
-    stats.sums.push_back(static_cast<float>(i));
-    stats.sums_of_squares.push_back(static_cast<float>(i * i));
-  }
-  stats.seen.assign(15, 3);
-  stats.inside.assign(15, 2);
+  stats.packed = {5, 0, 0, 0, 3, 6, 1, 2};  // the header, then a byte a sample (no colour)
+  for (int i = 0; i < 15; ++i) stats.packed.push_back(uint8_t(i % 3));
   OffsetsData offsets{21, {0, 10, 20, 5, 7}};
   ViewData view{
       1, 320, 240, 300.5f, 301, 159.5f, 119.5f, {1, 0, 0, 0, 0, -1, 0, 1, 0}, {0.1f, 1.2f, 4}};
@@ -124,7 +120,8 @@ TEST(MessageCodec, FlippedBytesNeverCrash) {
 TEST(MessageCodec, WrongVersionNamesBoth) {
   Message m = oneOfEach()[0];
   m.version = kProtocolVersion + 1;
-  EXPECT_EQ(decodeError(m), "protocol version 2, expected 1");
+  EXPECT_EQ(decodeError(m), "protocol version " + std::to_string(kProtocolVersion + 1) +
+                                ", expected " + std::to_string(kProtocolVersion));
 }
 
 TEST(MessageCodec, OversizedBuffersAreRefusedBeforeReading) {
@@ -173,14 +170,15 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
   VertexStatisticsData stats;
   stats.vertex_count = 41000;
   stats.offset_count = 21;
-  stats.sums.resize(12);
+  stats.packed.resize(12);
   EXPECT_EQ(decodeError(envelope(stats)),
-            "vertex statistics: 41000 vertices x 21 offsets needs 2583000 floats of sums, got 12");
+            "vertex statistics: 41000 vertices x 21 offsets needs 861008 to 9471008 packed bytes, "
+            "got 12");
 
   stats = std::get<VertexStatisticsData>(oneOfEach()[4].body);
-  stats.inside[3] = 9;
+  stats.packed[0] = 4;
   EXPECT_EQ(decodeError(envelope(stats)),
-            "vertex statistics: sample 3 is inside in more cameras than see it");
+            "vertex statistics: the packed header says 4 vertices x 3 offsets");
 
   SilhouettesData silhouettes;
   silhouettes.masks.push_back({0, 13, 7, std::vector<uint8_t>(11, 0)});

@@ -1,0 +1,292 @@
+#include "core/eval/surface_metrics.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "core/base/atomic_file.h"
+#include "core/base/error.h"
+#include "core/body/joint_pose_fit.h"
+#include "core/capture/session_reader.h"
+#include "core/refine/mesh_refiner.h"
+#include "core/refine/refinement_sampler.h"
+
+namespace lumistage {
+
+TriangleMesh readTruthSurface(const std::filesystem::path& path) {
+  const std::string data = readFile(path);
+  const size_t end = data.find("end_header\n");
+  if (data.rfind("ply\n", 0) != 0 || end == std::string::npos)
+    throw Error(path.string() + ": not a PLY file (expected 'ply' ... 'end_header')");
+  const std::string header = data.substr(0, end);
+  if (header.find("format binary_little_endian 1.0") == std::string::npos)
+    throw Error(path.string() + ": expected a binary little-endian PLY");
+  int vertices = -1, faces = -1;
+  for (size_t at = 0; at < header.size();) {
+    const size_t eol = header.find('\n', at);
+    const std::string line = header.substr(at, eol == std::string::npos ? eol : eol - at);
+    if (line.rfind("element vertex ", 0) == 0) vertices = std::stoi(line.substr(15));
+    if (line.rfind("element face ", 0) == 0) faces = std::stoi(line.substr(13));
+    if (eol == std::string::npos) break;
+    at = eol + 1;
+  }
+  const size_t body = end + 11;
+  if (vertices < 0 || faces < 0 ||
+      data.size() != body + size_t(vertices) * 12 + size_t(faces) * 13) {
+    throw Error(path.string() +
+                ": expected float x y z vertices and uchar-counted int triangles, sizes disagree");
+  }
+  TriangleMesh mesh;
+  mesh.positions.resize(3, vertices);
+  const char* p = data.data() + body;
+  for (int v = 0; v < vertices; ++v, p += 12) std::memcpy(mesh.positions.col(v).data(), p, 12);
+  mesh.triangles.resize(faces);
+  for (int f = 0; f < faces; ++f, p += 13) {
+    if (*p != 3) throw Error(path.string() + fmt::format(": face {} is not a triangle", f));
+    std::memcpy(mesh.triangles[f].data(), p + 1, 12);
+    for (int k = 0; k < 3; ++k) {
+      if (mesh.triangles[f][k] < 0 || mesh.triangles[f][k] >= vertices)
+        throw Error(path.string() + fmt::format(": face {} has a vertex out of range", f));
+    }
+  }
+  mesh.computeNormals();
+  return mesh;
+}
+
+namespace {
+
+// Ericson, Real-Time Collision Detection, 5.1.5: the closest point of triangle abc to p.
+Eigen::Vector3d closestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                  const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+}  // namespace
+
+SurfaceDistance::SurfaceDistance(const TriangleMesh& mesh, double cell_m) : cell_(cell_m) {
+  vertices_.resize(mesh.vertexCount());
+  for (int v = 0; v < mesh.vertexCount(); ++v) vertices_[v] = mesh.positions.col(v).cast<double>();
+  triangles_ = mesh.triangles;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e30), hi = Eigen::Vector3d::Constant(-1e30);
+  for (const Eigen::Vector3d& v : vertices_) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  if (vertices_.empty()) lo = hi = Eigen::Vector3d::Zero();
+  const double margin = 0.25;  // queries come from near the surface
+  origin_ = lo - Eigen::Vector3d::Constant(margin);
+  for (int k = 0; k < 3; ++k)
+    size_[k] = std::max(1, static_cast<int>(std::ceil((hi[k] - lo[k] + 2 * margin) / cell_)));
+  const size_t cells = size_t(size_[0]) * size_[1] * size_[2];
+  std::vector<std::vector<int>> buckets(cells);
+  for (size_t t = 0; t < triangles_.size(); ++t) {
+    Eigen::Vector3d tlo = vertices_[triangles_[t][0]], thi = tlo;
+    for (int k = 1; k < 3; ++k) {
+      tlo = tlo.cwiseMin(vertices_[triangles_[t][k]]);
+      thi = thi.cwiseMax(vertices_[triangles_[t][k]]);
+    }
+    Eigen::Vector3i a, b;
+    for (int k = 0; k < 3; ++k) {
+      a[k] = std::clamp(static_cast<int>((tlo[k] - origin_[k]) / cell_), 0, size_[k] - 1);
+      b[k] = std::clamp(static_cast<int>((thi[k] - origin_[k]) / cell_), 0, size_[k] - 1);
+    }
+    for (int z = a.z(); z <= b.z(); ++z)
+      for (int y = a.y(); y <= b.y(); ++y)
+        for (int x = a.x(); x <= b.x(); ++x)
+          buckets[(size_t(z) * size_[1] + y) * size_[0] + x].push_back(static_cast<int>(t));
+  }
+  cell_start_.assign(cells + 1, 0);
+  for (size_t c = 0; c < cells; ++c) {
+    cell_start_[c + 1] = cell_start_[c] + static_cast<int>(buckets[c].size());
+    cell_triangles_.insert(cell_triangles_.end(), buckets[c].begin(), buckets[c].end());
+  }
+  stamp_.assign(triangles_.size(), 0);
+}
+
+double SurfaceDistance::toTriangle(const Eigen::Vector3d& p, int t) const {
+  const Eigen::Vector3i& f = triangles_[t];
+  return (closestOnTriangle(p, vertices_[f[0]], vertices_[f[1]], vertices_[f[2]]) - p).norm();
+}
+
+double SurfaceDistance::bruteForce(const Eigen::Vector3d& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t t = 0; t < triangles_.size(); ++t) best = std::min(best, toTriangle(p, int(t)));
+  return best;
+}
+
+double SurfaceDistance::distance(const Eigen::Vector3d& p) const {
+  Eigen::Vector3i c;
+  for (int k = 0; k < 3; ++k) {
+    const double u = (p[k] - origin_[k]) / cell_;
+    if (!(u >= 0 && u < size_[k])) return bruteForce(p);  // far from the surface: rare
+    c[k] = static_cast<int>(u);
+  }
+  if (++stamp_now_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0), stamp_now_ = 1;
+  double best = std::numeric_limits<double>::infinity();
+  const int max_ring = std::max({size_[0], size_[1], size_[2]});
+  for (int ring = 0; ring <= max_ring; ++ring) {
+    // The cells at Chebyshev distance `ring` from p's cell.
+    for (int z = c.z() - ring; z <= c.z() + ring; ++z) {
+      if (z < 0 || z >= size_[2]) continue;
+      for (int y = c.y() - ring; y <= c.y() + ring; ++y) {
+        if (y < 0 || y >= size_[1]) continue;
+        for (int x = c.x() - ring; x <= c.x() + ring; ++x) {
+          if (x < 0 || x >= size_[0]) continue;
+          if (std::max({std::abs(x - c.x()), std::abs(y - c.y()), std::abs(z - c.z())}) != ring)
+            continue;
+          const size_t cell = (size_t(z) * size_[1] + y) * size_[0] + x;
+          for (int i = cell_start_[cell]; i < cell_start_[cell + 1]; ++i) {
+            const int t = cell_triangles_[i];
+            if (stamp_[t] == stamp_now_) continue;
+            stamp_[t] = stamp_now_;
+            best = std::min(best, toTriangle(p, t));
+          }
+        }
+      }
+    }
+    // Every cell within `ring` is searched: anything unsearched is at least ring cells away.
+    if (best <= ring * cell_) break;
+  }
+  return best;
+}
+
+void surfaceDistancesMm(const Eigen::Matrix3Xf& points, const SurfaceDistance& surface,
+                        std::vector<double>& out) {
+  out.resize(points.cols());
+  for (Eigen::Index v = 0; v < points.cols(); ++v)
+    out[v] = 1000.0 * surface.distance(points.col(v).cast<double>());
+}
+
+SurfaceError poolSurfaceErrors(const std::vector<std::vector<double>>& distances_mm) {
+  std::vector<double> all;
+  for (const std::vector<double>& d : distances_mm) all.insert(all.end(), d.begin(), d.end());
+  SurfaceError e;
+  e.points = static_cast<int>(all.size());
+  if (all.empty()) return e;
+  double sum = 0;
+  for (double d : all) sum += d;
+  e.mean_mm = sum / double(all.size());
+  const size_t k = std::min(all.size() - 1, size_t(std::ceil(0.95 * double(all.size()))) - 1);
+  std::nth_element(all.begin(), all.begin() + k, all.end());
+  e.p95_mm = all[k];
+  e.max_mm = *std::max_element(all.begin(), all.end());
+  return e;
+}
+
+SurfaceError surfaceError(const Eigen::Matrix3Xf& points, const SurfaceDistance& surface) {
+  std::vector<double> d;
+  surfaceDistancesMm(points, surface, d);
+  return poolSurfaceErrors({d});
+}
+
+SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const SkinnedMesh& generic,
+                                  const SurfaceEvaluationOptions& options) {
+  const SessionReader session(folder);
+  if (!session.hasTruth())
+    throw Error(folder.string() + ": the session has no truth (not from the virtual studio)");
+  std::vector<std::string> names;
+  const std::vector<std::vector<Eigen::Vector3d>> truth_joints = session.readTruthJoints(&names);
+  const Skeleton& skeleton = generic.skeleton;
+  // The generic skeleton's joints among the truth's columns, by name.
+  std::vector<int> column(skeleton.jointCount(), -1);
+  for (int j = 0; j < skeleton.jointCount(); ++j) {
+    for (size_t k = 0; k < names.size(); ++k)
+      if (names[k] == skeleton.joint(j).name) column[j] = static_cast<int>(k);
+    if (column[j] < 0)
+      throw Error(folder.string() + ": truth/joints.csv has no joint '" + skeleton.joint(j).name +
+                  "' of the generic skeleton");
+  }
+  const Rig& rig = session.rig();
+  const RefineConfig& config = options.refine;
+  RefinementSampler sampler(config);
+  MeshRefiner refiner(config, generic.rest.vertexCount(), generic.rest.triangles);
+  std::vector<GreenScreenKeyer> keyers(rig.cameraCount());
+  std::vector<CameraFrame> frames;
+  RefinementStatistics node_stats, combined;
+  std::vector<uint8_t> wire, offsets, previous;
+  double change_sum = 0;
+  int changes = 0;
+  std::vector<SamplerCamera> inputs;
+  Eigen::Matrix3Xf positions, normals, refined;
+  std::vector<std::vector<double>> before, after;
+  std::vector<double> d;
+  std::vector<Eigen::Vector3d> targets(skeleton.jointCount());
+  JointPoseFit fit;
+  bool first = true;
+  double fit_rms = 0, bytes = 0;
+  SurfaceEvaluation result;
+
+  const int step = std::max(1, options.frame_step);
+  for (int i = options.first_frame; i < session.frameCount(); i += step) {
+    if (options.max_frames > 0 && result.frames >= options.max_frames) break;
+    for (int j = 0; j < skeleton.jointCount(); ++j) targets[j] = truth_joints[i][column[j]];
+    fit = fitPoseToJoints(skeleton, targets, first ? initialJointPoseFit(skeleton, targets) : fit);
+    fit_rms += fit.rms_m;
+    posedScaledMesh(generic, fit, positions, normals);
+
+    session.readFrame(i, frames);
+    if (first) {
+      for (int c = 0; c < rig.cameraCount(); ++c) keyers[c].learnScreen(frames[c].image.view());
+    }
+    first = false;
+    combined.reset(generic.rest.vertexCount(), config.offset_count, config.colour_bits);
+    for (const RigNode& node : rig.nodes()) {
+      inputs.clear();
+      for (int c : node.cameras)
+        inputs.push_back({&rig.camera(c), frames[c].image.view(), &keyers[c], nullptr});
+      sampler.sample(inputs, positions, normals, generic.rest.triangles, node_stats);
+      encodeRefinementStatistics(node_stats, wire);
+      bytes += double(wire.size());
+      std::string error;
+      if (!addEncodedRefinementStatistics(wire, combined, &error)) throw Error(error);
+    }
+    combined.dropColourOutside();
+    refiner.refine(combined, offsets);
+    if (!previous.empty()) {
+      double change = 0;
+      for (size_t v = 0; v < offsets.size(); ++v)
+        change += std::abs(config.offsetAt(offsets[v]) - config.offsetAt(previous[v]));
+      change_sum += 1000.0 * change / double(offsets.size());
+      ++changes;
+    }
+    previous = offsets;
+    applyOffsets(config, offsets, positions, normals, refined);
+
+    const TriangleMesh truth = readTruthSurface(folder / "truth" / "surface" /
+                                                fmt::format("{:06}.ply", session.frameId(i)));
+    const SurfaceDistance surface(truth);
+    surfaceDistancesMm(positions, surface, d);
+    before.push_back(d);
+    result.unrefined_per_frame.push_back(poolSurfaceErrors({d}));
+    surfaceDistancesMm(refined, surface, d);
+    after.push_back(d);
+    result.refined_per_frame.push_back(poolSurfaceErrors({d}));
+    ++result.frames;
+  }
+  if (result.frames == 0) throw Error(folder.string() + ": no frames to evaluate");
+  result.unrefined = poolSurfaceErrors(before);
+  result.refined = poolSurfaceErrors(after);
+  result.joint_fit_rms_mm = 1000.0 * fit_rms / result.frames;
+  result.offset_change_mm = changes > 0 ? change_sum / changes : 0.0;
+  result.statistics_bytes_per_node = bytes / (double(result.frames) * rig.nodeCount());
+  return result;
+}
+
+}  // namespace lumistage

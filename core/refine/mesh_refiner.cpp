@@ -1,0 +1,170 @@
+#include "core/refine/mesh_refiner.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lumistage {
+
+MeshRefiner::MeshRefiner(const RefineConfig& config, int vertex_count,
+                         const std::vector<Eigen::Vector3i>& triangles)
+    : config_(config), vertex_count_(vertex_count) {
+  // Neighbours: vertices sharing an edge, each once.
+  std::vector<std::vector<int>> adjacency(vertex_count);
+  for (const Eigen::Vector3i& t : triangles) {
+    for (int e = 0; e < 3; ++e) {
+      const int a = t[e], b = t[(e + 1) % 3];
+      if (a < 0 || b < 0 || a >= vertex_count || b >= vertex_count) continue;
+      adjacency[a].push_back(b);
+      adjacency[b].push_back(a);
+    }
+  }
+  neighbour_start_.assign(vertex_count + 1, 0);
+  for (int v = 0; v < vertex_count; ++v) {
+    std::sort(adjacency[v].begin(), adjacency[v].end());
+    adjacency[v].erase(std::unique(adjacency[v].begin(), adjacency[v].end()), adjacency[v].end());
+    neighbour_start_[v + 1] = neighbour_start_[v] + static_cast<int>(adjacency[v].size());
+    neighbours_.insert(neighbours_.end(), adjacency[v].begin(), adjacency[v].end());
+  }
+  const size_t samples = size_t(vertex_count) * config_.offset_count;
+  data_.assign(samples, 0);
+  total_.assign(config_.offset_count, 0);
+  offsets_m_.resize(config_.offset_count);
+  for (int i = 0; i < config_.offset_count; ++i) offsets_m_[i] = float(config_.offsetAt(i));
+  previous_.assign(vertex_count, uint8_t(config_.zeroOffsetIndex()));
+  current_.assign(vertex_count, uint8_t(config_.zeroOffsetIndex()));
+}
+
+float MeshRefiner::dataError(const RefinementStatistics& stats, size_t s, int i) const {
+  const float t_rel = config_.t_max_m > 0 ? offsets_m_[i] / float(config_.t_max_m) : 0.0f;
+  float colour;
+  const int n = stats.colour_count[s];
+  if (stats.outside[s] > 0) {
+    colour = 1.0f;
+  } else if (n < 2) {
+    colour = float(config_.unseen_colour);
+  } else {
+    // The sample variance over the cameras (n - 1: two cameras agreeing by chance is weaker
+    // evidence than four), averaged over the channels, in 8-bit levels².
+    double sum2 = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double m = stats.sums[3 * s + c];
+      sum2 += m * m;
+    }
+    const double unit = double(1 << (8 - stats.colour_bits));
+    const double variance =
+        std::max(0.0, (double(stats.squares[s]) - sum2 / n) / (3.0 * (n - 1))) * unit * unit;
+    const double sigma2 = config_.colour_sigma * config_.colour_sigma;
+    colour = float(variance / (variance + sigma2));
+  }
+  return float(config_.outside_weight) * float(stats.outside[s]) -
+         float(config_.outward_weight) * t_rel + float(config_.colour_weight) * colour;
+}
+
+int MeshRefiner::choose(const float* e) const {
+  // The paper's fourth term: of the local minima within tie_margin of the lowest, the one closest
+  // to t = 0.
+  const int m = config_.offset_count;
+  float lowest = e[0];
+  for (int i = 1; i < m; ++i) lowest = std::min(lowest, e[i]);
+  const float limit = lowest + float(config_.tie_margin);
+  const int zero = config_.zeroOffsetIndex();
+  int best = -1;
+  for (int i = 0; i < m; ++i) {
+    if (e[i] > limit) continue;
+    const bool local = (i == 0 || e[i] <= e[i - 1]) && (i == m - 1 || e[i] <= e[i + 1]);
+    if (!local) continue;
+    if (best < 0 || std::abs(i - zero) < std::abs(best - zero)) best = i;
+  }
+  return best < 0 ? zero : best;
+}
+
+bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>& offsets) {
+  const int m = config_.offset_count;
+  if (stats.vertex_count != vertex_count_ || stats.offset_count != m) return false;
+  // The data terms (as dataError(), inlined for speed: every sample every frame).
+  const float outside_w = float(config_.outside_weight), colour_w = float(config_.colour_weight);
+  const float unseen = colour_w * float(config_.unseen_colour);
+  const float unit = float(1 << (8 - stats.colour_bits));
+  const float sigma2 = float(config_.colour_sigma * config_.colour_sigma) / (unit * unit);
+  for (int i = 0; i < m; ++i) {
+    total_[i] = config_.t_max_m > 0
+                    ? -float(config_.outward_weight) * offsets_m_[i] / float(config_.t_max_m)
+                    : 0.0f;
+  }
+  const size_t samples = size_t(vertex_count_) * m;
+  for (size_t s = 0, i = 0; s < samples; ++s, i = (i + 1 == size_t(m) ? 0 : i + 1)) {
+    float e = total_[i];
+    const int n = stats.colour_count[s];
+    if (stats.outside[s] > 0) {
+      e += outside_w * float(stats.outside[s]) + colour_w;
+    } else if (n < 2) {
+      e += unseen;
+    } else {
+      const float r = stats.sums[3 * s], g = stats.sums[3 * s + 1], b = stats.sums[3 * s + 2];
+      const float variance =
+          std::max(0.0f, (float(stats.squares[s]) - (r * r + g * g + b * b) / float(n)) /
+                             (3.0f * float(n - 1)));
+      e += colour_w * variance / (variance + sigma2);
+    }
+    data_[s] = e;
+  }
+  const float inv_t = config_.t_max_m > 0 ? 1.0f / float(config_.t_max_m) : 0.0f;
+  const float temporal = has_previous_ ? float(config_.temporal_weight) : 0.0f;
+  auto addTemporal = [&](int v, float* total) {
+    if (temporal == 0) return;
+    const float prev = offsets_m_[previous_[v]];
+    for (int i = 0; i < m; ++i) {
+      const float d = (offsets_m_[i] - prev) * inv_t;
+      total[i] += temporal * d * d;
+    }
+  };
+  float* total = total_.data();
+  for (int v = 0; v < vertex_count_; ++v) {
+    std::copy_n(&data_[size_t(v) * m], m, total);
+    addTemporal(v, total);
+    current_[v] = uint8_t(choose(total));
+  }
+  // Smoothness: iterated conditional modes, each vertex in turn against its neighbours' choices.
+  const float smooth = float(config_.smooth_weight);
+  for (int sweep = 0; smooth > 0 && sweep < config_.smooth_iterations; ++sweep) {
+    bool changed = false;
+    for (int v = 0; v < vertex_count_; ++v) {
+      const int begin = neighbour_start_[v], end = neighbour_start_[v + 1];
+      if (begin == end) continue;
+      std::copy_n(&data_[size_t(v) * m], m, total);
+      addTemporal(v, total);
+      // Σ_k (t - t_k)² = K t² - 2 t Σ t_k + Σ t_k²: one pass over the neighbours.
+      float s1 = 0, s2 = 0;
+      for (int k = begin; k < end; ++k) {
+        const float tn = offsets_m_[current_[neighbours_[k]]] * inv_t;
+        s1 += tn, s2 += tn * tn;
+      }
+      const float w = smooth / float(end - begin), count = float(end - begin);
+      for (int i = 0; i < m; ++i) {
+        const float t = offsets_m_[i] * inv_t;
+        total[i] += w * (count * t * t - 2 * t * s1 + s2);
+      }
+      const uint8_t chosen = uint8_t(choose(total));
+      changed = changed || chosen != current_[v];
+      current_[v] = chosen;
+    }
+    if (!changed) break;
+  }
+  if (offsets.size() != size_t(vertex_count_)) offsets.resize(vertex_count_);
+  std::copy(current_.begin(), current_.end(), offsets.begin());
+  std::copy(current_.begin(), current_.end(), previous_.begin());
+  has_previous_ = true;
+  return true;
+}
+
+void applyOffsets(const RefineConfig& config, const std::vector<uint8_t>& offsets,
+                  const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
+                  Eigen::Matrix3Xf& out) {
+  if (out.cols() != positions.cols()) out.resize(3, positions.cols());
+  for (Eigen::Index v = 0; v < positions.cols(); ++v) {
+    const int i = v < Eigen::Index(offsets.size()) ? offsets[v] : config.zeroOffsetIndex();
+    out.col(v) = positions.col(v) + float(config.offsetAt(i)) * normals.col(v);
+  }
+}
+
+}  // namespace lumistage

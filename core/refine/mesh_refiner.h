@@ -1,0 +1,51 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "core/refine/refine_config.h"
+#include "core/refine/refinement_statistics.h"
+
+namespace lumistage {
+
+// The studio's refinement module (the paper's §IV): from the combined statistics of all nodes, the
+// error of every vertex's every offset, and the offset each vertex takes (see RefineConfig for the
+// terms). Smoothness between neighbouring vertices is solved by a few sweeps of iterated
+// conditional modes from the per-vertex choice; temporal coherence pulls toward the previous
+// frame's offsets. One object per mesh; refine() does not allocate.
+class MeshRefiner {
+ public:
+  MeshRefiner(const RefineConfig& config, int vertex_count,
+              const std::vector<Eigen::Vector3i>& triangles);
+  const RefineConfig& config() const { return config_; }
+
+  // Chooses an offset index per vertex (`offsets`, resized when its size differs). Returns false
+  // (offsets untouched) when the statistics' sizes are not this mesh's.
+  bool refine(const RefinementStatistics& combined, std::vector<uint8_t>& offsets);
+  // Forgets the previous frame (a cut, a new actor): the next frame has no temporal term.
+  void resetTemporal() { has_previous_ = false; }
+
+  // The data error of the last refine() (terms 1 to 3), per sample v·offset_count + t.
+  const std::vector<float>& dataErrors() const { return data_; }
+  // The data terms of one sample, for tests and tools.
+  float dataError(const RefinementStatistics& stats, size_t sample, int offset_index) const;
+
+ private:
+  int choose(const float* error) const;
+
+  RefineConfig config_;
+  int vertex_count_;
+  std::vector<int> neighbour_start_, neighbours_;  // CSR adjacency
+  std::vector<float> data_, total_, offsets_m_;
+  std::vector<uint8_t> previous_, current_;
+  bool has_previous_ = false;
+};
+
+// The refined mesh: each vertex moved along its normal by its chosen offset. `out` is resized only
+// when its size differs.
+void applyOffsets(const RefineConfig& config, const std::vector<uint8_t>& offsets,
+                  const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
+                  Eigen::Matrix3Xf& out);
+
+}  // namespace lumistage

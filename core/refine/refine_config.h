@@ -1,0 +1,59 @@
+#pragma once
+
+#include <string_view>
+
+namespace YAML {
+class Node;
+}
+
+namespace lumistage {
+
+class YamlReader;
+
+// The mesh refinement's parameters (the paper's §IV), read from the `refine:` section of a studio
+// config (docs/virtual-studio.md documents every key). Each vertex of the posed generic mesh is
+// tried at `offset_count` offsets uniformly in [-t_max_m, t_max_m] along its normal; each offset
+// gets an error, a weighted sum of terms (all terms are dimensionless, so the weights compare):
+//   outside_weight  x cameras whose silhouette the point falls outside of (the visual hull term:
+//                     0 on or inside the hull);
+//   outward_weight  x -t / t_max: favours large outward offsets, i.e. points near the hull;
+//   colour_weight   x s²/(s² + colour_sigma²), s the colour standard deviation (8-bit levels)
+//                     across the cameras that see the point (visibility from low-res depth
+//                     maps); 1 when the point is outside the hull, unseen_colour when fewer than
+//                     two cameras see it;
+//   smooth_weight   x mean over neighbours of ((t - t_neighbour) / t_max)², and
+//   temporal_weight x ((t - t_previous_frame) / t_max)²: beyond the paper, against ragged
+//                     surfaces and shimmer on a still actor;
+// then the paper's fourth term: among the local minima within tie_margin of the lowest, the one
+// closest to t = 0.
+struct RefineConfig {
+  int offset_count = 21;
+  double t_max_m = 0.04;
+  double outside_weight = 1.0;
+  double outward_weight = 1.0;
+  double colour_weight = 1.0;
+  double colour_sigma = 20.0;  // 8-bit levels
+  double unseen_colour = 0.6;
+  double smooth_weight = 1.5;
+  double temporal_weight = 1.0;
+  double tie_margin = 0.05;
+  int smooth_iterations = 3;
+  // Visibility: low-resolution depth maps of the posed mesh, 1/depth_map_step of the image in
+  // each direction; a point is seen by a camera when it faces it (cosine above min_facing_cos) and
+  // lies no further than depth_tolerance_m behind the depth map.
+  int depth_map_step = 8;
+  double depth_tolerance_m = 0.03;
+  double min_facing_cos = 0.1;
+  int colour_bits = 6;  // colours are summed at this many bits a channel (<= 8)
+
+  double offsetAt(int index) const {
+    return offset_count > 1 ? -t_max_m + 2 * t_max_m * index / (offset_count - 1) : 0.0;
+  }
+  int zeroOffsetIndex() const { return offset_count / 2; }
+};
+
+// Reads a `refine:` map over the defaults; every key optional, unknown keys and out-of-range values
+// are Errors naming file:line: refine.key. `key` is the map's dotted path ("refine").
+RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std::string_view key);
+
+}  // namespace lumistage

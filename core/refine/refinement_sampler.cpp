@@ -1,0 +1,89 @@
+#include "core/refine/refinement_sampler.h"
+
+#include <algorithm>
+
+namespace lumistage {
+
+void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
+                               const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
+                               const std::vector<Eigen::Vector3i>& triangles,
+                               RefinementStatistics& out) {
+  const int n = static_cast<int>(positions.cols());
+  out.reset(n, config_.offset_count, config_.colour_bits);
+  offsets_m_.resize(config_.offset_count);
+  for (int i = 0; i < config_.offset_count; ++i) offsets_m_[i] = float(config_.offsetAt(i));
+  if (depth_maps_.size() < cameras.size()) depth_maps_.resize(cameras.size());
+  for (size_t k = 0; k < cameras.size(); ++k) {
+    const SamplerCamera& c = cameras[k];
+    depth_maps_[k].render(*c.camera, positions, triangles, config_.depth_map_step);
+    if (c.background) {
+      sampleCamera(c, *c.background, depth_maps_[k], positions, normals, out);
+    } else {
+      static const GreenScreenKeyer kDefaultKeyer;
+      sampleCamera(c, c.green_screen ? *c.green_screen : kDefaultKeyer, depth_maps_[k], positions,
+                   normals, out);
+    }
+  }
+  out.dropColourOutside();
+}
+
+template <typename Key>
+void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
+                                     const DepthMap& depth, const Eigen::Matrix3Xf& positions,
+                                     const Eigen::Matrix3Xf& normals,
+                                     RefinementStatistics& out) const {
+  const Camera& camera = *input.camera;
+  const ImageView& image = input.image;
+  const Eigen::Matrix3f R = camera.rotation().cast<float>();
+  const Eigen::Vector3f t = camera.translation().cast<float>();
+  const Eigen::Vector3f centre = camera.centre().cast<float>();
+  const Intrinsics& K = camera.intrinsics();
+  const float fx = float(K.fx), fy = float(K.fy), cx = float(K.cx), cy = float(K.cy),
+              skew = float(K.skew);
+  const Distortion& dist = camera.distortion();
+  const bool distorted = !dist.isZero();
+  const float max_x = float(image.width) - 0.5f, max_y = float(image.height) - 0.5f;
+  const int shift = 8 - config_.colour_bits;
+  const int offsets = config_.offset_count;
+  const float tolerance = float(config_.depth_tolerance_m);
+  const float min_cos = float(config_.min_facing_cos);
+  const int n = static_cast<int>(positions.cols());
+  for (int v = 0; v < n; ++v) {
+    const Eigen::Vector3f x = positions.col(v), nrm = normals.col(v);
+    // A line in the world is a line in camera coordinates: c(t) = c0 + t·d.
+    const Eigen::Vector3f c0 = R * x + t, d = R * nrm;
+    const Eigen::Vector3f to_camera = centre - x;
+    bool visible = nrm.dot(to_camera) > min_cos * to_camera.norm() && c0.z() > 0;
+    if (visible) {
+      float px = c0.x() / c0.z(), py = c0.y() / c0.z();
+      if (distorted) dist.apply(px, py, px, py);
+      visible = depth.visible(fx * px + skew * py + cx, fy * py + cy, c0.z(), tolerance);
+    }
+    const size_t base = size_t(v) * offsets;
+    for (int i = 0; i < offsets; ++i) {
+      const Eigen::Vector3f c = c0 + offsets_m_[i] * d;
+      if (c.z() <= 0) continue;
+      float px = c.x() / c.z(), py = c.y() / c.z();
+      if (distorted) dist.apply(px, py, px, py);
+      const float u = fx * px + skew * py + cx, w = fy * py + cy;
+      if (!(u >= -0.5f && w >= -0.5f && u < max_x && w < max_y)) continue;
+      const int ix = static_cast<int>(u + 0.5f), iy = static_cast<int>(w + 0.5f);
+      const size_t s = base + i;
+      if (!key.isForeground(image, ix, iy)) {
+        ++out.outside[s];
+        continue;
+      }
+      if (!visible) continue;
+      const Rgb rgb = colourAt(image, ix, iy);
+      const uint32_t r = uint32_t(rgb.r) >> shift, g = uint32_t(rgb.g) >> shift,
+                     b = uint32_t(rgb.b) >> shift;
+      ++out.colour_count[s];
+      out.sums[3 * s] = uint16_t(out.sums[3 * s] + r);
+      out.sums[3 * s + 1] = uint16_t(out.sums[3 * s + 1] + g);
+      out.sums[3 * s + 2] = uint16_t(out.sums[3 * s + 2] + b);
+      out.squares[s] += r * r + g * g + b * b;
+    }
+  }
+}
+
+}  // namespace lumistage

@@ -1,0 +1,135 @@
+// Micro-benchmarks of the mesh refinement (the paper's §IV) on a frame of the virtual studio: the
+// generic human posed to the actor's true joints, the reference rig's 1024x768 images.
+//   node side:   depth maps + samples of 2000 vertices x 21 offsets x its 3 cameras (target < 5 ms)
+//   module side: decode and combine 4 nodes' statistics, choose the offsets (target < 2 ms)
+// Run: ./studio bench, or build/tests/bench/refine_bench
+#include <benchmark/benchmark.h>
+
+#include "core/base/resource_path.h"
+#include "core/body/human_model.h"
+#include "core/body/joint_pose_fit.h"
+#include "core/refine/mesh_refiner.h"
+#include "core/refine/refinement_sampler.h"
+#include "core/sim/virtual_studio.h"
+
+namespace {
+
+using namespace lumistage;
+
+struct Scene {
+  StudioConfig config;
+  SkinnedMesh generic = loadGenericHuman();
+  std::vector<Image> images;
+  std::vector<GreenScreenKeyer> keyers;
+  Eigen::Matrix3Xf positions, normals;
+  std::vector<std::vector<uint8_t>> wire;  // per node
+
+  Scene() {
+    config = loadStudioConfig(resourcePath("studio/reference.yaml"));
+    config.actor.target_vertices = 4000;
+    VirtualStudio studio(config, 30);
+    StudioFrame frame;
+    studio.renderFrame(20, frame);
+    const Rig& rig = config.rig;
+    images.resize(rig.cameraCount());
+    keyers.resize(rig.cameraCount());
+    for (int c = 0; c < rig.cameraCount(); ++c) {
+      rgbaToImage(frame.images[c].data(), rig.camera(c).width(), rig.camera(c).height(),
+                  PixelFormat::kBayerRggb8, images[c]);
+    }
+    const JointPoseFit fit = fitPoseToJoints(generic.skeleton, frame.joints,
+                                             initialJointPoseFit(generic.skeleton, frame.joints));
+    posedScaledMesh(generic, fit, positions, normals);
+    RefinementSampler sampler(config.refine);
+    RefinementStatistics stats;
+    for (int n = 0; n < rig.nodeCount(); ++n) {
+      sampler.sample(camerasOf(n), positions, normals, generic.rest.triangles, stats);
+      wire.emplace_back();
+      encodeRefinementStatistics(stats, wire.back());
+    }
+  }
+  std::vector<SamplerCamera> camerasOf(int node) const {
+    std::vector<SamplerCamera> out;
+    for (int c : config.rig.nodes()[node].cameras)
+      out.push_back({&config.rig.camera(c), images[c].view(), &keyers[c], nullptr});
+    return out;
+  }
+};
+
+const Scene& scene() {
+  static const Scene s;
+  return s;
+}
+
+// One node's whole share: depth maps of its 3 cameras, samples, encoding for the wire.
+void refineNodeSide(benchmark::State& state) {
+  const Scene& s = scene();
+  RefinementSampler sampler(s.config.refine);
+  RefinementStatistics stats;
+  std::vector<uint8_t> wire;
+  const std::vector<SamplerCamera> cameras = s.camerasOf(0);
+  for (auto _ : state) {
+    sampler.sample(cameras, s.positions, s.normals, s.generic.rest.triangles, stats);
+    encodeRefinementStatistics(stats, wire);
+    benchmark::DoNotOptimize(wire.data());
+  }
+  state.counters["bytes"] = double(wire.size());
+  state.counters["vertices"] = double(s.positions.cols());
+}
+BENCHMARK(refineNodeSide)->Unit(benchmark::kMillisecond);
+
+// The depth maps alone (3 cameras, 1/8 resolution).
+void refineDepthMaps(benchmark::State& state) {
+  const Scene& s = scene();
+  DepthMap map;
+  for (auto _ : state) {
+    for (int c : s.config.rig.nodes()[0].cameras) {
+      map.render(s.config.rig.camera(c), s.positions, s.generic.rest.triangles,
+                 s.config.refine.depth_map_step);
+      benchmark::DoNotOptimize(map.depths().data());
+    }
+  }
+}
+BENCHMARK(refineDepthMaps)->Unit(benchmark::kMillisecond);
+
+// The module: decode the 4 nodes' statistics, combine, choose every vertex's offset.
+void refineModuleSide(benchmark::State& state) {
+  const Scene& s = scene();
+  MeshRefiner refiner(s.config.refine, s.generic.rest.vertexCount(), s.generic.rest.triangles);
+  RefinementStatistics combined;
+  std::vector<uint8_t> offsets;
+  for (auto _ : state) {
+    combined.reset(s.generic.rest.vertexCount(), s.config.refine.offset_count,
+                   s.config.refine.colour_bits);
+    for (const auto& w : s.wire) addEncodedRefinementStatistics(w, combined);
+    combined.dropColourOutside();
+    refiner.refine(combined, offsets);
+    benchmark::DoNotOptimize(offsets.data());
+  }
+}
+BENCHMARK(refineModuleSide)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+namespace {
+
+// The module's choice alone (statistics already combined): data terms, smoothness, temporal.
+void refineModuleChooseOnly(benchmark::State& state) {
+  const Scene& s = scene();
+  MeshRefiner refiner(s.config.refine, s.generic.rest.vertexCount(), s.generic.rest.triangles);
+  RefinementStatistics combined, decoded;
+  combined.reset(s.generic.rest.vertexCount(), s.config.refine.offset_count,
+                 s.config.refine.colour_bits);
+  for (const auto& w : s.wire) {
+    decodeRefinementStatistics(w, decoded);
+    combined.add(decoded);
+  }
+  std::vector<uint8_t> offsets;
+  for (auto _ : state) {
+    refiner.refine(combined, offsets);
+    benchmark::DoNotOptimize(offsets.data());
+  }
+}
+BENCHMARK(refineModuleChooseOnly)->Unit(benchmark::kMillisecond);
+
+}  // namespace

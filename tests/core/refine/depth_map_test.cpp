@@ -1,0 +1,52 @@
+// Low-resolution depth maps: depths of a known sphere, and what they hide.
+#include "core/refine/depth_map.h"
+
+#include <gtest/gtest.h>
+
+#include "tests/core/refine/refine_test_scene.h"
+
+namespace lumistage {
+namespace {
+
+TEST(DepthMap, DepthsOfASphereAndItsHiddenSide) {
+  const Rig rig = testing::smallRing(640, 480);
+  const Eigen::Vector3d centre(0, 0, 1.0);
+  const double radius = 0.3;
+  const TriangleMesh sphere = testing::icosphere(centre, radius, 4);
+  const Camera& camera = rig.camera(0);
+  DepthMap map;
+  map.render(camera, sphere.positions, sphere.triangles, 8);
+  EXPECT_EQ(map.width(), 80);
+  EXPECT_EQ(map.height(), 60);
+  const Eigen::Vector3d c = camera.centre();
+  const Eigen::Vector3d toward = (c - centre).normalized();
+  // The sphere's nearest point: depth along the optical axis within a few mm (flat facets).
+  const Eigen::Vector3d front = centre + radius * toward, back = centre - radius * toward;
+  const Eigen::Vector2d pf = *camera.project(front);
+  const float depth_front = float(camera.toCamera(front).z());
+  EXPECT_NEAR(map.depthAt(float(pf.x()), float(pf.y())), depth_front, 0.01);
+  EXPECT_TRUE(map.visible(float(pf.x()), float(pf.y()), depth_front, 0.02f));
+  const Eigen::Vector2d pb = *camera.project(back);
+  EXPECT_FALSE(map.visible(float(pb.x()), float(pb.y()), float(camera.toCamera(back).z()), 0.02f));
+  // Off the sphere: nothing.
+  EXPECT_EQ(map.depthAt(2, 2), DepthMap::kFar);
+  EXPECT_EQ(map.depthAt(-10, 5), DepthMap::kFar);
+  // Every sphere vertex facing the camera is visible, every one facing away hidden (away from
+  // the rim, where the low resolution decides).
+  Eigen::Matrix2Xf pixels;
+  Eigen::VectorXf depths;
+  camera.project(sphere.positions, pixels, depths);
+  int wrong = 0, counted = 0;
+  for (int v = 0; v < sphere.vertexCount(); ++v) {
+    const Eigen::Vector3f p = sphere.positions.col(v);
+    const float facing = sphere.normals.col(v).dot((c.cast<float>() - p).normalized());
+    if (std::abs(facing) < 0.5f) continue;
+    ++counted;
+    wrong += map.visible(pixels(0, v), pixels(1, v), depths(v), 0.02f) != (facing > 0);
+  }
+  EXPECT_GT(counted, 800);
+  EXPECT_EQ(wrong, 0);
+}
+
+}  // namespace
+}  // namespace lumistage

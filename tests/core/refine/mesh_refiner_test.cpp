@@ -1,0 +1,265 @@
+// The refinement module: each term of the error alone, and the whole against a known shape.
+#include "core/refine/mesh_refiner.h"
+
+#include <gtest/gtest.h>
+
+#include "core/refine/refinement_sampler.h"
+#include "tests/core/refine/refine_test_scene.h"
+
+namespace lumistage {
+namespace {
+
+// A config whose terms are all off: a test switches on the one it looks at.
+RefineConfig noTerms() {
+  RefineConfig c;
+  c.outside_weight = c.outward_weight = c.colour_weight = c.smooth_weight = c.temporal_weight = 0;
+  c.tie_margin = 0;
+  return c;
+}
+
+// One vertex, no neighbours.
+struct OneVertex {
+  RefinementStatistics stats;
+  explicit OneVertex(const RefineConfig& c) { stats.reset(1, c.offset_count, c.colour_bits); }
+  // Colour samples: `cameras` cameras seeing grey level `level` plus a per-camera spread.
+  void colour(int offset, int cameras, int level, int spread) {
+    for (int k = 0; k < cameras; ++k) {
+      const uint32_t q = uint32_t(std::clamp(level + (k % 2 ? spread : -spread), 0, 255)) >> 2;
+      stats.colour_count[offset]++;
+      for (int ch = 0; ch < 3; ++ch) stats.sums[3 * offset + ch] += uint16_t(q);
+      stats.squares[offset] += 3 * q * q;
+    }
+  }
+};
+
+int refineOne(const RefineConfig& config, const RefinementStatistics& stats) {
+  MeshRefiner refiner(config, 1, {});
+  std::vector<uint8_t> offsets;
+  EXPECT_TRUE(refiner.refine(stats, offsets));
+  return offsets.at(0);
+}
+
+TEST(MeshRefiner, HullTermAloneMovesAnOutsideVertexInToTheHull) {
+  RefineConfig c = noTerms();
+  c.outside_weight = 1;
+  OneVertex one(c);
+  // The hull's surface lies 4 steps inward: offsets beyond are outside some silhouettes, more of
+  // them the further out.
+  for (int i = 6; i < c.offset_count; ++i) one.stats.outside[i] = uint8_t(1 + (i - 6) / 4);
+  EXPECT_EQ(refineOne(c, one.stats), 5);
+}
+
+TEST(MeshRefiner, OutwardTermAloneFavoursLargeOffsets) {
+  RefineConfig c = noTerms();
+  c.outward_weight = 1;
+  OneVertex one(c);
+  EXPECT_EQ(refineOne(c, one.stats), c.offset_count - 1);
+  // With the hull: as far out as the hull allows.
+  c.outside_weight = 1;
+  for (int i = 15; i < c.offset_count; ++i) one.stats.outside[i] = 2;
+  EXPECT_EQ(refineOne(c, one.stats), 14);
+}
+
+TEST(MeshRefiner, ColourTermAloneFindsTheConsistentOffset) {
+  RefineConfig c = noTerms();
+  c.colour_weight = 1;
+  OneVertex one(c);
+  for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, i == 13 ? 1 : 40);
+  EXPECT_EQ(refineOne(c, one.stats), 13);
+  {  // The refiner's fast path computes what dataError() says.
+    MeshRefiner refiner(c, 1, {});
+    std::vector<uint8_t> offsets;
+    ASSERT_TRUE(refiner.refine(one.stats, offsets));
+    for (int i = 0; i < c.offset_count; ++i)
+      EXPECT_NEAR(refiner.dataErrors()[i], refiner.dataError(one.stats, i, i), 1e-5) << i;
+  }
+  // A point outside the hull has no colour consistency, whatever the colours say.
+  one.stats.outside[13] = 1;
+  one.stats.dropColourOutside();
+  EXPECT_NE(refineOne(c, one.stats), 13);
+}
+
+TEST(MeshRefiner, TieBreakTakesTheMinimumClosestToZero) {
+  RefineConfig c = noTerms();
+  c.colour_weight = 1;
+  c.tie_margin = 0.05;
+  OneVertex one(c);
+  // Two consistent offsets (the paper's Fig. 3: the torso at 8, the arm at 18).
+  for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, (i == 8 || i == 18) ? 1 : 40);
+  EXPECT_EQ(refineOne(c, one.stats), 8);
+  // The far one is much better than the margin: it wins.
+  one.stats.reset(1, c.offset_count, c.colour_bits);
+  for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, i == 18 ? 0 : (i == 8 ? 12 : 40));
+  EXPECT_EQ(refineOne(c, one.stats), 18);
+}
+
+TEST(MeshRefiner, SmoothnessPullsAnAmbiguousVertexToItsNeighbours) {
+  RefineConfig c = noTerms();
+  c.colour_weight = 1;
+  c.smooth_weight = 1;
+  c.tie_margin = 0;
+  // A fan: vertex 0 in the middle of 6 neighbours that clearly want offset 15; vertex 0's own
+  // colours prefer offset 5 by a little.
+  std::vector<Eigen::Vector3i> triangles;
+  for (int k = 0; k < 6; ++k) triangles.push_back({0, 1 + k, 1 + (k + 1) % 6});
+  RefinementStatistics stats;
+  stats.reset(7, c.offset_count, c.colour_bits);
+  auto colour = [&](int v, int offset, int spread) {
+    const size_t s = size_t(v) * c.offset_count + offset;
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t q = uint32_t(120 + (k % 2 ? spread : -spread)) >> 2;
+      stats.colour_count[s]++;
+      for (int ch = 0; ch < 3; ++ch) stats.sums[3 * s + ch] += uint16_t(q);
+      stats.squares[s] += 3 * q * q;
+    }
+  };
+  for (int i = 0; i < c.offset_count; ++i) {
+    colour(0, i, i == 5 ? 8 : (i == 15 ? 10 : 40));
+    for (int v = 1; v < 7; ++v) colour(v, i, i == 15 ? 0 : 40);
+  }
+  std::vector<uint8_t> offsets;
+  RefineConfig colour_only = noTerms();
+  colour_only.colour_weight = 1;
+  MeshRefiner without(colour_only, 7, triangles);
+  ASSERT_TRUE(without.refine(stats, offsets));
+  EXPECT_EQ(offsets[0], 5);
+  MeshRefiner with(c, 7, triangles);
+  ASSERT_TRUE(with.refine(stats, offsets));
+  EXPECT_EQ(offsets[0], 15);
+  for (int v = 1; v < 7; ++v) EXPECT_EQ(offsets[v], 15);
+}
+
+TEST(MeshRefiner, TemporalTermKeepsAStillVertexWhereItWas) {
+  RefineConfig c = noTerms();
+  c.colour_weight = 1;
+  c.temporal_weight = 0.5;
+  MeshRefiner refiner(c, 1, {});
+  std::vector<uint8_t> offsets;
+  OneVertex first(c);
+  for (int i = 0; i < c.offset_count; ++i) first.colour(i, 4, 120, i == 16 ? 1 : 40);
+  ASSERT_TRUE(refiner.refine(first.stats, offsets));
+  EXPECT_EQ(offsets[0], 16);
+  // Next frame: noise makes offset 4 look a little better than 16; the vertex stays.
+  OneVertex next(c);
+  for (int i = 0; i < c.offset_count; ++i) next.colour(i, 4, 120, i == 4 ? 2 : (i == 16 ? 4 : 40));
+  ASSERT_TRUE(refiner.refine(next.stats, offsets));
+  EXPECT_EQ(offsets[0], 16);
+  // Without the previous frame, it would have jumped.
+  refiner.resetTemporal();
+  ASSERT_TRUE(refiner.refine(next.stats, offsets));
+  EXPECT_EQ(offsets[0], 4);
+}
+
+TEST(MeshRefiner, RefusesStatisticsOfAnotherMesh) {
+  RefineConfig c;
+  MeshRefiner refiner(c, 10, {});
+  RefinementStatistics stats;
+  stats.reset(11, c.offset_count, c.colour_bits);
+  std::vector<uint8_t> offsets(3, 7);
+  EXPECT_FALSE(refiner.refine(stats, offsets));
+  EXPECT_EQ(offsets, std::vector<uint8_t>(3, 7));
+}
+
+// The whole: an icosphere inside a textured ellipsoid, 12 cameras, converges onto the ellipsoid.
+class EllipsoidScene : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    rig_ = new Rig(testing::smallRing());
+    images_ = new std::vector<Image>(testing::renderEllipsoid(*rig_, shape_));
+  }
+  static void TearDownTestSuite() {
+    delete rig_;
+    delete images_;
+  }
+  std::vector<SamplerCamera> cameras(const std::vector<int>& which) const {
+    std::vector<SamplerCamera> out;
+    for (int c : which) out.push_back({&rig_->camera(c), (*images_)[c].view(), &keyer_, nullptr});
+    return out;
+  }
+  // Mean and largest distance of the mesh's vertices from the ellipsoid, along the rays from the
+  // centre (the ellipsoid is nearly a sphere: close to the true distance).
+  static std::pair<double, double> error(const Eigen::Matrix3Xf& positions) {
+    double sum = 0, worst = 0;
+    for (Eigen::Index v = 0; v < positions.cols(); ++v) {
+      const Eigen::Vector3d d = positions.col(v).cast<double>() - shape_.centre;
+      const double e = std::abs(d.norm() - shape_.radiusAlong(d.normalized()));
+      sum += e;
+      worst = std::max(worst, e);
+    }
+    return {sum / double(positions.cols()), worst};
+  }
+  static inline testing::Ellipsoid shape_;
+  static inline Rig* rig_ = nullptr;
+  static inline std::vector<Image>* images_ = nullptr;
+  GreenScreenKeyer keyer_;
+};
+
+TEST_F(EllipsoidScene, AnInnerSphereConvergesOntoTheShape) {
+  const TriangleMesh sphere = testing::icosphere(shape_.centre, 0.25, 3);  // 642 vertices
+  RefineConfig config;
+  config.t_max_m = 0.09;
+  config.depth_map_step = 4;
+  std::vector<int> all;
+  for (int c = 0; c < rig_->cameraCount(); ++c) all.push_back(c);
+  RefinementSampler sampler(config);
+  RefinementStatistics stats;
+  sampler.sample(cameras(all), sphere.positions, sphere.normals, sphere.triangles, stats);
+  MeshRefiner refiner(config, sphere.vertexCount(), sphere.triangles);
+  std::vector<uint8_t> offsets;
+  ASSERT_TRUE(refiner.refine(stats, offsets));
+  Eigen::Matrix3Xf refined;
+  applyOffsets(config, offsets, sphere.positions, sphere.normals, refined);
+  const auto [before, before_worst] = error(sphere.positions);
+  const auto [after, after_worst] = error(refined);
+  EXPECT_GT(before, 0.04);
+  // The offsets are 9 mm apart: within a step on average, a few steps at worst (where two
+  // cameras agree by chance inside the shape).
+  EXPECT_LT(after, 0.006) << "before " << before;
+  EXPECT_LT(after_worst, 0.035);
+}
+
+TEST_F(EllipsoidScene, DistributedCombinationEqualsOneProcess) {
+  const TriangleMesh sphere = testing::icosphere(shape_.centre, 0.27, 2);
+  RefineConfig config;
+  config.t_max_m = 0.08;
+  RefinementSampler sampler(config);
+  std::vector<int> all;
+  for (int c = 0; c < rig_->cameraCount(); ++c) all.push_back(c);
+  RefinementStatistics single;
+  sampler.sample(cameras(all), sphere.positions, sphere.normals, sphere.triangles, single);
+
+  // Each node samples its own cameras and sends the compact encoding; the module combines, in
+  // any order.
+  std::vector<std::vector<uint8_t>> wire(rig_->nodeCount());
+  RefinementStatistics part;
+  for (int n = 0; n < rig_->nodeCount(); ++n) {
+    sampler.sample(cameras(rig_->nodes()[n].cameras), sphere.positions, sphere.normals,
+                   sphere.triangles, part);
+    encodeRefinementStatistics(part, wire[n]);
+  }
+  for (const std::vector<int>& order : {std::vector<int>{0, 1, 2, 3}, {3, 1, 0, 2}}) {
+    RefinementStatistics combined, decoded;
+    combined.reset(sphere.vertexCount(), config.offset_count, config.colour_bits);
+    for (int n : order) {
+      std::string error;
+      ASSERT_TRUE(decodeRefinementStatistics(wire[n], decoded, &error)) << error;
+      ASSERT_TRUE(combined.add(decoded));
+    }
+    EXPECT_TRUE(combined == single);
+    // The module's fast path, straight from the wire.
+    RefinementStatistics fast;
+    fast.reset(sphere.vertexCount(), config.offset_count, config.colour_bits);
+    for (int n : order) ASSERT_TRUE(addEncodedRefinementStatistics(wire[n], fast));
+    fast.dropColourOutside();
+    EXPECT_TRUE(fast == single);
+    MeshRefiner a(config, sphere.vertexCount(), sphere.triangles),
+        b(config, sphere.vertexCount(), sphere.triangles);
+    std::vector<uint8_t> oa, ob;
+    ASSERT_TRUE(a.refine(single, oa));
+    ASSERT_TRUE(b.refine(combined, ob));
+    EXPECT_EQ(oa, ob);
+  }
+}
+
+}  // namespace
+}  // namespace lumistage

@@ -1,0 +1,43 @@
+// The studio config's `refine:` section: read over the defaults, mistakes named.
+#include "core/refine/refine_config.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/sim/studio_config.h"
+#include "tests/test_util.h"
+
+namespace lumistage {
+namespace {
+
+TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
+  const auto folder = testing::testFolder("refine_config");
+  const std::string head =
+      "format: lumistage-studio\nversion: 1\nrig: " +
+      (std::filesystem::path(LUMISTAGE_TEST_RESOURCE_DIR) / "rigs" / "reference.yaml").string() +
+      "\n";
+  std::ofstream(folder / "a.yaml") << head
+                                   << "refine:\n  t_max_m: 0.05\n  offset_count: 11\n"
+                                      "  colour_weight: 0.5\n";
+  const StudioConfig config = loadStudioConfig(folder / "a.yaml");
+  EXPECT_DOUBLE_EQ(config.refine.t_max_m, 0.05);
+  EXPECT_EQ(config.refine.offset_count, 11);
+  EXPECT_DOUBLE_EQ(config.refine.colour_weight, 0.5);
+  EXPECT_DOUBLE_EQ(config.refine.outside_weight, RefineConfig{}.outside_weight);
+  EXPECT_DOUBLE_EQ(config.refine.offsetAt(0), -0.05);
+  EXPECT_DOUBLE_EQ(config.refine.offsetAt(5), 0.0);
+  EXPECT_DOUBLE_EQ(config.refine.offsetAt(10), 0.05);
+
+  std::ofstream(folder / "b.yaml") << head << "refine:\n  t_max: 0.05\n";
+  EXPECT_NE(testing::errorOf([&] { loadStudioConfig(folder / "b.yaml"); }).find("refine"),
+            std::string::npos);
+  std::ofstream(folder / "c.yaml") << head << "refine:\n  colour_bits: 9\n";
+  EXPECT_NE(testing::errorOf([&] {
+              loadStudioConfig(folder / "c.yaml");
+            }).find("c.yaml:5: refine.colour_bits: expected 1 to 8 bits"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace lumistage
