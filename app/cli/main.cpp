@@ -9,6 +9,7 @@
 #include "app/cli/calibrate_commands.h"
 #include "app/cli/camera_commands.h"
 #include "app/cli/eval_command.h"
+#include "app/cli/export_command.h"
 #include "app/cli/info_command.h"
 #include "app/cli/key_commands.h"
 #include "app/cli/rig_commands.h"
@@ -29,6 +30,7 @@ int main(int argc, char** argv) {
   lumistage::addInfoCommand(app);
   lumistage::addCalibrateCommands(app);
   lumistage::addEvalCommand(app);
+  lumistage::addExportCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -11,8 +11,7 @@
 #include "core/base/error.h"
 #include "core/body/joint_pose_fit.h"
 #include "core/capture/session_reader.h"
-#include "core/refine/mesh_refiner.h"
-#include "core/refine/refinement_sampler.h"
+#include "core/refine/frame_refiner.h"
 
 namespace lumistage {
 
@@ -215,15 +214,11 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
   }
   const Rig& rig = session.rig();
   const RefineConfig& config = options.refine;
-  RefinementSampler sampler(config);
-  MeshRefiner refiner(config, generic.rest.vertexCount(), generic.rest.triangles);
-  std::vector<GreenScreenKeyer> keyers(rig.cameraCount());
+  FrameRefiner refiner(rig, config, generic.rest.vertexCount(), generic.rest.triangles);
   std::vector<CameraFrame> frames;
-  RefinementStatistics node_stats, combined;
-  std::vector<uint8_t> wire, offsets, previous;
+  std::vector<uint8_t> previous;
   double change_sum = 0;
   int changes = 0;
-  std::vector<SamplerCamera> inputs;
   Eigen::Matrix3Xf positions, normals, refined;
   std::vector<std::vector<double>> before, after;
   std::vector<double> d;
@@ -242,23 +237,10 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
     posedScaledMesh(generic, fit, positions, normals);
 
     session.readFrame(i, frames);
-    if (first) {
-      for (int c = 0; c < rig.cameraCount(); ++c) keyers[c].learnScreen(frames[c].image.view());
-    }
     first = false;
-    combined.reset(generic.rest.vertexCount(), config.offset_count, config.colour_bits);
-    for (const RigNode& node : rig.nodes()) {
-      inputs.clear();
-      for (int c : node.cameras)
-        inputs.push_back({&rig.camera(c), frames[c].image.view(), &keyers[c], nullptr});
-      sampler.sample(inputs, positions, normals, generic.rest.triangles, node_stats);
-      encodeRefinementStatistics(node_stats, wire);
-      bytes += double(wire.size());
-      std::string error;
-      if (!addEncodedRefinementStatistics(wire, combined, &error)) throw Error(error);
-    }
-    combined.dropColourOutside();
-    refiner.refine(combined, offsets);
+    refiner.refine(frames, positions, normals, refined);
+    bytes += double(refiner.lastWireBytes());
+    const std::vector<uint8_t>& offsets = refiner.offsets();
     if (!previous.empty()) {
       double change = 0;
       for (size_t v = 0; v < offsets.size(); ++v)
@@ -267,7 +249,6 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
       ++changes;
     }
     previous = offsets;
-    applyOffsets(config, offsets, positions, normals, refined);
 
     const TriangleMesh truth = readTruthSurface(folder / "truth" / "surface" /
                                                 fmt::format("{:06}.ply", session.frameId(i)));

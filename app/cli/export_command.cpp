@@ -1,0 +1,125 @@
+#include "app/cli/export_command.h"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <memory>
+
+#include "app/cli/progress.h"
+#include "core/base/error.h"
+#include "core/body/bvh.h"
+#include "core/body/human_model.h"
+#include "core/body/mesh_sequence_io.h"
+#include "core/capture/session_reader.h"
+#include "core/eval/eval_report.h"
+#include "core/eval/mocap_eval.h"
+#include "core/refine/frame_refiner.h"
+
+namespace lumistage {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+}  // namespace
+
+void addExportCommand(CLI::App& app) {
+  struct Args {
+    std::string session, out;
+    int frames = 0;
+    bool bvh = false, glb = false, ply = false, obj = false, unrefined = false;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* exp = app.add_subcommand(
+      "export",
+      "Capture a session for other tools: the tracked skeleton as BVH, the captured surface as "
+      "an animated glTF and per-frame PLY/OBJ (default: --bvh --glb)");
+  exp->add_option("--session", args->session, "the recorded session")->required();
+  exp->add_option("-o,--out", args->out, "folder to write into (created)")->required();
+  exp->add_option("--frames", args->frames, "only the first N frames (default: all)");
+  exp->add_flag("--bvh", args->bvh, "skeleton.bvh: the tracked motion, the actor's bone lengths");
+  exp->add_flag("--glb", args->glb, "surface.glb: the surface of every frame, animated");
+  exp->add_flag("--ply", args->ply, "meshes/NNNNNN.ply: the surface of each frame");
+  exp->add_flag("--obj", args->obj, "meshes/NNNNNN.obj: the same as OBJ, with normals");
+  exp->add_flag("--unrefined", args->unrefined,
+                "the posed generic mesh as it is, without the refinement from the images");
+  exp->callback([args] {
+    if (!args->bvh && !args->glb && !args->ply && !args->obj) args->bvh = args->glb = true;
+    const SessionReader session(args->session);
+    const fs::path out(args->out);
+    std::error_code ec;
+    fs::create_directories(out / "meshes", ec);
+    if (ec) throw Error(out.string() + ": cannot create: " + ec.message());
+
+    // The studio's motion capture, offline: every camera keyed at low resolution, tracked.
+    const SkinnedMesh generic = loadGenericHuman();
+    MocapEvalOptions options;
+    options.max_frames = args->frames;
+    EvalReport report;
+    fmt::print("tracking {} ...\n", args->session);
+    const MocapEvalResult mocap = evaluateMocap(session, generic, options, report);
+    size_t first = 0;
+    while (first < mocap.valid.size() && !mocap.valid[first]) ++first;
+    if (first == mocap.valid.size())
+      throw Error(args->session + ": the actor was never tracked (no T- or A-pose to start from?)");
+
+    // Frames before the first tracked one are left out; a frame where the actor was lost keeps
+    // the last tracked pose (counted below).
+    MotionClip clip;
+    clip.name = fs::path(args->session).filename().string();
+    clip.fps = session.fps();
+    int held = 0;
+    for (size_t f = first; f < mocap.poses.size(); ++f) {
+      const bool tracked = mocap.valid[f];
+      held += !tracked;
+      clip.frames.push_back(tracked ? mocap.poses[f] : clip.frames.back());
+    }
+    if (args->bvh) {
+      saveBvh(clip, mocap.skeleton, out / "skeleton.bvh");
+      fmt::print("wrote {}\n", (out / "skeleton.bvh").string());
+    }
+
+    // The surface: the generic human posed by the tracked angles and scaled to the actor (the
+    // ratio of the calibrated skeleton's pelvis height to the generic one's), its pelvis where
+    // the actor's is, then refined from the frame's images.
+    std::vector<TriangleMesh> meshes;
+    std::vector<Eigen::Affine3f> transforms;
+    const Eigen::Vector3d generic_root = generic.skeleton.restPositions()[0];
+    const Eigen::Vector3d actor_root = mocap.skeleton.restPositions()[0];
+    const double scale = actor_root.z() / generic_root.z();
+    FrameRefiner refiner(session.rig(), RefineConfig{}, generic.rest.vertexCount(),
+                         generic.rest.triangles);
+    std::vector<CameraFrame> images;
+    Eigen::Matrix3Xf positions, normals;
+    for (size_t i = 0; i < clip.frames.size(); ++i) {
+      Pose pose = clip.frames[i];
+      pose.root_translation_m = (actor_root + pose.root_translation_m) / scale - generic_root;
+      generic.skeleton.skinningTransforms(pose, transforms);
+      TriangleMesh mesh;
+      mesh.triangles = generic.rest.triangles;
+      skinMesh(generic, transforms, positions, normals);
+      positions *= float(scale);
+      if (args->unrefined) {
+        mesh.positions = positions;
+        mesh.normals = normals;
+      } else {
+        session.readFrame(int(first + i), images);
+        refiner.refine(images, positions, normals, mesh.positions);
+        mesh.computeNormals();
+      }
+      const int64_t frame = session.frameId(int(first + i));
+      if (args->ply) saveMeshPly(out / "meshes" / fmt::format("{:06}.ply", frame), mesh);
+      if (args->obj) saveMeshObj(out / "meshes" / fmt::format("{:06}.obj", frame), mesh);
+      if (args->glb) meshes.push_back(std::move(mesh));
+      printProgress("surfaces", int(i + 1), int(clip.frames.size()));
+    }
+    if (args->glb) {
+      saveMeshSequenceGlb(out / "surface.glb", meshes, session.fps());
+      fmt::print("wrote {}\n", (out / "surface.glb").string());
+    }
+    fmt::print("{} frames exported from frame {}; {} held the last tracked pose\n",
+               clip.frames.size(), session.frameId(int(first)), held);
+  });
+}
+
+}  // namespace lumistage

@@ -1,0 +1,42 @@
+#include "core/refine/frame_refiner.h"
+
+#include <string>
+
+#include "core/base/error.h"
+
+namespace lumistage {
+
+FrameRefiner::FrameRefiner(const Rig& rig, const RefineConfig& config, int vertex_count,
+                           const std::vector<Eigen::Vector3i>& triangles)
+    : rig_(rig),
+      config_(config),
+      triangles_(triangles),
+      sampler_(config),
+      refiner_(config, vertex_count, triangles),
+      keyers_(rig.cameraCount()) {}
+
+void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::Matrix3Xf& positions,
+                          const Eigen::Matrix3Xf& normals, Eigen::Matrix3Xf& refined) {
+  if (!keyers_learnt_) {
+    for (int c = 0; c < rig_.cameraCount(); ++c) keyers_[c].learnScreen(frames[c].image.view());
+    keyers_learnt_ = true;
+  }
+  combined_.reset(int(positions.cols()), config_.offset_count, config_.colour_bits);
+  wire_bytes_ = 0;
+  for (const RigNode& node : rig_.nodes()) {
+    inputs_.clear();
+    for (int c : node.cameras)
+      inputs_.push_back({&rig_.camera(c), frames[c].image.view(), &keyers_[c], nullptr});
+    sampler_.sample(inputs_, positions, normals, triangles_, node_stats_);
+    encodeRefinementStatistics(node_stats_, wire_);
+    wire_bytes_ += wire_.size();
+    std::string error;
+    if (!addEncodedRefinementStatistics(wire_, combined_, &error))
+      throw Error("refinement: node " + node.name + ": " + error);
+  }
+  combined_.dropColourOutside();
+  refiner_.refine(combined_, offsets_);
+  applyOffsets(config_, offsets_, positions, normals, refined);
+}
+
+}  // namespace lumistage
