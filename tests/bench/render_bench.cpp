@@ -1,0 +1,171 @@
+// Lumigraph rendering on this machine's OpenGL (Mesa llvmpipe without a GPU): a node's partial
+// image (3 cameras of the reference rig) at 640x480 and 1920x1080, its parts, and the studio's
+// side. Run: ./studio bench, or build/tests/bench/render_bench.
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+#include <memory>
+
+#include "core/base/resource_path.h"
+#include "core/capture/image.h"
+#include "core/render/lumigraph_renderer.h"
+#include "core/render/partial_image_blender.h"
+#include "core/render/partial_image_codec.h"
+#include "core/sim/virtual_studio.h"
+
+namespace {
+
+using namespace lumistage;
+
+struct Scene {
+  std::unique_ptr<VirtualStudio> studio;
+  StudioFrame frame;
+  std::vector<int> node;  // the first node's cameras
+  std::vector<Image> bayer;
+};
+
+Scene& scene() {
+  static Scene* s = [] {
+    auto* s = new Scene;
+    s->studio = std::make_unique<VirtualStudio>(
+        loadStudioConfig(resourcePath("studio/reference.yaml")), 12);
+    s->studio->renderFrame(10, s->frame);
+    s->frame.surface.computeNormals();
+    s->node = s->studio->rig().nodes()[0].cameras;
+    for (int c : s->node) {
+      s->bayer.emplace_back();
+      const Camera& cam = s->studio->rig().camera(c);
+      rgbaToImage(s->frame.images[c].data(), cam.width(), cam.height(), PixelFormat::kBayerRggb8,
+                  s->bayer.back());
+    }
+    return s;
+  }();
+  return *s;
+}
+
+Camera viewOf(int width, int height) {
+  const Eigen::Vector3d centre(-3.2, -3.2, 1.7), target(0, 0, 1.0);
+  const Eigen::Vector3d z = (target - centre).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  Eigen::Matrix3d R;
+  R.row(0) = x, R.row(1) = z.cross(x), R.row(2) = z;
+  const double f = 1.4 * width / 2;  // about 70 degrees across
+  return Camera("view", width, height, {f, f, width / 2.0 - 0.5, height / 2.0 - 0.5, 0}, {}, R,
+                -R * centre);
+}
+
+std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer) {
+  Scene& s = scene();
+  auto r = std::make_unique<LumigraphRenderer>(s.studio->rig(), s.node);
+  r->setMesh(s.frame.surface.positions, s.frame.surface.normals, s.frame.surface.triangles);
+  for (size_t j = 0; j < s.node.size(); ++j) {
+    if (bayer) {
+      r->setImage(int(j), s.bayer[j].view());
+    } else {
+      const Camera& c = s.studio->rig().camera(s.node[j]);
+      r->setImageRgba(int(j), s.frame.images[s.node[j]].data(), c.width(), c.height());
+    }
+  }
+  return r;
+}
+
+// The node's frame after upload: the view rendered and read back (depth maps kept).
+void nodePartialImage(benchmark::State& state) {
+  auto r = nodeRenderer(state.range(2) != 0);
+  const Camera view = viewOf(int(state.range(0)), int(state.range(1)));
+  std::vector<uint8_t> rgba;
+  r->render(view, rgba);
+  for (auto _ : state) {
+    r->render(view, rgba);
+    benchmark::DoNotOptimize(rgba.data());
+  }
+}
+BENCHMARK(nodePartialImage)
+    ->ArgNames({"w", "h", "bayer"})
+    ->Args({640, 480, 0})
+    ->Args({640, 480, 1})
+    ->Args({1920, 1080, 0})
+    ->Args({1920, 1080, 1})
+    ->Unit(benchmark::kMillisecond);
+
+// A new mesh: the 12 visibility maps rendered again before the view.
+void nodeMeshAndPartialImage(benchmark::State& state) {
+  Scene& s = scene();
+  auto r = nodeRenderer(false);
+  const Camera view = viewOf(640, 480);
+  std::vector<uint8_t> rgba;
+  for (auto _ : state) {
+    r->setMesh(s.frame.surface.positions, s.frame.surface.normals, s.frame.surface.triangles);
+    r->render(view, rgba);
+    benchmark::DoNotOptimize(rgba.data());
+  }
+}
+BENCHMARK(nodeMeshAndPartialImage)->Unit(benchmark::kMillisecond);
+
+// Uploading the node's 3 images of 1024x768: Bayer (1 byte a pixel) or RGBA (4).
+void uploadImages(benchmark::State& state) {
+  Scene& s = scene();
+  const bool bayer = state.range(0) != 0;
+  auto r = nodeRenderer(bayer);
+  for (auto _ : state) {
+    for (size_t j = 0; j < s.node.size(); ++j) {
+      if (bayer) {
+        r->setImage(int(j), s.bayer[j].view());
+      } else {
+        const Camera& c = s.studio->rig().camera(s.node[j]);
+        r->setImageRgba(int(j), s.frame.images[s.node[j]].data(), c.width(), c.height());
+      }
+    }
+    std::vector<uint8_t> rgba(4);
+    r->render(viewOf(2, 2), rgba);  // forces the uploads through
+  }
+}
+BENCHMARK(uploadImages)->ArgNames({"bayer"})->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// Clones: the cost of each extra one.
+void clones(benchmark::State& state) {
+  auto r = nodeRenderer(false);
+  const Camera view = viewOf(640, 480);
+  CloneSet set;
+  for (int i = 0; i < state.range(0); ++i) {
+    Eigen::Affine3f t = Eigen::Affine3f::Identity();
+    t.translate(Eigen::Vector3f(0.9f * (i % 4) - 1.35f, 0.9f * (i / 4), 0));
+    set.push_back(t);
+  }
+  std::vector<uint8_t> rgba;
+  for (auto _ : state) {
+    r->render(view, set, rgba);
+    benchmark::DoNotOptimize(rgba.data());
+  }
+}
+BENCHMARK(clones)->ArgName("clones")->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
+
+// The wire: encoding a node's 640x480 partial image, and the studio's blend of four.
+void encodePartialImage(benchmark::State& state) {
+  auto r = nodeRenderer(false);
+  std::vector<uint8_t> rgba, out;
+  r->render(viewOf(640, 480), rgba);
+  for (auto _ : state) {
+    encodeAlphaRuns(rgba, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["bytes"] = double(out.size());
+  state.counters["raw_bytes"] = double(rgba.size());
+}
+BENCHMARK(encodePartialImage)->Unit(benchmark::kMicrosecond);
+
+void blendFourPartialImages(benchmark::State& state) {
+  auto r = nodeRenderer(false);
+  std::vector<uint8_t> rgba, out;
+  r->render(viewOf(640, 480), rgba);
+  PartialImageBlender blender;
+  for (auto _ : state) {
+    blender.reset(640, 480);
+    for (int n = 0; n < 4; ++n) blender.add(rgba);
+    blender.finish(out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+BENCHMARK(blendFourPartialImages)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
