@@ -10,6 +10,7 @@
 //              for the k candidates of smallest angle, 0 for every other camera.
 // The weights are computed in the captured actor's frame: a clone's desired camera is brought
 // into it (desired_centre), and only the clone's placement moves the vertex on screen.
+// kOwnCameras (the renderer's own cameras, whose images it has) is defined when compiling.
 const int kMaxCameras = 16;
 const int kMaxK = 4;
 
@@ -47,8 +48,11 @@ uniform vec3 view_radial;
 uniform vec2 view_tangential;
 uniform vec2 view_size;
 
-out float v_weight[kMaxCameras];
-out vec2 v_texel[kMaxCameras];  // pixel coordinates + 0.5 (texel space of the camera's image)
+uniform int own_camera[kOwnCameras];  // rig index of each own camera
+
+out float v_weight[kOwnCameras];  // of the own cameras
+out vec2 v_texel[kOwnCameras];    // pixel coordinates + 0.5 (texel space of the camera's image)
+out float v_total;                // the weight of every camera of the rig
 
 vec2 projectPixel(vec3 c, vec4 fc, float s, vec3 radial, vec2 tangential) {
   vec2 x = c.xy / c.z;
@@ -65,54 +69,72 @@ void main() {
   vec3 p = position;
   vec3 n = normalize(normal);
   vec3 to_desired = desired_centre - p;
-  float best_angle[kMaxK + 1];
-  int best_camera[kMaxK + 1];
-  float best_facing[kMaxK + 1];
-  int count = 0;
-  int keep = min(k_nearest, kMaxK) + 1;
+  // Pass 1: every camera's angle (a large value when it cannot contribute) and the k+1 smallest
+  // through a branch-free insertion network (no dynamic indexing: llvmpipe runs this 8 vertices
+  // at a time).
+  const float kNone = 1e9;
+  float angle[kMaxCameras], facing[kMaxCameras], weight[kMaxCameras];
+  vec2 texel[kMaxCameras];
+  vec4 smallest = vec4(kNone);  // sorted: the 4 smallest angles
+  float fifth = kNone;
   for (int i = 0; i < kMaxCameras; ++i) {
-    v_weight[i] = 0.0;
-    v_texel[i] = vec2(-1.0);
+    angle[i] = kNone;
+    facing[i] = 0.0;
+    texel[i] = vec2(-1.0);
     if (i >= camera_count || camera_active[i] == 0) continue;
     vec3 c = rotations[i] * p + translations[i];
     if (c.z <= 0.05) continue;
     vec2 pixel = projectPixel(c, focal_centres[i], skews[i], radials[i], tangentials[i]);
     if (any(lessThan(pixel, vec2(-0.5))) || any(greaterThan(pixel, image_sizes[i] - 0.5)))
       continue;
-    v_texel[i] = pixel + 0.5;
+    texel[i] = pixel + 0.5;
     vec3 to_camera = centres[i] - p;
-    float facing = dot(n, normalize(to_camera));
-    if (facing <= min_facing) continue;
-    vec4 d = textureGather(depth_maps, vec3(v_texel[i] * depth_scale / depth_map_size, float(i)));
+    float f = dot(n, normalize(to_camera));
+    if (f <= min_facing) continue;
+    vec4 d = textureGather(depth_maps, vec3(texel[i] * depth_scale / depth_map_size, float(i)));
     if (c.z > min(min(d.x, d.y), min(d.z, d.w)) + depth_tolerance) continue;  // occluded
     float a = angleBetween(to_desired, to_camera);
-    // Insert into the sorted list of the k+1 smallest angles.
-    int j = min(count, keep - 1);
-    if (count >= keep && a >= best_angle[keep - 1]) continue;
-    while (j > 0 && best_angle[j - 1] > a) {
-      best_angle[j] = best_angle[j - 1];
-      best_camera[j] = best_camera[j - 1];
-      best_facing[j] = best_facing[j - 1];
-      --j;
-    }
-    best_angle[j] = a;
-    best_camera[j] = i;
-    best_facing[j] = facing;
-    count = min(count + 1, keep);
+    angle[i] = a;
+    facing[i] = f;
+    float x = a, t;
+    t = min(smallest.x, x); x = max(smallest.x, x); smallest.x = t;
+    t = min(smallest.y, x); x = max(smallest.y, x); smallest.y = t;
+    t = min(smallest.z, x); x = max(smallest.z, x); smallest.z = t;
+    t = min(smallest.w, x); x = max(smallest.w, x); smallest.w = t;
+    fifth = min(fifth, x);
   }
-  int k = min(k_nearest, kMaxK);
-  float threshold = count > k ? best_angle[k] : max_angle;
+  // Pass 2: the k nearest get the ramp weight, the others 0.
+  int k = clamp(k_nearest, 1, kMaxK);
+  float kth = k == 1 ? smallest.x : k == 2 ? smallest.y : k == 3 ? smallest.z : smallest.w;
+  float next = k == 1 ? smallest.y : k == 2 ? smallest.z : k == 3 ? smallest.w : fifth;
+  float threshold = next < kNone ? next : max_angle;
   float sum = 0.0;
-  for (int j = 0; j < kMaxK; ++j) {
-    if (j >= min(k, count)) break;
-    float a = best_angle[j];
-    float ramp = max(0.0, 1.0 - a / max(threshold, epsilon));
-    float w = ramp / max(a, epsilon) * smoothstep(min_facing, 1.0, best_facing[j]);
-    v_weight[best_camera[j]] = w;
+  for (int i = 0; i < kMaxCameras; ++i) {
+    float a = angle[i];
+    float w = 0.0;
+    if (a <= kth && a < kNone) {
+      float ramp = max(0.0, 1.0 - a / max(threshold, epsilon));
+      w = ramp / max(a, epsilon) * smoothstep(min_facing, 1.0, facing[i]);
+    }
+    weight[i] = w;
     sum += w;
   }
   // The k-th and (k+1)-th tie: every kept weight is 0; the nearest camera alone.
-  if (count > 0 && sum <= 0.0) v_weight[best_camera[0]] = 1.0;
+  if (sum <= 0.0 && smallest.x < kNone) {
+    for (int i = 0; i < kMaxCameras; ++i) weight[i] = angle[i] == smallest.x ? 1.0 : 0.0;
+    sum = 1.0;
+  }
+  v_total = sum;
+  for (int j = 0; j < kOwnCameras; ++j) {
+    v_weight[j] = 0.0;
+    v_texel[j] = vec2(-1.0);
+    for (int i = 0; i < kMaxCameras; ++i) {
+      if (own_camera[j] == i) {
+        v_weight[j] = weight[i];
+        v_texel[j] = texel[i];
+      }
+    }
+  }
 
   vec3 world = (clone * vec4(p, 1.0)).xyz;
   vec3 c = view_rotation * world + view_translation;

@@ -10,8 +10,11 @@
 namespace lumistage {
 
 struct LumigraphRenderer::Programs {
+  explicit Programs(int own)
+      : blend("lumigraph.vert", "lumigraph.frag",
+              "#define kOwnCameras " + std::to_string(std::max(own, 1))) {}
   ShaderProgram depth{"lumigraph_depth.vert", "lumigraph_depth.frag"};
-  ShaderProgram blend{"lumigraph.vert", "lumigraph.frag"};
+  ShaderProgram blend;  // compiled for the renderer's number of own cameras
 };
 
 namespace {
@@ -44,11 +47,7 @@ CameraUniforms uniformsOf(const Camera& camera) {
 }  // namespace
 
 LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, LumigraphParams params)
-    : programs_(std::make_unique<Programs>()),
-      rig_(rig),
-      own_(std::move(own)),
-      params_(params),
-      active_(rig.cameraCount(), 1) {
+    : rig_(rig), own_(std::move(own)), params_(params), active_(rig.cameraCount(), 1) {
   if (rig_.cameraCount() > kMaxCameras || rig_.cameraCount() == 0) {
     throw Error("LumigraphRenderer: the rig has " + std::to_string(rig_.cameraCount()) +
                 " cameras; 1 to " + std::to_string(kMaxCameras) + " are supported");
@@ -57,6 +56,9 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
     if (c < 0 || c >= rig_.cameraCount())
       throw Error("LumigraphRenderer: own camera " + std::to_string(c) + " is not in the rig");
   }
+  if (own_.empty() || own_.size() > size_t(kMaxCameras))
+    throw Error("LumigraphRenderer: 1 to " + std::to_string(kMaxCameras) + " own cameras needed");
+  programs_ = std::make_unique<Programs>(static_cast<int>(own_.size()));
   params_.k = std::clamp(params_.k, 1, 4);
   params_.depth_map_divisor = std::max(1, params_.depth_map_divisor);
   for (const Camera& c : rig_.cameras()) {
@@ -284,6 +286,11 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDisable(GL_BLEND);
+  // Closed surfaces, counter-clockwise from outside: back faces are never seen (half the
+  // fragments llvmpipe would otherwise shade before the front hides them).
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glFrontFace(GL_CW);  // image rows go down the framebuffer: counter-clockwise turns clockwise
 
   const ShaderProgram& p = programs_->blend;
   p.use();
@@ -293,9 +300,6 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   Eigen::Matrix<float, 4, kMaxCameras> focal_centres;
   Eigen::Matrix<float, 2, kMaxCameras> tangentials, sizes;
   float skews[kMaxCameras];
-  int own_layer[kMaxCameras];
-  std::fill(own_layer, own_layer + kMaxCameras, -1);
-  for (size_t j = 0; j < own_.size(); ++j) own_layer[own_[j]] = static_cast<int>(j);
   for (int c = 0; c < n; ++c) {
     const CameraUniforms u = uniformsOf(rig_.camera(c));
     rotations.col(c) = Eigen::Map<const Eigen::Matrix<float, 9, 1>>(u.rotation.data());
@@ -317,7 +321,7 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform2fv(p.uniform("image_sizes"), n, sizes.data());
   glUniform3fv(p.uniform("centres"), n, centres.data());
   glUniform1iv(p.uniform("camera_active"), n, active_.data());
-  glUniform1iv(p.uniform("own_layer"), kMaxCameras, own_layer);
+  glUniform1iv(p.uniform("own_camera"), static_cast<GLsizei>(own_.size()), own_.data());
   glUniform1f(p.uniform("depth_scale"), 1.0f / float(params_.depth_map_divisor));
   glUniform2f(p.uniform("depth_map_size"), float(depth_width_), float(depth_height_));
   glUniform1f(p.uniform("depth_tolerance"), params_.depth_tolerance_m);
@@ -327,7 +331,7 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform1f(p.uniform("epsilon"), params_.epsilon_rad);
   glUniform2f(p.uniform("images_size"), float(images_width_), float(images_height_));
   glUniform1i(p.uniform("bayer"), bayer_ ? 1 : 0);
-  glUniform2i(p.uniform("red_offset"), bayer_layout_.red_x, bayer_layout_.red_y);
+  glUniform1i(p.uniform("red_index"), bayer_layout_.red_y * 2 + bayer_layout_.red_x);
   glUniform1i(p.uniform("images"), 0);
   glUniform1i(p.uniform("depth_maps"), 1);
   glActiveTexture(GL_TEXTURE0);
@@ -357,6 +361,7 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
     }
   }
   glBindVertexArray(0);
+  glDisable(GL_CULL_FACE);
 
   const size_t bytes = size_t(width_) * height_ * 4;
   if (rgba.size() != bytes) rgba.resize(bytes);

@@ -69,4 +69,18 @@ bool decodeAlphaRuns(std::span<const uint8_t> data, size_t pixel_count,
   return at == data.size();
 }
 
+bool validAlphaRuns(std::span<const uint8_t> data, size_t pixel_count) {
+  size_t at = 0, i = 0;
+  while (i < pixel_count) {
+    uint64_t empty_run = 0, literal_run = 0;
+    if (!getVarint(data, at, empty_run) || !getVarint(data, at, literal_run)) return false;
+    if (empty_run > pixel_count - i || literal_run > pixel_count - i - empty_run) return false;
+    if (empty_run + literal_run == 0) return false;
+    if (literal_run * 4 > data.size() - at) return false;
+    at += 4 * literal_run;
+    i += empty_run + literal_run;
+  }
+  return at == data.size();
+}
+
 }  // namespace lumistage

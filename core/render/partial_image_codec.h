@@ -20,4 +20,7 @@ void encodeAlphaRuns(std::span<const uint8_t> rgba, std::vector<uint8_t>& out);
 // pixels. `rgba` is resized to pixel_count*4.
 bool decodeAlphaRuns(std::span<const uint8_t> data, size_t pixel_count, std::vector<uint8_t>& rgba);
 
+// Whether `data` is a valid encoding of exactly pixel_count pixels (no decoding, no allocation).
+bool validAlphaRuns(std::span<const uint8_t> data, size_t pixel_count);
+
 }  // namespace lumistage
