@@ -10,6 +10,7 @@
 #include "core/base/resource_path.h"
 #include "core/body/human_model.h"
 #include "core/capture/image.h"
+#include "core/net/message_codec.h"
 #include "core/render/gl.h"
 #include "core/render/lumigraph_renderer.h"
 #include "core/render/partial_image_blender.h"
@@ -71,9 +72,11 @@ Camera viewOf(int width, int height) {
 }
 
 // A node's renderer: mesh 0 the truth surface, 1 the generic human.
-std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0) {
+std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int divisor = 2) {
   Scene& s = scene();
-  auto r = std::make_unique<LumigraphRenderer>(s.studio->rig(), s.node);
+  LumigraphParams params;
+  params.depth_map_divisor = divisor;
+  auto r = std::make_unique<LumigraphRenderer>(s.studio->rig(), s.node, params);
   const TriangleMesh& m = mesh == 0 ? s.frame.surface : s.generic;
   r->setMesh(m.positions, m.normals, m.triangles);
   for (size_t j = 0; j < s.node.size(); ++j) {
@@ -112,21 +115,25 @@ BENCHMARK(nodePartialImage)
     ->Args({1920, 1080, 1, 1})
     ->Unit(benchmark::kMillisecond);
 
-// A new mesh: the 12 visibility maps rendered again before the view.
+// A new mesh: the 12 visibility maps (the camera's size / divisor) rendered again before the view.
 void nodeMeshAndPartialImage(benchmark::State& state) {
   Scene& s = scene();
-  auto r = nodeRenderer(false);
+  const TriangleMesh& m = state.range(0) ? s.generic : s.frame.surface;
+  auto r = nodeRenderer(false, int(state.range(0)), int(state.range(1)));
   const Camera view = viewOf(640, 480);
   std::vector<uint8_t> rgba;
   const double cpu = processCpuMs();
   for (auto _ : state) {
-    r->setMesh(s.frame.surface.positions, s.frame.surface.normals, s.frame.surface.triangles);
+    r->setMesh(m.positions, m.normals, m.triangles);
     r->render(view, rgba);
     benchmark::DoNotOptimize(rgba.data());
   }
   state.counters["process_cpu_ms"] = (processCpuMs() - cpu) / double(state.iterations());
 }
-BENCHMARK(nodeMeshAndPartialImage)->Unit(benchmark::kMillisecond);
+BENCHMARK(nodeMeshAndPartialImage)
+    ->ArgNames({"generic", "divisor"})
+    ->ArgsProduct({{0, 1}, {2, 4}})
+    ->Unit(benchmark::kMillisecond);
 
 // Uploading the node's 3 images of 1024x768: Bayer (1 byte a pixel) or RGBA (4).
 void uploadImages(benchmark::State& state) {
@@ -179,6 +186,7 @@ void encodePartialImage(benchmark::State& state) {
     benchmark::DoNotOptimize(out.data());
   }
   state.counters["bytes"] = double(out.size());
+  state.counters["rle_rgba_bytes"] = double(encodeRleRgba(rgba).size());  // the paper's RLE
   state.counters["raw_bytes"] = double(rgba.size());
 }
 BENCHMARK(encodePartialImage)->Unit(benchmark::kMicrosecond);
