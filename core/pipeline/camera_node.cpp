@@ -93,17 +93,7 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
 std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_id,
                                                   const std::vector<ViewData>& views) {
   std::vector<Message> messages;
-  if (renderer_failed_ || views.empty()) return messages;
-  if (!renderer_) {
-    try {
-      gl_ = std::make_unique<EglContext>();
-      renderer_ = std::make_unique<LumigraphRenderer>(rig_, cameras_);
-    } catch (const Error& e) {
-      spdlog::error("node {}: no lumigraph rendering: {}", name_, e.what());
-      renderer_failed_ = true;
-      return messages;
-    }
-  }
+  if (!renderer_ || views.empty()) return messages;
   renderer_->setMesh(positions_, normals_, body_.rest.triangles);
   for (size_t k = 0; k < cameras_.size(); ++k)
     renderer_->setImage(static_cast<int>(k), set.frames[k].image.view());

@@ -147,6 +147,19 @@ TEST_F(LumigraphRendererTest, DistributedImageEqualsTheSingleProcessImage) {
   EXPECT_EQ(covered(distributed), covered(local_blended));
 }
 
+TEST_F(LumigraphRendererTest, SeveralViewsOfOneFrameDoNotDisturbEachOther) {
+  auto renderer = makeRenderer(rig().nodes()[1].cameras);
+  const Camera desired = desiredView();
+  const Camera& preview = rig().camera(rig().nodes()[1].cameras[0]);
+  std::vector<uint8_t> first, other, again;
+  renderer->render(desired, first);
+  renderer->render(preview, other);
+  renderer->render(desired, again);
+  EXPECT_GT(covered(first), 1000);
+  EXPECT_GT(covered(other), 1000);
+  EXPECT_EQ(first, again);
+}
+
 TEST_F(LumigraphRendererTest, ClonesAppearWherePlacedWithTheirOwnViewDependentWeights) {
   auto renderer = makeRenderer();
   const Camera& camera = rig().camera(2);
