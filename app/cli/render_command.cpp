@@ -79,7 +79,7 @@ void addRenderCommand(CLI::App& app) {
     std::vector<int> all(rig.cameraCount());
     for (int c = 0; c < rig.cameraCount(); ++c) all[c] = c;
     LumigraphRenderer renderer(rig, all);
-    CloneSet clones;
+    std::vector<Eigen::Affine3f> clones;
     for (int i = 0; i < std::max(1, a->clones); ++i) {
       Eigen::Affine3f t = Eigen::Affine3f::Identity();
       t.translate(Eigen::Vector3f(float(i - (a->clones - 1) / 2.0), 0, 0));

@@ -22,10 +22,6 @@ struct LumigraphParams {
   float depth_tolerance_m = 0.03f;  // a vertex this far behind the map's surface is occluded
 };
 
-// A rigid placement of the captured actor on the stage: stage (world) from the capture's frame.
-// The identity is the actor where it was filmed.
-using CloneSet = std::vector<Eigen::Affine3f>;
-
 // Unstructured lumigraph rendering on the GPU (or Mesa llvmpipe), through an offscreen OpenGL 4.3
 // context that must be current for the renderer's whole life (EglContext). Takes any triangle
 // mesh with per-vertex normals (the truth surface, the posed generic human, the refined mesh),
@@ -63,8 +59,10 @@ class LumigraphRenderer {
   // with that camera inactive.
   void setActive(const std::vector<bool>& active);
 
-  // Renders the desired camera's view (its size, lens distortion included) of every clone
-  // (one draw each; an empty set renders nothing). `rgba` is resized when its size differs.
+  // Renders the desired camera's view (its size, lens distortion included) of every clone: a
+  // rigid placement of the captured actor, stage (world) from the capture's frame, the identity
+  // being the actor where it was filmed (CloneSet::transforms() gives them). One draw each; an
+  // empty set renders nothing. `rgba` is resized when its size differs.
   void render(const Camera& desired, std::span<const Eigen::Affine3f> clones,
               std::vector<uint8_t>& rgba);
   // The actor where it was filmed.

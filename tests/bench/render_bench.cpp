@@ -160,7 +160,7 @@ BENCHMARK(uploadImages)->ArgNames({"bayer"})->Arg(0)->Arg(1)->Unit(benchmark::kM
 void clones(benchmark::State& state) {
   auto r = nodeRenderer(false);
   const Camera view = viewOf(640, 480);
-  CloneSet set;
+  std::vector<Eigen::Affine3f> set;
   for (int i = 0; i < state.range(0); ++i) {
     Eigen::Affine3f t = Eigen::Affine3f::Identity();
     t.translate(Eigen::Vector3f(0.9f * (i % 4) - 1.35f, 0.9f * (i / 4), 0));
