@@ -7,16 +7,65 @@
 #include "core/body/human_model.h"
 #include "core/capture/session_reader.h"
 #include "core/eval/eval_report.h"
+#include "core/eval/leave_one_out.h"
 #include "core/eval/mocap_eval.h"
 #include "core/eval/surface_metrics.h"
+#include "core/render/egl_context.h"
 #include "core/sim/studio_config.h"
 
 namespace lumistage {
 
+namespace {
+
+// Section "render": every camera's view rendered from the others with the unstructured
+// lumigraph, compared with its image over the truth mask (docs/lumigraph.md), on the posed
+// generic mesh (the tracked pose; "unrefined") and on the true surface (the upper bound).
+// loo_psnr_db / loo_ssim are the pipeline's own geometry: the refined mesh once the refinement
+// is evaluated here, until then the unrefined one.
+void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
+                    const MocapEvalResult& tracked, int frame_count, EvalReport& report) {
+  const int total = std::min<int>(session.frameCount(), static_cast<int>(tracked.poses.size()));
+  std::vector<int> frames;
+  for (int k = 0; k < frame_count && total > 0; ++k) {
+    const int i = int((k + 0.5) * total / frame_count);
+    if (i < static_cast<int>(tracked.valid.size()) && tracked.valid[i] &&
+        (frames.empty() || frames.back() != i))
+      frames.push_back(i);
+  }
+  EglContext gl;
+  const LeaveOneOutSummary truth =
+      evaluateLeaveOneOut(session, frames, [&](int i) { return truthSurface(session, i); });
+  SkinnedMesh body = generic;
+  std::vector<Eigen::Affine3f> transforms;
+  const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(session, frames, [&](int i) {
+    body.skeleton.skinningTransforms(tracked.poses[i], transforms);
+    TriangleMesh mesh;
+    mesh.triangles = body.rest.triangles;
+    skinMesh(body, transforms, mesh.positions, mesh.normals);
+    return mesh;
+  });
+  report.set("render", "loo_frames", double(frames.size()));
+  report.set("render", "loo_psnr_db", unrefined.psnr_db);
+  report.set("render", "loo_ssim", unrefined.ssim);
+  report.set("render", "loo_psnr_db_unrefined", unrefined.psnr_db);
+  report.set("render", "loo_ssim_unrefined", unrefined.ssim);
+  report.set("render", "loo_psnr_db_truth_surface", truth.psnr_db);
+  report.set("render", "loo_ssim_truth_surface", truth.ssim);
+  for (size_t c = 0; c < truth.per_camera.size(); ++c) {
+    const std::string name = session.rig().camera(int(c)).name();
+    report.set("render", "loo_psnr_db_unrefined_" + name, unrefined.per_camera[c].psnr_db);
+    report.set("render", "loo_ssim_unrefined_" + name, unrefined.per_camera[c].ssim);
+    report.set("render", "loo_psnr_db_truth_surface_" + name, truth.per_camera[c].psnr_db);
+    report.set("render", "loo_ssim_truth_surface_" + name, truth.per_camera[c].ssim);
+  }
+}
+
+}  // namespace
+
 void addEvalCommand(CLI::App& app) {
   struct Args {
     std::string session, json, config;
-    int cameras = 0, frames = 0;
+    int cameras = 0, frames = 0, loo_frames = 3;
     bool quiet = false;
   };
   auto args = std::make_shared<Args>();
@@ -30,6 +79,10 @@ void addEvalCommand(CLI::App& app) {
   eval->add_option("--frames", args->frames, "only the first N frames (default: all)");
   eval->add_option("--config", args->config,
                    "studio config whose `refine:` section sets the refinement (default: built in)");
+  eval->add_option("--loo-frames", args->loo_frames,
+                   "frames of the leave-one-camera-out rendering score, spread over the session; "
+                   "0: none")
+      ->capture_default_str();
   eval->add_flag("--quiet", args->quiet, "no report on standard output");
   eval->callback([args] {
     const SessionReader session(args->session);
@@ -42,7 +95,8 @@ void addEvalCommand(CLI::App& app) {
     mocap.camera_count = args->cameras;
     mocap.max_frames = args->frames;
     const SkinnedMesh generic = loadGenericHuman();
-    evaluateMocap(session, generic, mocap, report);
+    const MocapEvalResult tracked = evaluateMocap(session, generic, mocap, report);
+    if (args->loo_frames > 0) addLeaveOneOut(session, generic, tracked, args->loo_frames, report);
 
     // Refinement: the generic human posed by a fit to the true joints, refined from the images,
     // both measured against the true surface.

@@ -12,6 +12,7 @@
 #include "app/cli/export_command.h"
 #include "app/cli/info_command.h"
 #include "app/cli/key_commands.h"
+#include "app/cli/render_command.h"
 #include "app/cli/rig_commands.h"
 #include "app/cli/run_command.h"
 #include "app/cli/synth_command.h"
@@ -31,6 +32,7 @@ int main(int argc, char** argv) {
   lumistage::addCalibrateCommands(app);
   lumistage::addEvalCommand(app);
   lumistage::addExportCommand(app);
+  lumistage::addRenderCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

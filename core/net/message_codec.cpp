@@ -7,6 +7,7 @@
 #include <cstring>
 #include <type_traits>
 
+#include "core/render/partial_image_codec.h"
 #include "messages_generated.h"
 
 namespace lumistage {
@@ -349,6 +350,13 @@ Check decodePartialImage(const fb::PartialImage& in, const MessageLimits& limits
       }
       break;
     }
+    case fb::ImageEncoding::alpha_runs:
+      if (!validAlphaRuns(std::span<const uint8_t>(in.data() ? in.data()->data() : nullptr, bytes),
+                          pixels)) {
+        return where + ": alpha-run data of " + num(bytes) + " bytes does not cover exactly " +
+               num(pixels) + " pixels";
+      }
+      break;
     default:
       return where + ": unknown encoding " + num(static_cast<uint8_t>(in.encoding()));
   }

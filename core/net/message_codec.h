@@ -83,7 +83,7 @@ struct OffsetsData {
   bool operator==(const OffsetsData&) const = default;
 };
 
-enum class ImageEncoding : uint8_t { kRawRgba = 0, kRleRgba = 1 };
+enum class ImageEncoding : uint8_t { kRawRgba = 0, kRleRgba = 1, kAlphaRuns = 2 };
 
 struct PartialImageData {
   int view = 0;

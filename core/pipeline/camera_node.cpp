@@ -1,7 +1,9 @@
 #include "core/pipeline/camera_node.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cstring>
 #include <thread>
@@ -9,7 +11,7 @@
 #include "core/base/error.h"
 #include "core/pipeline/pipeline.h"
 #include "core/refine/mesh_refiner.h"
-#include "core/render/lumigraph_weights.h"
+#include "core/render/partial_image_codec.h"
 
 namespace lumistage {
 
@@ -88,75 +90,37 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   return reply;
 }
 
-Message CameraNode::partialImageFor(const Set& set, int64_t frame_id, const ViewData& view) {
-  const int w = view.width, h = view.height;
-  Eigen::Matrix3f R;
-  for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = view.rotation[i];
-  const Eigen::Vector3f t(view.translation[0], view.translation[1], view.translation[2]);
-  const Eigen::Vector3d desired = (-R.transpose() * t).cast<double>();
-  // Weights over every camera of the rig (the nodes agree on them), applied to our own.
-  std::vector<Eigen::Vector3d> centres;
-  for (const Camera& c : rig_.cameras()) centres.push_back(c.centre());
-  std::vector<char> own(rig_.cameraCount(), 0);
-  for (int c : cameras_) own[c] = 1;
-  LumigraphWeightParams params;
-  params.epsilon_rad = 0.05;  // bounds a weight by 20, so alpha fits a byte
-  const float alpha_scale = 255.0f / float(20 * params.k);
-  std::vector<float> depth(size_t(w) * h, 1e30f);
-  std::vector<uint8_t> rgba(size_t(w) * h * 4, 0);
-  std::vector<double> weights;
-  std::unique_ptr<bool[]> visible(new bool[rig_.cameraCount()]);
-  std::vector<std::optional<Eigen::Vector2d>> pixels(rig_.cameraCount());  // of the vertex
-  const int n = static_cast<int>(positions_.cols());
-  for (int v = 0; v < n; ++v) {
-    const Eigen::Vector3f p = positions_.col(v), nrm = normals_.col(v);
-    const Eigen::Vector3f pc = R * p + t;
-    if (pc.z() <= 0.05f) continue;
-    const int x = static_cast<int>(view.fx * pc.x() / pc.z() + view.cx + 0.5f);
-    const int y = static_cast<int>(view.fy * pc.y() / pc.z() + view.cy + 0.5f);
-    if (x < 1 || y < 1 || x >= w - 1 || y >= h - 1) continue;
-    // Which cameras see the vertex on their image (occlusion: with the depth maps of refinement).
-    for (int c = 0; c < rig_.cameraCount(); ++c) {
-      pixels[c] = rig_.camera(c).project(p.cast<double>());
-      visible[c] = pixels[c] && rig_.camera(c).inImage(*pixels[c]);
-    }
-    lumigraphWeights(p.cast<double>(), nrm.cast<double>(), desired, centres,
-                     std::span<const bool>(visible.get(), rig_.cameraCount()), params, weights);
-    double sum = 0, colour[3] = {0, 0, 0};
-    for (size_t k = 0; k < cameras_.size(); ++k) {
-      const int c = cameras_[k];
-      if (weights[c] <= 0) continue;
-      const Eigen::Vector2d& px = *pixels[c];
-      const Rgb rgb = colourAt(set.frames[k].image.view(), static_cast<int>(px.x() + 0.5),
-                               static_cast<int>(px.y() + 0.5));
-      colour[0] += weights[c] * rgb.r, colour[1] += weights[c] * rgb.g,
-          colour[2] += weights[c] * rgb.b;
-      sum += weights[c];
-    }
-    if (sum <= 0) continue;
-    const uint8_t out[4] = {uint8_t(colour[0] / sum), uint8_t(colour[1] / sum),
-                            uint8_t(colour[2] / sum),
-                            uint8_t(std::clamp(float(sum) * alpha_scale, 1.0f, 255.0f))};
-    for (int dy = -1; dy <= 1; ++dy) {  // a 3x3 splat: the surface is sampled at its vertices
-      for (int dx = -1; dx <= 1; ++dx) {
-        const size_t i = size_t(y + dy) * w + (x + dx);
-        if (pc.z() >= depth[i]) continue;
-        depth[i] = pc.z();
-        std::memcpy(&rgba[4 * i], out, 4);
-      }
-    }
+std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_id,
+                                                  const std::vector<ViewData>& views) {
+  std::vector<Message> messages;
+  if (!renderer_ || views.empty()) return messages;
+  renderer_->setMesh(positions_, normals_, body_.rest.triangles);
+  for (size_t k = 0; k < cameras_.size(); ++k)
+    renderer_->setImage(static_cast<int>(k), set.frames[k].image.view());
+  for (const ViewData& view : views) {
+    if (view.width <= 0 || view.height <= 0 || view.rotation.size() != 9 ||
+        view.translation.size() != 3)
+      continue;
+    Eigen::Matrix3d R;
+    for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = view.rotation[i];
+    R = Eigen::Quaterniond(R).normalized().toRotationMatrix();  // exact rotation from floats
+    const Camera desired(
+        "view", view.width, view.height, {view.fx, view.fy, view.cx, view.cy, 0}, {}, R,
+        Eigen::Vector3d(view.translation[0], view.translation[1], view.translation[2]));
+    renderer_->render(desired, partial_rgba_);
+    PartialImageData image;
+    image.view = view.view;
+    image.width = view.width;
+    image.height = view.height;
+    image.encoding = ImageEncoding::kAlphaRuns;
+    encodeAlphaRuns(partial_rgba_, image.data);
+    Message message;
+    message.frame_id = frame_id;
+    message.sent_ns = steadyNowNs();
+    message.body = std::move(image);
+    messages.push_back(std::move(message));
   }
-  PartialImageData image;
-  image.view = view.view;
-  image.width = w;
-  image.height = h;
-  image.encoding = ImageEncoding::kRleRgba;
-  image.data = encodeRleRgba(rgba);
-  Message message;
-  message.frame_id = frame_id;
-  message.sent_ns = steadyNowNs();
-  message.body = std::move(image);
-  return message;
+  return messages;
 }
 
 void CameraNode::captureLoop(const std::atomic<bool>& stop) {
@@ -232,10 +196,17 @@ CameraNode::MonitorState CameraNode::monitorState() {
 }
 
 void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {
+  // The renderer's OpenGL context lives on this thread; made before the first pose arrives
+  // (context and shaders take a while, longer on a loaded machine).
+  try {
+    gl_ = std::make_unique<EglContext>();
+    renderer_ = std::make_unique<LumigraphRenderer>(rig_, cameras_);
+  } catch (const Error& e) {
+    spdlog::error("node {}: no lumigraph rendering: {}", name_, e.what());
+  }
   while (!stop) {
     while (std::optional<Message> offsets = offsets_.pop(std::chrono::milliseconds(0))) {
-      if (std::optional<Message> image = partialImageWithOffsets(*offsets))
-        outbox_.push(std::move(*image));
+      for (Message& image : partialImagesWithOffsets(*offsets)) outbox_.push(std::move(image));
     }
     std::optional<Message> pose = poses_.pop(std::chrono::milliseconds(2));
     if (!pose) continue;
@@ -243,27 +214,30 @@ void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {
     if (!reply) continue;
     outbox_.push(std::move(*reply));
   }
+  // The GL objects belong to this thread's context.
+  renderer_.reset();
+  gl_.reset();
 }
 
-std::optional<Message> CameraNode::partialImageWithOffsets(const Message& message) {
+std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message) {
   const auto it = posed_.find(message.frame_id);
-  if (it == posed_.end()) return std::nullopt;  // too old: dropped already
+  if (it == posed_.end()) return {};  // too old: dropped already
   const OffsetsData& offsets = std::get<OffsetsData>(message.body);
   Posed posed = std::move(it->second);
   posed_.erase(posed_.begin(), std::next(it));
   if (offsets.offsets.size() != size_t(posed.positions.cols()) ||
       offsets.offset_count != options_.refine.offset_count) {
-    return std::nullopt;  // for another mesh or configuration
+    return {};  // for another mesh or configuration
   }
   applyOffsets(options_.refine, offsets.offsets, posed.positions, posed.normals, positions_);
   normals_ = posed.normals;
-  std::optional<ViewData> view;
+  std::vector<ViewData> views;
   {
     std::lock_guard lock(view_mutex_);
-    view = view_;
+    for (const auto& [id, view] : views_) views.push_back(view);
   }
-  if (!view || !posed.set) return std::nullopt;
-  return partialImageFor(*posed.set, message.frame_id, *view);
+  if (!posed.set) return {};
+  return partialImagesFor(*posed.set, message.frame_id, views);
 }
 
 bool CameraNode::send(Message message) {
@@ -294,7 +268,8 @@ void CameraNode::run(const std::atomic<bool>& stop) {
         offsets_.push(std::move(*received->message));
       } else if (received->ok() && std::holds_alternative<ViewData>(received->message->body)) {
         std::lock_guard lock(view_mutex_);
-        view_ = std::get<ViewData>(received->message->body);
+        const ViewData& view = std::get<ViewData>(received->message->body);
+        views_[view.view] = view;
       }
     }
     const auto now = std::chrono::steady_clock::now();

@@ -17,6 +17,8 @@
 #include "core/pipeline/bounded_queue.h"
 #include "core/pipeline/silhouettes.h"
 #include "core/refine/refinement_sampler.h"
+#include "core/render/egl_context.h"
+#include "core/render/lumigraph_renderer.h"
 
 namespace lumistage {
 
@@ -77,13 +79,15 @@ class CameraNode {
   void statisticsLoop(const std::atomic<bool>& stop);
   Message silhouettesOf(const Set& set) const;
   std::optional<Message> statisticsFor(const Message& pose);
-  // Applies the studio's offsets to that frame's posed mesh and renders its partial image.
-  std::optional<Message> partialImageWithOffsets(const Message& offsets);
-  // The node's partial lumigraph image of the posed surface (just skinned by statisticsFor) for
-  // the desired view: per vertex the weighted mean colour of its own cameras and, as alpha, the
-  // sum of their weights (global Buehler weights, so the studio's normalisation is exact), splat
-  // with a depth test and run-length encoded.
-  Message partialImageFor(const Set& set, int64_t frame_id, const ViewData& view);
+  // Applies the studio's offsets to that frame's posed mesh and renders its partial images.
+  std::vector<Message> partialImagesWithOffsets(const Message& offsets);
+  // The node's partial lumigraph images of the (refined) posed surface, one per desired view,
+  // rendered with OpenGL (LumigraphRenderer, its own cameras' images): colour = the weighted
+  // mean of its cameras, alpha = their share of the weight of all the rig's cameras (so the
+  // studio's normalisation is exact); alpha-run encoded. Empty when no OpenGL context could be
+  // had (said once in the log).
+  std::vector<Message> partialImagesFor(const Set& set, int64_t frame_id,
+                                        const std::vector<ViewData>& views);
   bool send(Message message);
 
   Rig rig_;
@@ -100,7 +104,11 @@ class CameraNode {
   BoundedQueue<Message> offsets_{4};
   BoundedQueue<Message> outbox_{32};
   std::mutex view_mutex_;
-  std::optional<ViewData> view_;  // the latest desired view from the studio
+  std::map<int, ViewData> views_;  // the latest of each desired view from the studio
+  // The statistics thread's alone: its OpenGL context and renderer (none when no context).
+  std::unique_ptr<EglContext> gl_;
+  std::unique_ptr<LumigraphRenderer> renderer_;
+  std::vector<uint8_t> partial_rgba_;
   std::mutex kept_mutex_;
   std::map<int64_t, std::shared_ptr<const Set>> kept_;  // sets awaiting their pose
   std::atomic<bool> source_finished_{false};

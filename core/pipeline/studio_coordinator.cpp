@@ -4,8 +4,10 @@
 #include <spdlog/spdlog.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 
 #include "core/body/human_model.h"
+#include "core/render/partial_image_codec.h"
 
 namespace lumistage {
 
@@ -32,11 +34,37 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
   const Eigen::Vector3f z = (target - centre).normalized();
   const Eigen::Vector3f x = z.cross(Eigen::Vector3f::UnitZ()).normalized();
   const Eigen::Vector3f y = z.cross(x);
-  view_ = {0, 320, 240, 300, 300, 159.5f, 119.5f, {}, {}};
+  ViewData view = {0, 320, 240, 300, 300, 159.5f, 119.5f, {}, {}};
   for (const Eigen::Vector3f& row : {x, y, z}) {
-    for (int k = 0; k < 3; ++k) view_.rotation.push_back(row[k]);
+    for (int k = 0; k < 3; ++k) view.rotation.push_back(row[k]);
   }
-  view_.translation = {-x.dot(centre), -y.dot(centre), -z.dot(centre)};
+  view.translation = {-x.dot(centre), -y.dot(centre), -z.dot(centre)};
+  views_.push_back(view);
+}
+
+void StudioCoordinator::setView(const ViewData& view) {
+  for (ViewData& v : views_) {
+    if (v.view == view.view) {
+      v = view;
+      return;
+    }
+  }
+  views_.push_back(view);
+}
+
+void StudioCoordinator::setViews(std::vector<ViewData> views) {
+  if (!views.empty()) views_ = std::move(views);
+}
+
+void StudioCoordinator::removeView(int view) {
+  if (views_.size() <= 1) return;  // always at least one
+  std::erase_if(views_, [&](const ViewData& v) { return v.view == view; });
+}
+
+const BlendedImage& StudioCoordinator::lastImage(int view) const {
+  static const BlendedImage kNone;
+  const auto it = last_images_.find(view);
+  return it == last_images_.end() ? kNone : it->second;
 }
 
 void StudioCoordinator::maybeFinish(int64_t frame_id, FrameState& frame) {
@@ -44,9 +72,12 @@ void StudioCoordinator::maybeFinish(int64_t frame_id, FrameState& frame) {
     runRefinement(frame_id, frame);
     return;
   }
-  if (frame.offsets_sent_ns > 0 && frame.image_nodes.size() >= frame.statistics_nodes.size()) {
-    finishFrame(frame_id, frame);
+  if (frame.offsets_sent_ns == 0) return;
+  for (const ViewData& view : views_) {
+    const auto it = frame.image_nodes.find(view.view);
+    if (it == frame.image_nodes.end() || it->second.size() < frame.statistics_nodes.size()) return;
   }
+  finishFrame(frame_id, frame);
 }
 
 std::string StudioCoordinator::nodeState(const std::string& node) const {
@@ -138,26 +169,28 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   } else if (const auto* image = std::get_if<PartialImageData>(&message.body)) {
     const auto it = frames_.find(message.frame_id);
     if (it == frames_.end() || it->second.pose_sent_ns == 0) return;
-    if (image->width != view_.width || image->height != view_.height ||
-        image->encoding != ImageEncoding::kRleRgba) {
-      return;  // for another view
-    }
+    const auto view = std::find_if(views_.begin(), views_.end(),
+                                   [&](const ViewData& v) { return v.view == image->view; });
+    if (view == views_.end() || image->width != view->width || image->height != view->height)
+      return;  // a view no longer asked for, or resized since
     FrameState& frame = it->second;
     const size_t pixels = size_t(image->width) * image->height;
-    const std::vector<uint8_t> rgba = decodeRleRgba(image->data, pixels);
-    if (rgba.size() != pixels * 4) return;
-    if (frame.blend_alpha.empty()) {
-      frame.blend_rgb.assign(pixels * 3, 0.0f);
-      frame.blend_alpha.assign(pixels, 0.0f);
+    std::span<const uint8_t> rgba;
+    if (image->encoding == ImageEncoding::kAlphaRuns) {
+      if (!decodeAlphaRuns(image->data, pixels, decoded_)) return;
+      rgba = decoded_;
+    } else if (image->encoding == ImageEncoding::kRleRgba) {
+      decoded_ = decodeRleRgba(image->data, pixels);
+      rgba = decoded_;
+    } else {
+      rgba = image->data;
     }
-    // The paper's blend: alpha is the node's sum of weights; colours add weighted by it.
-    for (size_t i = 0; i < pixels; ++i) {
-      const float a = rgba[4 * i + 3];
-      if (a == 0) continue;
-      for (int k = 0; k < 3; ++k) frame.blend_rgb[3 * i + k] += a * rgba[4 * i + k];
-      frame.blend_alpha[i] += a;
-    }
-    frame.image_nodes.insert(node.report.name);
+    PartialImageBlender& blender = frame.blends[image->view];
+    if (blender.width() != image->width || blender.height() != image->height)
+      blender.reset(image->width, image->height);
+    // The paper's blend: colours add weighted by the nodes' alphas, normalised at the end.
+    if (!blender.add(rgba)) return;
+    frame.image_nodes[image->view].insert(node.report.name);
     maybeFinish(message.frame_id, frame);
   }
 }
@@ -191,12 +224,15 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   last_pose_ = pose;
   last_pose_frame_ = frame_id;
   if (counting_) mocap_ms_.add((steadyNowNs() - start) / 1e6);
-  Message view_message;  // before the pose: the nodes render that frame for this view
-  view_message.sender = "studio";
-  view_message.frame_id = frame_id;
-  view_message.sent_ns = steadyNowNs();
-  view_message.body = view_;
-  const std::vector<uint8_t> view_bytes = encodeMessage(view_message);
+  std::vector<std::vector<uint8_t>> view_bytes;  // before the pose: the views to render it for
+  for (const ViewData& view : views_) {
+    Message view_message;
+    view_message.sender = "studio";
+    view_message.frame_id = frame_id;
+    view_message.sent_ns = steadyNowNs();
+    view_message.body = view;
+    view_bytes.push_back(encodeMessage(view_message));
+  }
   Message message;
   message.sender = "studio";
   message.frame_id = frame_id;
@@ -205,10 +241,11 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   const std::span<const uint8_t> bytes = encoder_.encode(message);
   for (auto& [name, node] : nodes_) {
     if (node.report.lost || node.peer.empty()) continue;
-    if (endpoint_.send(node.peer, view_bytes, std::chrono::milliseconds(5)) &&
-        endpoint_.send(node.peer, bytes, std::chrono::milliseconds(5))) {
+    bool sent = true;
+    for (const std::vector<uint8_t>& v : view_bytes)
+      sent = sent && endpoint_.send(node.peer, v, std::chrono::milliseconds(5));
+    if (sent && endpoint_.send(node.peer, bytes, std::chrono::milliseconds(5)))
       frame.pose_nodes.insert(name);
-    }
   }
   frame.pose_sent_ns = steadyNowNs();
   if (frame.pose_nodes.empty()) finishFrame(frame_id, frame);
@@ -266,20 +303,16 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     agreeing += sum.outside[s] == 0;
   }
   const int64_t combined = steadyNowNs();
-  if (!frame.blend_alpha.empty()) {
+  for (const auto& [view, blender] : frame.blends) {
+    if (blender.added() == 0) continue;
     // Normalise the nodes' alphas per pixel and blend.
-    last_image_.frame_id = frame_id;
-    last_image_.width = view_.width;
-    last_image_.height = view_.height;
-    last_image_.rgba.assign(frame.blend_alpha.size() * 4, 0);
-    for (size_t i = 0; i < frame.blend_alpha.size(); ++i) {
-      const float a = frame.blend_alpha[i];
-      if (a <= 0) continue;
-      for (int k = 0; k < 3; ++k)
-        last_image_.rgba[4 * i + k] = uint8_t(frame.blend_rgb[3 * i + k] / a + 0.5f);
-      last_image_.rgba[4 * i + 3] = 255;  // normalised: opaque wherever a camera contributed
-    }
+    BlendedImage& image = last_images_[view];
+    image.frame_id = frame_id;
+    image.width = blender.width();
+    image.height = blender.height();
+    blender.finish(image.rgba);
   }
+
   if (counting_) {
     combine_ms_.add((combined - start) / 1e6);
     blend_ms_.add((steadyNowNs() - combined) / 1e6);

@@ -11,8 +11,9 @@
 
 #include "core/net/transport.h"
 #include "core/pipeline/pipeline.h"
-#include "core/tracking/pose_tracker.h"
 #include "core/refine/mesh_refiner.h"
+#include "core/render/partial_image_blender.h"
+#include "core/tracking/pose_tracker.h"
 #include "core/tracking/visual_hull_locator.h"
 
 namespace lumistage {
@@ -99,10 +100,15 @@ class StudioCoordinator {
   void runFor(std::chrono::milliseconds duration);
   int64_t framesDone() const { return frames_done_; }
   RunReport report() const;
-  // The virtual camera the nodes render for (default: a view of the stage from the front-left).
-  void setView(const ViewData& view) { view_ = view; }
-  const ViewData& view() const { return view_; }
-  const BlendedImage& lastImage() const { return last_image_; }
+  // The virtual cameras the nodes render for, each a stream of blended images (default: view 0,
+  // the stage from the front-left). setView replaces the view of the same id or adds it.
+  void setView(const ViewData& view);
+  void setViews(std::vector<ViewData> views);
+  void removeView(int view);
+  const std::vector<ViewData>& views() const { return views_; }
+  const ViewData& view() const { return views_.front(); }
+  // The newest blended image of a view (empty before its first frame).
+  const BlendedImage& lastImage(int view = 0) const;
   // The body pose the motion capture module sent the nodes last (for overlays); its frame id.
   const PoseData& lastPose() const { return last_pose_; }
   int64_t lastPoseFrame() const { return last_pose_frame_; }
@@ -118,8 +124,8 @@ class StudioCoordinator {
     int64_t pose_sent_ns = 0;
     RefinementStatistics refine_sum;  // the nodes' statistics, combined exactly
     int64_t offsets_sent_ns = 0;
-    std::set<std::string> image_nodes;
-    std::vector<float> blend_rgb, blend_alpha;  // sums of alpha x colour, and of alpha
+    std::map<int, std::set<std::string>> image_nodes;  // per view
+    std::map<int, PartialImageBlender> blends;         // per view
   };
   struct NodeState {
     std::string peer;
@@ -153,8 +159,9 @@ class StudioCoordinator {
   static constexpr size_t kTimelineFrames = 1 << 16;
   std::vector<std::pair<int64_t, float>> timeline_;  // done (steady ns), latency (ms)
   RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_, refine_ms_;
-  ViewData view_;
-  BlendedImage last_image_;
+  std::vector<ViewData> views_;
+  std::map<int, BlendedImage> last_images_;
+  std::vector<uint8_t> decoded_;  // a partial image, reused
   PoseData last_pose_;
   int64_t last_pose_frame_ = -1;
   int64_t frames_done_ = 0, frames_dropped_ = 0;

@@ -1,5 +1,6 @@
 #include "core/render/shader_program.h"
 
+#include <algorithm>
 #include <vector>
 
 #include "core/base/atomic_file.h"
@@ -20,9 +21,16 @@ std::string infoLog(GLuint object, GetIv get_iv, GetLog get_log) {
   return log.data();
 }
 
-GLuint compile(GLenum type, std::string_view file) {
+GLuint compile(GLenum type, std::string_view file, std::string_view defines) {
   const std::string path = shaderPath(file).string();
-  const std::string source = readFile(path);
+  std::string source = readFile(path);
+  if (!defines.empty()) {
+    const size_t version = source.find("#version");
+    const size_t line_end = version == std::string::npos ? 0 : source.find('\n', version) + 1;
+    // #line keeps the driver's line numbers those of the file.
+    const size_t line = size_t(std::count(source.begin(), source.begin() + line_end, '\n')) + 1;
+    source.insert(line_end, std::string(defines) + "\n#line " + std::to_string(line) + "\n");
+  }
   const GLuint shader = glCreateShader(type);
   const char* text = source.c_str();
   glShaderSource(shader, 1, &text, nullptr);
@@ -39,11 +47,12 @@ GLuint compile(GLenum type, std::string_view file) {
 
 }  // namespace
 
-ShaderProgram::ShaderProgram(std::string_view vertex_file, std::string_view fragment_file) {
-  const GLuint vertex = compile(GL_VERTEX_SHADER, vertex_file);
+ShaderProgram::ShaderProgram(std::string_view vertex_file, std::string_view fragment_file,
+                             std::string_view defines) {
+  const GLuint vertex = compile(GL_VERTEX_SHADER, vertex_file, defines);
   GLuint fragment = 0;
   try {
-    fragment = compile(GL_FRAGMENT_SHADER, fragment_file);
+    fragment = compile(GL_FRAGMENT_SHADER, fragment_file, defines);
   } catch (...) {
     glDeleteShader(vertex);
     throw;

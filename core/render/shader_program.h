@@ -11,7 +11,9 @@ namespace lumistage {
 // Throws Error with the file name and the driver's log on a compile or link error.
 class ShaderProgram {
  public:
-  ShaderProgram(std::string_view vertex_file, std::string_view fragment_file);
+  // `defines` (e.g. "#define kOwnCameras 3\n") is inserted after each file's #version line.
+  ShaderProgram(std::string_view vertex_file, std::string_view fragment_file,
+                std::string_view defines = {});
   ~ShaderProgram();
   ShaderProgram(const ShaderProgram&) = delete;
   ShaderProgram& operator=(const ShaderProgram&) = delete;

@@ -5,6 +5,8 @@
 #include <cstring>
 #include <random>
 
+#include "core/render/partial_image_codec.h"
+
 namespace lumistage {
 namespace {
 
@@ -78,6 +80,24 @@ TEST(MessageCodec, RleRoundTripAndBadRuns) {
   EXPECT_EQ(decodeRleRgba(rle, 300), rgba);
   EXPECT_TRUE(decodeRleRgba(rle, 299).empty());
   EXPECT_TRUE(decodeRleRgba(std::span(rle).first(7), 300).empty());
+}
+
+TEST(MessageCodec, AlphaRunPartialImagesAreCheckedOnDecoding) {
+  std::vector<uint8_t> rgba(40 * 30 * 4, 0), runs;
+  for (int i = 100; i < 400; ++i) rgba[4 * i] = uint8_t(i), rgba[4 * i + 3] = 200;
+  encodeAlphaRuns(rgba, runs);
+  Message m;
+  m.sender = "node1";
+  m.body = PartialImageData{1, 40, 30, ImageEncoding::kAlphaRuns, runs};
+  const std::vector<uint8_t> bytes = encodeMessage(m);
+  const DecodeResult ok = decodeMessage(bytes.data(), bytes.size(), {});
+  ASSERT_TRUE(ok.ok()) << ok.error;
+  EXPECT_EQ(std::get<PartialImageData>(ok.message->body).data, runs);
+  m.body = PartialImageData{1, 40, 31, ImageEncoding::kAlphaRuns, runs};  // too few pixels
+  const std::vector<uint8_t> short_bytes = encodeMessage(m);
+  const DecodeResult bad = decodeMessage(short_bytes.data(), short_bytes.size(), {});
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(bad.error.find("alpha-run data"), std::string::npos) << bad.error;
 }
 
 TEST(MessageCodec, EmptyTruncatedAndRandomBuffersAreRefused) {

@@ -1,0 +1,124 @@
+#include "app/cli/render_command.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "app/cli/progress.h"
+#include "core/base/error.h"
+#include "core/body/ply_mesh.h"
+#include "core/capture/session_reader.h"
+#include "core/eval/leave_one_out.h"
+#include "core/render/egl_context.h"
+#include "core/render/lumigraph_renderer.h"
+
+namespace lumistage {
+
+namespace {
+
+// The virtual camera of path `path` at t in [0, 1): "orbit" circles the stage 3.5 m out and
+// 1.6 m up looking at 1 m above its centre, once over the video; "camNN" stays on that camera.
+Camera pathCamera(const std::string& path, const Rig& rig, double t, int width, int height) {
+  if (const std::optional<int> c = rig.findCamera(path)) {
+    const Camera& cam = rig.camera(*c);
+    const double s = double(width) / cam.width();
+    Intrinsics k = cam.intrinsics();
+    k.fx *= s, k.fy *= s, k.skew *= s;
+    k.cx = (k.cx + 0.5) * s - 0.5, k.cy = (k.cy + 0.5) * s - 0.5;
+    return Camera("view", width, int(std::lround(cam.height() * s)), k, cam.distortion(),
+                  cam.rotation(), cam.translation());
+  }
+  if (path != "orbit") throw Error("--path: 'orbit' or a camera of the rig expected, not " + path);
+  const double a = 2 * std::numbers::pi * t - 0.75 * std::numbers::pi;
+  const Eigen::Vector3d centre(3.5 * std::cos(a), 3.5 * std::sin(a), 1.6), target(0, 0, 1.0);
+  const Eigen::Vector3d z = (target - centre).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  Eigen::Matrix3d R;
+  R.row(0) = x, R.row(1) = z.cross(x), R.row(2) = z;
+  const double f = 0.9 * width;  // about 58 degrees across
+  return Camera("view", width, height, {f, f, width / 2.0 - 0.5, height / 2.0 - 0.5, 0}, {}, R,
+                -R * centre);
+}
+
+}  // namespace
+
+void addRenderCommand(CLI::App& app) {
+  struct Args {
+    std::string session, path = "orbit", out, mesh = "truth";
+    int width = 1280, height = 720, frames = 0, clones = 1;
+    double fps = 0;
+  };
+  auto a = std::make_shared<Args>();
+  CLI::App* render = app.add_subcommand(
+      "render", "Render a camera path through a recorded session into a video (lumigraph)");
+  render->add_option("--session", a->session, "recorded session")->required();
+  render->add_option("--path", a->path, "camera path: orbit, or a camera's name")
+      ->capture_default_str();
+  render->add_option("--out", a->out, "video file (.mp4, .avi)")->required();
+  render
+      ->add_option("--mesh", a->mesh,
+                   "geometry: truth (the session's truth/surface) or a folder of NNNNNN.ply")
+      ->capture_default_str();
+  render->add_option("--width", a->width)->capture_default_str();
+  render->add_option("--height", a->height)->capture_default_str();
+  render->add_option("--frames", a->frames, "frames to render (default: the session's)");
+  render->add_option("--fps", a->fps, "video rate (default: the session's)");
+  render->add_option("--clones", a->clones, "copies of the actor side by side, 1 m apart")
+      ->capture_default_str();
+  render->callback([a] {
+    const SessionReader session(a->session);
+    const Rig& rig = session.rig();
+    const int frames =
+        a->frames > 0 ? std::min(a->frames, session.frameCount()) : session.frameCount();
+    if (frames == 0) throw Error(a->session + ": no frames");
+    EglContext gl;
+    std::vector<int> all(rig.cameraCount());
+    for (int c = 0; c < rig.cameraCount(); ++c) all[c] = c;
+    LumigraphRenderer renderer(rig, all);
+    std::vector<Eigen::Affine3f> clones;
+    for (int i = 0; i < std::max(1, a->clones); ++i) {
+      Eigen::Affine3f t = Eigen::Affine3f::Identity();
+      t.translate(Eigen::Vector3f(float(i - (a->clones - 1) / 2.0), 0, 0));
+      clones.push_back(t);
+    }
+    const Camera first = pathCamera(a->path, rig, 0, a->width, a->height);
+    cv::VideoWriter video(a->out, cv::VideoWriter::fourcc('m', 'p', '4', 'v'),
+                          a->fps > 0 ? a->fps : session.fps(),
+                          cv::Size(first.width(), first.height()));
+    if (!video.isOpened()) throw Error(a->out + ": cannot open a video writer (OpenCV/FFmpeg)");
+    fmt::print("rendering {} frames of {}x{} on {}\n", frames, first.width(), first.height(),
+               gl.description());
+    std::vector<CameraFrame> images;
+    std::vector<uint8_t> rgba;
+    cv::Mat bgr;
+    double ms = -1;
+    for (int i = 0; i < frames; ++i) {
+      const auto start = std::chrono::steady_clock::now();
+      session.readFrame(i, images);
+      for (int c = 0; c < rig.cameraCount(); ++c) renderer.setImage(c, images[c].image.view());
+      const TriangleMesh mesh = a->mesh == "truth"
+                                    ? truthSurface(session, i)
+                                    : readPlyMesh(std::filesystem::path(a->mesh) /
+                                                  fmt::format("{:06}.ply", session.frameId(i)));
+      renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
+      const Camera view = pathCamera(a->path, rig, double(i) / frames, a->width, a->height);
+      renderer.render(view, clones, rgba);
+      const cv::Mat image(view.height(), view.width(), CV_8UC4, rgba.data());
+      cv::cvtColor(image, bgr, cv::COLOR_RGBA2BGR);
+      video.write(bgr);
+      const double took =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count();
+      ms = ms < 0 ? took : 0.9 * ms + 0.1 * took;
+      printProgress("render", i + 1, frames, ms);
+    }
+    video.release();
+    fmt::print("wrote {}\n", a->out);
+  });
+}
+
+}  // namespace lumistage

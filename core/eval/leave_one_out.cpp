@@ -1,0 +1,58 @@
+#include "core/eval/leave_one_out.h"
+
+#include <fmt/format.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/base/error.h"
+#include "core/body/ply_mesh.h"
+
+namespace lumistage {
+
+TriangleMesh truthSurface(const SessionReader& session, int i) {
+  return readPlyMesh(session.folder() / "truth" / "surface" /
+                     fmt::format("{:06}.ply", session.frameId(i)));
+}
+
+LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::vector<int>& frames,
+                                       const std::function<TriangleMesh(int)>& mesh_for,
+                                       const LumigraphParams& params) {
+  const Rig& rig = session.rig();
+  const int n = rig.cameraCount();
+  std::vector<int> all(n);
+  for (int c = 0; c < n; ++c) all[c] = c;
+  LumigraphRenderer renderer(rig, all, params);
+  LeaveOneOutSummary summary;
+  summary.per_camera.resize(n);
+  std::vector<CameraFrame> images;
+  std::vector<std::vector<uint8_t>> truth(n), masks(n);
+  for (int i : frames) {
+    session.readFrame(i, images);
+    for (int c = 0; c < n; ++c) {
+      renderer.setImage(c, images[c].image.view());
+      imageToRgba(images[c].image.view(), truth[c]);
+      const std::string path = session.truthMaskPath(c, i).string();
+      const cv::Mat mask = cv::imread(path, cv::IMREAD_GRAYSCALE);
+      if (mask.empty() || mask.cols != rig.camera(c).width() ||
+          mask.rows != rig.camera(c).height() || !mask.isContinuous())
+        throw Error(path + ": cannot read the truth mask (8-bit PNG of the camera's size)");
+      masks[c].assign(mask.data, mask.data + mask.total());
+    }
+    const TriangleMesh mesh = mesh_for(i);
+    renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
+    const std::vector<ViewScore> scores = leaveOneOut(renderer, rig, truth, masks);
+    for (int c = 0; c < n; ++c) {
+      summary.per_camera[c].psnr_db += scores[c].psnr_db / frames.size();
+      summary.per_camera[c].ssim += scores[c].ssim / frames.size();
+      summary.per_camera[c].pixels += scores[c].pixels;
+    }
+    ++summary.frames;
+  }
+  for (const ViewScore& s : summary.per_camera) {
+    summary.psnr_db += s.psnr_db / n;
+    summary.ssim += s.ssim / n;
+  }
+  return summary;
+}
+
+}  // namespace lumistage

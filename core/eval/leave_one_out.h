@@ -1,0 +1,30 @@
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "core/body/skinned_mesh.h"
+#include "core/capture/session_reader.h"
+#include "core/eval/view_metrics.h"
+
+namespace lumistage {
+
+// Leave-one-camera-out over frames of a recorded virtual-studio session (it needs truth masks).
+struct LeaveOneOutSummary {
+  std::vector<ViewScore> per_camera;  // mean over the frames
+  double psnr_db = 0, ssim = 0;       // mean over cameras and frames
+  int frames = 0;
+};
+
+// For each frame index in `frames`, renders every camera's view from the other cameras on the
+// mesh `mesh_for(frame index)` gives (the truth surface, the posed or the refined mesh; normals
+// set) and compares it with the camera's image over its truth mask. Needs a current OpenGL
+// context (EglContext). Throws Error naming the file when a mask cannot be read.
+LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::vector<int>& frames,
+                                       const std::function<TriangleMesh(int)>& mesh_for,
+                                       const LumigraphParams& params = {});
+
+// The truth surface of frame index i (truth/surface/NNNNNN.ply, normals computed).
+TriangleMesh truthSurface(const SessionReader& session, int i);
+
+}  // namespace lumistage

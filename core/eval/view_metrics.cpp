@@ -1,0 +1,114 @@
+#include "core/eval/view_metrics.h"
+
+#include <cmath>
+
+#include "core/base/error.h"
+#include "core/imaging/keyer.h"
+
+namespace lumistage {
+
+namespace {
+
+// Box sums over (2r+1)^2 windows, clamped at the borders, through an integral image.
+void boxMean(const std::vector<double>& in, int w, int h, int r, std::vector<double>& out) {
+  std::vector<double> integral(size_t(w + 1) * (h + 1), 0.0);
+  for (int y = 0; y < h; ++y) {
+    double row = 0;
+    for (int x = 0; x < w; ++x) {
+      row += in[size_t(y) * w + x];
+      integral[size_t(y + 1) * (w + 1) + x + 1] = integral[size_t(y) * (w + 1) + x + 1] + row;
+    }
+  }
+  out.resize(size_t(w) * h);
+  for (int y = 0; y < h; ++y) {
+    const int y0 = std::max(0, y - r), y1 = std::min(h, y + r + 1);
+    for (int x = 0; x < w; ++x) {
+      const int x0 = std::max(0, x - r), x1 = std::min(w, x + r + 1);
+      const double s = integral[size_t(y1) * (w + 1) + x1] - integral[size_t(y0) * (w + 1) + x1] -
+                       integral[size_t(y1) * (w + 1) + x0] + integral[size_t(y0) * (w + 1) + x0];
+      out[size_t(y) * w + x] = s / double((y1 - y0) * (x1 - x0));
+    }
+  }
+}
+
+}  // namespace
+
+ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uint8_t> truth,
+                          std::span<const uint8_t> mask, int width, int height) {
+  const size_t n = size_t(width) * height;
+  if (rendered.size() != n * 4 || truth.size() != n * 4 || mask.size() != n)
+    throw Error("compareOverMask: images of " + std::to_string(width) + "x" +
+                std::to_string(height) + " RGBA8 and a one-byte mask expected");
+  ViewScore score;
+  double squared = 0;
+  std::vector<double> a(n), b(n);
+  for (size_t i = 0; i < n; ++i) {
+    // Luma for SSIM, the same black outside the mask in both: the windows at the silhouette
+    // compare the actor, not the renderer's empty background with the camera's green screen.
+    if (!mask[i]) {
+      a[i] = b[i] = 0;
+      continue;
+    }
+    a[i] = 0.299 * rendered[4 * i] + 0.587 * rendered[4 * i + 1] + 0.114 * rendered[4 * i + 2];
+    b[i] = 0.299 * truth[4 * i] + 0.587 * truth[4 * i + 1] + 0.114 * truth[4 * i + 2];
+    ++score.pixels;
+    for (int k = 0; k < 3; ++k) {
+      const double d = double(rendered[4 * i + k]) - truth[4 * i + k];
+      squared += d * d;
+    }
+  }
+  if (score.pixels == 0) return score;
+  const double mse = squared / (3.0 * score.pixels);
+  score.psnr_db = mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : 100.0;
+  // SSIM of luma with 7x7 box windows.
+  std::vector<double> aa(n), bb(n), ab(n), ma, mb, maa, mbb, mab;
+  for (size_t i = 0; i < n; ++i) aa[i] = a[i] * a[i], bb[i] = b[i] * b[i], ab[i] = a[i] * b[i];
+  boxMean(a, width, height, 3, ma);
+  boxMean(b, width, height, 3, mb);
+  boxMean(aa, width, height, 3, maa);
+  boxMean(bb, width, height, 3, mbb);
+  boxMean(ab, width, height, 3, mab);
+  const double c1 = (0.01 * 255) * (0.01 * 255), c2 = (0.03 * 255) * (0.03 * 255);
+  double ssim = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (!mask[i]) continue;
+    const double va = maa[i] - ma[i] * ma[i], vb = mbb[i] - mb[i] * mb[i],
+                 cov = mab[i] - ma[i] * mb[i];
+    ssim += ((2 * ma[i] * mb[i] + c1) * (2 * cov + c2)) /
+            ((ma[i] * ma[i] + mb[i] * mb[i] + c1) * (va + vb + c2));
+  }
+  score.ssim = ssim / score.pixels;
+  return score;
+}
+
+void imageToRgba(const ImageView& image, std::vector<uint8_t>& rgba) {
+  rgba.resize(size_t(image.width) * image.height * 4);
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      const Rgb c = colourAt(image, x, y);
+      uint8_t* p = &rgba[4 * (size_t(y) * image.width + x)];
+      p[0] = uint8_t(c.r), p[1] = uint8_t(c.g), p[2] = uint8_t(c.b), p[3] = 255;
+    }
+  }
+}
+
+std::vector<ViewScore> leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
+                                   const std::vector<std::vector<uint8_t>>& truth,
+                                   const std::vector<std::vector<uint8_t>>& masks) {
+  std::vector<ViewScore> scores;
+  std::vector<uint8_t> rendered;
+  const int n = rig.cameraCount();
+  for (int c = 0; c < n; ++c) {
+    std::vector<bool> active(n, true);
+    active[c] = false;
+    renderer.setActive(active);
+    const Camera& camera = rig.camera(c);
+    renderer.render(camera, rendered);
+    scores.push_back(
+        compareOverMask(rendered, truth.at(c), masks.at(c), camera.width(), camera.height()));
+  }
+  renderer.setActive(std::vector<bool>(n, true));
+  return scores;
+}
+
+}  // namespace lumistage

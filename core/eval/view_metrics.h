@@ -1,0 +1,34 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/capture/image.h"
+#include "core/render/lumigraph_renderer.h"
+
+namespace lumistage {
+
+// How close a rendered view is to a camera's real image, over the actor's mask.
+struct ViewScore {
+  double psnr_db = 0;  // over R, G, B of the mask's pixels (peak 255)
+  double ssim = 0;     // mean SSIM of luma (7x7 box windows, the usual constants) over the mask
+  int64_t pixels = 0;  // in the mask
+};
+
+// `rendered` and `truth` RGBA8 (alpha ignored: a pixel the renderer left empty is black and
+// counts as an error), `mask` one byte a pixel (non-zero: compared), all width x height.
+ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uint8_t> truth,
+                          std::span<const uint8_t> mask, int width, int height);
+
+// Any camera image as RGBA8 (Bayer from its 2x2 cells, as the keyer reads it; mono8 as grey).
+void imageToRgba(const ImageView& image, std::vector<uint8_t>& rgba);
+
+// Leave-one-camera-out: every camera's view rendered from the others (that camera inactive in the
+// weights) and compared with its real image over its mask. `renderer` owns every camera of its
+// rig, has their images and the mesh; `truth[c]` RGBA8 and `masks[c]` of camera c's size.
+std::vector<ViewScore> leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
+                                   const std::vector<std::vector<uint8_t>>& truth,
+                                   const std::vector<std::vector<uint8_t>>& masks);
+
+}  // namespace lumistage

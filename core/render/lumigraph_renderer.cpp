@@ -1,0 +1,372 @@
+#include "core/render/lumigraph_renderer.h"
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+
+#include "core/base/error.h"
+#include "core/render/shader_program.h"
+
+namespace lumistage {
+
+struct LumigraphRenderer::Programs {
+  explicit Programs(int own)
+      : blend("lumigraph.vert", "lumigraph.frag",
+              "#define kOwnCameras " + std::to_string(std::max(own, 1))) {}
+  ShaderProgram depth{"lumigraph_depth.vert", "lumigraph_depth.frag"};
+  ShaderProgram blend;  // compiled for the renderer's number of own cameras
+};
+
+namespace {
+
+struct CameraUniforms {
+  Eigen::Matrix3f rotation;
+  Eigen::Vector3f translation, centre, radial;
+  float focal_centre[4];
+  float skew;
+  float tangential[2];
+  float size[2];
+};
+
+CameraUniforms uniformsOf(const Camera& camera) {
+  CameraUniforms u;
+  u.rotation = camera.rotation().cast<float>();
+  u.translation = camera.translation().cast<float>();
+  u.centre = camera.centre().cast<float>();
+  const Intrinsics& k = camera.intrinsics();
+  const Distortion& d = camera.distortion();
+  u.radial = Eigen::Vector3f(float(d.k1), float(d.k2), float(d.k3));
+  u.focal_centre[0] = float(k.fx), u.focal_centre[1] = float(k.fy);
+  u.focal_centre[2] = float(k.cx), u.focal_centre[3] = float(k.cy);
+  u.skew = float(k.skew);
+  u.tangential[0] = float(d.p1), u.tangential[1] = float(d.p2);
+  u.size[0] = float(camera.width()), u.size[1] = float(camera.height());
+  return u;
+}
+
+}  // namespace
+
+LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, LumigraphParams params)
+    : rig_(rig), own_(std::move(own)), params_(params), active_(rig.cameraCount(), 1) {
+  if (rig_.cameraCount() > kMaxCameras || rig_.cameraCount() == 0) {
+    throw Error("LumigraphRenderer: the rig has " + std::to_string(rig_.cameraCount()) +
+                " cameras; 1 to " + std::to_string(kMaxCameras) + " are supported");
+  }
+  for (int c : own_) {
+    if (c < 0 || c >= rig_.cameraCount())
+      throw Error("LumigraphRenderer: own camera " + std::to_string(c) + " is not in the rig");
+  }
+  if (own_.empty() || own_.size() > size_t(kMaxCameras))
+    throw Error("LumigraphRenderer: 1 to " + std::to_string(kMaxCameras) + " own cameras needed");
+  programs_ = std::make_unique<Programs>(static_cast<int>(own_.size()));
+  params_.k = std::clamp(params_.k, 1, 4);
+  params_.depth_map_divisor = std::max(1, params_.depth_map_divisor);
+  for (const Camera& c : rig_.cameras()) {
+    images_width_ = std::max(images_width_, c.width());
+    images_height_ = std::max(images_height_, c.height());
+  }
+  depth_width_ = (images_width_ + params_.depth_map_divisor - 1) / params_.depth_map_divisor;
+  depth_height_ = (images_height_ + params_.depth_map_divisor - 1) / params_.depth_map_divisor;
+
+  glGenVertexArrays(1, &vao_);
+  glGenBuffers(1, &vertex_buffer_);
+  glGenBuffers(1, &index_buffer_);
+  glGenBuffers(1, &upload_buffer_);
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ARRAY_BUFFER, vertex_buffer_);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                        reinterpret_cast<void*>(3 * sizeof(float)));
+  glEnableVertexAttribArray(0);
+  glEnableVertexAttribArray(1);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
+  glBindVertexArray(0);
+
+  // Visibility maps: camera-space depth per rig camera.
+  glGenTextures(1, &depth_maps_);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, depth_maps_);
+  glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R32F, depth_width_, depth_height_, rig_.cameraCount());
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glGenFramebuffers(1, &depth_framebuffer_);
+  glGenRenderbuffers(1, &depth_renderbuffer_);
+  glBindRenderbuffer(GL_RENDERBUFFER, depth_renderbuffer_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, depth_width_, depth_height_);
+  glBindFramebuffer(GL_FRAMEBUFFER, depth_framebuffer_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                            depth_renderbuffer_);
+  glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, depth_maps_, 0, 0);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw Error("LumigraphRenderer: the depth-map framebuffer is incomplete");
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+LumigraphRenderer::~LumigraphRenderer() {
+  glDeleteFramebuffers(1, &framebuffer_);
+  glDeleteRenderbuffers(1, &colour_);
+  glDeleteRenderbuffers(1, &depth_);
+  glDeleteFramebuffers(1, &depth_framebuffer_);
+  glDeleteRenderbuffers(1, &depth_renderbuffer_);
+  glDeleteTextures(1, &depth_maps_);
+  glDeleteTextures(1, &images_);
+  glDeleteBuffers(1, &upload_buffer_);
+  glDeleteBuffers(1, &vertex_buffer_);
+  glDeleteBuffers(1, &index_buffer_);
+  glDeleteVertexArrays(1, &vao_);
+}
+
+void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
+                                std::span<const Eigen::Vector3i> triangles) {
+  const int n = static_cast<int>(positions.cols());
+  if (normals.cols() != n) throw Error("LumigraphRenderer::setMesh: one normal per vertex needed");
+  vertices_.resize(size_t(6) * n);
+  for (int v = 0; v < n; ++v) {
+    for (int k = 0; k < 3; ++k) {
+      vertices_[6 * v + k] = positions(k, v);
+      vertices_[6 * v + 3 + k] = normals(k, v);
+    }
+  }
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ARRAY_BUFFER, vertex_buffer_);
+  const GLsizeiptr vertex_bytes = GLsizeiptr(vertices_.size() * sizeof(float));
+  if (vertex_bytes > vertex_capacity_) {
+    glBufferData(GL_ARRAY_BUFFER, vertex_bytes, nullptr, GL_STREAM_DRAW);
+    vertex_capacity_ = vertex_bytes;
+  }
+  glBufferSubData(GL_ARRAY_BUFFER, 0, vertex_bytes, vertices_.data());
+  static_assert(sizeof(Eigen::Vector3i) == 3 * sizeof(GLuint));
+  const GLsizeiptr index_bytes = GLsizeiptr(triangles.size() * sizeof(Eigen::Vector3i));
+  if (index_bytes > index_capacity_) {
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, index_bytes, nullptr, GL_STATIC_DRAW);
+    index_capacity_ = index_bytes;
+  }
+  if (index_bytes > 0) glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, index_bytes, triangles.data());
+  index_count_ = static_cast<GLsizei>(triangles.size() * 3);
+  glBindVertexArray(0);
+  depth_dirty_ = true;
+}
+
+void LumigraphRenderer::setImage(int own_index, const ImageView& image) {
+  if (image.format == PixelFormat::kRgb8) {
+    // Widened straight into the pixel-buffer object (RGB uploads are slow: never RGB).
+    widened_.resize(size_t(image.width) * image.height * 4);
+    const size_t n = size_t(image.width) * image.height;
+    for (size_t i = 0; i < n; ++i) {
+      widened_[4 * i] = image.data[3 * i];
+      widened_[4 * i + 1] = image.data[3 * i + 1];
+      widened_[4 * i + 2] = image.data[3 * i + 2];
+      widened_[4 * i + 3] = 255;
+    }
+    setImageRgba(own_index, widened_.data(), image.width, image.height);
+    return;
+  }
+  if (own_index < 0 || own_index >= static_cast<int>(own_.size()))
+    throw Error("LumigraphRenderer::setImage: no own camera " + std::to_string(own_index));
+  const bool bayer = image.format != PixelFormat::kMono8;
+  if (!images_ || !bayer_) {
+    glDeleteTextures(1, &images_);
+    glGenTextures(1, &images_);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R8, images_width_, images_height_,
+                   std::max<int>(1, own_.size()));
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    bayer_ = true;
+  }
+  // Mono8 goes through the same path as a Bayer image whose every cell is grey.
+  bayer_layout_ = bayer ? bayerLayout(image.format) : BayerLayout{};
+  const size_t bytes = size_t(image.width) * image.height;
+  glBindBuffer(GL_PIXEL_UNPACK_BUFFER, upload_buffer_);
+  glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(bytes), image.data, GL_STREAM_DRAW);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, image.width, image.height, 1, GL_RED,
+                  GL_UNSIGNED_BYTE, nullptr);
+  glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+}
+
+void LumigraphRenderer::setImageRgba(int own_index, const uint8_t* rgba, int width, int height) {
+  if (own_index < 0 || own_index >= static_cast<int>(own_.size()))
+    throw Error("LumigraphRenderer::setImage: no own camera " + std::to_string(own_index));
+  if (!images_ || bayer_) {
+    glDeleteTextures(1, &images_);
+    glGenTextures(1, &images_);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RGBA8, images_width_, images_height_,
+                   std::max<int>(1, own_.size()));
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    bayer_ = false;
+  }
+  const size_t bytes = size_t(width) * height * 4;
+  glBindBuffer(GL_PIXEL_UNPACK_BUFFER, upload_buffer_);
+  glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(bytes), rgba, GL_STREAM_DRAW);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, width, height, 1, GL_RGBA,
+                  GL_UNSIGNED_BYTE, nullptr);
+  glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+}
+
+void LumigraphRenderer::setActive(const std::vector<bool>& active) {
+  for (int c = 0; c < rig_.cameraCount(); ++c)
+    active_[c] = c < static_cast<int>(active.size()) ? int(active[c]) : 1;
+}
+
+void LumigraphRenderer::renderDepthMaps() {
+  glBindFramebuffer(GL_FRAMEBUFFER, depth_framebuffer_);
+  glViewport(0, 0, depth_width_, depth_height_);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_BLEND);
+  const ShaderProgram& p = programs_->depth;
+  p.use();
+  glUniform1f(p.uniform("map_scale"), 1.0f / float(params_.depth_map_divisor));
+  glUniform2f(p.uniform("map_size"), float(depth_width_), float(depth_height_));
+  glBindVertexArray(vao_);
+  const float far[4] = {1e30f, 1e30f, 1e30f, 1e30f};
+  for (int c = 0; c < rig_.cameraCount(); ++c) {
+    glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, depth_maps_, 0, c);
+    glClearBufferfv(GL_COLOR, 0, far);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    const CameraUniforms u = uniformsOf(rig_.camera(c));
+    glUniformMatrix3fv(p.uniform("rotation"), 1, GL_FALSE, u.rotation.data());
+    glUniform3fv(p.uniform("translation"), 1, u.translation.data());
+    glUniform4fv(p.uniform("focal_centre"), 1, u.focal_centre);
+    glUniform1f(p.uniform("skew"), u.skew);
+    glUniform3fv(p.uniform("radial"), 1, u.radial.data());
+    glUniform2fv(p.uniform("tangential"), 1, u.tangential);
+    glUniform2fv(p.uniform("image_size"), 1, u.size);
+    glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  }
+  glBindVertexArray(0);
+  depth_dirty_ = false;
+}
+
+void LumigraphRenderer::ensureTarget(int width, int height) {
+  if (width == width_ && height == height_) return;
+  if (!framebuffer_) {
+    glGenFramebuffers(1, &framebuffer_);
+    glGenRenderbuffers(1, &colour_);
+    glGenRenderbuffers(1, &depth_);
+  }
+  glBindRenderbuffer(GL_RENDERBUFFER, colour_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
+  glBindRenderbuffer(GL_RENDERBUFFER, depth_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+    throw Error("LumigraphRenderer: framebuffer of " + std::to_string(width) + "x" +
+                std::to_string(height) + " is incomplete");
+  }
+  width_ = width;
+  height_ = height;
+}
+
+void LumigraphRenderer::render(const Camera& desired, std::vector<uint8_t>& rgba) {
+  const Eigen::Affine3f identity = Eigen::Affine3f::Identity();
+  render(desired, std::span<const Eigen::Affine3f>(&identity, 1), rgba);
+}
+
+void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Affine3f> clones,
+                               std::vector<uint8_t>& rgba) {
+  if (depth_dirty_) renderDepthMaps();
+  ensureTarget(desired.width(), desired.height());
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+  glViewport(0, 0, width_, height_);
+  glClearColor(0, 0, 0, 0);
+  glClearDepth(1.0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_BLEND);
+  // Closed surfaces, counter-clockwise from outside: back faces are never seen (half the
+  // fragments llvmpipe would otherwise shade before the front hides them).
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glFrontFace(GL_CW);  // image rows go down the framebuffer: counter-clockwise turns clockwise
+
+  const ShaderProgram& p = programs_->blend;
+  p.use();
+  const int n = rig_.cameraCount();
+  Eigen::Matrix<float, 9, kMaxCameras> rotations;
+  Eigen::Matrix<float, 3, kMaxCameras> translations, centres, radials;
+  Eigen::Matrix<float, 4, kMaxCameras> focal_centres;
+  Eigen::Matrix<float, 2, kMaxCameras> tangentials, sizes;
+  float skews[kMaxCameras];
+  for (int c = 0; c < n; ++c) {
+    const CameraUniforms u = uniformsOf(rig_.camera(c));
+    rotations.col(c) = Eigen::Map<const Eigen::Matrix<float, 9, 1>>(u.rotation.data());
+    translations.col(c) = u.translation;
+    centres.col(c) = u.centre;
+    radials.col(c) = u.radial;
+    focal_centres.col(c) = Eigen::Map<const Eigen::Vector4f>(u.focal_centre);
+    tangentials.col(c) = Eigen::Vector2f(u.tangential[0], u.tangential[1]);
+    sizes.col(c) = Eigen::Vector2f(u.size[0], u.size[1]);
+    skews[c] = u.skew;
+  }
+  glUniform1i(p.uniform("camera_count"), n);
+  glUniformMatrix3fv(p.uniform("rotations"), n, GL_FALSE, rotations.data());
+  glUniform3fv(p.uniform("translations"), n, translations.data());
+  glUniform4fv(p.uniform("focal_centres"), n, focal_centres.data());
+  glUniform1fv(p.uniform("skews"), n, skews);
+  glUniform3fv(p.uniform("radials"), n, radials.data());
+  glUniform2fv(p.uniform("tangentials"), n, tangentials.data());
+  glUniform2fv(p.uniform("image_sizes"), n, sizes.data());
+  glUniform3fv(p.uniform("centres"), n, centres.data());
+  glUniform1iv(p.uniform("camera_active"), n, active_.data());
+  glUniform1iv(p.uniform("own_camera"), static_cast<GLsizei>(own_.size()), own_.data());
+  glUniform1f(p.uniform("depth_scale"), 1.0f / float(params_.depth_map_divisor));
+  glUniform2f(p.uniform("depth_map_size"), float(depth_width_), float(depth_height_));
+  glUniform1f(p.uniform("depth_tolerance"), params_.depth_tolerance_m);
+  glUniform1i(p.uniform("k_nearest"), params_.k);
+  glUniform1f(p.uniform("min_facing"), params_.min_facing);
+  glUniform1f(p.uniform("max_angle"), params_.max_angle_rad);
+  glUniform1f(p.uniform("epsilon"), params_.epsilon_rad);
+  glUniform2f(p.uniform("images_size"), float(images_width_), float(images_height_));
+  glUniform1i(p.uniform("bayer"), bayer_ ? 1 : 0);
+  glUniform1i(p.uniform("red_index"), bayer_layout_.red_y * 2 + bayer_layout_.red_x);
+  glUniform1i(p.uniform("images"), 0);
+  glUniform1i(p.uniform("depth_maps"), 1);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, depth_maps_);
+  glActiveTexture(GL_TEXTURE0);
+
+  const CameraUniforms v = uniformsOf(desired);
+  glUniformMatrix3fv(p.uniform("view_rotation"), 1, GL_FALSE, v.rotation.data());
+  glUniform3fv(p.uniform("view_translation"), 1, v.translation.data());
+  glUniform4fv(p.uniform("view_focal_centre"), 1, v.focal_centre);
+  glUniform1f(p.uniform("view_skew"), v.skew);
+  glUniform3fv(p.uniform("view_radial"), 1, v.radial.data());
+  glUniform2fv(p.uniform("view_tangential"), 1, v.tangential);
+  glUniform2fv(p.uniform("view_size"), 1, v.size);
+  glBindVertexArray(vao_);
+  if (images_ && !own_.empty()) {
+    for (const Eigen::Affine3f& clone : clones) {
+      // The view-dependent weights in the clone's frame: the desired centre brought into the
+      // captured actor's frame.
+      const Eigen::Vector3f desired_in_actor = clone.inverse() * v.centre;
+      const Eigen::Matrix4f m = clone.matrix();
+      glUniformMatrix4fv(p.uniform("clone"), 1, GL_FALSE, m.data());
+      glUniform3fv(p.uniform("desired_centre"), 1, desired_in_actor.data());
+      glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+    }
+  }
+  glBindVertexArray(0);
+  glDisable(GL_CULL_FACE);
+
+  const size_t bytes = size_t(width_) * height_ * 4;
+  if (rgba.size() != bytes) rgba.resize(bytes);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+}
+
+}  // namespace lumistage

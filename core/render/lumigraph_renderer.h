@@ -1,0 +1,98 @@
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "core/capture/image.h"
+#include "core/geometry/rig.h"
+#include "core/render/gl.h"
+
+namespace lumistage {
+
+// How the lumigraph weighs and tests cameras (docs/lumigraph.md has the weight function).
+struct LumigraphParams {
+  int k = 3;                        // cameras blended per vertex (at most 4)
+  float min_facing = 0.1f;          // cos of 84 degrees: grazing views are left out
+  float max_angle_rad = 1.57f;      // the threshold when at most k cameras qualify
+  float epsilon_rad = 1e-4f;        // angles below this count as this
+  int depth_map_divisor = 2;        // visibility maps are the camera's size / this
+  float depth_tolerance_m = 0.03f;  // a vertex this far behind the map's surface is occluded
+};
+
+// Unstructured lumigraph rendering on the GPU (or Mesa llvmpipe), through an offscreen OpenGL 4.3
+// context that must be current for the renderer's whole life (EglContext). Takes any triangle
+// mesh with per-vertex normals (the truth surface, the posed generic human, the refined mesh),
+// the rig, and the images of `own` cameras (a node's; all of them for the single-process
+// renderer). Weights are computed per vertex over *every* active camera of the rig, with
+// visibility from small depth maps of the mesh rendered from each camera, so that renderers that
+// own different cameras agree on them. A render writes RGBA8 (rows top first): colour = weighted
+// mean of the own cameras' images, alpha = the own cameras' share of the total weight (255 when
+// the renderer owns every contributing camera, 0 where no camera sees the surface). Blending the
+// partial images of all nodes (PartialImageBlender) gives the single-process image.
+class LumigraphRenderer {
+ public:
+  static constexpr int kMaxCameras = 16;
+
+  // Throws Error for more than kMaxCameras cameras, an own index out of the rig, or GL failures.
+  LumigraphRenderer(const Rig& rig, std::vector<int> own, LumigraphParams params = {});
+  ~LumigraphRenderer();
+  LumigraphRenderer(const LumigraphRenderer&) = delete;
+  LumigraphRenderer& operator=(const LumigraphRenderer&) = delete;
+
+  const std::vector<int>& ownCameras() const { return own_; }
+  const LumigraphParams& params() const { return params_; }
+
+  // The surface for the next renders (in the capture's frame); its depth maps are rendered
+  // lazily by the next render(). `normals` unit, outward.
+  void setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
+               std::span<const Eigen::Vector3i> triangles);
+  // The image of own camera `own_index` (index into ownCameras()). Bayer and mono8 upload one
+  // byte a pixel (demosaiced in the shader); rgb8 is widened to RGBA first. All own images must
+  // share one format (a renderer's are one session's or one node's cameras).
+  void setImage(int own_index, const ImageView& image);
+  // RGBA8 (rows top first) as setImage(rgb8) would take it.
+  void setImageRgba(int own_index, const uint8_t* rgba, int width, int height);
+  // Cameras that take part in the weights (default: all). Leave-one-out renders a camera's view
+  // with that camera inactive.
+  void setActive(const std::vector<bool>& active);
+
+  // Renders the desired camera's view (its size, lens distortion included) of every clone: a
+  // rigid placement of the captured actor, stage (world) from the capture's frame, the identity
+  // being the actor where it was filmed (CloneSet::transforms() gives them). One draw each; an
+  // empty set renders nothing. `rgba` is resized when its size differs.
+  void render(const Camera& desired, std::span<const Eigen::Affine3f> clones,
+              std::vector<uint8_t>& rgba);
+  // The actor where it was filmed.
+  void render(const Camera& desired, std::vector<uint8_t>& rgba);
+
+ private:
+  void renderDepthMaps();
+  void ensureTarget(int width, int height);
+
+  struct Programs;
+  std::unique_ptr<Programs> programs_;
+  Rig rig_;
+  std::vector<int> own_;
+  LumigraphParams params_;
+  std::vector<int> active_;
+  GLuint vao_ = 0, vertex_buffer_ = 0, index_buffer_ = 0;
+  GLsizei index_count_ = 0;
+  GLsizeiptr vertex_capacity_ = 0, index_capacity_ = 0;
+  GLuint images_ = 0;  // 2D array texture, one layer per own camera
+  int images_width_ = 0, images_height_ = 0;
+  bool bayer_ = false;
+  BayerLayout bayer_layout_;
+  GLuint depth_maps_ = 0, depth_framebuffer_ = 0, depth_renderbuffer_ = 0;
+  int depth_width_ = 0, depth_height_ = 0;
+  bool depth_dirty_ = true;
+  GLuint framebuffer_ = 0, colour_ = 0, depth_ = 0;
+  int width_ = 0, height_ = 0;
+  GLuint upload_buffer_ = 0;      // pixel-buffer object for image uploads
+  std::vector<float> vertices_;   // interleaved positions and normals, reused
+  std::vector<uint8_t> widened_;  // rgb8 -> RGBA, reused
+};
+
+}  // namespace lumistage

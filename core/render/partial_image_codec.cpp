@@ -1,0 +1,86 @@
+#include "core/render/partial_image_codec.h"
+
+#include <cstring>
+
+namespace lumistage {
+
+namespace {
+
+void putVarint(uint64_t v, std::vector<uint8_t>& out) {
+  while (v >= 0x80) {
+    out.push_back(static_cast<uint8_t>(v | 0x80));
+    v >>= 7;
+  }
+  out.push_back(static_cast<uint8_t>(v));
+}
+
+bool getVarint(std::span<const uint8_t> data, size_t& at, uint64_t& v) {
+  v = 0;
+  for (int shift = 0; shift < 64; shift += 7) {
+    if (at >= data.size()) return false;
+    const uint8_t b = data[at++];
+    v |= uint64_t(b & 0x7f) << shift;
+    if (!(b & 0x80)) return true;
+  }
+  return false;
+}
+
+bool empty(const uint8_t* p) {
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v == 0;
+}
+
+}  // namespace
+
+void encodeAlphaRuns(std::span<const uint8_t> rgba, std::vector<uint8_t>& out) {
+  out.clear();
+  const size_t n = rgba.size() / 4;
+  const uint8_t* p = rgba.data();
+  size_t i = 0;
+  while (i < n) {
+    size_t e = i;
+    while (e < n && empty(p + 4 * e)) ++e;
+    size_t l = e;
+    while (l < n && !empty(p + 4 * l)) ++l;
+    putVarint(e - i, out);
+    putVarint(l - e, out);
+    out.insert(out.end(), p + 4 * e, p + 4 * l);
+    i = l;
+  }
+}
+
+bool decodeAlphaRuns(std::span<const uint8_t> data, size_t pixel_count,
+                     std::vector<uint8_t>& rgba) {
+  rgba.resize(pixel_count * 4);
+  size_t at = 0, i = 0;
+  while (i < pixel_count) {
+    uint64_t empty_run = 0, literal_run = 0;
+    if (!getVarint(data, at, empty_run) || !getVarint(data, at, literal_run)) return false;
+    if (empty_run > pixel_count - i || literal_run > pixel_count - i - empty_run) return false;
+    if (empty_run + literal_run == 0) return false;  // no progress: not an encoding of ours
+    std::memset(rgba.data() + 4 * i, 0, 4 * empty_run);
+    i += empty_run;
+    if (literal_run * 4 > data.size() - at) return false;
+    std::memcpy(rgba.data() + 4 * i, data.data() + at, 4 * literal_run);
+    at += 4 * literal_run;
+    i += literal_run;
+  }
+  return at == data.size();
+}
+
+bool validAlphaRuns(std::span<const uint8_t> data, size_t pixel_count) {
+  size_t at = 0, i = 0;
+  while (i < pixel_count) {
+    uint64_t empty_run = 0, literal_run = 0;
+    if (!getVarint(data, at, empty_run) || !getVarint(data, at, literal_run)) return false;
+    if (empty_run > pixel_count - i || literal_run > pixel_count - i - empty_run) return false;
+    if (empty_run + literal_run == 0) return false;
+    if (literal_run * 4 > data.size() - at) return false;
+    at += 4 * literal_run;
+    i += empty_run + literal_run;
+  }
+  return at == data.size();
+}
+
+}  // namespace lumistage

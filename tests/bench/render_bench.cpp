@@ -1,0 +1,208 @@
+// Lumigraph rendering on this machine's OpenGL (Mesa llvmpipe without a GPU): a node's partial
+// image (3 cameras of the reference rig) at 640x480 and 1920x1080, its parts, and the studio's
+// side. Run: ./studio bench, or build/tests/bench/render_bench.
+#include <benchmark/benchmark.h>
+
+#include <ctime>
+#include <filesystem>
+#include <memory>
+
+#include "core/base/resource_path.h"
+#include "core/body/human_model.h"
+#include "core/capture/image.h"
+#include "core/net/message_codec.h"
+#include "core/render/gl.h"
+#include "core/render/lumigraph_renderer.h"
+#include "core/render/partial_image_blender.h"
+#include "core/render/partial_image_codec.h"
+#include "core/sim/virtual_studio.h"
+
+namespace {
+
+using namespace lumistage;
+
+// CPU time of the whole process (llvmpipe renders on its own threads), milliseconds: on a
+// machine shared with other work, a steadier figure than the wall clock.
+double processCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
+}
+
+struct Scene {
+  std::unique_ptr<VirtualStudio> studio;
+  StudioFrame frame;
+  TriangleMesh generic;   // the generic human (~1930 vertices) standing where the actor is
+  std::vector<int> node;  // the first node's cameras
+  std::vector<Image> bayer;
+};
+
+Scene& scene() {
+  static Scene* s = [] {
+    auto* s = new Scene;
+    s->studio = std::make_unique<VirtualStudio>(
+        loadStudioConfig(resourcePath("studio/reference.yaml")), 12);
+    s->studio->renderFrame(10, s->frame);
+    s->frame.surface.computeNormals();
+    s->node = s->studio->rig().nodes()[0].cameras;
+    s->generic = loadGenericHuman().rest;
+    const Eigen::Vector3f offset =
+        s->frame.surface.positions.rowwise().mean() - s->generic.positions.rowwise().mean();
+    s->generic.positions.colwise() += offset;
+    for (int c : s->node) {
+      s->bayer.emplace_back();
+      const Camera& cam = s->studio->rig().camera(c);
+      rgbaToImage(s->frame.images[c].data(), cam.width(), cam.height(), PixelFormat::kBayerRggb8,
+                  s->bayer.back());
+    }
+    return s;
+  }();
+  return *s;
+}
+
+Camera viewOf(int width, int height) {
+  const Eigen::Vector3d centre(-3.2, -3.2, 1.7), target(0, 0, 1.0);
+  const Eigen::Vector3d z = (target - centre).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  Eigen::Matrix3d R;
+  R.row(0) = x, R.row(1) = z.cross(x), R.row(2) = z;
+  const double f = 1.4 * width / 2;  // about 70 degrees across
+  return Camera("view", width, height, {f, f, width / 2.0 - 0.5, height / 2.0 - 0.5, 0}, {}, R,
+                -R * centre);
+}
+
+// A node's renderer: mesh 0 the truth surface, 1 the generic human.
+std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int divisor = 2) {
+  Scene& s = scene();
+  LumigraphParams params;
+  params.depth_map_divisor = divisor;
+  auto r = std::make_unique<LumigraphRenderer>(s.studio->rig(), s.node, params);
+  const TriangleMesh& m = mesh == 0 ? s.frame.surface : s.generic;
+  r->setMesh(m.positions, m.normals, m.triangles);
+  for (size_t j = 0; j < s.node.size(); ++j) {
+    if (bayer) {
+      r->setImage(int(j), s.bayer[j].view());
+    } else {
+      const Camera& c = s.studio->rig().camera(s.node[j]);
+      r->setImageRgba(int(j), s.frame.images[s.node[j]].data(), c.width(), c.height());
+    }
+  }
+  return r;
+}
+
+// The node's frame after upload: the view rendered and read back (depth maps kept).
+void nodePartialImage(benchmark::State& state) {
+  auto r = nodeRenderer(state.range(2) != 0, int(state.range(3)));
+  const Camera view = viewOf(int(state.range(0)), int(state.range(1)));
+  std::vector<uint8_t> rgba;
+  r->render(view, rgba);
+  const double cpu = processCpuMs();
+  for (auto _ : state) {
+    r->render(view, rgba);
+    benchmark::DoNotOptimize(rgba.data());
+  }
+  state.counters["process_cpu_ms"] = (processCpuMs() - cpu) / double(state.iterations());
+}
+BENCHMARK(nodePartialImage)
+    ->ArgNames({"w", "h", "bayer", "generic"})
+    ->Args({640, 480, 0, 0})
+    ->Args({640, 480, 1, 0})
+    ->Args({640, 480, 0, 1})
+    ->Args({640, 480, 1, 1})
+    ->Args({1920, 1080, 0, 0})
+    ->Args({1920, 1080, 1, 0})
+    ->Args({1920, 1080, 0, 1})
+    ->Args({1920, 1080, 1, 1})
+    ->Unit(benchmark::kMillisecond);
+
+// A new mesh: the 12 visibility maps (the camera's size / divisor) rendered again before the view.
+void nodeMeshAndPartialImage(benchmark::State& state) {
+  Scene& s = scene();
+  const TriangleMesh& m = state.range(0) ? s.generic : s.frame.surface;
+  auto r = nodeRenderer(false, int(state.range(0)), int(state.range(1)));
+  const Camera view = viewOf(640, 480);
+  std::vector<uint8_t> rgba;
+  const double cpu = processCpuMs();
+  for (auto _ : state) {
+    r->setMesh(m.positions, m.normals, m.triangles);
+    r->render(view, rgba);
+    benchmark::DoNotOptimize(rgba.data());
+  }
+  state.counters["process_cpu_ms"] = (processCpuMs() - cpu) / double(state.iterations());
+}
+BENCHMARK(nodeMeshAndPartialImage)
+    ->ArgNames({"generic", "divisor"})
+    ->ArgsProduct({{0, 1}, {2, 4}})
+    ->Unit(benchmark::kMillisecond);
+
+// Uploading the node's 3 images of 1024x768: Bayer (1 byte a pixel) or RGBA (4).
+void uploadImages(benchmark::State& state) {
+  Scene& s = scene();
+  const bool bayer = state.range(0) != 0;
+  auto r = nodeRenderer(bayer);
+  const double cpu = processCpuMs();
+  for (auto _ : state) {
+    for (size_t j = 0; j < s.node.size(); ++j) {
+      if (bayer) {
+        r->setImage(int(j), s.bayer[j].view());
+      } else {
+        const Camera& c = s.studio->rig().camera(s.node[j]);
+        r->setImageRgba(int(j), s.frame.images[s.node[j]].data(), c.width(), c.height());
+      }
+    }
+    glFinish();  // the uploads done
+  }
+  state.counters["process_cpu_ms"] = (processCpuMs() - cpu) / double(state.iterations());
+}
+BENCHMARK(uploadImages)->ArgNames({"bayer"})->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// Clones: the cost of each extra one.
+void clones(benchmark::State& state) {
+  auto r = nodeRenderer(false);
+  const Camera view = viewOf(640, 480);
+  std::vector<Eigen::Affine3f> set;
+  for (int i = 0; i < state.range(0); ++i) {
+    Eigen::Affine3f t = Eigen::Affine3f::Identity();
+    t.translate(Eigen::Vector3f(0.9f * (i % 4) - 1.35f, 0.9f * (i / 4), 0));
+    set.push_back(t);
+  }
+  std::vector<uint8_t> rgba;
+  const double cpu = processCpuMs();
+  for (auto _ : state) {
+    r->render(view, set, rgba);
+    benchmark::DoNotOptimize(rgba.data());
+  }
+  state.counters["process_cpu_ms"] = (processCpuMs() - cpu) / double(state.iterations());
+}
+BENCHMARK(clones)->ArgName("clones")->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
+
+// The wire: encoding a node's 640x480 partial image, and the studio's blend of four.
+void encodePartialImage(benchmark::State& state) {
+  auto r = nodeRenderer(false);
+  std::vector<uint8_t> rgba, out;
+  r->render(viewOf(640, 480), rgba);
+  for (auto _ : state) {
+    encodeAlphaRuns(rgba, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["bytes"] = double(out.size());
+  state.counters["rle_rgba_bytes"] = double(encodeRleRgba(rgba).size());  // the paper's RLE
+  state.counters["raw_bytes"] = double(rgba.size());
+}
+BENCHMARK(encodePartialImage)->Unit(benchmark::kMicrosecond);
+
+void blendFourPartialImages(benchmark::State& state) {
+  auto r = nodeRenderer(false);
+  std::vector<uint8_t> rgba, out;
+  r->render(viewOf(640, 480), rgba);
+  PartialImageBlender blender;
+  for (auto _ : state) {
+    blender.reset(640, 480);
+    for (int n = 0; n < 4; ++n) blender.add(rgba);
+    blender.finish(out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+BENCHMARK(blendFourPartialImages)->Unit(benchmark::kMicrosecond);
+
+}  // namespace

@@ -1,0 +1,256 @@
+// Unstructured lumigraph rendering on a real headless OpenGL context (Mesa llvmpipe on a machine
+// without GPU), against the virtual studio's ground truth.
+#include "core/render/lumigraph_renderer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+
+#include "core/eval/view_metrics.h"
+#include "core/render/partial_image_blender.h"
+#include "core/render/partial_image_codec.h"
+#include "core/sim/virtual_studio.h"
+
+namespace lumistage {
+namespace {
+
+namespace fs = std::filesystem;
+
+// One frame of the reference studio (12 cameras, 1024x768), rendered once for every test.
+class LumigraphRendererTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    StudioConfig config =
+        loadStudioConfig(fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / "studio" / "reference.yaml");
+    studio_ = new VirtualStudio(config, 12);
+    frame_ = new StudioFrame;
+    studio_->renderFrame(10, *frame_);
+    frame_->surface.computeNormals();
+  }
+  static void TearDownTestSuite() {
+    delete frame_;
+    delete studio_;
+  }
+  const Rig& rig() const { return studio_->rig(); }
+  // A renderer of `own` cameras (all when empty) with the frame's surface and images.
+  std::unique_ptr<LumigraphRenderer> makeRenderer(std::vector<int> own = {}) const {
+    if (own.empty())
+      for (int c = 0; c < rig().cameraCount(); ++c) own.push_back(c);
+    auto r = std::make_unique<LumigraphRenderer>(rig(), own);
+    r->setMesh(frame_->surface.positions, frame_->surface.normals, frame_->surface.triangles);
+    for (size_t j = 0; j < own.size(); ++j) {
+      const Camera& c = rig().camera(own[j]);
+      r->setImageRgba(static_cast<int>(j), frame_->images[own[j]].data(), c.width(), c.height());
+    }
+    return r;
+  }
+  // A virtual camera between cameras 0 and 1 (not on any input camera), smaller.
+  Camera desiredView() const {
+    const Camera& a = rig().camera(0);
+    const Camera& b = rig().camera(1);
+    const Eigen::Vector3d centre = 0.5 * (a.centre() + b.centre());
+    const Eigen::Vector3d z = (Eigen::Vector3d(0, 0, 1.0) - centre).normalized();
+    const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+    Eigen::Matrix3d R;
+    R.row(0) = x;
+    R.row(1) = z.cross(x);
+    R.row(2) = z;
+    return Camera("desired", 480, 360, {400, 400, 239.5, 179.5, 0}, {}, R, -R * centre);
+  }
+  static VirtualStudio* studio_;
+  static StudioFrame* frame_;
+};
+
+VirtualStudio* LumigraphRendererTest::studio_ = nullptr;
+StudioFrame* LumigraphRendererTest::frame_ = nullptr;
+
+int64_t covered(const std::vector<uint8_t>& rgba) {
+  int64_t n = 0;
+  for (size_t i = 3; i < rgba.size(); i += 4) n += rgba[i] > 0;
+  return n;
+}
+
+TEST_F(LumigraphRendererTest, DesiredCameraOnAnInputCameraGivesThatCamerasImage) {
+  auto renderer = makeRenderer();
+  std::vector<uint8_t> rendered;
+  for (int c : {0, 5, 9}) {
+    const Camera& camera = rig().camera(c);
+    renderer->render(camera, rendered);
+    const ViewScore score = compareOverMask(rendered, frame_->images[c], frame_->masks[c],
+                                            camera.width(), camera.height());
+    EXPECT_GT(score.pixels, 10000) << camera.name();
+    EXPECT_GT(score.psnr_db, 38.0) << camera.name();
+    EXPECT_GT(score.ssim, 0.97) << camera.name();
+  }
+}
+
+TEST_F(LumigraphRendererTest, NodeWeightsSumToOneAndVanishForCamerasThatDoNotContribute) {
+  const Camera desired = desiredView();
+  std::vector<std::vector<uint8_t>> partials;
+  for (const RigNode& node : rig().nodes()) {
+    partials.emplace_back();
+    makeRenderer(node.cameras)->render(desired, partials.back());
+  }
+  std::vector<uint8_t> local;
+  makeRenderer()->render(desired, local);
+  ASSERT_GT(covered(local), 5000);
+  int64_t off = 0, inside = 0;
+  for (size_t i = 0; i < local.size() / 4; ++i) {
+    int sum = 0;
+    for (const auto& p : partials) sum += p[4 * i + 3];
+    if (local[4 * i + 3] == 0) {
+      EXPECT_EQ(sum, 0) << "pixel " << i;  // no surface, or no camera sees it: no weight
+      continue;
+    }
+    EXPECT_EQ(local[4 * i + 3], 255);
+    ++inside;
+    off += std::abs(sum - 255) > 2;  // shares of 255, each rounded
+  }
+  EXPECT_EQ(off, 0) << "of " << inside;
+  // Cameras 6 and 7 face the desired view from the other side of the stage: never among the
+  // three nearest in angle, their weight is zero everywhere.
+  std::vector<uint8_t> behind;
+  makeRenderer({6, 7})->render(desired, behind);
+  EXPECT_EQ(covered(behind), 0);
+}
+
+TEST_F(LumigraphRendererTest, DistributedImageEqualsTheSingleProcessImage) {
+  const Camera desired = desiredView();
+  PartialImageBlender blender;
+  blender.reset(desired.width(), desired.height());
+  std::vector<uint8_t> partial, encoded, decoded;
+  for (const RigNode& node : rig().nodes()) {
+    makeRenderer(node.cameras)->render(desired, partial);
+    encodeAlphaRuns(partial, encoded);  // through the wire encoding
+    ASSERT_TRUE(decodeAlphaRuns(encoded, partial.size() / 4, decoded));
+    ASSERT_TRUE(blender.add(decoded));
+  }
+  std::vector<uint8_t> distributed, local, local_blended;
+  blender.finish(distributed);
+  makeRenderer()->render(desired, local);
+  PartialImageBlender single;
+  single.reset(desired.width(), desired.height());
+  single.add(local);
+  single.finish(local_blended);
+  ASSERT_EQ(distributed.size(), local_blended.size());
+  double sum = 0;
+  int worst = 0;
+  for (size_t i = 0; i < local_blended.size(); ++i) {
+    const int d = std::abs(int(distributed[i]) - int(local_blended[i]));
+    sum += d;
+    worst = std::max(worst, d);
+  }
+  EXPECT_LT(sum / local_blended.size(), 0.1);
+  EXPECT_LE(worst, 3);  // 8-bit colours and alpha shares, rounded on each node
+  EXPECT_EQ(covered(distributed), covered(local_blended));
+}
+
+TEST_F(LumigraphRendererTest, SeveralViewsOfOneFrameDoNotDisturbEachOther) {
+  auto renderer = makeRenderer(rig().nodes()[1].cameras);
+  const Camera desired = desiredView();
+  const Camera& preview = rig().camera(rig().nodes()[1].cameras[0]);
+  std::vector<uint8_t> first, other, again;
+  renderer->render(desired, first);
+  renderer->render(preview, other);
+  renderer->render(desired, again);
+  EXPECT_GT(covered(first), 1000);
+  EXPECT_GT(covered(other), 1000);
+  EXPECT_EQ(first, again);
+}
+
+TEST_F(LumigraphRendererTest, ClonesAppearWherePlacedWithTheirOwnViewDependentWeights) {
+  auto renderer = makeRenderer();
+  const Camera& camera = rig().camera(2);
+  std::vector<uint8_t> original, cloned;
+  renderer->render(camera, original);
+  // A clone 0.8 m to the side and turned by 30 degrees about the vertical through the origin,
+  // seen by the camera carried along with it: the same picture as the actor from the camera.
+  Eigen::Affine3f clone = Eigen::Affine3f::Identity();
+  clone.translate(Eigen::Vector3f(0.8f, -0.3f, 0.0f));
+  clone.rotate(Eigen::AngleAxisf(0.52f, Eigen::Vector3f::UnitZ()));
+  const Eigen::Affine3d c = clone.cast<double>();
+  const Eigen::Matrix3d R = camera.rotation() * c.linear().transpose();
+  const Camera carried("carried", camera.width(), camera.height(), camera.intrinsics(),
+                       camera.distortion(), R, camera.translation() - R * c.translation());
+  const Eigen::Affine3f both[] = {clone};
+  renderer->render(carried, both, cloned);
+  const ViewScore same =
+      compareOverMask(cloned, original, frame_->masks[2], camera.width(), camera.height());
+  EXPECT_GT(same.psnr_db, 40.0);
+  // From the camera itself the clone covers where its placed surface projects.
+  renderer->render(camera, both, cloned);
+  Eigen::Vector2d centroid(0, 0), expected(0, 0);
+  int64_t n = 0;
+  for (int y = 0; y < camera.height(); ++y)
+    for (int x = 0; x < camera.width(); ++x)
+      if (cloned[4 * (size_t(y) * camera.width() + x) + 3]) centroid += Eigen::Vector2d(x, y), ++n;
+  ASSERT_GT(n, 1000);
+  centroid /= double(n);
+  const Eigen::Matrix3Xf& p = frame_->surface.positions;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int v = 0; v < p.cols(); ++v) mean += (clone * Eigen::Vector3f(p.col(v))).cast<double>();
+  expected = *camera.project(mean / double(p.cols()));
+  EXPECT_LT((centroid - expected).norm(), 25.0)
+      << centroid.transpose() << " vs " << expected.transpose();
+  // Several clones: each a draw, all of them visible.
+  const Eigen::Affine3f two[] = {Eigen::Affine3f::Identity(), clone};
+  renderer->render(camera, two, cloned);
+  EXPECT_GT(covered(cloned), n + covered(original) / 2);
+}
+
+TEST_F(LumigraphRendererTest, LeaveOneOutOnTheTrueSurfaceReachesTheTarget) {
+  auto renderer = makeRenderer();
+  const std::vector<ViewScore> scores =
+      leaveOneOut(*renderer, rig(), frame_->images, frame_->masks);
+  ASSERT_EQ(scores.size(), 12u);
+  double psnr = 0, ssim = 0;
+  for (size_t c = 0; c < scores.size(); ++c) {
+    std::printf("  LOO %s: PSNR %.2f dB, SSIM %.3f\n", rig().camera(int(c)).name().c_str(),
+                scores[c].psnr_db, scores[c].ssim);
+    EXPECT_GT(scores[c].psnr_db, 25.0) << rig().camera(int(c)).name();
+    psnr += scores[c].psnr_db / 12;
+    ssim += scores[c].ssim / 12;
+  }
+  EXPECT_GT(psnr, 28.0);
+  EXPECT_GT(ssim, 0.8);
+}
+
+TEST(PartialImageCodec, RoundTripsExactly) {
+  std::vector<uint8_t> rgba(64 * 48 * 4, 0), encoded, decoded;
+  uint32_t state = 1;
+  for (int y = 10; y < 30; ++y)
+    for (int x = 5 + y % 7; x < 40; ++x)
+      for (int k = 0; k < 4; ++k) {
+        state = state * 1664525u + 1013904223u;
+        rgba[4 * (y * 64 + x) + k] = uint8_t(state >> 24);  // some pixels all zero by chance
+      }
+  rgba[4 * 1000] = 0, rgba[4 * 1000 + 3] = 7;  // alpha alone
+  for (const std::vector<uint8_t>& image :
+       {rgba, std::vector<uint8_t>(rgba.size(), 0), std::vector<uint8_t>(rgba.size(), 9)}) {
+    encodeAlphaRuns(image, encoded);
+    ASSERT_TRUE(decodeAlphaRuns(encoded, image.size() / 4, decoded));
+    EXPECT_EQ(decoded, image);
+  }
+  encodeAlphaRuns(rgba, encoded);
+  EXPECT_LT(encoded.size(), rgba.size() / 2);
+  EXPECT_FALSE(decodeAlphaRuns(std::span(encoded).first(encoded.size() - 1), 64 * 48, decoded));
+  EXPECT_FALSE(decodeAlphaRuns(encoded, 64 * 48 - 1, decoded));
+  EXPECT_FALSE(decodeAlphaRuns(encoded, 64 * 48 + 1, decoded));
+}
+
+TEST(PartialImageBlender, NormalisesAlphasPerPixel) {
+  PartialImageBlender blender;
+  blender.reset(2, 1);
+  const std::vector<uint8_t> a = {100, 0, 0, 51, 0, 0, 0, 0}, b = {200, 30, 0, 204, 0, 0, 0, 0};
+  blender.add(a);
+  blender.add(b);
+  EXPECT_FALSE(blender.add(std::vector<uint8_t>(4, 1)));
+  std::vector<uint8_t> out;
+  blender.finish(out);
+  EXPECT_EQ(out, (std::vector<uint8_t>{180, 24, 0, 255, 0, 0, 0, 0}));
+}
+
+}  // namespace
+}  // namespace lumistage
