@@ -10,20 +10,22 @@
 #include "core/eval/leave_one_out.h"
 #include "core/eval/mocap_eval.h"
 #include "core/eval/surface_metrics.h"
+#include "core/refine/frame_refiner.h"
 #include "core/render/egl_context.h"
 #include "core/sim/studio_config.h"
+#include "core/tracking/tracked_mesh.h"
 
 namespace lumistage {
 
 namespace {
 
 // Section "render": every camera's view rendered from the others with the unstructured
-// lumigraph, compared with its image over the truth mask (docs/lumigraph.md), on the posed
-// generic mesh (the tracked pose; "unrefined") and on the true surface (the upper bound).
-// loo_psnr_db / loo_ssim are the pipeline's own geometry: the refined mesh once the refinement
-// is evaluated here, until then the unrefined one.
+// lumigraph, compared with its image over the truth mask (docs/lumigraph.md), on the pipeline's
+// own geometry — the generic human where the tracker sees the actor, refined from the images
+// (loo_psnr_db, loo_ssim) — on that mesh unrefined, and on the true surface (the upper bound).
 void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
-                    const MocapEvalResult& tracked, int frame_count, EvalReport& report) {
+                    const MocapEvalResult& tracked, const RefineConfig& refine, int frame_count,
+                    EvalReport& report) {
   const int total = std::min<int>(session.frameCount(), static_cast<int>(tracked.poses.size()));
   std::vector<int> frames;
   for (int k = 0; k < frame_count && total > 0; ++k) {
@@ -35,24 +37,36 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   EglContext gl;
   const LeaveOneOutSummary truth =
       evaluateLeaveOneOut(session, frames, [&](int i) { return truthSurface(session, i); });
-  SkinnedMesh body = generic;
-  std::vector<Eigen::Affine3f> transforms;
   const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(session, frames, [&](int i) {
-    body.skeleton.skinningTransforms(tracked.poses[i], transforms);
     TriangleMesh mesh;
-    mesh.triangles = body.rest.triangles;
-    skinMesh(body, transforms, mesh.positions, mesh.normals);
+    mesh.triangles = generic.rest.triangles;
+    poseTrackedMesh(generic, tracked.skeleton, tracked.poses[i], mesh.positions, mesh.normals);
+    return mesh;
+  });
+  std::vector<CameraFrame> images;
+  const LeaveOneOutSummary refined = evaluateLeaveOneOut(session, frames, [&](int i) {
+    // A refiner per frame: the scored frames are far apart, no temporal coherence between them.
+    FrameRefiner refiner(session.rig(), refine, generic.rest.vertexCount(), generic.rest.triangles);
+    Eigen::Matrix3Xf positions, normals;
+    poseTrackedMesh(generic, tracked.skeleton, tracked.poses[i], positions, normals);
+    session.readFrame(i, images);
+    TriangleMesh mesh;
+    mesh.triangles = generic.rest.triangles;
+    refiner.refine(images, positions, normals, mesh.positions);
+    mesh.computeNormals();
     return mesh;
   });
   report.set("render", "loo_frames", double(frames.size()));
-  report.set("render", "loo_psnr_db", unrefined.psnr_db);
-  report.set("render", "loo_ssim", unrefined.ssim);
+  report.set("render", "loo_psnr_db", refined.psnr_db);
+  report.set("render", "loo_ssim", refined.ssim);
   report.set("render", "loo_psnr_db_unrefined", unrefined.psnr_db);
   report.set("render", "loo_ssim_unrefined", unrefined.ssim);
   report.set("render", "loo_psnr_db_truth_surface", truth.psnr_db);
   report.set("render", "loo_ssim_truth_surface", truth.ssim);
   for (size_t c = 0; c < truth.per_camera.size(); ++c) {
     const std::string name = session.rig().camera(int(c)).name();
+    report.set("render", "loo_psnr_db_" + name, refined.per_camera[c].psnr_db);
+    report.set("render", "loo_ssim_" + name, refined.per_camera[c].ssim);
     report.set("render", "loo_psnr_db_unrefined_" + name, unrefined.per_camera[c].psnr_db);
     report.set("render", "loo_ssim_unrefined_" + name, unrefined.per_camera[c].ssim);
     report.set("render", "loo_psnr_db_truth_surface_" + name, truth.per_camera[c].psnr_db);
@@ -96,12 +110,13 @@ void addEvalCommand(CLI::App& app) {
     mocap.max_frames = args->frames;
     const SkinnedMesh generic = loadGenericHuman();
     const MocapEvalResult tracked = evaluateMocap(session, generic, mocap, report);
-    if (args->loo_frames > 0) addLeaveOneOut(session, generic, tracked, args->loo_frames, report);
+    SurfaceEvaluationOptions surface;
+    if (!args->config.empty()) surface.refine = loadStudioConfig(args->config).refine;
+    if (args->loo_frames > 0)
+      addLeaveOneOut(session, generic, tracked, surface.refine, args->loo_frames, report);
 
     // Refinement: the generic human posed by a fit to the true joints, refined from the images,
     // both measured against the true surface.
-    SurfaceEvaluationOptions surface;
-    if (!args->config.empty()) surface.refine = loadStudioConfig(args->config).refine;
     surface.max_frames = args->frames;
     const SurfaceEvaluation e = evaluateSurface(args->session, generic, surface);
     report.set("refine", "surface_frames", e.frames);

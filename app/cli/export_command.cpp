@@ -14,6 +14,7 @@
 #include "core/eval/eval_report.h"
 #include "core/eval/mocap_eval.h"
 #include "core/refine/frame_refiner.h"
+#include "core/tracking/tracked_mesh.h"
 
 namespace lumistage {
 
@@ -79,26 +80,16 @@ void addExportCommand(CLI::App& app) {
       fmt::print("wrote {}\n", (out / "skeleton.bvh").string());
     }
 
-    // The surface: the generic human posed by the tracked angles and scaled to the actor (the
-    // ratio of the calibrated skeleton's pelvis height to the generic one's), its pelvis where
-    // the actor's is, then refined from the frame's images.
+    // The surface: the generic human where the tracker sees the actor, refined from the images.
     std::vector<TriangleMesh> meshes;
-    std::vector<Eigen::Affine3f> transforms;
-    const Eigen::Vector3d generic_root = generic.skeleton.restPositions()[0];
-    const Eigen::Vector3d actor_root = mocap.skeleton.restPositions()[0];
-    const double scale = actor_root.z() / generic_root.z();
     FrameRefiner refiner(session.rig(), RefineConfig{}, generic.rest.vertexCount(),
                          generic.rest.triangles);
     std::vector<CameraFrame> images;
     Eigen::Matrix3Xf positions, normals;
     for (size_t i = 0; i < clip.frames.size(); ++i) {
-      Pose pose = clip.frames[i];
-      pose.root_translation_m = (actor_root + pose.root_translation_m) / scale - generic_root;
-      generic.skeleton.skinningTransforms(pose, transforms);
       TriangleMesh mesh;
       mesh.triangles = generic.rest.triangles;
-      skinMesh(generic, transforms, positions, normals);
-      positions *= float(scale);
+      poseTrackedMesh(generic, mocap.skeleton, clip.frames[i], positions, normals);
       if (args->unrefined) {
         mesh.positions = positions;
         mesh.normals = normals;
