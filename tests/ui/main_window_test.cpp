@@ -387,7 +387,10 @@ class MainWindowTest : public QObject {
     QVERIFY(clock.elapsed() < 1000);
     QVERIFY2(QString::fromStdString(health->verdict(killed_too).words).contains("exited"),
              health->verdict(killed_too).words.c_str());
-    QCOMPARE(health->verdict(kept).state, lumistage::HealthState::kStreaming);
+    // The other node never goes lost; on a loaded machine it may be late for a moment.
+    QVERIFY(health->verdict(kept).state != lumistage::HealthState::kLost);
+    QTRY_COMPARE_WITH_TIMEOUT(health->verdict(kept).state, lumistage::HealthState::kStreaming,
+                              3000);
     QTRY_COMPARE_WITH_TIMEOUT(health->table()->item(killed, 1)->text(), QString("lost"), 500);
     window.pipeline()->stop();
   }
