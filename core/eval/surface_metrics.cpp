@@ -10,50 +10,11 @@
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/body/joint_pose_fit.h"
+#include "core/body/ply_mesh.h"
 #include "core/capture/session_reader.h"
 #include "core/refine/frame_refiner.h"
 
 namespace lumistage {
-
-TriangleMesh readTruthSurface(const std::filesystem::path& path) {
-  const std::string data = readFile(path);
-  const size_t end = data.find("end_header\n");
-  if (data.rfind("ply\n", 0) != 0 || end == std::string::npos)
-    throw Error(path.string() + ": not a PLY file (expected 'ply' ... 'end_header')");
-  const std::string header = data.substr(0, end);
-  if (header.find("format binary_little_endian 1.0") == std::string::npos)
-    throw Error(path.string() + ": expected a binary little-endian PLY");
-  int vertices = -1, faces = -1;
-  for (size_t at = 0; at < header.size();) {
-    const size_t eol = header.find('\n', at);
-    const std::string line = header.substr(at, eol == std::string::npos ? eol : eol - at);
-    if (line.rfind("element vertex ", 0) == 0) vertices = std::stoi(line.substr(15));
-    if (line.rfind("element face ", 0) == 0) faces = std::stoi(line.substr(13));
-    if (eol == std::string::npos) break;
-    at = eol + 1;
-  }
-  const size_t body = end + 11;
-  if (vertices < 0 || faces < 0 ||
-      data.size() != body + size_t(vertices) * 12 + size_t(faces) * 13) {
-    throw Error(path.string() +
-                ": expected float x y z vertices and uchar-counted int triangles, sizes disagree");
-  }
-  TriangleMesh mesh;
-  mesh.positions.resize(3, vertices);
-  const char* p = data.data() + body;
-  for (int v = 0; v < vertices; ++v, p += 12) std::memcpy(mesh.positions.col(v).data(), p, 12);
-  mesh.triangles.resize(faces);
-  for (int f = 0; f < faces; ++f, p += 13) {
-    if (*p != 3) throw Error(path.string() + fmt::format(": face {} is not a triangle", f));
-    std::memcpy(mesh.triangles[f].data(), p + 1, 12);
-    for (int k = 0; k < 3; ++k) {
-      if (mesh.triangles[f][k] < 0 || mesh.triangles[f][k] >= vertices)
-        throw Error(path.string() + fmt::format(": face {} has a vertex out of range", f));
-    }
-  }
-  mesh.computeNormals();
-  return mesh;
-}
 
 namespace {
 
@@ -250,8 +211,8 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
     }
     previous = offsets;
 
-    const TriangleMesh truth = readTruthSurface(folder / "truth" / "surface" /
-                                                fmt::format("{:06}.ply", session.frameId(i)));
+    const TriangleMesh truth =
+        readPlyMesh(folder / "truth" / "surface" / fmt::format("{:06}.ply", session.frameId(i)));
     const SurfaceDistance surface(truth);
     surfaceDistancesMm(positions, surface, d);
     before.push_back(d);

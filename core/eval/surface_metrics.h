@@ -10,10 +10,6 @@
 
 namespace lumistage {
 
-// Reads a truth surface as the virtual studio writes it (truth/surface/NNNNNN.ply: binary little
-// endian, float x y z vertices, uchar-counted int triangles). Throws Error naming the file.
-TriangleMesh readTruthSurface(const std::filesystem::path& path);
-
 // Point-to-surface distances against a triangle mesh, through a uniform grid of triangles.
 class SurfaceDistance {
  public:

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <random>
 
+#include "core/body/ply_mesh.h"
 #include "tests/core/refine/refine_test_scene.h"
 #include "tests/test_util.h"
 
@@ -48,12 +49,12 @@ TEST(SurfaceDistance, ReadsTruthSurfacesAndRefusesBrokenOnes) {
   const int f[3] = {0, 1, 2};
   std::memcpy(body.data() + 37, f, 12);
   std::ofstream(folder / "ok.ply", std::ios::binary) << header << body;
-  const TriangleMesh mesh = readTruthSurface(folder / "ok.ply");
+  const TriangleMesh mesh = readPlyMesh(folder / "ok.ply");
   ASSERT_EQ(mesh.vertexCount(), 3);
   ASSERT_EQ(mesh.triangles.size(), 1u);
   EXPECT_NEAR(SurfaceDistance(mesh).distance({0.2, 0.2, 0.5}), 0.5, 1e-9);
   std::ofstream(folder / "short.ply", std::ios::binary) << header << body.substr(0, 40);
-  EXPECT_NE(testing::errorOf([&] { readTruthSurface(folder / "short.ply"); }).find("short.ply"),
+  EXPECT_NE(testing::errorOf([&] { readPlyMesh(folder / "short.ply"); }).find("short.ply"),
             std::string::npos);
 }
 
