@@ -104,9 +104,6 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
 }
 
 LumigraphRenderer::~LumigraphRenderer() {
-  glDeleteFramebuffers(1, &framebuffer_);
-  glDeleteRenderbuffers(1, &colour_);
-  glDeleteRenderbuffers(1, &depth_);
   glDeleteFramebuffers(1, &depth_framebuffer_);
   glDeleteRenderbuffers(1, &depth_renderbuffer_);
   glDeleteTextures(1, &depth_maps_);
@@ -247,28 +244,6 @@ void LumigraphRenderer::renderDepthMaps() {
   depth_dirty_ = false;
 }
 
-void LumigraphRenderer::ensureTarget(int width, int height) {
-  if (width == width_ && height == height_) return;
-  if (!framebuffer_) {
-    glGenFramebuffers(1, &framebuffer_);
-    glGenRenderbuffers(1, &colour_);
-    glGenRenderbuffers(1, &depth_);
-  }
-  glBindRenderbuffer(GL_RENDERBUFFER, colour_);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
-  glBindRenderbuffer(GL_RENDERBUFFER, depth_);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, width, height);
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour_);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_);
-  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-    throw Error("LumigraphRenderer: framebuffer of " + std::to_string(width) + "x" +
-                std::to_string(height) + " is incomplete");
-  }
-  width_ = width;
-  height_ = height;
-}
-
 void LumigraphRenderer::render(const Camera& desired, std::vector<uint8_t>& rgba) {
   const Eigen::Affine3f identity = Eigen::Affine3f::Identity();
   render(desired, std::span<const Eigen::Affine3f>(&identity, 1), rgba);
@@ -277,9 +252,7 @@ void LumigraphRenderer::render(const Camera& desired, std::vector<uint8_t>& rgba
 void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Affine3f> clones,
                                std::vector<uint8_t>& rgba) {
   if (depth_dirty_) renderDepthMaps();
-  ensureTarget(desired.width(), desired.height());
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
-  glViewport(0, 0, width_, height_);
+  target_.bind(desired.width(), desired.height(), "LumigraphRenderer");
   glClearColor(0, 0, 0, 0);
   glClearDepth(1.0);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -363,10 +336,7 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glBindVertexArray(0);
   glDisable(GL_CULL_FACE);
 
-  const size_t bytes = size_t(width_) * height_ * 4;
-  if (rgba.size() != bytes) rgba.resize(bytes);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  target_.readRgba(rgba);
 }
 
 }  // namespace lumistage

@@ -9,6 +9,7 @@
 #include "core/capture/image.h"
 #include "core/geometry/rig.h"
 #include "core/render/gl.h"
+#include "core/render/render_target.h"
 
 namespace lumistage {
 
@@ -70,7 +71,6 @@ class LumigraphRenderer {
 
  private:
   void renderDepthMaps();
-  void ensureTarget(int width, int height);
 
   struct Programs;
   std::unique_ptr<Programs> programs_;
@@ -88,8 +88,7 @@ class LumigraphRenderer {
   GLuint depth_maps_ = 0, depth_framebuffer_ = 0, depth_renderbuffer_ = 0;
   int depth_width_ = 0, depth_height_ = 0;
   bool depth_dirty_ = true;
-  GLuint framebuffer_ = 0, colour_ = 0, depth_ = 0;
-  int width_ = 0, height_ = 0;
+  RenderTarget target_;
   GLuint upload_buffer_ = 0;      // pixel-buffer object for image uploads
   std::vector<float> vertices_;   // interleaved positions and normals, reused
   std::vector<uint8_t> widened_;  // rgb8 -> RGBA, reused

@@ -61,9 +61,6 @@ StudioRenderer::StudioRenderer(const SkinnedMesh& actor)
 }
 
 StudioRenderer::~StudioRenderer() {
-  glDeleteFramebuffers(1, &framebuffer_);
-  glDeleteRenderbuffers(1, &colour_);
-  glDeleteRenderbuffers(1, &depth_);
   glDeleteBuffers(1, &posed_buffer_);
   glDeleteBuffers(1, &rest_buffer_);
   glDeleteBuffers(1, &index_buffer_);
@@ -88,33 +85,9 @@ void StudioRenderer::setSurface(const Eigen::Matrix3Xf& positions,
   glBufferSubData(GL_ARRAY_BUFFER, 0, interleaved_.size() * sizeof(float), interleaved_.data());
 }
 
-void StudioRenderer::ensureTarget(int width, int height) {
-  if (width == width_ && height == height_) return;
-  if (!framebuffer_) {
-    glGenFramebuffers(1, &framebuffer_);
-    glGenRenderbuffers(1, &colour_);
-    glGenRenderbuffers(1, &depth_);
-  }
-  glBindRenderbuffer(GL_RENDERBUFFER, colour_);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
-  glBindRenderbuffer(GL_RENDERBUFFER, depth_);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, width, height);
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour_);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_);
-  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-    throw Error("StudioRenderer: framebuffer of " + std::to_string(width) + "x" +
-                std::to_string(height) + " is incomplete");
-  }
-  width_ = width;
-  height_ = height;
-}
-
 void StudioRenderer::render(const Camera& camera, const StudioLook& look, uint32_t noise_seed,
                             std::vector<uint8_t>& rgba, bool with_actor) {
-  ensureTarget(camera.width(), camera.height());
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
-  glViewport(0, 0, width_, height_);
+  target_.bind(camera.width(), camera.height(), "StudioRenderer");
   glClearColor(0, 0, 0, 0);
   glClearDepth(1.0);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -133,7 +106,7 @@ void StudioRenderer::render(const Camera& camera, const StudioLook& look, uint32
   glUniformMatrix3fv(background.uniform("rotation"), 1, GL_FALSE, R.data());
   glUniform3fv(background.uniform("camera_centre"), 1, centre.data());
   glUniform4fv(background.uniform("focal_centre"), 1, focal_centre);
-  glUniform2f(background.uniform("image_size"), float(width_), float(height_));
+  glUniform2f(background.uniform("image_size"), float(target_.width()), float(target_.height()));
   glUniform1ui(background.uniform("noise_seed"), noise_seed);
   glUniform1f(background.uniform("noise_sigma"), look.noise_sigma);
   glUniform3fv(background.uniform("screen_green"), 1, look.screen_green.data());
@@ -153,7 +126,7 @@ void StudioRenderer::render(const Camera& camera, const StudioLook& look, uint32
   const float radial[3] = {float(d.k1), float(d.k2), float(d.k3)};
   glUniform1fv(actor.uniform("radial"), 3, radial);
   glUniform2f(actor.uniform("tangential"), float(d.p1), float(d.p2));
-  glUniform2f(actor.uniform("image_size"), float(width_), float(height_));
+  glUniform2f(actor.uniform("image_size"), float(target_.width()), float(target_.height()));
   glUniform2f(actor.uniform("depth_range"), 0.05f, 50.0f);
   glUniform3fv(actor.uniform("camera_centre"), 1, centre.data());
   glUniform1ui(actor.uniform("noise_seed"), noise_seed);
@@ -163,10 +136,7 @@ void StudioRenderer::render(const Camera& camera, const StudioLook& look, uint32
   if (with_actor) glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);
 
-  const size_t bytes = size_t(width_) * height_ * 4;
-  if (rgba.size() != bytes) rgba.resize(bytes);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  target_.readRgba(rgba);
 }
 
 }  // namespace lumistage

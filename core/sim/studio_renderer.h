@@ -8,6 +8,7 @@
 #include "core/body/skinned_mesh.h"
 #include "core/geometry/camera.h"
 #include "core/render/gl.h"
+#include "core/render/render_target.h"
 
 namespace lumistage {
 
@@ -40,16 +41,13 @@ class StudioRenderer {
               std::vector<uint8_t>& rgba, bool with_actor = true);
 
  private:
-  void ensureTarget(int width, int height);
-
   struct Programs;
   std::unique_ptr<Programs> programs_;
   GLuint vao_ = 0, background_vao_ = 0;
   GLuint posed_buffer_ = 0, rest_buffer_ = 0, index_buffer_ = 0;
   GLsizei index_count_ = 0;
   int vertex_count_ = 0;
-  GLuint framebuffer_ = 0, colour_ = 0, depth_ = 0;
-  int width_ = 0, height_ = 0;
+  RenderTarget target_;
   std::vector<float> interleaved_;  // posed positions and normals, reused
 };
 
