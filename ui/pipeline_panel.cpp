@@ -15,6 +15,7 @@
 #include <exception>
 
 #include "core/body/human_model.h"
+#include "core/pipeline/posed_body.h"
 
 namespace lumistage {
 
@@ -77,17 +78,11 @@ void PipelineWorker::run() {
       if (pipeline.studio().lastPoseFrame() != posed_frame &&
           pose_data.angles.size() == size_t(3) * human.skeleton.jointCount()) {
         posed_frame = pipeline.studio().lastPoseFrame();
-        Pose pose = Pose::rest(human.skeleton.jointCount());
-        pose.root_translation_m =
-            Eigen::Vector3d(pose_data.root[0], pose_data.root[1], pose_data.root[2]);
-        for (int j = 0; j < human.skeleton.jointCount(); ++j) {
-          pose.angles_rad[j] = Eigen::Vector3d(pose_data.angles[3 * j], pose_data.angles[3 * j + 1],
-                                               pose_data.angles[3 * j + 2]);
-        }
-        human.skeleton.jointPositions(pose, joints);
-        human.skeleton.skinningTransforms(pose, transforms);
+        human.skeleton.jointPositions(poseFromMessage(pose_data, human.skeleton.jointCount()),
+                                      joints);
+        for (Eigen::Vector3d& joint : joints) joint *= pose_data.scale;
         mesh = std::make_shared<TriangleMesh>();
-        skinMesh(human, transforms, mesh->positions, mesh->normals);
+        posedBodyMesh(human, pose_data, transforms, mesh->positions, mesh->normals);
         mesh->triangles = human.rest.triangles;
       }
       s.pose_frame = posed_frame;

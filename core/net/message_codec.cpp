@@ -62,7 +62,7 @@ struct BodyEncoder {
     const auto angles = b.CreateVector(m.angles);
     const auto joints = static_cast<uint16_t>(m.angles.size() / 3);
     return {fb::Body::Pose,
-            fb::CreatePose(b, m.root[0], m.root[1], m.root[2], joints, angles).Union()};
+            fb::CreatePose(b, m.root[0], m.root[1], m.root[2], joints, angles, m.scale).Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const VertexStatisticsData& m) const {
     const auto packed = b.CreateVector(m.packed);
@@ -236,10 +236,14 @@ Check decodePose(const fb::Pose& in, const MessageLimits& limits, PoseData& out)
     return "pose: " + num(in.joint_count()) + " joints need " + num(expected) + " angles, got " +
            num(sizeOf(in.angles()));
   }
+  if (!(in.scale() >= 0.5f && in.scale() <= 2.0f)) {
+    return "pose: scale " + std::to_string(in.scale()) + " outside 0.5..2";
+  }
   out.root[0] = in.root_x();
   out.root[1] = in.root_y();
   out.root[2] = in.root_z();
   out.angles = copyVector(in.angles());
+  out.scale = in.scale();
   return {};
 }
 

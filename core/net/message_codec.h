@@ -65,6 +65,7 @@ struct SilhouettesData {
 struct PoseData {
   float root[3] = {0, 0, 0};  // metres
   std::vector<float> angles;  // three a joint, radians
+  float scale = 1;            // of the posed body, about the world origin (posed_body.h)
   bool operator==(const PoseData&) const = default;
 };
 

@@ -10,6 +10,7 @@
 
 #include "core/base/error.h"
 #include "core/pipeline/pipeline.h"
+#include "core/pipeline/posed_body.h"
 #include "core/refine/mesh_refiner.h"
 #include "core/render/partial_image_codec.h"
 
@@ -54,17 +55,7 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
     set = it->second;
   }
   const PoseData& pose_data = std::get<PoseData>(message.body);
-  Pose pose = Pose::rest(body_.skeleton.jointCount());
-  pose.root_translation_m =
-      Eigen::Vector3d(pose_data.root[0], pose_data.root[1], pose_data.root[2]);
-  for (int j = 0;
-       j < body_.skeleton.jointCount() && 3 * j + 2 < static_cast<int>(pose_data.angles.size());
-       ++j) {
-    pose.angles_rad[j] = Eigen::Vector3d(pose_data.angles[3 * j], pose_data.angles[3 * j + 1],
-                                         pose_data.angles[3 * j + 2]);
-  }
-  body_.skeleton.skinningTransforms(pose, transforms_);
-  skinMesh(body_, transforms_, positions_, normals_);
+  posedBodyMesh(body_, pose_data, transforms_, positions_, normals_);
 
   // The refinement's samples: every vertex's offsets along its normal in this node's cameras.
   sampler_cameras_.resize(cameras_.size());

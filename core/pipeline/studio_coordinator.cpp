@@ -205,7 +205,11 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   if (tracked && tracked->valid()) {
     // The tracked angles on the nodes' generic skeleton, its pelvis where the actor's is (the
     // calibrated bone lengths stay in the studio).
-    const Eigen::Vector3d root = tracked->joints[0] - generic_root_m_;
+    // Scaled to the actor by the ratio of the pelvis heights (posed_body.h): the nodes' mesh
+    // stands on the floor and reaches the actor's height.
+    const double scale = tracker_->skeleton().restPositions()[0].z() / generic_root_m_.z();
+    const Eigen::Vector3d root = tracked->joints[0] / scale - generic_root_m_;
+    pose.scale = float(scale);
     pose.root[0] = float(root.x());
     pose.root[1] = float(root.y());
     pose.root[2] = float(root.z());

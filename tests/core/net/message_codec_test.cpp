@@ -30,6 +30,7 @@ std::vector<Message> oneOfEach() {
   pose.root[0] = 0.1f;
   pose.root[1] = -0.2f;
   pose.root[2] = 0.95f;
+  pose.scale = 1.04f;
   for (int i = 0; i < 22 * 3; ++i) pose.angles.push_back(0.01f * static_cast<float>(i));
   VertexStatisticsData stats;
   stats.vertex_count = 5;
@@ -208,6 +209,9 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
   PoseData pose;
   pose.angles.resize(7);  // the encoder writes 2 joints
   EXPECT_EQ(decodeError(envelope(pose)), "pose: 2 joints need 6 angles, got 7");
+  pose.angles.resize(6);
+  pose.scale = 5.0f;  // no actor is five times the generic human
+  EXPECT_EQ(decodeError(envelope(pose)), "pose: scale 5.000000 outside 0.5..2");
 
   OffsetsData offsets{21, {3, 21}};
   EXPECT_EQ(decodeError(envelope(offsets)), "offsets: vertex 1 has offset 21, expected below 21");

@@ -1,0 +1,23 @@
+#include "core/pipeline/posed_body.h"
+
+namespace lumistage {
+
+Pose poseFromMessage(const PoseData& data, int joint_count) {
+  Pose pose = Pose::rest(joint_count);
+  pose.root_translation_m = Eigen::Vector3d(data.root[0], data.root[1], data.root[2]);
+  for (int j = 0; j < joint_count && 3 * j + 2 < static_cast<int>(data.angles.size()); ++j) {
+    pose.angles_rad[j] =
+        Eigen::Vector3d(data.angles[3 * j], data.angles[3 * j + 1], data.angles[3 * j + 2]);
+  }
+  return pose;
+}
+
+void posedBodyMesh(const SkinnedMesh& body, const PoseData& data,
+                   std::vector<Eigen::Affine3f>& transforms, Eigen::Matrix3Xf& positions,
+                   Eigen::Matrix3Xf& normals) {
+  body.skeleton.skinningTransforms(poseFromMessage(data, body.skeleton.jointCount()), transforms);
+  skinMesh(body, transforms, positions, normals);
+  if (data.scale != 1.0f) positions *= data.scale;
+}
+
+}  // namespace lumistage
