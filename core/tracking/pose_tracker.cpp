@@ -215,6 +215,9 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   for (int j = 1; j < generic.jointCount(); ++j) {
     chain[j] = chain[generic.joint(j).parent];
     const JointLimits& l = generic.joint(j).limits;
+    // The clavicles stay at rest unless asked: the hull cannot see them, and free they soak up
+    // the shoulders' misfit (raising the shoulders, lowering the neck).
+    if (!opt.track_clavicles && (j == kRightClavicle || j == kLeftClavicle)) continue;
     for (int k = 0; k < 3; ++k) {
       if (l.upper_rad[k] > l.lower_rad[k]) {
         chain[j].push_back(int(dofs.size()));
@@ -724,10 +727,12 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
   if (opt.calibrate_shape && !shape_calibrated) {
     // Coordinate search over the body's proportions, refitting the pose for every trial.
     constexpr int kParams = 7;
-    // Which of them: the girth and the feet (shoes). The height comes from the hull's top; the
-    // limbs' proportions stay the generic ones (searching them too lowered the fit's cost but
-    // raised the joints' error: the capsules are too coarse to tell bone lengths apart).
-    const int calibrated_params = 0x60;
+    // Which of them: the legs' length, the girth and the feet (shoes). The hull's top fixes the
+    // body's overall size, so a trial leg length trades the legs against the rest of the body
+    // (the pelvis moves, the top stays): searching the legs with a free height, or the arms,
+    // lowered the fit's cost but raised the joints' error (the capsules are too coarse to tell
+    // bone lengths apart on their own).
+    const int calibrated_params = 0x64;
     double k[kParams] = {shape.height_m,
                          shape.arm_length_scale,
                          shape.leg_length_scale,
@@ -741,7 +746,10 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
     auto make = [&](const double* v) {
       foot_scale = v[6];
       BodyShape s;
-      s.height_m = v[0];
+      // The height that keeps the body's top at the hull's top with this leg length
+      // (makeHumanSkeleton: the legs are 0.84 of the generic height unit, 1.75 m).
+      s.height_m = std::clamp(BodyShape{}.height_m * top_z / (generic_top_z + 0.84 * (v[2] - 1.0)),
+                              1.3, 2.3);
       s.arm_length_scale = v[1];
       s.leg_length_scale = v[2];
       s.shoulder_width_scale = v[3];

@@ -26,6 +26,7 @@ struct PoseTrackerOptions {
   double lost_rms_m = 0.05;        // hull fit error above this...
   int lost_frames = 3;             // ...for this many frames in a row: lost, re-initialise
   bool calibrate_shape = true;     // scale the generic skeleton to the actor at initialisation
+  bool track_clavicles = false;    // fit the clavicles' angles too (else they stay at rest)
 };
 
 enum class TrackState { kNoActor, kInitialised, kTracking, kLost };
@@ -51,9 +52,10 @@ struct TrackResult {
 // Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
 // is fitted from T- and A-pose templates at its centroid in four headings, the best fit wins, and
 // (once per actor) the body shape is calibrated: the generic skeleton's bones scaled to the
-// height of the hull's top, then the capsules' girth and the feet's radius (shoes) by a
-// coordinate search that refits the pose for each trial. The limbs keep the generic proportions:
-// searching them too lowered the fit's cost but not the joints' error. A fit error above
+// height of the hull's top, then the legs' length (with the top held at the hull's), the
+// capsules' girth and the feet's radius (shoes) by a coordinate search that refits the pose for
+// each trial. The arms keep the generic proportions: searching them too lowered the fit's cost
+// but not the joints' error. The clavicles stay at rest (track_clavicles). A fit error above
 // lost_rms_m for lost_frames frames, or an empty stage, loses the actor; the next frames
 // re-initialise. No ground truth at run time. Not thread-safe; reuses its buffers (no allocation
 // per tracked frame once warm).

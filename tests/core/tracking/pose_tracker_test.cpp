@@ -56,8 +56,12 @@ TEST(PoseTracker, TracksAWalkFromTheTPose) {
   EXPECT_EQ(e.tracked, e.frames);
   EXPECT_LT(e.mean_m, 0.03);
   EXPECT_LT(e.max_m, 0.08);
-  // The shape calibration found the actor's height from the hull (1.82 m, plus hair).
-  EXPECT_NEAR(tracker.shape().height_m, 1.82, 0.04);
+  // The shape calibration found the actor's size from the hull (1.82 m, plus hair, longer legs):
+  // the calibrated skeleton's head and pelvis stand where the actor's do.
+  const auto& found = tracker.skeleton().restPositions();
+  const auto& actor = stage.actor.skeleton.restPositions();
+  EXPECT_NEAR(found[kHead].z(), actor[kHead].z(), 0.03);
+  EXPECT_NEAR(found[kPelvis].z(), actor[kPelvis].z(), 0.03);
 }
 
 TEST(PoseTracker, RecoversARandomPose) {
@@ -123,7 +127,10 @@ TEST(PoseTracker, TracksAnActorFifteenPercentTallerAfterShapeCalibration) {
   PoseTracker tracker(stage.config.rig, generic());
   const MotionClip clip = makeBuiltinClip("arm_wave", stage.actor.skeleton, 30.0, 2);
   const ClipErrors e = trackClip(stage, tracker, clip, 0, 45);
-  EXPECT_NEAR(tracker.shape().height_m, 1.75 * 1.15, 0.05);
+  const auto& found = tracker.skeleton().restPositions();
+  const auto& actor = stage.actor.skeleton.restPositions();
+  EXPECT_NEAR(found[kHead].z(), actor[kHead].z(), 0.04);
+  EXPECT_NEAR(found[kPelvis].z(), actor[kPelvis].z(), 0.04);
   EXPECT_EQ(e.tracked, e.frames);
   EXPECT_LT(e.mean_m, 0.03);
   EXPECT_LT(e.max_m, 0.08);
