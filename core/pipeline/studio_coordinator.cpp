@@ -317,7 +317,9 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     blender.finish(image.rgba);
   }
 
-  if (counting_) {
+  // A run asked for max_frames counts exactly those: frames that complete together (several are
+  // in flight) beyond it are still shown, not counted.
+  if (counting_ && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
     combine_ms_.add((combined - start) / 1e6);
     blend_ms_.add((steadyNowNs() - combined) / 1e6);
     if (frame.pose_sent_ns > 0) statistics_wait_ms_.add((now - frame.pose_sent_ns) / 1e6);
