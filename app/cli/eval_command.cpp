@@ -10,10 +10,10 @@
 #include "core/eval/leave_one_out.h"
 #include "core/eval/mocap_eval.h"
 #include "core/eval/surface_metrics.h"
+#include "core/pipeline/posed_body.h"
 #include "core/refine/frame_refiner.h"
 #include "core/render/egl_context.h"
 #include "core/sim/studio_config.h"
-#include "core/tracking/tracked_mesh.h"
 
 namespace lumistage {
 
@@ -37,10 +37,14 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   EglContext gl;
   const LeaveOneOutSummary truth =
       evaluateLeaveOneOut(session, frames, [&](int i) { return truthSurface(session, i); });
+  std::vector<Eigen::Affine3f> transforms;
   const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(session, frames, [&](int i) {
     TriangleMesh mesh;
     mesh.triangles = generic.rest.triangles;
-    poseTrackedMesh(generic, tracked.skeleton, tracked.poses[i], mesh.positions, mesh.normals);
+    posedBodyMesh(
+        generic,
+        poseMessageFor(generic.skeleton.restPositions()[0], tracked.skeleton, tracked.poses[i]),
+        transforms, mesh.positions, mesh.normals);
     return mesh;
   });
   std::vector<CameraFrame> images;
@@ -48,7 +52,10 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     // A refiner per frame: the scored frames are far apart, no temporal coherence between them.
     FrameRefiner refiner(session.rig(), refine, generic.rest.vertexCount(), generic.rest.triangles);
     Eigen::Matrix3Xf positions, normals;
-    poseTrackedMesh(generic, tracked.skeleton, tracked.poses[i], positions, normals);
+    posedBodyMesh(
+        generic,
+        poseMessageFor(generic.skeleton.restPositions()[0], tracked.skeleton, tracked.poses[i]),
+        transforms, positions, normals);
     session.readFrame(i, images);
     TriangleMesh mesh;
     mesh.triangles = generic.rest.triangles;

@@ -13,8 +13,8 @@
 #include "core/capture/session_reader.h"
 #include "core/eval/eval_report.h"
 #include "core/eval/mocap_eval.h"
+#include "core/pipeline/posed_body.h"
 #include "core/refine/frame_refiner.h"
-#include "core/tracking/tracked_mesh.h"
 
 namespace lumistage {
 
@@ -49,7 +49,7 @@ void addExportCommand(CLI::App& app) {
     const SessionReader session(args->session);
     const fs::path out(args->out);
     std::error_code ec;
-    fs::create_directories(out / "meshes", ec);
+    fs::create_directories(args->ply || args->obj ? out / "meshes" : out, ec);
     if (ec) throw Error(out.string() + ": cannot create: " + ec.message());
 
     // The studio's motion capture, offline: every camera keyed at low resolution, tracked.
@@ -85,11 +85,16 @@ void addExportCommand(CLI::App& app) {
     FrameRefiner refiner(session.rig(), RefineConfig{}, generic.rest.vertexCount(),
                          generic.rest.triangles);
     std::vector<CameraFrame> images;
+    std::vector<Eigen::Affine3f> transforms;
     Eigen::Matrix3Xf positions, normals;
-    for (size_t i = 0; i < clip.frames.size(); ++i) {
+    const bool surfaces = args->glb || args->ply || args->obj;
+    for (size_t i = 0; surfaces && i < clip.frames.size(); ++i) {
       TriangleMesh mesh;
       mesh.triangles = generic.rest.triangles;
-      poseTrackedMesh(generic, mocap.skeleton, clip.frames[i], positions, normals);
+      posedBodyMesh(
+          generic,
+          poseMessageFor(generic.skeleton.restPositions()[0], mocap.skeleton, clip.frames[i]),
+          transforms, positions, normals);
       if (args->unrefined) {
         mesh.positions = positions;
         mesh.normals = normals;

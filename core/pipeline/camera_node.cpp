@@ -69,11 +69,12 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   stats.offset_count = options_.refine.offset_count;
   encodeRefinementStatistics(refine_stats_, stats.packed);
   // Kept until the studio's offsets for the frame arrive.
-  Posed& posed = posed_[message.frame_id];
+  Posed& posed = keepPosed(message.frame_id);
   posed.set = set;
   posed.positions = positions_;
   posed.normals = normals_;
-  while (static_cast<int>(posed_.size()) > options_.frames_kept) posed_.erase(posed_.begin());
+  while (static_cast<int>(posed_.size()) > options_.frames_kept)
+    releasePosedUpTo(posed_.begin()->first);
   Message reply;
   reply.frame_id = message.frame_id;
   reply.sent_ns = steadyNowNs();
@@ -210,25 +211,44 @@ void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {
   gl_.reset();
 }
 
+CameraNode::Posed& CameraNode::keepPosed(int64_t frame_id) {
+  if (const auto it = posed_.find(frame_id); it != posed_.end()) return it->second;
+  if (spare_posed_.empty()) return posed_[frame_id];
+  auto node = std::move(spare_posed_.back());
+  spare_posed_.pop_back();
+  node.key() = frame_id;
+  return posed_.insert(std::move(node)).position->second;
+}
+
+void CameraNode::releasePosedUpTo(int64_t frame_id) {
+  while (!posed_.empty() && posed_.begin()->first <= frame_id) {
+    auto node = posed_.extract(posed_.begin());
+    node.mapped().set.reset();
+    spare_posed_.push_back(std::move(node));
+  }
+}
+
 std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message) {
   const auto it = posed_.find(message.frame_id);
   if (it == posed_.end()) return {};  // too old: dropped already
   const OffsetsData& offsets = std::get<OffsetsData>(message.body);
-  Posed posed = std::move(it->second);
-  posed_.erase(posed_.begin(), std::next(it));
-  if (offsets.offsets.size() != size_t(posed.positions.cols()) ||
-      offsets.offset_count != options_.refine.offset_count) {
-    return {};  // for another mesh or configuration
+  Posed& posed = it->second;
+  const std::shared_ptr<const Set> set = posed.set;
+  // Offsets for another mesh or configuration are ignored.
+  const bool fits = offsets.offsets.size() == size_t(posed.positions.cols()) &&
+                    offsets.offset_count == options_.refine.offset_count;
+  if (fits) {
+    applyOffsets(options_.refine, offsets.offsets, posed.positions, posed.normals, positions_);
+    normals_ = posed.normals;
   }
-  applyOffsets(options_.refine, offsets.offsets, posed.positions, posed.normals, positions_);
-  normals_ = posed.normals;
+  releasePosedUpTo(message.frame_id);  // this frame and older ones are done with
+  if (!fits || !set) return {};
   std::vector<ViewData> views;
   {
     std::lock_guard lock(view_mutex_);
     for (const auto& [id, view] : views_) views.push_back(view);
   }
-  if (!posed.set) return {};
-  return partialImagesFor(*posed.set, message.frame_id, views);
+  return partialImagesFor(*set, message.frame_id, views);
 }
 
 bool CameraNode::send(Message message) {

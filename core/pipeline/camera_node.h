@@ -123,6 +123,11 @@ class CameraNode {
     Eigen::Matrix3Xf positions, normals;
   };
   std::map<int64_t, Posed> posed_;  // frames awaiting their offsets (statistics thread's alone)
+  // Map nodes of frames done with, reused with their matrices: keeping a frame's posed mesh does
+  // not allocate once warmed up.
+  std::vector<std::map<int64_t, Posed>::node_type> spare_posed_;
+  Posed& keepPosed(int64_t frame_id);
+  void releasePosedUpTo(int64_t frame_id);
   std::atomic<int64_t> sets_sent_{0}, bytes_sent_{0};
   std::mutex monitor_mutex_;
   std::shared_ptr<const Set> monitor_set_;

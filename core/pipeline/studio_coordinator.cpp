@@ -7,6 +7,7 @@
 #include <algorithm>
 
 #include "core/body/human_model.h"
+#include "core/pipeline/posed_body.h"
 #include "core/render/partial_image_codec.h"
 
 namespace lumistage {
@@ -203,20 +204,8 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   PoseData pose;
   const TrackResult* tracked = tracker_ ? &tracker_->track(all) : nullptr;
   if (tracked && tracked->valid()) {
-    // The tracked angles on the nodes' generic skeleton, its pelvis where the actor's is (the
-    // calibrated bone lengths stay in the studio).
-    // Scaled to the actor by the ratio of the pelvis heights (posed_body.h): the nodes' mesh
-    // stands on the floor and reaches the actor's height.
-    const double scale = tracker_->skeleton().restPositions()[0].z() / generic_root_m_.z();
-    const Eigen::Vector3d root = tracked->joints[0] / scale - generic_root_m_;
-    pose.scale = float(scale);
-    pose.root[0] = float(root.x());
-    pose.root[1] = float(root.y());
-    pose.root[2] = float(root.z());
-    pose.angles.resize(size_t(3) * joints_);
-    for (int j = 0; j < joints_; ++j) {
-      for (int k = 0; k < 3; ++k) pose.angles[3 * j + k] = float(tracked->pose.angles_rad[j][k]);
-    }
+    // The tracked angles on the nodes' generic human, scaled to the actor (posed_body.h).
+    pose = poseMessageFor(generic_root_m_, tracker_->skeleton(), tracked->pose);
   } else {
     // Nobody tracked: the generic human standing where the hull is, in its rest pose.
     const ActorLocation where = locator_.locate(all);

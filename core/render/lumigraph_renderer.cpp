@@ -161,51 +161,46 @@ void LumigraphRenderer::setImage(int own_index, const ImageView& image) {
   }
   if (own_index < 0 || own_index >= static_cast<int>(own_.size()))
     throw Error("LumigraphRenderer::setImage: no own camera " + std::to_string(own_index));
-  const bool bayer = image.format != PixelFormat::kMono8;
-  if (!images_ || !bayer_) {
-    glDeleteTextures(1, &images_);
-    glGenTextures(1, &images_);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
-    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R8, images_width_, images_height_,
-                   std::max<int>(1, own_.size()));
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    bayer_ = true;
-  }
+  useImageFormat(true);
   // Mono8 goes through the same path as a Bayer image whose every cell is grey.
+  const bool bayer = image.format != PixelFormat::kMono8;
   bayer_layout_ = bayer ? bayerLayout(image.format) : BayerLayout{};
-  const size_t bytes = size_t(image.width) * image.height;
-  glBindBuffer(GL_PIXEL_UNPACK_BUFFER, upload_buffer_);
-  glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(bytes), image.data, GL_STREAM_DRAW);
-  glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, image.width, image.height, 1, GL_RED,
-                  GL_UNSIGNED_BYTE, nullptr);
-  glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+  uploadImage(own_index, image.data, image.width, image.height);
 }
 
 void LumigraphRenderer::setImageRgba(int own_index, const uint8_t* rgba, int width, int height) {
   if (own_index < 0 || own_index >= static_cast<int>(own_.size()))
     throw Error("LumigraphRenderer::setImage: no own camera " + std::to_string(own_index));
-  if (!images_ || bayer_) {
-    glDeleteTextures(1, &images_);
-    glGenTextures(1, &images_);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
-    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RGBA8, images_width_, images_height_,
-                   std::max<int>(1, own_.size()));
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  useImageFormat(false);
+  uploadImage(own_index, rgba, width, height);
+}
+
+void LumigraphRenderer::useImageFormat(bool bayer) {
+  if (images_ && bayer_ == bayer) return;
+  glDeleteTextures(1, &images_);
+  glGenTextures(1, &images_);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
+  glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, bayer ? GL_R8 : GL_RGBA8, images_width_, images_height_,
+                 std::max<int>(1, own_.size()));
+  // Bayer cells are demosaiced in the shader from exact texels; RGBA is filtered.
+  const GLint filter = bayer ? GL_NEAREST : GL_LINEAR;
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
+  if (!bayer) {
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    bayer_ = false;
   }
-  const size_t bytes = size_t(width) * height * 4;
+  bayer_ = bayer;
+}
+
+void LumigraphRenderer::uploadImage(int own_index, const void* pixels, int width, int height) {
+  const size_t bytes = size_t(width) * height * (bayer_ ? 1 : 4);
   glBindBuffer(GL_PIXEL_UNPACK_BUFFER, upload_buffer_);
-  glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(bytes), rgba, GL_STREAM_DRAW);
+  glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(bytes), pixels, GL_STREAM_DRAW);
   glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, width, height, 1, GL_RGBA,
-                  GL_UNSIGNED_BYTE, nullptr);
+  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, width, height, 1,
+                  bayer_ ? GL_RED : GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
   glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
 }
 

@@ -70,6 +70,10 @@ class LumigraphRenderer {
   void render(const Camera& desired, std::vector<uint8_t>& rgba);
 
  private:
+  // The cameras' texture array, one byte a pixel (Bayer, mono) or RGBA; remade on a change.
+  void useImageFormat(bool bayer);
+  // Through the pixel-buffer object, in the array's current format.
+  void uploadImage(int own_index, const void* pixels, int width, int height);
   void renderDepthMaps();
 
   struct Programs;
