@@ -205,7 +205,7 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
     if (!previous.empty()) {
       double change = 0;
       for (size_t v = 0; v < offsets.size(); ++v)
-        change += std::abs(config.offsetAt(offsets[v]) - config.offsetAt(previous[v]));
+        change += std::abs(config.levelOffset(offsets[v]) - config.levelOffset(previous[v]));
       change_sum += 1000.0 * change / double(offsets.size());
       ++changes;
     }

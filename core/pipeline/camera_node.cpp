@@ -236,7 +236,7 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
   const std::shared_ptr<const Set> set = posed.set;
   // Offsets for another mesh or configuration are ignored.
   const bool fits = offsets.offsets.size() == size_t(posed.positions.cols()) &&
-                    offsets.offset_count == options_.refine.offset_count;
+                    offsets.offset_count == options_.refine.offsetLevels();
   if (fits) {
     applyOffsets(options_.refine, offsets.offsets, posed.positions, posed.normals, positions_);
     normals_ = posed.normals;

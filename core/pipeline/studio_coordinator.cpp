@@ -270,7 +270,7 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
   message.sender = "studio";
   message.frame_id = frame_id;
   message.sent_ns = steadyNowNs();
-  message.body = OffsetsData{sum.offset_count, chosen_offsets_};
+  message.body = OffsetsData{refiner_->config().offsetLevels(), chosen_offsets_};
   const std::span<const uint8_t> bytes = encoder_.encode(message);
   if (counting_) refine_ms_.add((steadyNowNs() - start) / 1e6);
   int sent = 0;

@@ -26,6 +26,7 @@ class FrameRefiner {
   void refine(const std::vector<CameraFrame>& frames, const Eigen::Matrix3Xf& positions,
               const Eigen::Matrix3Xf& normals, Eigen::Matrix3Xf& refined);
 
+  // The last frame's offset levels (RefineConfig::offsetLevels()).
   const std::vector<uint8_t>& offsets() const { return offsets_; }
   // Encoded statistics of the last frame, summed over the nodes.
   size_t lastWireBytes() const { return wire_bytes_; }

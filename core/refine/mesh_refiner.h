@@ -20,8 +20,10 @@ class MeshRefiner {
               const std::vector<Eigen::Vector3i>& triangles);
   const RefineConfig& config() const { return config_; }
 
-  // Chooses an offset index per vertex (`offsets`, resized when its size differs). Returns false
-  // (offsets untouched) when the statistics' sizes are not this mesh's.
+  // Chooses an offset per vertex and writes its level (RefineConfig::offsetLevels(): twice the
+  // offset index, one more or less where the silhouette crosses next to it) to `offsets`, resized
+  // when its size differs. Returns false (offsets untouched) when the statistics' sizes are not
+  // this mesh's.
   bool refine(const RefinementStatistics& combined, std::vector<uint8_t>& offsets);
   // Forgets the previous frame (a cut, a new actor): the next frame has no temporal term.
   void resetTemporal() { has_previous_ = false; }
@@ -42,8 +44,8 @@ class MeshRefiner {
   bool has_previous_ = false;
 };
 
-// The refined mesh: each vertex moved along its normal by its chosen offset. `out` is resized only
-// when its size differs.
+// The refined mesh: each vertex moved along its normal by its chosen offset level. `out` is resized
+// only when its size differs.
 void applyOffsets(const RefineConfig& config, const std::vector<uint8_t>& offsets,
                   const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                   Eigen::Matrix3Xf& out);

@@ -25,7 +25,9 @@ class YamlReader;
 //   temporal_weight x ((t - t_previous_frame) / t_max)²: beyond the paper, against ragged
 //                     surfaces and shimmer on a still actor;
 // then the paper's fourth term: among the local minima within tie_margin of the lowest, the one
-// closest to t = 0.
+// closest to t = 0. The chosen surface is sent as a *level* on a grid of half steps (offsetLevels()
+// of them): the offset of the chosen sample, or half a step further where the next sample lies
+// outside the hull, since the silhouette crosses between the two (on average halfway).
 struct RefineConfig {
   int offset_count = 21;
   double t_max_m = 0.04;
@@ -50,6 +52,12 @@ struct RefineConfig {
     return offset_count > 1 ? -t_max_m + 2 * t_max_m * index / (offset_count - 1) : 0.0;
   }
   int zeroOffsetIndex() const { return offset_count / 2; }
+  // Levels: half steps, level 2i is offset index i (at most 255 levels in a byte).
+  int offsetLevels() const { return 2 * (offset_count - 1) + 1; }
+  double levelOffset(int level) const {
+    return offset_count > 1 ? -t_max_m + t_max_m * level / (offset_count - 1) : 0.0;
+  }
+  int zeroLevel() const { return 2 * zeroOffsetIndex(); }
 };
 
 // Reads a `refine:` map over the defaults; every key optional, unknown keys and out-of-range values

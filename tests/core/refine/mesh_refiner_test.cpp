@@ -32,6 +32,7 @@ struct OneVertex {
   }
 };
 
+// The chosen offset level: twice the offset index, +-1 where the silhouette crosses next to it.
 int refineOne(const RefineConfig& config, const RefinementStatistics& stats) {
   MeshRefiner refiner(config, 1, {});
   std::vector<uint8_t> offsets;
@@ -46,18 +47,20 @@ TEST(MeshRefiner, HullTermAloneMovesAnOutsideVertexInToTheHull) {
   // The hull's surface lies 4 steps inward: offsets beyond are outside some silhouettes, more of
   // them the further out.
   for (int i = 6; i < c.offset_count; ++i) one.stats.outside[i] = uint8_t(1 + (i - 6) / 4);
-  EXPECT_EQ(refineOne(c, one.stats), 5);
+  // Offset 5, the last inside; the silhouette crosses between 5 and 6: halfway, level 11.
+  EXPECT_EQ(refineOne(c, one.stats), 2 * 5 + 1);
 }
 
 TEST(MeshRefiner, OutwardTermAloneFavoursLargeOffsets) {
   RefineConfig c = noTerms();
   c.outward_weight = 1;
   OneVertex one(c);
-  EXPECT_EQ(refineOne(c, one.stats), c.offset_count - 1);
-  // With the hull: as far out as the hull allows.
+  EXPECT_EQ(refineOne(c, one.stats), 2 * (c.offset_count - 1));
+  // With the hull: as far out as the hull allows, half a step beyond the last sample inside.
   c.outside_weight = 1;
   for (int i = 15; i < c.offset_count; ++i) one.stats.outside[i] = 2;
-  EXPECT_EQ(refineOne(c, one.stats), 14);
+  EXPECT_EQ(refineOne(c, one.stats), 2 * 14 + 1);
+  EXPECT_NEAR(c.levelOffset(2 * 14 + 1), (c.offsetAt(14) + c.offsetAt(15)) / 2, 1e-12);
 }
 
 TEST(MeshRefiner, ColourTermAloneFindsTheConsistentOffset) {
@@ -65,7 +68,7 @@ TEST(MeshRefiner, ColourTermAloneFindsTheConsistentOffset) {
   c.colour_weight = 1;
   OneVertex one(c);
   for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, i == 13 ? 1 : 40);
-  EXPECT_EQ(refineOne(c, one.stats), 13);
+  EXPECT_EQ(refineOne(c, one.stats), 2 * 13);
   {  // The refiner's fast path computes what dataError() says.
     MeshRefiner refiner(c, 1, {});
     std::vector<uint8_t> offsets;
@@ -76,7 +79,7 @@ TEST(MeshRefiner, ColourTermAloneFindsTheConsistentOffset) {
   // A point outside the hull has no colour consistency, whatever the colours say.
   one.stats.outside[13] = 1;
   one.stats.dropColourOutside();
-  EXPECT_NE(refineOne(c, one.stats), 13);
+  EXPECT_NE(refineOne(c, one.stats) / 2, 13);
 }
 
 TEST(MeshRefiner, TieBreakTakesTheMinimumClosestToZero) {
@@ -86,11 +89,24 @@ TEST(MeshRefiner, TieBreakTakesTheMinimumClosestToZero) {
   OneVertex one(c);
   // Two consistent offsets (the paper's Fig. 3: the torso at 8, the arm at 18).
   for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, (i == 8 || i == 18) ? 1 : 40);
-  EXPECT_EQ(refineOne(c, one.stats), 8);
+  EXPECT_EQ(refineOne(c, one.stats), 2 * 8);
   // The far one is much better than the margin: it wins.
   one.stats.reset(1, c.offset_count, c.colour_bits);
   for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, i == 18 ? 0 : (i == 8 ? 12 : 40));
-  EXPECT_EQ(refineOne(c, one.stats), 18);
+  EXPECT_EQ(refineOne(c, one.stats), 2 * 18);
+}
+
+TEST(MeshRefiner, ASilhouetteCrossingInwardMovesHalfAStepIn) {
+  RefineConfig c = noTerms();
+  c.colour_weight = 1;
+  c.outside_weight = 1;
+  OneVertex one(c);
+  // The colours agree best at offset 3, just inside; offsets 0 to 2 fall outside a silhouette
+  // (a point on the far side of a thin limb): the surface lies between 2 and 3.
+  for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, i == 3 ? 1 : 40);
+  for (int i = 0; i < 3; ++i) one.stats.outside[i] = 1;
+  one.stats.dropColourOutside();
+  EXPECT_EQ(refineOne(c, one.stats), 2 * 3 - 1);
 }
 
 TEST(MeshRefiner, SmoothnessPullsAnAmbiguousVertexToItsNeighbours) {
@@ -122,11 +138,11 @@ TEST(MeshRefiner, SmoothnessPullsAnAmbiguousVertexToItsNeighbours) {
   colour_only.colour_weight = 1;
   MeshRefiner without(colour_only, 7, triangles);
   ASSERT_TRUE(without.refine(stats, offsets));
-  EXPECT_EQ(offsets[0], 5);
+  EXPECT_EQ(offsets[0], 2 * 5);
   MeshRefiner with(c, 7, triangles);
   ASSERT_TRUE(with.refine(stats, offsets));
-  EXPECT_EQ(offsets[0], 15);
-  for (int v = 1; v < 7; ++v) EXPECT_EQ(offsets[v], 15);
+  EXPECT_EQ(offsets[0], 2 * 15);
+  for (int v = 1; v < 7; ++v) EXPECT_EQ(offsets[v], 2 * 15);
 }
 
 TEST(MeshRefiner, TemporalTermKeepsAStillVertexWhereItWas) {
@@ -138,16 +154,16 @@ TEST(MeshRefiner, TemporalTermKeepsAStillVertexWhereItWas) {
   OneVertex first(c);
   for (int i = 0; i < c.offset_count; ++i) first.colour(i, 4, 120, i == 16 ? 1 : 40);
   ASSERT_TRUE(refiner.refine(first.stats, offsets));
-  EXPECT_EQ(offsets[0], 16);
+  EXPECT_EQ(offsets[0], 2 * 16);
   // Next frame: noise makes offset 4 look a little better than 16; the vertex stays.
   OneVertex next(c);
   for (int i = 0; i < c.offset_count; ++i) next.colour(i, 4, 120, i == 4 ? 2 : (i == 16 ? 4 : 40));
   ASSERT_TRUE(refiner.refine(next.stats, offsets));
-  EXPECT_EQ(offsets[0], 16);
+  EXPECT_EQ(offsets[0], 2 * 16);
   // Without the previous frame, it would have jumped.
   refiner.resetTemporal();
   ASSERT_TRUE(refiner.refine(next.stats, offsets));
-  EXPECT_EQ(offsets[0], 4);
+  EXPECT_EQ(offsets[0], 2 * 4);
 }
 
 TEST(MeshRefiner, RefusesStatisticsOfAnotherMesh) {
