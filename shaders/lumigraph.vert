@@ -8,6 +8,8 @@
 //   t        = (k+1)-th smallest candidate angle, or max_angle with at most k candidates
 //   w_i      = max(0, 1 - angle_i / t) / max(angle_i, epsilon) * smoothstep(min_facing, 1, facing_i)
 //              for the k candidates of smallest angle, 0 for every other camera.
+// The desired view rasterises p + dilation * n (texture coordinates and weights stay p's): the flat
+// triangles between vertices cut inside a curved surface's silhouette (LumigraphParams).
 // The weights are computed in the captured actor's frame: a clone's desired camera is brought
 // into it (desired_centre), and only the clone's placement moves the vertex on screen.
 // kOwnCameras (the renderer's own cameras, whose images it has) is defined when compiling.
@@ -16,6 +18,7 @@ const int kMaxK = 4;
 
 layout(location = 0) in vec3 position;  // captured actor frame (= capture world), metres
 layout(location = 1) in vec3 normal;
+layout(location = 2) in float dilation;  // metres out along the normal, for the desired view only
 
 uniform int camera_count;
 uniform mat3 rotations[kMaxCameras];
@@ -136,7 +139,7 @@ void main() {
     }
   }
 
-  vec3 world = (clone * vec4(p, 1.0)).xyz;
+  vec3 world = (clone * vec4(p + dilation * n, 1.0)).xyz;
   vec3 c = view_rotation * world + view_translation;
   vec2 pixel = projectPixel(c, view_focal_centre, view_skew, view_radial, view_tangential);
   vec2 ndc = (pixel + 0.5) / view_size * 2.0 - 1.0;

@@ -9,6 +9,10 @@
 
 namespace lumistage {
 
+namespace {
+constexpr int kVertexFloats = 7;  // position, normal, rim dilation
+}  // namespace
+
 struct LumigraphRenderer::Programs {
   explicit Programs(int own)
       : blend("lumigraph.vert", "lumigraph.frag",
@@ -61,12 +65,24 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
   programs_ = std::make_unique<Programs>(static_cast<int>(own_.size()));
   params_.k = std::clamp(params_.k, 1, 4);
   params_.depth_map_divisor = std::max(1, params_.depth_map_divisor);
+  params_.cpu_depth_map_divisor = std::max(1, params_.cpu_depth_map_divisor);
+  if (params_.depth_maps == LumigraphParams::DepthMaps::kAuto) {
+    const char* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    const std::string renderer = name ? name : "";
+    const bool software = renderer.find("llvmpipe") != std::string::npos ||
+                          renderer.find("softpipe") != std::string::npos;
+    params_.depth_maps =
+        software ? LumigraphParams::DepthMaps::kCpu : LumigraphParams::DepthMaps::kGpu;
+  }
+  cpu_depth_maps_ = params_.depth_maps == LumigraphParams::DepthMaps::kCpu;
+  depth_divisor_ = cpu_depth_maps_ ? params_.cpu_depth_map_divisor : params_.depth_map_divisor;
+  if (cpu_depth_maps_) cpu_maps_.resize(rig_.cameraCount());
   for (const Camera& c : rig_.cameras()) {
     images_width_ = std::max(images_width_, c.width());
     images_height_ = std::max(images_height_, c.height());
   }
-  depth_width_ = (images_width_ + params_.depth_map_divisor - 1) / params_.depth_map_divisor;
-  depth_height_ = (images_height_ + params_.depth_map_divisor - 1) / params_.depth_map_divisor;
+  depth_width_ = (images_width_ + depth_divisor_ - 1) / depth_divisor_;
+  depth_height_ = (images_height_ + depth_divisor_ - 1) / depth_divisor_;
 
   glGenVertexArrays(1, &vao_);
   glGenBuffers(1, &vertex_buffer_);
@@ -74,11 +90,14 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
   glGenBuffers(1, &upload_buffer_);
   glBindVertexArray(vao_);
   glBindBuffer(GL_ARRAY_BUFFER, vertex_buffer_);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, kVertexFloats * sizeof(float), nullptr);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, kVertexFloats * sizeof(float),
                         reinterpret_cast<void*>(3 * sizeof(float)));
+  glVertexAttribPointer(2, 1, GL_FLOAT, GL_FALSE, kVertexFloats * sizeof(float),
+                        reinterpret_cast<void*>(6 * sizeof(float)));
   glEnableVertexAttribArray(0);
   glEnableVertexAttribArray(1);
+  glEnableVertexAttribArray(2);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
   glBindVertexArray(0);
 
@@ -100,6 +119,12 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
   glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, depth_maps_, 0, 0);
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw Error("LumigraphRenderer: the depth-map framebuffer is incomplete");
+  // Every texel far: a smaller camera's CPU map leaves the rest of its layer as it is.
+  const float far[4] = {DepthMap::kFar, DepthMap::kFar, DepthMap::kFar, DepthMap::kFar};
+  for (int c = 0; c < rig_.cameraCount(); ++c) {
+    glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, depth_maps_, 0, c);
+    glClearBufferfv(GL_COLOR, 0, far);
+  }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
@@ -118,12 +143,31 @@ void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::
                                 std::span<const Eigen::Vector3i> triangles) {
   const int n = static_cast<int>(positions.cols());
   if (normals.cols() != n) throw Error("LumigraphRenderer::setMesh: one normal per vertex needed");
-  vertices_.resize(size_t(6) * n);
-  for (int v = 0; v < n; ++v) {
-    for (int k = 0; k < 3; ++k) {
-      vertices_[6 * v + k] = positions(k, v);
-      vertices_[6 * v + 3 + k] = normals(k, v);
+  // Rim dilation: the mean sagitta of each vertex's edges, (-n_v . (p_u - p_v)) / 4 for an edge
+  // v-u where the surface bends away (convex), 0 where it bends toward the normal.
+  rim_sum_.assign(n, 0.0f);
+  rim_count_.assign(n, 0);
+  if (params_.rim_dilation > 0) {
+    for (const Eigen::Vector3i& t : triangles) {
+      if (t.minCoeff() < 0 || t.maxCoeff() >= n) continue;
+      for (int e = 0; e < 3; ++e) {
+        const int a = t[e], b = t[(e + 1) % 3];
+        const Eigen::Vector3f d = positions.col(b) - positions.col(a);
+        rim_sum_[a] += std::max(0.0f, -normals.col(a).dot(d)) * 0.25f;
+        rim_sum_[b] += std::max(0.0f, normals.col(b).dot(d)) * 0.25f;
+        ++rim_count_[a];
+        ++rim_count_[b];
+      }
     }
+  }
+  vertices_.resize(size_t(kVertexFloats) * n);
+  for (int v = 0; v < n; ++v) {
+    float* out = &vertices_[size_t(kVertexFloats) * v];
+    for (int k = 0; k < 3; ++k) {
+      out[k] = positions(k, v);
+      out[3 + k] = normals(k, v);
+    }
+    out[6] = rim_count_[v] > 0 ? params_.rim_dilation * rim_sum_[v] / float(rim_count_[v]) : 0.0f;
   }
   glBindVertexArray(vao_);
   glBindBuffer(GL_ARRAY_BUFFER, vertex_buffer_);
@@ -142,6 +186,10 @@ void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::
   if (index_bytes > 0) glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, index_bytes, triangles.data());
   index_count_ = static_cast<GLsizei>(triangles.size() * 3);
   glBindVertexArray(0);
+  if (cpu_depth_maps_) {
+    mesh_positions_ = positions;
+    mesh_triangles_.assign(triangles.begin(), triangles.end());
+  }
   depth_dirty_ = true;
 }
 
@@ -210,6 +258,19 @@ void LumigraphRenderer::setActive(const std::vector<bool>& active) {
 }
 
 void LumigraphRenderer::renderDepthMaps() {
+  if (cpu_depth_maps_) {
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, depth_maps_);
+    for (int c = 0; c < rig_.cameraCount(); ++c) {
+      DepthMap& map = cpu_maps_[c];
+      map.render(rig_.camera(c), mesh_positions_, mesh_triangles_, depth_divisor_);
+      glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, c, map.width(), map.height(), 1, GL_RED,
+                      GL_FLOAT, map.depths().data());
+    }
+    depth_dirty_ = false;
+    return;
+  }
   glBindFramebuffer(GL_FRAMEBUFFER, depth_framebuffer_);
   glViewport(0, 0, depth_width_, depth_height_);
   glEnable(GL_DEPTH_TEST);
@@ -217,7 +278,7 @@ void LumigraphRenderer::renderDepthMaps() {
   glDisable(GL_BLEND);
   const ShaderProgram& p = programs_->depth;
   p.use();
-  glUniform1f(p.uniform("map_scale"), 1.0f / float(params_.depth_map_divisor));
+  glUniform1f(p.uniform("map_scale"), 1.0f / float(depth_divisor_));
   glUniform2f(p.uniform("map_size"), float(depth_width_), float(depth_height_));
   glBindVertexArray(vao_);
   const float far[4] = {1e30f, 1e30f, 1e30f, 1e30f};
@@ -290,7 +351,7 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform3fv(p.uniform("centres"), n, centres.data());
   glUniform1iv(p.uniform("camera_active"), n, active_.data());
   glUniform1iv(p.uniform("own_camera"), static_cast<GLsizei>(own_.size()), own_.data());
-  glUniform1f(p.uniform("depth_scale"), 1.0f / float(params_.depth_map_divisor));
+  glUniform1f(p.uniform("depth_scale"), 1.0f / float(depth_divisor_));
   glUniform2f(p.uniform("depth_map_size"), float(depth_width_), float(depth_height_));
   glUniform1f(p.uniform("depth_tolerance"), params_.depth_tolerance_m);
   glUniform1i(p.uniform("k_nearest"), params_.k);

@@ -75,7 +75,10 @@ Camera viewOf(int width, int height) {
 std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int divisor = 2) {
   Scene& s = scene();
   LumigraphParams params;
-  params.depth_map_divisor = divisor;
+  // The GPU's maps at 1/divisor, or (divisor < 0) the CPU's at 1/-divisor.
+  params.depth_maps =
+      divisor > 0 ? LumigraphParams::DepthMaps::kGpu : LumigraphParams::DepthMaps::kCpu;
+  params.depth_map_divisor = params.cpu_depth_map_divisor = std::abs(divisor);
   auto r = std::make_unique<LumigraphRenderer>(s.studio->rig(), s.node, params);
   const TriangleMesh& m = mesh == 0 ? s.frame.surface : s.generic;
   r->setMesh(m.positions, m.normals, m.triangles);
@@ -115,7 +118,8 @@ BENCHMARK(nodePartialImage)
     ->Args({1920, 1080, 1, 1})
     ->Unit(benchmark::kMillisecond);
 
-// A new mesh: the 12 visibility maps (the camera's size / divisor) rendered again before the view.
+// A new mesh: the 12 visibility maps (the camera's size / divisor; negative: by the CPU) rendered
+// again before the view.
 void nodeMeshAndPartialImage(benchmark::State& state) {
   Scene& s = scene();
   const TriangleMesh& m = state.range(0) ? s.generic : s.frame.surface;
@@ -132,7 +136,7 @@ void nodeMeshAndPartialImage(benchmark::State& state) {
 }
 BENCHMARK(nodeMeshAndPartialImage)
     ->ArgNames({"generic", "divisor"})
-    ->ArgsProduct({{0, 1}, {2, 4}})
+    ->ArgsProduct({{0, 1}, {2, 4, 8, -2, -4, -8}})
     ->Unit(benchmark::kMillisecond);
 
 // Uploading the node's 3 images of 1024x768: Bayer (1 byte a pixel) or RGBA (4).

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -12,6 +13,7 @@
 #include "core/render/partial_image_blender.h"
 #include "core/render/partial_image_codec.h"
 #include "core/sim/virtual_studio.h"
+#include "tests/core/refine/refine_test_scene.h"
 
 namespace lumistage {
 namespace {
@@ -147,6 +149,34 @@ TEST_F(LumigraphRendererTest, DistributedImageEqualsTheSingleProcessImage) {
   EXPECT_EQ(covered(distributed), covered(local_blended));
 }
 
+// The visibility maps rasterised by the CPU (what llvmpipe machines use) and by OpenGL give the
+// same image but where a vertex sits at an occlusion boundary.
+TEST_F(LumigraphRendererTest, VisibilityMapsFromTheCpuMatchTheGpus) {
+  std::vector<uint8_t> images[2];
+  int k = 0;
+  for (const auto maps : {LumigraphParams::DepthMaps::kGpu, LumigraphParams::DepthMaps::kCpu}) {
+    LumigraphParams params;
+    params.depth_maps = maps;
+    params.depth_map_divisor = params.cpu_depth_map_divisor = 2;
+    std::vector<int> all;
+    for (int c = 0; c < rig().cameraCount(); ++c) all.push_back(c);
+    LumigraphRenderer renderer(rig(), all, params);
+    renderer.setMesh(frame_->surface.positions, frame_->surface.normals, frame_->surface.triangles);
+    for (int c = 0; c < rig().cameraCount(); ++c)
+      renderer.setImageRgba(c, frame_->images[c].data(), rig().camera(c).width(),
+                            rig().camera(c).height());
+    renderer.render(desiredView(), images[k++]);
+  }
+  const Camera view = desiredView();
+  const std::vector<uint8_t> all_pixels(size_t(view.width()) * view.height(), 1);
+  ASSERT_GT(covered(images[0]), 5000);
+  EXPECT_EQ(covered(images[0]), covered(images[1]));
+  const ViewScore score =
+      compareOverMask(images[1], images[0], all_pixels, view.width(), view.height());
+  std::printf("  CPU against GPU visibility maps: %.1f dB\n", score.psnr_db);
+  EXPECT_GT(score.psnr_db, 60.0);  // 93 dB measured; no occlusion at all gives 41 dB
+}
+
 TEST_F(LumigraphRendererTest, SeveralViewsOfOneFrameDoNotDisturbEachOther) {
   auto renderer = makeRenderer(rig().nodes()[1].cameras);
   const Camera desired = desiredView();
@@ -215,6 +245,57 @@ TEST_F(LumigraphRendererTest, LeaveOneOutOnTheTrueSurfaceReachesTheTarget) {
   }
   EXPECT_GT(psnr, 28.0);
   EXPECT_GT(ssim, 0.8);
+}
+
+// The flat triangles of a coarse mesh cut inside a curved surface's silhouette; rim dilation
+// brings the rendered silhouette back out to it, without drawing much beyond it.
+TEST_F(LumigraphRendererTest, RimDilationKeepsTheSilhouetteOfACoarseSphere) {
+  const Eigen::Vector3d centre(0, 0, 1.0);
+  const double radius = 0.3;
+  const TriangleMesh sphere = testing::icosphere(centre, radius, 1);  // 42 vertices, 19 cm edges
+  const Camera& camera = rig().camera(2);
+  // The true sphere's silhouette, pixel by pixel.
+  std::vector<uint8_t> mask(size_t(camera.width()) * camera.height(), 0);
+  for (int y = 0; y < camera.height(); ++y) {
+    for (int x = 0; x < camera.width(); ++x) {
+      const std::optional<Ray> ray = camera.unproject(Eigen::Vector2d(x, y));
+      if (!ray) continue;
+      const Eigen::Vector3d to_centre = centre - ray->origin;
+      const double along = to_centre.dot(ray->direction);
+      mask[size_t(y) * camera.width() + x] =
+          along > 0 && (to_centre - along * ray->direction).norm() < radius;
+    }
+  }
+  const std::vector<uint8_t> grey(size_t(camera.width()) * camera.height() * 4, 128);
+  auto silhouetteErrors = [&](float rim_dilation) {
+    LumigraphParams params;
+    params.rim_dilation = rim_dilation;
+    std::vector<int> all;
+    for (int c = 0; c < rig().cameraCount(); ++c) all.push_back(c);
+    LumigraphRenderer renderer(rig(), all, params);
+    renderer.setMesh(sphere.positions, sphere.normals, sphere.triangles);
+    for (int c = 0; c < rig().cameraCount(); ++c)
+      renderer.setImageRgba(c, grey.data(), camera.width(), camera.height());
+    std::vector<uint8_t> rendered;
+    renderer.render(camera, rendered);
+    int64_t inside = 0, missed = 0, beyond = 0;
+    for (size_t i = 0; i < mask.size(); ++i) {
+      const bool drawn = rendered[4 * i + 3] > 0;
+      inside += mask[i];
+      missed += mask[i] && !drawn;
+      beyond += !mask[i] && drawn;
+    }
+    return std::array<double, 2>{double(missed) / inside, double(beyond) / inside};
+  };
+  const auto [missed_flat, beyond_flat] = silhouetteErrors(0.0f);
+  const auto [missed, beyond] = silhouetteErrors(LumigraphParams{}.rim_dilation);
+  std::printf("  sphere silhouette: missed %.2f%% -> %.2f%%, beyond %.2f%% -> %.2f%%\n",
+              100 * missed_flat, 100 * missed, 100 * beyond_flat, 100 * beyond);
+  EXPECT_GT(missed_flat, 0.02);  // the flat triangles fall short by several per cent
+  EXPECT_LT(beyond_flat, 0.002);
+  EXPECT_LT(missed, missed_flat / 3);
+  EXPECT_LT(beyond, missed_flat / 2);
+  EXPECT_LT(missed + beyond, missed_flat);
 }
 
 TEST(PartialImageCodec, RoundTripsExactly) {
