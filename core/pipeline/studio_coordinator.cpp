@@ -160,7 +160,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       frame.refine_sum.reset(int(stats->vertex_count), stats->offset_count, stats->packed[5]);
     // Integer sums of every node's cameras add up exactly, in any order.
     std::string error;
-    if (!addEncodedRefinementStatistics(stats->packed, frame.refine_sum, &error)) {
+    if (!statistics_codec_.add(stats->packed, frame.refine_sum, &error)) {
       spdlog::warn("node {}: frame {}: {}", node.report.name, message.frame_id, error);
       ++node.report.bad_messages;
       return;
