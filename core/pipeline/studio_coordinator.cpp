@@ -422,9 +422,10 @@ RunReport StudioCoordinator::report() const {
     const int64_t last = nodes_.at(n.name).last_ns;
     n.silent_ms = last > 0 ? (now - last) / 1e6 : -1;
   }
+  // Those the transport could not decode, and those decoded but refused here (statistics).
+  const auto bad = endpoint_.badMessages();
   for (NodeReport& n : r.nodes) {
-    const auto bad = endpoint_.badMessages();
-    if (const auto it = bad.find(n.name); it != bad.end()) n.bad_messages = it->second;
+    if (const auto it = bad.find(n.name); it != bad.end()) n.bad_messages += it->second;
   }
   return r;
 }
