@@ -22,6 +22,8 @@ packages=(
   iproute2 util-linux
   # transport and messages
   libzmq3-dev cppzmq-dev libflatbuffers-dev flatbuffers-compiler
+  # compression of the nodes' refinement statistics
+  libzstd-dev
   # logging, command line, config
   libspdlog-dev libfmt-dev libcli11-dev libyaml-cpp-dev
   # tests and benchmarks

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <type_traits>
 
+#include "core/refine/refinement_statistics.h"
 #include "core/render/partial_image_codec.h"
 #include "messages_generated.h"
 
@@ -258,20 +259,26 @@ Check decodeVertexStatistics(const fb::VertexStatistics& in, const MessageLimits
     return "vertex statistics: " + num(offsets) + " offsets, expected 1 to " +
            num(limits.max_offsets);
   }
-  // The packed form: an 8-byte header (vertex count, offset count, colour bits, value widths),
-  // a byte a sample, then at most 10 bytes a sample of sums and squares. Its contents are checked
-  // where it is combined (addEncodedRefinementStatistics).
+  // The statistics' wire form (core/refine/refinement_statistics.h), packed or compressed: a
+  // header that starts with the vertex and offset counts, then at most 11 bytes a sample packed,
+  // zstd's bound of that compressed. Its contents are checked where it is combined
+  // (addEncodedRefinementStatistics).
   const uint64_t samples = vertices * offsets, size = sizeOf(in.packed());
-  if (size < 8 + samples || size > 8 + samples * 11) {
+  const bool compressed = size >= kPackedStatisticsHeaderBytes && in.packed()->Get(6) == 0;
+  const uint64_t least = compressed ? kCompressedStatisticsHeaderBytes
+                                    : kPackedStatisticsHeaderBytes + samples,
+                 most = compressed ? maxCompressedStatisticsBytes(samples)
+                                   : maxPackedStatisticsBytes(samples);
+  if (size < least || size > most) {
     return "vertex statistics: " + num(vertices) + " vertices x " + num(offsets) +
-           " offsets needs " + num(8 + samples) + " to " + num(8 + samples * 11) +
-           " packed bytes, got " + num(size);
+           " offsets needs " + num(least) + " to " + num(most) +
+           (compressed ? " compressed" : " packed") + " bytes, got " + num(size);
   }
   const auto* p = in.packed()->data();
   const uint32_t packed_vertices =
       uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
   if (packed_vertices != vertices || p[4] != offsets) {
-    return "vertex statistics: the packed header says " + num(packed_vertices) + " vertices x " +
+    return "vertex statistics: the header says " + num(packed_vertices) + " vertices x " +
            num(p[4]) + " offsets";
   }
   out.vertex_count = in.vertex_count();

@@ -22,7 +22,9 @@ class FlatBufferBuilder;
 namespace lumistage {
 
 // Raised whenever a table changes in a way an older peer would misread.
-inline constexpr uint16_t kProtocolVersion = 2;  // 2: compact refinement statistics
+// 2: compact refinement statistics; 3: compressed refinement statistics (a version 2 studio would
+// count every node's statistics as a bad message).
+inline constexpr uint16_t kProtocolVersion = 3;
 
 struct HelloData {
   std::string node_name;
@@ -69,8 +71,9 @@ struct PoseData {
   bool operator==(const PoseData&) const = default;
 };
 
-// A node's refinement statistics: `packed` as encodeRefinementStatistics writes it
-// (core/refine/refinement_statistics.h); its header must agree with the counts here.
+// A node's refinement statistics: `packed` is their wire form, packed or compressed
+// (core/refine/refinement_statistics.h; nodes send it compressed); its header must agree with the
+// counts here.
 struct VertexStatisticsData {
   uint32_t vertex_count = 0;
   int offset_count = 0;

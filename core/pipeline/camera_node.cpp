@@ -67,7 +67,7 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   VertexStatisticsData stats;
   stats.vertex_count = static_cast<uint32_t>(positions_.cols());
   stats.offset_count = options_.refine.offset_count;
-  encodeRefinementStatistics(refine_stats_, stats.packed);
+  statistics_codec_.encode(refine_stats_, stats.packed);
   // Kept until the studio's offsets for the frame arrive.
   Posed& posed = keepPosed(message.frame_id);
   posed.set = set;

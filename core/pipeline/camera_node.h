@@ -17,6 +17,7 @@
 #include "core/pipeline/bounded_queue.h"
 #include "core/pipeline/silhouettes.h"
 #include "core/refine/refinement_sampler.h"
+#include "core/refine/refinement_statistics.h"
 #include "core/render/egl_context.h"
 #include "core/render/lumigraph_renderer.h"
 
@@ -117,6 +118,7 @@ class CameraNode {
   Eigen::Matrix3Xf positions_, normals_;
   RefinementSampler sampler_;
   RefinementStatistics refine_stats_;
+  RefinementStatisticsCodec statistics_codec_;  // compresses them for the wire
   std::vector<SamplerCamera> sampler_cameras_;
   struct Posed {
     std::shared_ptr<const Set> set;

@@ -160,7 +160,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       frame.refine_sum.reset(int(stats->vertex_count), stats->offset_count, stats->packed[5]);
     // Integer sums of every node's cameras add up exactly, in any order.
     std::string error;
-    if (!addEncodedRefinementStatistics(stats->packed, frame.refine_sum, &error)) {
+    if (!statistics_codec_.add(stats->packed, frame.refine_sum, &error)) {
       spdlog::warn("node {}: frame {}: {}", node.report.name, message.frame_id, error);
       ++node.report.bad_messages;
       return;
@@ -422,9 +422,10 @@ RunReport StudioCoordinator::report() const {
     const int64_t last = nodes_.at(n.name).last_ns;
     n.silent_ms = last > 0 ? (now - last) / 1e6 : -1;
   }
+  // Those the transport could not decode, and those decoded but refused here (statistics).
+  const auto bad = endpoint_.badMessages();
   for (NodeReport& n : r.nodes) {
-    const auto bad = endpoint_.badMessages();
-    if (const auto it = bad.find(n.name); it != bad.end()) n.bad_messages = it->second;
+    if (const auto it = bad.find(n.name); it != bad.end()) n.bad_messages += it->second;
   }
   return r;
 }

@@ -12,6 +12,7 @@
 #include "core/net/transport.h"
 #include "core/pipeline/pipeline.h"
 #include "core/refine/mesh_refiner.h"
+#include "core/refine/refinement_statistics.h"
 #include "core/render/partial_image_blender.h"
 #include "core/tracking/pose_tracker.h"
 #include "core/tracking/visual_hull_locator.h"
@@ -150,6 +151,7 @@ class StudioCoordinator {
   Eigen::Vector3d generic_root_m_ = Eigen::Vector3d::Zero();  // the nodes' skeleton's rest root
   std::unique_ptr<MeshRefiner> refiner_;  // made for the first statistics' vertex count
   std::vector<uint8_t> chosen_offsets_;
+  RefinementStatisticsCodec statistics_codec_;  // the nodes' statistics, decompressed here
   int joints_;
   std::map<int64_t, FrameState> frames_;
   std::map<std::string, NodeState> nodes_;

@@ -28,10 +28,10 @@ void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::M
     for (int c : node.cameras)
       inputs_.push_back({&rig_.camera(c), frames[c].image.view(), &keyers_[c], nullptr});
     sampler_.sample(inputs_, positions, normals, triangles_, node_stats_);
-    encodeRefinementStatistics(node_stats_, wire_);
+    codec_.encode(node_stats_, wire_);
     wire_bytes_ += wire_.size();
     std::string error;
-    if (!addEncodedRefinementStatistics(wire_, combined_, &error))
+    if (!codec_.add(wire_, combined_, &error))
       throw Error("refinement: node " + node.name + ": " + error);
   }
   combined_.dropColourOutside();

@@ -13,8 +13,8 @@
 namespace lumistage {
 
 // The whole refinement of one frame in one process, node by node as the distributed pipeline
-// does it (each node samples its own cameras, its statistics go through the wire encoding, the
-// module combines and refines): for offline work on a session — evaluation, export. The
+// does it (each node samples its own cameras, its statistics go through the compressed wire form,
+// the module combines and refines): for offline work on a session — evaluation, export. The
 // green-screen keyers learn the screen from the first frame's images.
 class FrameRefiner {
  public:
@@ -28,7 +28,7 @@ class FrameRefiner {
 
   // The last frame's offset levels (RefineConfig::offsetLevels()).
   const std::vector<uint8_t>& offsets() const { return offsets_; }
-  // Encoded statistics of the last frame, summed over the nodes.
+  // Compressed statistics of the last frame, summed over the nodes.
   size_t lastWireBytes() const { return wire_bytes_; }
 
  private:
@@ -40,6 +40,7 @@ class FrameRefiner {
   std::vector<GreenScreenKeyer> keyers_;
   bool keyers_learnt_ = false;
   RefinementStatistics node_stats_, combined_;
+  RefinementStatisticsCodec codec_;
   std::vector<uint8_t> wire_, offsets_;
   std::vector<SamplerCamera> inputs_;
   size_t wire_bytes_ = 0;

@@ -1,6 +1,9 @@
 #include "core/refine/refinement_statistics.h"
 
+#include <zstd.h>
+
 #include <algorithm>
+#include <string_view>
 
 namespace lumistage {
 
@@ -43,7 +46,8 @@ void RefinementStatistics::dropColourOutside() {
 
 namespace {
 
-constexpr size_t kHeaderBytes = 4 + 1 + 1 + 1 + 1;
+constexpr size_t kHeaderBytes = kPackedStatisticsHeaderBytes;
+constexpr uint8_t kZstdCompression = 1;
 
 int bytesFor(uint64_t max_value) {
   int b = 1;
@@ -95,8 +99,10 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
   }
 }
 
-bool decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& out,
-                                std::string* error, int max_samples) {
+namespace {
+
+bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std::string* error,
+                  int max_samples) {
   auto fail = [&](const char* why) {
     if (error) *error = std::string("refinement statistics: ") + why;
     return false;
@@ -134,8 +140,7 @@ bool decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatist
   return true;
 }
 
-bool addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& sum,
-                                    std::string* error) {
+bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::string* error) {
   auto fail = [&](const char* why) {
     if (error) *error = std::string("refinement statistics: ") + why;
     return false;
@@ -176,6 +181,147 @@ bool addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementSta
     sum.squares[s] += q;
   }
   return true;
+}
+
+RefinementStatisticsCodec& threadCodec() {
+  thread_local RefinementStatisticsCodec codec;
+  return codec;
+}
+
+}  // namespace
+
+static_assert(maxCompressedStatisticsBytes(100) ==
+              kCompressedStatisticsHeaderBytes + ZSTD_COMPRESSBOUND(maxPackedStatisticsBytes(100)));
+static_assert(maxCompressedStatisticsBytes(1 << 20) ==
+              kCompressedStatisticsHeaderBytes +
+                  ZSTD_COMPRESSBOUND(maxPackedStatisticsBytes(1 << 20)));
+
+bool decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& out,
+                                std::string* error, int max_samples) {
+  if (isCompressedRefinementStatistics(data))
+    return threadCodec().decode(data, out, error, max_samples);
+  return decodePacked(data, out, error, max_samples);
+}
+
+bool addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& sum,
+                                    std::string* error) {
+  if (isCompressedRefinementStatistics(data)) return threadCodec().add(data, sum, error);
+  return addPacked(data, sum, error);
+}
+
+void RefinementStatisticsCodec::ZstdFree::operator()(ZSTD_CCtx_s* c) const {
+  ZSTD_freeCCtx(c);
+}
+void RefinementStatisticsCodec::ZstdFree::operator()(ZSTD_DCtx_s* d) const {
+  ZSTD_freeDCtx(d);
+}
+
+RefinementStatisticsCodec::RefinementStatisticsCodec() = default;
+RefinementStatisticsCodec::~RefinementStatisticsCodec() = default;
+RefinementStatisticsCodec::RefinementStatisticsCodec(RefinementStatisticsCodec&&) noexcept =
+    default;
+RefinementStatisticsCodec& RefinementStatisticsCodec::operator=(
+    RefinementStatisticsCodec&&) noexcept = default;
+
+void RefinementStatisticsCodec::encode(const RefinementStatistics& stats,
+                                       std::vector<uint8_t>& out) {
+  encodeRefinementStatistics(stats, packed_);
+  if (!compressor_) {
+    compressor_.reset(ZSTD_createCCtx());
+    if (compressor_ &&
+        (ZSTD_isError(
+             ZSTD_CCtx_setParameter(compressor_.get(), ZSTD_c_compressionLevel, kZstdLevel)) ||
+         ZSTD_isError(ZSTD_CCtx_setParameter(compressor_.get(), ZSTD_c_checksumFlag, 1)))) {
+      compressor_.reset();
+    }
+  }
+  constexpr size_t h = kCompressedStatisticsHeaderBytes;
+  out.resize(h + ZSTD_compressBound(packed_.size()));
+  const size_t size = compressor_ ? ZSTD_compress2(compressor_.get(), out.data() + h,
+                                                   out.size() - h, packed_.data(), packed_.size())
+                                  : 0;
+  if (!compressor_ || ZSTD_isError(size)) {
+    out.assign(packed_.begin(), packed_.end());
+    return;
+  }
+  out.resize(h + size);
+  std::copy_n(packed_.begin(), 6, out.begin());  // vertices, offsets, colour bits
+  out[6] = 0;
+  out[7] = kZstdCompression;
+  size_t at = 8;
+  put(out, at, uint32_t(packed_.size()), 4);
+}
+
+bool RefinementStatisticsCodec::unpack(std::span<const uint8_t> data, int max_samples,
+                                       std::span<const uint8_t>& packed, std::string* error) {
+  auto fail = [&](std::string_view why) {
+    if (error) *error = "refinement statistics: " + std::string(why);
+    return false;
+  };
+  if (!isCompressedRefinementStatistics(data)) {
+    packed = data;
+    return true;
+  }
+  constexpr size_t h = kCompressedStatisticsHeaderBytes;
+  if (data.size() < h) return fail("shorter than its compressed header");
+  if (data[7] != kZstdCompression) return fail("unknown compression " + std::to_string(data[7]));
+  const uint64_t n = uint64_t(get(data.data(), 4)) * data[4];
+  if (n > uint64_t(max_samples)) return fail("too many samples");
+  const uint64_t size = get(data.data() + 8, 4);
+  if (size < kHeaderBytes + n || size > maxPackedStatisticsBytes(n)) {
+    return fail("compressed form declares " + std::to_string(size) + " packed bytes, " +
+                std::to_string(n) + " samples take " + std::to_string(kHeaderBytes + n) + " to " +
+                std::to_string(maxPackedStatisticsBytes(n)));
+  }
+  const std::span<const uint8_t> frame = data.subspan(h);
+  // Only a plain zstd frame: no skippable or legacy frames, no concatenation.
+  if (frame.size() < 4 || get(frame.data(), 4) != ZSTD_MAGICNUMBER)
+    return fail("compressed form does not hold a zstd frame");
+  const unsigned long long content = ZSTD_getFrameContentSize(frame.data(), frame.size());
+  if (content == ZSTD_CONTENTSIZE_ERROR) return fail("malformed or truncated zstd frame header");
+  if (content == ZSTD_CONTENTSIZE_UNKNOWN) return fail("zstd frame does not declare its size");
+  if (content != size) {
+    return fail("zstd frame declares " + std::to_string(content) + " bytes, the header " +
+                std::to_string(size));
+  }
+  const size_t frame_size = ZSTD_findFrameCompressedSize(frame.data(), frame.size());
+  if (ZSTD_isError(frame_size))
+    return fail("truncated zstd frame: " + std::string(ZSTD_getErrorName(frame_size)));
+  if (frame_size != frame.size()) return fail("bytes after the zstd frame");
+  if (!decompressor_) {
+    decompressor_.reset(ZSTD_createDCtx());
+    if (!decompressor_) return fail("out of memory for a zstd context");
+  }
+  packed_.resize(size);
+  const size_t got = ZSTD_decompressDCtx(decompressor_.get(), packed_.data(), packed_.size(),
+                                         frame.data(), frame.size());
+  if (ZSTD_isError(got)) return fail("corrupt zstd frame: " + std::string(ZSTD_getErrorName(got)));
+  if (got != size) {
+    return fail("zstd frame holds " + std::to_string(got) + " bytes, the header says " +
+                std::to_string(size));
+  }
+  if (!std::equal(data.begin(), data.begin() + 6, packed_.begin()))
+    return fail("the packed header differs from the compressed one");
+  packed = packed_;
+  return true;
+}
+
+bool RefinementStatisticsCodec::decode(std::span<const uint8_t> data, RefinementStatistics& out,
+                                       std::string* error, int max_samples) {
+  std::span<const uint8_t> packed;
+  return unpack(data, max_samples, packed, error) && decodePacked(packed, out, error, max_samples);
+}
+
+bool RefinementStatisticsCodec::add(std::span<const uint8_t> data, RefinementStatistics& sum,
+                                    std::string* error) {
+  // Both forms start with the sizes: another mesh's statistics are refused before decompressing.
+  if (data.size() >= kHeaderBytes && (int(get(data.data(), 4)) != sum.vertex_count ||
+                                      data[4] != sum.offset_count || data[5] != sum.colour_bits)) {
+    if (error) *error = "refinement statistics: sizes differ from the mesh's";
+    return false;
+  }
+  std::span<const uint8_t> packed;
+  return unpack(data, sum.sampleCount(), packed, error) && addPacked(packed, sum, error);
 }
 
 }  // namespace lumistage

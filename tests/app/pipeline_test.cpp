@@ -114,6 +114,8 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
     missed += n.frames_missed;
     ASSERT_EQ(n.cameras.size(), 1u) << n.name;  // health from its heartbeats
     EXPECT_GT(n.cameras[0].frames, 0) << n.name;
+    // Every message read, the compressed refinement statistics among them.
+    EXPECT_EQ(n.bad_messages, 0) << n.name;
   }
   EXPECT_LT(missed, report.frames);  // nearly every frame had all four nodes' parts
 

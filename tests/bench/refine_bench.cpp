@@ -1,7 +1,8 @@
 // Micro-benchmarks of the mesh refinement (the paper's §IV) on a frame of the virtual studio: the
 // generic human posed to the actor's true joints, the reference rig's 1024x768 images.
-//   node side:   depth maps + samples of 2000 vertices x 21 offsets x its 3 cameras (target < 5 ms)
-//   module side: decode and combine 4 nodes' statistics, choose the offsets (target < 2 ms)
+//   node side:   depth maps + samples of 2000 vertices x 21 offsets x its 3 cameras, compressed
+//                for the wire (target < 5 ms)
+//   module side: decompress and combine 4 nodes' statistics, choose the offsets (target < 2 ms)
 // Run: ./studio bench, or build/tests/bench/refine_bench
 #include <benchmark/benchmark.h>
 
@@ -10,6 +11,7 @@
 #include "core/body/joint_pose_fit.h"
 #include "core/refine/mesh_refiner.h"
 #include "core/refine/refinement_sampler.h"
+#include "core/refine/refinement_statistics.h"
 #include "core/sim/virtual_studio.h"
 
 namespace {
@@ -22,7 +24,7 @@ struct Scene {
   std::vector<Image> images;
   std::vector<GreenScreenKeyer> keyers;
   Eigen::Matrix3Xf positions, normals;
-  std::vector<std::vector<uint8_t>> wire;  // per node
+  std::vector<std::vector<uint8_t>> wire;  // per node, compressed as nodes send it
 
   Scene() {
     config = loadStudioConfig(resourcePath("studio/reference.yaml"));
@@ -42,10 +44,11 @@ struct Scene {
     posedScaledMesh(generic, fit, positions, normals);
     RefinementSampler sampler(config.refine);
     RefinementStatistics stats;
+    RefinementStatisticsCodec codec;
     for (int n = 0; n < rig.nodeCount(); ++n) {
       sampler.sample(camerasOf(n), positions, normals, generic.rest.triangles, stats);
       wire.emplace_back();
-      encodeRefinementStatistics(stats, wire.back());
+      codec.encode(stats, wire.back());
     }
   }
   std::vector<SamplerCamera> camerasOf(int node) const {
@@ -61,19 +64,22 @@ const Scene& scene() {
   return s;
 }
 
-// One node's whole share: depth maps of its 3 cameras, samples, encoding for the wire.
+// One node's whole share: depth maps of its 3 cameras, samples, the compressed wire form.
 void refineNodeSide(benchmark::State& state) {
   const Scene& s = scene();
   RefinementSampler sampler(s.config.refine);
   RefinementStatistics stats;
-  std::vector<uint8_t> wire;
+  RefinementStatisticsCodec codec;
+  std::vector<uint8_t> wire, packed;
   const std::vector<SamplerCamera> cameras = s.camerasOf(0);
   for (auto _ : state) {
     sampler.sample(cameras, s.positions, s.normals, s.generic.rest.triangles, stats);
-    encodeRefinementStatistics(stats, wire);
+    codec.encode(stats, wire);
     benchmark::DoNotOptimize(wire.data());
   }
+  encodeRefinementStatistics(stats, packed);
   state.counters["bytes"] = double(wire.size());
+  state.counters["packed_bytes"] = double(packed.size());
   state.counters["vertices"] = double(s.positions.cols());
 }
 BENCHMARK(refineNodeSide)->Unit(benchmark::kMillisecond);
@@ -92,16 +98,17 @@ void refineDepthMaps(benchmark::State& state) {
 }
 BENCHMARK(refineDepthMaps)->Unit(benchmark::kMillisecond);
 
-// The module: decode the 4 nodes' statistics, combine, choose every vertex's offset.
+// The module: decompress the 4 nodes' statistics, combine, choose every vertex's offset.
 void refineModuleSide(benchmark::State& state) {
   const Scene& s = scene();
   MeshRefiner refiner(s.config.refine, s.generic.rest.vertexCount(), s.generic.rest.triangles);
   RefinementStatistics combined;
+  RefinementStatisticsCodec codec;
   std::vector<uint8_t> offsets;
   for (auto _ : state) {
     combined.reset(s.generic.rest.vertexCount(), s.config.refine.offset_count,
                    s.config.refine.colour_bits);
-    for (const auto& w : s.wire) addEncodedRefinementStatistics(w, combined);
+    for (const auto& w : s.wire) codec.add(w, combined);
     combined.dropColourOutside();
     refiner.refine(combined, offsets);
     benchmark::DoNotOptimize(offsets.data());

@@ -1,5 +1,7 @@
-// libFuzzer target over decodeMessage(), the one place network bytes become data. Any input must
-// give a message or a reason, never a crash, a hang or a read out of bounds (AddressSanitizer).
+// libFuzzer target over decodeMessage(), the one place network bytes become data, and over the
+// decoding of the refinement statistics a message carries (packed or zstd-compressed), which the
+// studio does next. Any input must give a message or a reason, never a crash, a hang or a read
+// out of bounds (AddressSanitizer).
 // With LUMISTAGE_FUZZ_SEED_DIR set, it first writes one valid message of each kind there, so the
 // fuzzer starts from inputs that pass the verifier and explores the checks behind it.
 #include <cstdint>
@@ -8,6 +10,7 @@
 #include <string>
 
 #include "core/net/message_codec.h"
+#include "core/refine/refinement_statistics.h"
 
 namespace {
 
@@ -24,6 +27,17 @@ void writeSeeds(const std::string& dir) {
   stats.vertex_count = 2;
   stats.offset_count = 3;
   stats.packed = {2, 0, 0, 0, 3, 6, 1, 2, 0x20, 0x01, 0, 0, 0x10, 0, 4, 5, 6, 9, 9, 9, 200, 1};
+  bodies.push_back(stats);
+  RefinementStatistics small;  // the compressed form of a few samples with colour
+  small.reset(3, 4, 6);
+  for (int s = 0; s < small.sampleCount(); ++s) {
+    small.colour_count[s] = uint8_t(s % 3);
+    for (int c = 0; c < 3; ++c) small.sums[3 * s + c] = uint16_t(small.colour_count[s] * (10 + c));
+    small.squares[s] = uint32_t(small.colour_count[s] * 400);
+  }
+  stats.vertex_count = 3;
+  stats.offset_count = 4;
+  RefinementStatisticsCodec().encode(small, stats.packed);
   bodies.push_back(stats);
   bodies.push_back(OffsetsData{21, {0, 5, 20}});
   bodies.push_back(
@@ -57,5 +71,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   limits.max_vertices = 5000;
   const lumistage::DecodeResult result = lumistage::decodeMessage(data, size, limits);
   if (result.ok() == !result.error.empty()) std::abort();  // exactly one of the two
+  const auto* stats =
+      result.ok() ? std::get_if<lumistage::VertexStatisticsData>(&result.message->body) : nullptr;
+  if (stats) {
+    // As the studio: decode (checked against the message's counts) and add.
+    static lumistage::RefinementStatisticsCodec codec;
+    static lumistage::RefinementStatistics decoded, sum;
+    std::string error;
+    const bool ok = codec.decode(stats->packed, decoded, &error,
+                                 int(stats->vertex_count) * stats->offset_count);
+    if (ok == !error.empty()) std::abort();
+    sum.reset(int(stats->vertex_count), stats->offset_count, ok ? decoded.colour_bits : 6);
+    error.clear();
+    const bool added = codec.add(stats->packed, sum, &error);
+    if (added == !error.empty() || (ok && !added)) std::abort();
+  }
   return 0;
 }

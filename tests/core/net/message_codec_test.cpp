@@ -191,15 +191,20 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
   VertexStatisticsData stats;
   stats.vertex_count = 41000;
   stats.offset_count = 21;
-  stats.packed.resize(12);
+  stats.packed.assign(12, 1);
   EXPECT_EQ(decodeError(envelope(stats)),
             "vertex statistics: 41000 vertices x 21 offsets needs 861008 to 9471008 packed bytes, "
             "got 12");
+  stats.vertex_count = 2;
+  stats.offset_count = 3;
+  stats.packed.assign(150, 0);  // 0 where the packed form has its sums' width: compressed
+  EXPECT_EQ(decodeError(envelope(stats)),
+            "vertex statistics: 2 vertices x 3 offsets needs 12 to 149 compressed bytes, got 150");
 
   stats = std::get<VertexStatisticsData>(oneOfEach()[4].body);
   stats.packed[0] = 4;
   EXPECT_EQ(decodeError(envelope(stats)),
-            "vertex statistics: the packed header says 4 vertices x 3 offsets");
+            "vertex statistics: the header says 4 vertices x 3 offsets");
 
   SilhouettesData silhouettes;
   silhouettes.masks.push_back({0, 13, 7, std::vector<uint8_t>(11, 0)});

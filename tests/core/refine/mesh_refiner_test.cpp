@@ -244,14 +244,16 @@ TEST_F(EllipsoidScene, DistributedCombinationEqualsOneProcess) {
   RefinementStatistics single;
   sampler.sample(cameras(all), sphere.positions, sphere.normals, sphere.triangles, single);
 
-  // Each node samples its own cameras and sends the compact encoding; the module combines, in
-  // any order.
+  // Each node samples its own cameras and sends the compressed wire form; the module combines,
+  // in any order.
   std::vector<std::vector<uint8_t>> wire(rig_->nodeCount());
   RefinementStatistics part;
+  RefinementStatisticsCodec node_codec, module_codec;
   for (int n = 0; n < rig_->nodeCount(); ++n) {
     sampler.sample(cameras(rig_->nodes()[n].cameras), sphere.positions, sphere.normals,
                    sphere.triangles, part);
-    encodeRefinementStatistics(part, wire[n]);
+    node_codec.encode(part, wire[n]);
+    ASSERT_TRUE(isCompressedRefinementStatistics(wire[n]));
   }
   for (const std::vector<int>& order : {std::vector<int>{0, 1, 2, 3}, {3, 1, 0, 2}}) {
     RefinementStatistics combined, decoded;
@@ -265,7 +267,7 @@ TEST_F(EllipsoidScene, DistributedCombinationEqualsOneProcess) {
     // The module's fast path, straight from the wire.
     RefinementStatistics fast;
     fast.reset(sphere.vertexCount(), config.offset_count, config.colour_bits);
-    for (int n : order) ASSERT_TRUE(addEncodedRefinementStatistics(wire[n], fast));
+    for (int n : order) ASSERT_TRUE(module_codec.add(wire[n], fast));
     fast.dropColourOutside();
     EXPECT_TRUE(fast == single);
     MeshRefiner a(config, sphere.vertexCount(), sphere.triangles),

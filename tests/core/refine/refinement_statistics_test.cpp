@@ -1,9 +1,12 @@
-// The node's statistics: exact combination and the compact wire form.
+// The node's statistics: exact combination and the wire form, packed and compressed.
 #include "core/refine/refinement_statistics.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <string>
+#include <vector>
 
 namespace lumistage {
 namespace {
@@ -62,6 +65,133 @@ TEST(RefinementStatistics, MalformedWireIsRefused) {
   bad = wire;
   bad[0] = 0xff, bad[1] = 0xff, bad[2] = 0xff;  // absurd vertex count
   EXPECT_FALSE(decodeRefinementStatistics(bad, back));
+}
+
+TEST(RefinementStatistics, CompressedWireRoundTripsExactly) {
+  std::mt19937 rng(10);
+  RefinementStatisticsCodec codec, other_codec;
+  for (int cameras : {1, 3, 8}) {
+    const RefinementStatistics s = randomStatistics(rng, 300, 21, cameras);
+    std::vector<uint8_t> packed, wire, again;
+    encodeRefinementStatistics(s, packed);
+    codec.encode(s, wire);
+    ASSERT_TRUE(isCompressedRefinementStatistics(wire));
+    EXPECT_FALSE(isCompressedRefinementStatistics(packed));
+    EXPECT_LT(wire.size(), packed.size()) << cameras << " cameras";
+    // The sizes stay readable in place for the studio; the rest is one zstd frame.
+    EXPECT_TRUE(std::equal(packed.begin(), packed.begin() + 6, wire.begin()));
+    RefinementStatistics back, back_free;
+    std::string error;
+    ASSERT_TRUE(other_codec.decode(wire, back, &error)) << error;
+    EXPECT_TRUE(back == s) << cameras << " cameras";
+    ASSERT_TRUE(decodeRefinementStatistics(wire, back_free, &error)) << error;
+    EXPECT_TRUE(back_free == s);
+    // The codec reads the packed form too, and a reused codec writes the same bytes.
+    ASSERT_TRUE(other_codec.decode(packed, back, &error)) << error;
+    EXPECT_TRUE(back == s);
+    codec.encode(s, again);
+    EXPECT_EQ(again, wire);
+  }
+}
+
+TEST(RefinementStatistics, CompressedAddEqualsPackedAdd) {
+  std::mt19937 rng(11);
+  RefinementStatisticsCodec codec;
+  RefinementStatistics from_packed, from_compressed, from_free;
+  for (RefinementStatistics* sum : {&from_packed, &from_compressed, &from_free})
+    sum->reset(120, 21, 6);
+  std::vector<uint8_t> packed, wire;
+  std::string error;
+  for (int n = 0; n < 4; ++n) {
+    const RefinementStatistics s = randomStatistics(rng, 120, 21, 3);
+    encodeRefinementStatistics(s, packed);
+    codec.encode(s, wire);
+    ASSERT_TRUE(addEncodedRefinementStatistics(packed, from_packed, &error)) << error;
+    ASSERT_TRUE(codec.add(wire, from_compressed, &error)) << error;
+    ASSERT_TRUE(addEncodedRefinementStatistics(wire, from_free, &error)) << error;
+  }
+  EXPECT_TRUE(from_compressed == from_packed);
+  EXPECT_TRUE(from_free == from_packed);
+}
+
+// What a hostile or broken node could send: every case refused with its reason, nothing changed,
+// nothing decompressed beyond the bound of the header's sample count.
+TEST(RefinementStatistics, HostileCompressedWireIsRefused) {
+  std::mt19937 rng(12);
+  const RefinementStatistics s = randomStatistics(rng, 50, 21, 3);
+  RefinementStatisticsCodec codec;
+  std::vector<uint8_t> packed, wire;
+  encodeRefinementStatistics(s, packed);
+  codec.encode(s, wire);
+  ASSERT_TRUE(isCompressedRefinementStatistics(wire));
+  RefinementStatistics sum;
+  sum.reset(50, 21, 6);
+  const RefinementStatistics untouched = sum;
+  auto refusal = [&](const std::vector<uint8_t>& bad) {
+    RefinementStatistics back;
+    std::string decode_error, add_error;
+    EXPECT_FALSE(codec.decode(bad, back, &decode_error));
+    EXPECT_FALSE(codec.add(bad, sum, &add_error));
+    EXPECT_TRUE(sum == untouched);
+    EXPECT_EQ(add_error, decode_error);
+    return decode_error;
+  };
+  auto withSize = [&](uint32_t size) {
+    std::vector<uint8_t> bad = wire;
+    for (int i = 0; i < 4; ++i) bad[8 + i] = uint8_t(size >> (8 * i));
+    return bad;
+  };
+  const std::string why = "refinement statistics: ";
+
+  EXPECT_EQ(refusal({wire.begin(), wire.begin() + 10}), why + "shorter than its compressed header");
+  EXPECT_EQ(refusal({wire.begin(), wire.begin() + 14}),
+            why + "compressed form does not hold a zstd frame");
+  EXPECT_EQ(refusal({wire.begin(), wire.begin() + 17}),
+            why + "malformed or truncated zstd frame header");
+  EXPECT_EQ(refusal({wire.begin(), wire.end() - 1}).rfind(why + "truncated zstd frame: ", 0), 0u);
+  std::vector<uint8_t> bad = wire;
+  bad.push_back(0);
+  EXPECT_EQ(refusal(bad), why + "bytes after the zstd frame");
+  bad = wire;
+  bad[7] = 2;
+  EXPECT_EQ(refusal(bad), why + "unknown compression 2");
+
+  // Declared sizes: above the bound of 50 x 21 samples (8 + 11 a sample), below their counts, or
+  // other than the frame's own.
+  EXPECT_EQ(refusal(withSize(11559)),
+            why + "compressed form declares 11559 packed bytes, 1050 samples take 1058 to 11558");
+  EXPECT_EQ(refusal(withSize(1000)),
+            why + "compressed form declares 1000 packed bytes, 1050 samples take 1058 to 11558");
+  EXPECT_EQ(refusal(withSize(uint32_t(packed.size() + 1))),
+            why + "zstd frame declares " + std::to_string(packed.size()) + " bytes, the header " +
+                std::to_string(packed.size() + 1));
+
+  // Corrupt data: the checksum catches what the zstd format itself does not.
+  bad = wire;
+  bad.back() ^= 0x5a;
+  EXPECT_EQ(refusal(bad), why + "corrupt zstd frame: Restored data doesn't match checksum");
+  for (size_t at = 20; at + 8 < wire.size(); at += 97) {
+    bad = wire;
+    bad[at] ^= 0x5a;
+    EXPECT_EQ(refusal(bad).rfind(why, 0), 0u) << at;
+  }
+  // A frame that decompresses well but holds statistics other than its header says.
+  bad = wire;
+  bad[5] = 5;  // colour bits
+  RefinementStatistics back;
+  std::string error;
+  EXPECT_FALSE(codec.decode(bad, back, &error));
+  EXPECT_EQ(error, why + "the packed header differs from the compressed one");
+  // Too many samples for the reader, or another mesh's sizes: refused before decompressing.
+  EXPECT_FALSE(codec.decode(wire, back, &error, 1000));
+  EXPECT_EQ(error, why + "too many samples");
+  RefinementStatistics other;
+  other.reset(51, 21, 6);
+  EXPECT_FALSE(codec.add(wire, other, &error));
+  EXPECT_EQ(error, why + "sizes differ from the mesh's");
+  // And the codec still works after all that.
+  ASSERT_TRUE(codec.decode(wire, back, &error)) << error;
+  EXPECT_TRUE(back == s);
 }
 
 TEST(RefinementStatistics, CombiningIsExactAndOrderIndependent) {
