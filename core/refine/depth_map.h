@@ -16,7 +16,8 @@ class DepthMap {
  public:
   // Rasterises the triangles at the cells' centres (lens distortion applied at the vertices,
   // straight edges between them: fine at this resolution). Triangles with a vertex behind the
-  // camera are left out.
+  // camera are left out, and so are back faces: the mesh is closed and wound counter-clockwise
+  // seen from outside (as every mesh here), so the nearest surface is always a front face.
   void render(const Camera& camera, const Eigen::Matrix3Xf& positions,
               const std::vector<Eigen::Vector3i>& triangles, int step);
 

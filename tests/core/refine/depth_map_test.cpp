@@ -48,5 +48,23 @@ TEST(DepthMap, DepthsOfASphereAndItsHiddenSide) {
   EXPECT_EQ(wrong, 0);
 }
 
+// The nearest surface of a closed mesh is a front face: back faces are not drawn, so the same
+// sphere wound the other way round shows its far side (its inside seen from within).
+TEST(DepthMap, BackFacesAreNotDrawn) {
+  const Rig rig = testing::smallRing(640, 480);
+  const Eigen::Vector3d centre(0, 0, 1.0);
+  const double radius = 0.3;
+  TriangleMesh sphere = testing::icosphere(centre, radius, 3);
+  const Camera& camera = rig.camera(0);
+  const Eigen::Vector2d pixel = *camera.project(centre);
+  const double to_centre = camera.toCamera(centre).z();
+  DepthMap map;
+  map.render(camera, sphere.positions, sphere.triangles, 4);
+  EXPECT_NEAR(map.depthAt(float(pixel.x()), float(pixel.y())), to_centre - radius, 0.01);
+  for (Eigen::Vector3i& t : sphere.triangles) std::swap(t[1], t[2]);
+  map.render(camera, sphere.positions, sphere.triangles, 4);
+  EXPECT_NEAR(map.depthAt(float(pixel.x()), float(pixel.y())), to_centre + radius, 0.01);
+}
+
 }  // namespace
 }  // namespace lumistage
