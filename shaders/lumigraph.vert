@@ -94,8 +94,8 @@ void main() {
     vec3 to_camera = centres[i] - p;
     float f = dot(n, normalize(to_camera));
     if (f <= min_facing) continue;
-    vec4 d = textureGather(depth_maps, vec3(texel[i] * depth_scale / depth_map_size, float(i)));
-    if (c.z > min(min(d.x, d.y), min(d.z, d.w)) + depth_tolerance) continue;  // occluded
+    float d = texture(depth_maps, vec3(texel[i] * depth_scale / depth_map_size, float(i))).r;
+    if (c.z > d + depth_tolerance) continue;  // occluded
     float a = angleBetween(to_desired, to_camera);
     angle[i] = a;
     facing[i] = f;

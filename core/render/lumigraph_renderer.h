@@ -25,7 +25,7 @@ struct LumigraphParams {
   // shades vertices on one thread: the 12 maps' draws cost about 9 ms of CPU a frame there, a CPU
   // z-buffer at 1/cpu_depth_map_divisor about 2 ms), the GPU otherwise.
   enum class DepthMaps { kAuto, kGpu, kCpu } depth_maps = DepthMaps::kAuto;
-  int cpu_depth_map_divisor = 2;
+  int cpu_depth_map_divisor = 4;
   float depth_tolerance_m = 0.03f;  // a vertex this far behind the map's surface is occluded
   // The flat triangles between vertices on a curved surface cut inside it: by the sagitta of an
   // edge at its middle, (its length)² x curvature / 8, about 3 mm for 3.5 cm edges on a 5 cm limb,
