@@ -35,7 +35,7 @@ double processCpuSeconds() {
 }
 
 std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string& machine,
-                       const ViewData& view) {
+                       const ViewData& view, int max_in_flight) {
   std::string stages;
   for (const auto& [name, ms] : r.stage_ms)
     stages += fmt::format("{}\"{}\": {:.3f}", stages.empty() ? "" : ", ", name, ms);
@@ -63,12 +63,14 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       "\"stage_ms\": {{{}}},\n"
       "  \"node_bytes_per_frame\": {:.1f},\n  \"raw_bytes_per_frame_per_node\": {:.1f},\n  "
       "\"frames\": {},\n"
-      "  \"frames_dropped\": {},\n  \"hull_agreement\": {:.4f},\n  \"refusals\": {},\n"
+      "  \"frames_dropped\": {},\n  \"frames_refused\": {},\n  \"max_frames_in_flight\": {},\n"
+      "  \"hull_agreement\": {:.4f},\n  \"refusals\": {},\n"
       "  \"view\": \"{}x{}\",\n  \"cpu_cores_studio\": {:.3f},\n  \"cpu_cores_nodes\": {:.3f},\n"
       "  \"machine\": {},\n  \"nodes\": [{}\n  ]\n}}\n",
       r.fps, r.latency_ms_p50, r.latency_ms_p95, stages, r.node_bytes_per_frame,
-      r.raw_bytes_per_frame_per_node, r.frames, r.frames_dropped, r.hull_agreement, r.refusals,
-      view.width, view.height, cpu.studio_cores, cpu.nodes_cores, machine, nodes);
+      r.raw_bytes_per_frame_per_node, r.frames, r.frames_dropped, r.frames_refused, max_in_flight,
+      r.hull_agreement, r.refusals, view.width, view.height, cpu.studio_cores, cpu.nodes_cores,
+      machine, nodes);
 }
 
 }  // namespace
@@ -76,7 +78,7 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
 void addRunCommand(CLI::App& app) {
   struct Args {
     std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size;
-    int nodes = 0;
+    int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
     int64_t frames = 150;
     double seconds = 60;
     bool plain = false;
@@ -93,6 +95,10 @@ void addRunCommand(CLI::App& app) {
   run->add_option("--frames", a->frames, "stop after this many complete frames")
       ->capture_default_str();
   run->add_option("--seconds", a->seconds, "or after this long")->capture_default_str();
+  run->add_option("--max-in-flight", a->max_in_flight,
+                  "frames between motion capture and done at once; a newer frame is dropped "
+                  "before any work (0: no limit, frames queue)")
+      ->capture_default_str();
   run->add_option("--replay", a->replay,
                   "node pace: rate (as recorded) or memory (decoded up front, as fast as possible)")
       ->capture_default_str();
@@ -120,6 +126,7 @@ void addRunCommand(CLI::App& app) {
     options.plain = a->plain;
     options.keys = a->keys;
     options.coordinator.max_frames = a->frames;
+    options.coordinator.max_frames_in_flight = a->max_in_flight;
     LocalPipelineRun pipeline(options);
     StudioCoordinator& studio = pipeline.studio();
     if (!a->view_size.empty()) {
@@ -186,7 +193,8 @@ void addRunCommand(CLI::App& app) {
     if (!a->json.empty() || !a->plot.empty()) {
       const MachineInfo machine = describeMachine();
       if (!a->json.empty())
-        writeFileAtomically(a->json, reportJson(r, cpu, machineJson(machine), studio.view()));
+        writeFileAtomically(
+            a->json, reportJson(r, cpu, machineJson(machine), studio.view(), a->max_in_flight));
       if (!a->plot.empty()) {
         const std::string source = a->session.empty() ? "Aravis cameras" : a->session;
         writeRunPlot(r,

@@ -118,6 +118,8 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     return;
   }
   if (message.frame_id <= newest_done_) return;  // a frame already done or given up
+  if (std::find(refused_.begin(), refused_.end(), message.frame_id) != refused_.end())
+    return;  // dropped at admission
   if (const auto* silhouettes = std::get_if<SilhouettesData>(&message.body)) {
     FrameState& frame = frames_[message.frame_id];
     if (frame.first_ns == 0) {
@@ -197,6 +199,15 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
 }
 
 void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
+  int begun = 0;
+  for (const auto& [id, f] : frames_) begun += f.pose_sent_ns > 0;
+  if (options_.max_frames_in_flight > 0 && begun >= options_.max_frames_in_flight) {
+    if (counting_) ++frames_dropped_, ++frames_refused_;
+    frames_.erase(frame_id);                                 // the callers hold no iterator to it
+    refused_[next_refused_++ % refused_.size()] = frame_id;  // its late silhouettes are ignored
+    return;
+  }
+  if (counting_) peak_frames_begun_ = std::max(peak_frames_begun_, begun + 1);
   const int64_t start = steadyNowNs();
   std::vector<const LowResSilhouette*> all;
   all.reserve(frame.silhouettes.size());
@@ -379,6 +390,8 @@ RunReport StudioCoordinator::report() const {
   RunReport r;
   r.frames = frames_done_;
   r.frames_dropped = frames_dropped_;
+  r.frames_refused = frames_refused_;
+  r.peak_frames_begun = peak_frames_begun_;
   r.fps = frames_done_ > 1 && last_done_ns_ > start_ns_
               ? (frames_done_ - 1) / ((last_done_ns_ - start_ns_) / 1e9)
               : 0;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -26,8 +27,12 @@ struct StudioCoordinatorOptions {
   std::chrono::milliseconds deadline{120};
   std::chrono::milliseconds lost_after{1000};  // no message for this long: the node is lost
   int64_t max_frames = 0;                      // stop after this many complete frames; 0: never
-  int raw_bytes_per_pixel = 1;                 // of the cameras' images (Bayer, mono: 1; RGB: 3)
-  RefineConfig refine;                         // the refinement module's parameters
+  // A frame begins (motion capture) only while fewer frames than this are between motion capture
+  // and done; otherwise it is dropped before any work, so that a pipeline slower than its cameras
+  // drops frames instead of queueing them (latency stays bounded). 0: no limit.
+  int max_frames_in_flight = 3;
+  int raw_bytes_per_pixel = 1;  // of the cameras' images (Bayer, mono: 1; RGB: 3)
+  RefineConfig refine;          // the refinement module's parameters
   // The nodes' body mesh's triangles, for the refinement's smoothness between neighbours (empty:
   // no smoothness).
   std::vector<Eigen::Vector3i> body_triangles;
@@ -73,6 +78,9 @@ struct RunReport {
   double node_bytes_per_frame = 0;                // mean over nodes
   double raw_bytes_per_frame_per_node = 0;        // what the node's cameras deliver
   int64_t frames = 0, frames_dropped = 0;
+  int64_t frames_refused =
+      0;  // of the dropped: at admission, before any work (max_frames_in_flight)
+  int peak_frames_begun = 0;  // the most frames between motion capture and done at once
   double hull_agreement = 0;  // share of posed vertices seen inside the silhouettes
   std::vector<NodeReport> nodes;
   int64_t refusals = 0;
@@ -83,9 +91,10 @@ struct RunReport {
 // The studio's side of the distributed pipeline (DESIGN.md §1), one frame at a time per stage but
 // several frames in flight: silhouettes of frame f from the nodes -> the motion capture module
 // places the body -> pose(f) to the nodes -> their per-vertex statistics -> the module combines
-// them exactly. Motion capture is the PoseTracker (the visual-hull locator places the generic
-// human while nobody is tracked); until the refinement lands, the combined statistics give each
-// vertex its colour variance and whether every camera saw it inside the silhouettes. Never blocks
+// them exactly -> the refinement's offsets to the nodes -> their partial lumigraph images of every
+// view -> blended. Motion capture is the PoseTracker (the visual-hull locator places the generic
+// human while nobody is tracked). At most max_frames_in_flight frames are past motion capture at
+// once: a newer frame is dropped on arrival, so that latency stays bounded. Never blocks
 // on one node: each stage waits for the nodes at most `deadline`; a silent node is marked lost
 // and rejoins by itself when it speaks again.
 class StudioCoordinator {
@@ -157,6 +166,8 @@ class StudioCoordinator {
   std::map<std::string, NodeState> nodes_;
   MessageEncoder encoder_;
   int64_t newest_done_ = -1;
+  std::array<int64_t, 8> refused_{-1, -1, -1, -1, -1, -1, -1, -1};  // the latest frames dropped
+  size_t next_refused_ = 0;                                         // at admission (a ring)
   int64_t start_ns_ = 0, last_done_ns_ = 0;
   static constexpr size_t kTimelineFrames = 1 << 16;
   std::vector<std::pair<int64_t, float>> timeline_;  // done (steady ns), latency (ms)
@@ -166,7 +177,8 @@ class StudioCoordinator {
   std::vector<uint8_t> decoded_;  // a partial image, reused
   PoseData last_pose_;
   int64_t last_pose_frame_ = -1;
-  int64_t frames_done_ = 0, frames_dropped_ = 0;
+  int64_t frames_done_ = 0, frames_dropped_ = 0, frames_refused_ = 0;
+  int peak_frames_begun_ = 0;
   // Figures count once every node has spoken (or a few seconds after the first did): a start-up
   // with nodes still loading is not the pipeline's speed.
   bool counting_ = false;
