@@ -87,8 +87,10 @@ MainWindow::MainWindow(QWidget* parent)
   connect(pipeline_panel_, &PipelinePanel::demoSessionWanted, this, &MainWindow::startDemo);
   connect(viewport_panel_->viewport(), &ViewportWidget::clonesChanged, clone_panel_,
           &ClonePanel::refresh);
-  connect(clone_panel_, &ClonePanel::clonesChanged, viewport_panel_->viewport(),
-          &ViewportWidget::refresh);
+  connect(clone_panel_, &ClonePanel::clonesChanged, this, [this] {
+    viewport_panel_->viewport()->refresh();
+    pipeline_panel_->setView(viewport_panel_->viewport()->viewData());  // the nodes draw them
+  });
   connect(demo_session_, &DemoSession::made, this, &MainWindow::startDemoOn);
   connect(demo_session_, &DemoSession::failed, this, [this](const QString& error) {
     status_->setText(tr("No demo session: %1").arg(error));

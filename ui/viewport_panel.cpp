@@ -164,6 +164,18 @@ void ViewportWidget::paintTo(QPainter& painter, int w, int h) {
   painter.drawImage(0, 0, frame_);
 }
 
+ViewData ViewportWidget::viewData() const {
+  ViewData data = toViewData(view_.pose(), renderSize().width(), renderSize().height());
+  if (clones_) {
+    for (const Clone& c : clones_->clones()) {
+      data.clones.push_back(float(c.offset_m.x()));
+      data.clones.push_back(float(c.offset_m.y()));
+      data.clones.push_back(float(c.yaw_rad));
+    }
+  }
+  return data;
+}
+
 Eigen::Vector3d ViewportWidget::actorFloorPoint() const {
   if (snapshot_.joints.empty()) return Eigen::Vector3d::Zero();
   return Eigen::Vector3d(snapshot_.joints[0].x(), snapshot_.joints[0].y(), 0);
@@ -229,7 +241,9 @@ void ViewportWidget::paintScene(QPainter& painter, int w, int h) {
     for (const Clone& clone : clones_->clones()) {
       // The clone's transform acts about the actor's place: move there, turn, shift.
       const Eigen::Affine3d t = clone.transform(actor);
-      drawMesh(painter, camera, *snapshot_.mesh, t, QColor(120, 170, 230, 230), true, false);
+      // The pipeline's image shows the clones with the captured texture; without it, the mesh.
+      if (snapshot_.view.isNull())
+        drawMesh(painter, camera, *snapshot_.mesh, t, QColor(120, 170, 230, 230), true, false);
       if (const auto p = projectTo(camera, t * actor)) {
         painter.setPen(QColor(120, 170, 230));
         painter.drawText(*p + QPointF(6, 14), QString::fromStdString(clone.name));
@@ -289,6 +303,7 @@ void ViewportWidget::mouseMoveEvent(QMouseEvent* event) {
     last_mouse_ = p;
     refresh();
     emit clonesChanged();
+    emit viewChanged();  // the nodes draw the clones
     return;
   }
   if (dragging_ == Qt::LeftButton) {

@@ -59,9 +59,9 @@ class ViewportWidget : public QWidget {
   void showSnapshot(const PipelineSnapshot& snapshot);
   // The size the nodes render at: 320 wide, the widget's aspect.
   QSize renderSize() const;
-  ViewData viewData() const {
-    return toViewData(view_.pose(), renderSize().width(), renderSize().height());
-  }
+  // The view for the nodes to render, with the clones (drawn by the lumigraph with the
+  // captured texture).
+  ViewData viewData() const;
   // Where the actor stands now (the placed body's root on the floor), for clones.
   Eigen::Vector3d actorFloorPoint() const;
   const PipelineSnapshot& snapshot() const { return snapshot_; }

@@ -88,10 +88,11 @@ struct BodyEncoder {
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const ViewData& m) const {
     const auto rotation = b.CreateVector(m.rotation);
     const auto translation = b.CreateVector(m.translation);
+    const auto clones = b.CreateVector(m.clones);
     return {fb::Body::View,
             fb::CreateView(b, static_cast<uint16_t>(m.view), static_cast<uint16_t>(m.width),
                            static_cast<uint16_t>(m.height), m.fx, m.fy, m.cx, m.cy, rotation,
-                           translation)
+                           translation, clones)
                 .Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const FrameTimestampsData& m) const {
@@ -297,8 +298,18 @@ Check decodeView(const fb::View& in, const MessageLimits& limits, ViewData& out)
     return "view: " + num(in.width()) + "x" + num(in.height()) + " pixels, expected 1 to " +
            num(limits.max_image_pixels);
   }
+  const size_t clone_numbers = sizeOf(in.clones());
+  if (clone_numbers % 3 != 0 || clone_numbers / 3 > size_t(limits.max_clones)) {
+    return "view: clones take 3 numbers each (offset x, y, yaw), at most " +
+           num(limits.max_clones) + " clones; got " + num(clone_numbers) + " numbers";
+  }
   out.rotation = copyVector(in.rotation());
   out.translation = copyVector(in.translation());
+  out.clones = copyVector(in.clones());
+  for (float v : out.clones) {
+    if (!std::isfinite(v) || std::abs(v) > 1000.0f)
+      return "view: a clone's offset or turn is not a finite number within 1000";
+  }
   bool finite = std::isfinite(in.fx()) && std::isfinite(in.fy()) && std::isfinite(in.cx()) &&
                 std::isfinite(in.cy());
   for (float v : out.rotation) finite = finite && std::isfinite(v);

@@ -116,6 +116,7 @@ struct ViewData {
   float fx = 0, fy = 0, cx = 0, cy = 0;
   std::vector<float> rotation;     // 9
   std::vector<float> translation;  // 3
+  std::vector<float> clones;       // 3 a clone: floor offset x, y (m), yaw (rad)
   bool operator==(const ViewData&) const = default;
 };
 
@@ -138,7 +139,8 @@ struct MessageLimits {
   size_t max_bytes = size_t{64} << 20;
   int max_cameras = 64;  // per message: names, health entries, masks, camera indices
   uint32_t max_vertices = 200000;
-  int max_offsets = 64;
+  int max_offsets = 255;  // offset levels of the refinement, one byte
+  int max_clones = 64;    // per view
   int max_joints = 128;
   int max_mask_pixels = 1024 * 1024;
   int max_image_pixels = 4096 * 4096;

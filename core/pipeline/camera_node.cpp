@@ -12,6 +12,7 @@
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/posed_body.h"
 #include "core/refine/mesh_refiner.h"
+#include "core/render/clone_set.h"
 #include "core/render/partial_image_codec.h"
 
 namespace lumistage {
@@ -73,6 +74,7 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   posed.set = set;
   posed.positions = positions_;
   posed.normals = normals_;
+  posed.pivot = Eigen::Vector3d(positions_.row(0).mean(), positions_.row(1).mean(), 0);
   while (static_cast<int>(posed_.size()) > options_.frames_kept)
     releasePosedUpTo(posed_.begin()->first);
   Message reply;
@@ -83,7 +85,8 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
 }
 
 std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_id,
-                                                  const std::vector<ViewData>& views) {
+                                                  const std::vector<ViewData>& views,
+                                                  const Eigen::Vector3d& pivot) {
   std::vector<Message> messages;
   if (!renderer_ || views.empty()) return messages;
   renderer_->setMesh(positions_, normals_, body_.rest.triangles);
@@ -99,7 +102,15 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
     const Camera desired(
         "view", view.width, view.height, {view.fx, view.fy, view.cx, view.cy, 0}, {}, R,
         Eigen::Vector3d(view.translation[0], view.translation[1], view.translation[2]));
-    renderer_->render(desired, partial_rgba_);
+    // The actor where it was filmed, then its clones (turned about its place, shifted).
+    placements_.assign(1, Eigen::Affine3f::Identity());
+    for (size_t k = 0; k + 2 < view.clones.size(); k += 3) {
+      Clone clone;
+      clone.offset_m = Eigen::Vector2d(view.clones[k], view.clones[k + 1]);
+      clone.yaw_rad = view.clones[k + 2];
+      placements_.push_back(clone.transform(pivot).cast<float>());
+    }
+    renderer_->render(desired, placements_, partial_rgba_);
     PartialImageData image;
     image.view = view.view;
     image.width = view.width;
@@ -234,6 +245,7 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
   const OffsetsData& offsets = std::get<OffsetsData>(message.body);
   Posed& posed = it->second;
   const std::shared_ptr<const Set> set = posed.set;
+  const Eigen::Vector3d pivot = posed.pivot;
   // Offsets for another mesh or configuration are ignored.
   const bool fits = offsets.offsets.size() == size_t(posed.positions.cols()) &&
                     offsets.offset_count == options_.refine.offsetLevels();
@@ -248,7 +260,7 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
     std::lock_guard lock(view_mutex_);
     for (const auto& [id, view] : views_) views.push_back(view);
   }
-  return partialImagesFor(*set, message.frame_id, views);
+  return partialImagesFor(*set, message.frame_id, views, pivot);
 }
 
 bool CameraNode::send(Message message) {

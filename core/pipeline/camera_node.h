@@ -88,7 +88,8 @@ class CameraNode {
   // studio's normalisation is exact); alpha-run encoded. Empty when no OpenGL context could be
   // had (said once in the log).
   std::vector<Message> partialImagesFor(const Set& set, int64_t frame_id,
-                                        const std::vector<ViewData>& views);
+                                        const std::vector<ViewData>& views,
+                                        const Eigen::Vector3d& pivot);
   bool send(Message message);
 
   Rig rig_;
@@ -110,6 +111,7 @@ class CameraNode {
   std::unique_ptr<EglContext> gl_;
   std::unique_ptr<LumigraphRenderer> renderer_;
   std::vector<uint8_t> partial_rgba_;
+  std::vector<Eigen::Affine3f> placements_;  // the actor and its clones in a view, reused
   std::mutex kept_mutex_;
   std::map<int64_t, std::shared_ptr<const Set>> kept_;  // sets awaiting their pose
   std::atomic<bool> source_finished_{false};
@@ -123,6 +125,7 @@ class CameraNode {
   struct Posed {
     std::shared_ptr<const Set> set;
     Eigen::Matrix3Xf positions, normals;
+    Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  // the actor's place on the floor, for clones
   };
   std::map<int64_t, Posed> posed_;  // frames awaiting their offsets (statistics thread's alone)
   // Map nodes of frames done with, reused with their matrices: keeping a frame's posed mesh does

@@ -35,7 +35,7 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
   const Eigen::Vector3f z = (target - centre).normalized();
   const Eigen::Vector3f x = z.cross(Eigen::Vector3f::UnitZ()).normalized();
   const Eigen::Vector3f y = z.cross(x);
-  ViewData view = {0, 320, 240, 300, 300, 159.5f, 119.5f, {}, {}};
+  ViewData view = {0, 320, 240, 300, 300, 159.5f, 119.5f, {}, {}, {}};
   for (const Eigen::Vector3f& row : {x, y, z}) {
     for (int k = 0; k < 3; ++k) view.rotation.push_back(row[k]);
   }

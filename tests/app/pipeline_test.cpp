@@ -126,6 +126,12 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   EXPECT_LE(report.peak_frames_begun, 2);
   EXPECT_LE(report.frames_refused, report.frames_dropped);
 
+  // Clones in the preview: the nodes draw the actor twice more, with the captured texture.
+  const size_t alone = coverage(1);
+  preview.clones = {0.9f, 0.0f, 0.0f, 0.0f, 0.9f, 1.5f};  // two, beside the actor, one turned
+  studio.setView(preview);
+  EXPECT_TRUE(runUntil(studio, 10, [&] { return coverage(1) > alone * 3 / 2; })) << alone;
+
   // kill -9 one node: it is marked lost within about a second, and frames go on without it.
   kill(node2, SIGKILL);
   waitpid(node2, nullptr, 0);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 #include <random>
 
 #include "core/render/partial_image_codec.h"
@@ -38,8 +39,16 @@ std::vector<Message> oneOfEach() {
   stats.packed = {5, 0, 0, 0, 3, 6, 1, 2};  // the header, then a byte a sample (no colour)
   for (int i = 0; i < 15; ++i) stats.packed.push_back(uint8_t(i % 3));
   OffsetsData offsets{21, {0, 10, 20, 5, 7}};
-  ViewData view{
-      1, 320, 240, 300.5f, 301, 159.5f, 119.5f, {1, 0, 0, 0, 0, -1, 0, 1, 0}, {0.1f, 1.2f, 4}};
+  ViewData view{1,
+                320,
+                240,
+                300.5f,
+                301,
+                159.5f,
+                119.5f,
+                {1, 0, 0, 0, 0, -1, 0, 1, 0},
+                {0.1f, 1.2f, 4},
+                {1.5f, -0.5f, 3.1f, -1.5f, 0.25f, 0}};  // two clones
   std::vector<uint8_t> rgba(6 * 4 * 4, 0);
   rgba[0] = 255;
   PartialImageData raw{1, 6, 4, ImageEncoding::kRawRgba, rgba};
@@ -241,16 +250,37 @@ namespace {
 TEST(MessageCodec, MalformedViewsAreRefusedWithTheirReason) {
   Message message;
   message.sender = "studio";
-  message.body = ViewData{0, 320, 240, 300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0}, {0, 0, 3}};
+  message.body = ViewData{0, 320, 240, 300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0}, {0, 0, 3}, {}};
   std::vector<uint8_t> bytes = encodeMessage(message);
   DecodeResult result = decodeMessage(bytes.data(), bytes.size());
   EXPECT_FALSE(result.ok());
   EXPECT_EQ(result.error,
             "view: expected a rotation of 9 numbers and a translation of 3, got 8 and 3");
-  message.body = ViewData{0, 320, 240, -300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 3}};
+  message.body =
+      ViewData{0, 320, 240, -300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 3}, {}};
   bytes = encodeMessage(message);
   result = decodeMessage(bytes.data(), bytes.size());
   EXPECT_EQ(result.error, "view: expected finite numbers and positive focal lengths");
+  ViewData view{0, 320, 240, 300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 3}, {}};
+  view.clones = {1, 0};  // a clone is 3 numbers
+  message.body = view;
+  bytes = encodeMessage(message);
+  result = decodeMessage(bytes.data(), bytes.size());
+  EXPECT_EQ(
+      result.error,
+      "view: clones take 3 numbers each (offset x, y, yaw), at most 64 clones; got 2 numbers");
+  view.clones.assign(65 * 3, 0.0f);
+  message.body = view;
+  bytes = encodeMessage(message);
+  result = decodeMessage(bytes.data(), bytes.size());
+  EXPECT_EQ(result.error,
+            "view: clones take 3 numbers each (offset x, y, yaw), at most 64 clones; "
+            "got 195 numbers");
+  view.clones = {1, std::numeric_limits<float>::quiet_NaN(), 0};
+  message.body = view;
+  bytes = encodeMessage(message);
+  result = decodeMessage(bytes.data(), bytes.size());
+  EXPECT_EQ(result.error, "view: a clone's offset or turn is not a finite number within 1000");
 }
 
 }  // namespace
