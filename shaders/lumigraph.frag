@@ -1,7 +1,8 @@
 #version 430 core
 // The renderer's own cameras blended with the interpolated lumigraph weights: colour = their
 // weighted mean, alpha = their share of the weight of every camera of the rig (1 when the
-// renderer has them all). Images are RGBA8, or Bayer (one byte a pixel) demosaiced here.
+// renderer has them all; less where a foreground mask takes weight away). Images are RGBA8, or
+// Bayer (one byte a pixel) demosaiced here.
 // kOwnCameras is defined when compiling; own camera j's image is layer j of `images`.
 in float v_weight[kOwnCameras];
 in vec2 v_texel[kOwnCameras];
@@ -11,6 +12,10 @@ uniform sampler2DArray images;
 uniform vec2 images_size;  // texels of the array (the largest camera)
 uniform int bayer;         // 0: RGBA; 1: Bayer, R at red_index in each 2x2 cell
 uniform int red_index;     // 0: top left, 1: top right, 2: bottom left, 3: bottom right
+// The own cameras' low-resolution foreground masks (cells covering the image as the image array
+// does), when the renderer has them: a camera's weight scales by its mask where it samples.
+uniform sampler2DArray masks;
+uniform int use_masks;
 
 out vec4 colour;
 
@@ -40,6 +45,11 @@ void main() {
   vec3 rgb = vec3(0.0);
   for (int j = 0; j < kOwnCameras; ++j) {
     float w = v_weight[j];
+    if (w <= 0.0) continue;
+    // The colour is normalised by the weights, so a partly masked camera would still colour a
+    // pixel alone: half a cell off the silhouette (mask 0.5) already counts as off.
+    if (use_masks != 0)
+      w *= smoothstep(0.5, 0.75, texture(masks, vec3(v_texel[j] / images_size, float(j))).r);
     if (w <= 0.0) continue;
     rgb += w * sampleImage(v_texel[j], j);
     own += w;

@@ -112,6 +112,8 @@ class CameraNode {
   std::unique_ptr<LumigraphRenderer> renderer_;
   std::vector<uint8_t> partial_rgba_;
   std::vector<Eigen::Affine3f> placements_;  // the actor and its clones in a view, reused
+  LowResSilhouette mask_silhouette_;         // the renderer's foreground masks, reused
+  std::vector<uint8_t> mask_;
   std::mutex kept_mutex_;
   std::map<int64_t, std::shared_ptr<const Set>> kept_;  // sets awaiting their pose
   std::atomic<bool> source_finished_{false};

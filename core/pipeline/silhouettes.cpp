@@ -21,4 +21,18 @@ void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int 
   }
 }
 
+void silhouetteMask(const LowResSilhouette& s, int grow_cells, std::vector<uint8_t>& out) {
+  out.assign(size_t(s.width) * s.height, 0);
+  for (int y = 0; y < s.height; ++y) {
+    for (int x = 0; x < s.width; ++x) {
+      if (!s.at(x, y)) continue;
+      for (int v = std::max(0, y - grow_cells); v <= std::min(s.height - 1, y + grow_cells); ++v) {
+        uint8_t* row = &out[size_t(v) * s.width];
+        std::fill(row + std::max(0, x - grow_cells), row + std::min(s.width, x + grow_cells + 1),
+                  uint8_t(255));
+      }
+    }
+  }
+}
+
 }  // namespace lumistage

@@ -133,6 +133,7 @@ LumigraphRenderer::~LumigraphRenderer() {
   glDeleteRenderbuffers(1, &depth_renderbuffer_);
   glDeleteTextures(1, &depth_maps_);
   glDeleteTextures(1, &images_);
+  glDeleteTextures(1, &masks_);
   glDeleteBuffers(1, &upload_buffer_);
   glDeleteBuffers(1, &vertex_buffer_);
   glDeleteBuffers(1, &index_buffer_);
@@ -221,6 +222,35 @@ void LumigraphRenderer::setImageRgba(int own_index, const uint8_t* rgba, int wid
     throw Error("LumigraphRenderer::setImage: no own camera " + std::to_string(own_index));
   useImageFormat(false);
   uploadImage(own_index, rgba, width, height);
+}
+
+void LumigraphRenderer::setMask(int own_index, std::span<const uint8_t> mask, int width,
+                                int height) {
+  if (own_index < 0 || own_index >= static_cast<int>(own_.size()) || width <= 0 || height <= 0 ||
+      mask.size() != size_t(width) * height)
+    throw Error("LumigraphRenderer::setMask: own camera " + std::to_string(own_index) + ", a " +
+                std::to_string(width) + "x" + std::to_string(height) + " mask of " +
+                std::to_string(mask.size()) + " bytes");
+  glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  if (!masks_ || width != mask_width_ || height != mask_height_) {
+    glDeleteTextures(1, &masks_);
+    glGenTextures(1, &masks_);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, masks_);
+    const GLsizei layers = static_cast<GLsizei>(own_.size());
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R8, width, height, layers);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    const std::vector<uint8_t> all(size_t(width) * height * layers, 255);  // not given: all in
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0, width, height, layers, GL_RED,
+                    GL_UNSIGNED_BYTE, all.data());
+    mask_width_ = width, mask_height_ = height;
+  }
+  glBindTexture(GL_TEXTURE_2D_ARRAY, masks_);
+  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, width, height, 1, GL_RED,
+                  GL_UNSIGNED_BYTE, mask.data());
 }
 
 void LumigraphRenderer::useImageFormat(bool bayer) {
@@ -363,10 +393,14 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform1i(p.uniform("red_index"), bayer_layout_.red_y * 2 + bayer_layout_.red_x);
   glUniform1i(p.uniform("images"), 0);
   glUniform1i(p.uniform("depth_maps"), 1);
+  glUniform1i(p.uniform("masks"), 2);
+  glUniform1i(p.uniform("use_masks"), masks_ ? 1 : 0);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D_ARRAY, depth_maps_);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, masks_);
   glActiveTexture(GL_TEXTURE0);
 
   const CameraUniforms v = uniformsOf(desired);

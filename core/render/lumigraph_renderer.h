@@ -74,6 +74,12 @@ class LumigraphRenderer {
   // Cameras that take part in the weights (default: all). Leave-one-out renders a camera's view
   // with that camera inactive.
   void setActive(const std::vector<bool>& active);
+  // A low-resolution foreground mask of own camera `own_index`'s current image (one byte a cell,
+  // 0 background, 255 foreground; cells of the camera's size / the mask's, the same for every
+  // own camera). A camera's weight is scaled by the mask (bilinear) where it samples: where the
+  // mesh reaches beyond the actor in that camera, the others colour it, or, beyond the actor in
+  // all, nothing does (instead of the screen's green). Without masks, every pixel counts.
+  void setMask(int own_index, std::span<const uint8_t> mask, int width, int height);
 
   // Renders the desired camera's view (its size, lens distortion included) of every clone: a
   // rigid placement of the captured actor, stage (world) from the capture's frame, the identity
@@ -101,6 +107,8 @@ class LumigraphRenderer {
   GLsizei index_count_ = 0;
   GLsizeiptr vertex_capacity_ = 0, index_capacity_ = 0;
   GLuint images_ = 0;  // 2D array texture, one layer per own camera
+  GLuint masks_ = 0;   // 2D array texture of the own cameras' foreground masks, once given
+  int mask_width_ = 0, mask_height_ = 0;
   int images_width_ = 0, images_height_ = 0;
   bool bayer_ = false;
   BayerLayout bayer_layout_;

@@ -4,11 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
 #include <memory>
 
+#include "core/base/error.h"
 #include "core/eval/view_metrics.h"
 #include "core/render/partial_image_blender.h"
 #include "core/render/partial_image_codec.h"
@@ -175,6 +177,31 @@ TEST_F(LumigraphRendererTest, VisibilityMapsFromTheCpuMatchTheGpus) {
       compareOverMask(images[1], images[0], all_pixels, view.width(), view.height());
   std::printf("  CPU against GPU visibility maps: %.1f dB\n", score.psnr_db);
   EXPECT_GT(score.psnr_db, 60.0);  // 93 dB measured; no occlusion at all gives 41 dB
+}
+
+// A camera's foreground mask scales its weight where it samples: a camera whose mask says
+// "background" everywhere gives nothing, and where every camera says so nothing is drawn.
+TEST_F(LumigraphRendererTest, ForegroundMasksTakeAwayWhatIsOffTheActor) {
+  auto renderer = makeRenderer();
+  std::vector<uint8_t> before, after;
+  renderer->render(desiredView(), before);
+  ASSERT_GT(covered(before), 5000);
+  const int w = rig().camera(0).width() / 8, h = rig().camera(0).height() / 8;
+  std::vector<uint8_t> mask(size_t(w) * h, 255);
+  for (int c = 0; c < rig().cameraCount(); ++c) renderer->setMask(c, mask, w, h);
+  renderer->render(desiredView(), after);
+  EXPECT_EQ(covered(after), covered(before));  // all foreground: as without masks
+  // The left half of every camera's image is background: less is drawn, and nothing where the
+  // actor is only seen there.
+  for (int y = 0; y < h; ++y) std::fill_n(&mask[size_t(y) * w], w / 2, uint8_t(0));
+  for (int c = 0; c < rig().cameraCount(); ++c) renderer->setMask(c, mask, w, h);
+  renderer->render(desiredView(), after);
+  EXPECT_LT(covered(after), covered(before));
+  std::fill(mask.begin(), mask.end(), uint8_t(0));
+  for (int c = 0; c < rig().cameraCount(); ++c) renderer->setMask(c, mask, w, h);
+  renderer->render(desiredView(), after);
+  EXPECT_EQ(covered(after), 0);
+  EXPECT_THROW(renderer->setMask(0, mask, w + 1, h), Error);
 }
 
 TEST_F(LumigraphRendererTest, SeveralViewsOfOneFrameDoNotDisturbEachOther) {
