@@ -14,6 +14,7 @@
 #include "core/capture/session_reader.h"
 #include "core/eval/leave_one_out.h"
 #include "core/render/egl_context.h"
+#include "core/render/frame_inputs.h"
 #include "core/render/lumigraph_renderer.h"
 
 namespace lumistage {
@@ -93,13 +94,14 @@ void addRenderCommand(CLI::App& app) {
     fmt::print("rendering {} frames of {}x{} on {}\n", frames, first.width(), first.height(),
                gl.description());
     std::vector<CameraFrame> images;
+    FrameInputs inputs;
     std::vector<uint8_t> rgba;
     cv::Mat bgr;
     double ms = -1;
     for (int i = 0; i < frames; ++i) {
       const auto start = std::chrono::steady_clock::now();
       session.readFrame(i, images);
-      for (int c = 0; c < rig.cameraCount(); ++c) renderer.setImage(c, images[c].image.view());
+      inputs.set(renderer, images);  // images and foreground masks, as the nodes give theirs
       const TriangleMesh mesh = a->mesh == "truth"
                                     ? truthSurface(session, i)
                                     : readPlyMesh(std::filesystem::path(a->mesh) /

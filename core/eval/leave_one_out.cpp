@@ -6,8 +6,7 @@
 
 #include "core/base/error.h"
 #include "core/body/ply_mesh.h"
-#include "core/imaging/keyer.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/render/frame_inputs.h"
 
 namespace lumistage {
 
@@ -28,20 +27,11 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
   summary.per_camera.resize(n);
   std::vector<CameraFrame> images;
   std::vector<std::vector<uint8_t>> truth(n), masks(n);
-  // The foreground masks the nodes give their renderers: each camera's silhouette, keyed by a
-  // green-screen keyer that learns the screen from the first frame.
-  std::vector<GreenScreenKeyer> keyers(n);
-  LowResSilhouette silhouette;
-  std::vector<uint8_t> foreground;
-  bool learnt = false;
+  FrameInputs inputs;  // images and foreground masks, as the nodes give theirs
   for (int i : frames) {
     session.readFrame(i, images);
+    inputs.set(renderer, images);
     for (int c = 0; c < n; ++c) {
-      renderer.setImage(c, images[c].image.view());
-      if (!learnt) keyers[c].learnScreen(images[c].image.view());
-      computeSilhouette(keyers[c], images[c].image.view(), c, kMaskStep, silhouette);
-      silhouetteMask(silhouette, 0, foreground);
-      renderer.setMask(c, foreground, silhouette.width, silhouette.height);
       imageToRgba(images[c].image.view(), truth[c]);
       const std::string path = session.truthMaskPath(c, i).string();
       const cv::Mat mask = cv::imread(path, cv::IMREAD_GRAYSCALE);
@@ -50,7 +40,6 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
         throw Error(path + ": cannot read the truth mask (8-bit PNG of the camera's size)");
       masks[c].assign(mask.data, mask.data + mask.total());
     }
-    learnt = true;
     const TriangleMesh mesh = mesh_for(i);
     renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
     const std::vector<ViewScore> scores = leaveOneOut(renderer, rig, truth, masks);
