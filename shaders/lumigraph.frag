@@ -41,18 +41,29 @@ vec3 sampleImage(vec2 texel, int layer) {
 }
 
 void main() {
-  float own = 0.0;
-  vec3 rgb = vec3(0.0);
+  float own = 0.0, unmasked = 0.0;
+  vec3 rgb = vec3(0.0), rgb_unmasked = vec3(0.0);
   for (int j = 0; j < kOwnCameras; ++j) {
     float w = v_weight[j];
     if (w <= 0.0) continue;
+    vec3 c = sampleImage(v_texel[j], j);
+    rgb_unmasked += w * c;
+    unmasked += w;
     // The colour is normalised by the weights, so a partly masked camera would still colour a
     // pixel alone: half a cell off the silhouette (mask 0.5) already counts as off.
     if (use_masks != 0)
       w *= smoothstep(0.5, 0.75, texture(masks, vec3(v_texel[j] / images_size, float(j))).r);
-    if (w <= 0.0) continue;
-    rgb += w * sampleImage(v_texel[j], j);
+    rgb += w * c;
     own += w;
   }
-  colour = own > 0.0 && v_total > 0.0 ? vec4(rgb / own, own / v_total) : vec4(0.0);
+  if (v_total <= 0.0 || unmasked <= 0.0) {
+    colour = vec4(0.0);
+  } else if (own > 0.0) {
+    colour = vec4(rgb / own, max(own / v_total, 1.0 / 255.0));  // a masked share stays drawn
+  } else {
+    // Off the actor in every own camera: the unmasked colour, at a sixteenth of the share, so that
+    // a node whose cameras see the actor there outweighs it in the studio's blend, and the pixel is
+    // still drawn where no camera does (a hole would show more than the screen's colour).
+    colour = vec4(rgb_unmasked / unmasked, max(unmasked / v_total / 16.0, 1.0 / 255.0));
+  }
 }
