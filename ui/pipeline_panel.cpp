@@ -74,10 +74,14 @@ void PipelineWorker::run() {
       for (const std::string& name : pipeline.nodeNames()) {
         if (!pipeline.nodeRunning(name)) s.exited << QString::fromStdString(name);
       }
-      const PoseData& pose_data = pipeline.studio().lastPose();
-      if (pipeline.studio().lastPoseFrame() != posed_frame &&
+      // The skeleton and mesh drawn over the view are those of the view's frame (the newest pose
+      // runs a few frames ahead of the newest image); the newest pose before the first image.
+      const bool shown = blended.frame_id >= 0;
+      const PoseData& pose_data = shown ? blended.pose : pipeline.studio().lastPose();
+      const int64_t pose_frame = shown ? blended.frame_id : pipeline.studio().lastPoseFrame();
+      if (pose_frame != posed_frame &&
           pose_data.angles.size() == size_t(3) * human.skeleton.jointCount()) {
-        posed_frame = pipeline.studio().lastPoseFrame();
+        posed_frame = pose_frame;
         human.skeleton.jointPositions(poseFromMessage(pose_data, human.skeleton.jointCount()),
                                       joints);
         for (Eigen::Vector3d& joint : joints) joint *= pose_data.scale;

@@ -226,6 +226,7 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
     pose.angles.assign(size_t(3) * joints_, 0.0f);
   }
   last_pose_ = pose;
+  frame.pose = pose;
   last_pose_frame_ = frame_id;
   if (counting_) mocap_ms_.add((steadyNowNs() - start) / 1e6);
   std::vector<std::vector<uint8_t>> view_bytes;  // before the pose: the views to render it for
@@ -312,6 +313,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     // Normalise the nodes' alphas per pixel and blend.
     BlendedImage& image = last_images_[view];
     image.frame_id = frame_id;
+    image.pose = frame.pose;
     image.width = blender.width();
     image.height = blender.height();
     blender.finish(image.rgba);

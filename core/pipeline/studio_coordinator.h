@@ -62,6 +62,7 @@ struct BlendedImage {
   int64_t frame_id = -1;
   int width = 0, height = 0;
   std::vector<uint8_t> rgba;  // alpha 255 where a camera contributed, 0 elsewhere
+  PoseData pose;              // the pose the nodes rendered it with (its frame's, not the newest)
 };
 
 // When a frame was done, from the first counted frame, and its latency (for plots).
@@ -132,6 +133,7 @@ class StudioCoordinator {
     std::vector<LowResSilhouette> silhouettes;
     std::set<std::string> silhouette_nodes, pose_nodes, statistics_nodes;
     int64_t pose_sent_ns = 0;
+    PoseData pose;                    // sent to the nodes
     RefinementStatistics refine_sum;  // the nodes' statistics, combined exactly
     int64_t offsets_sent_ns = 0;
     std::map<int, std::set<std::string>> image_nodes;  // per view
