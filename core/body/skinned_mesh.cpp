@@ -8,6 +8,12 @@
 namespace lumistage {
 
 void TriangleMesh::computeNormals() {
+  computeVertexNormals(positions, triangles, normals);
+}
+
+void computeVertexNormals(const Eigen::Matrix3Xf& positions,
+                          const std::vector<Eigen::Vector3i>& triangles,
+                          Eigen::Matrix3Xf& normals) {
   normals.setZero(3, positions.cols());
   for (const Eigen::Vector3i& t : triangles) {
     const Eigen::Vector3f a = positions.col(t[0]), b = positions.col(t[1]), c = positions.col(t[2]);

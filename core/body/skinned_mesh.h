@@ -21,6 +21,10 @@ struct TriangleMesh {
   void computeNormals();
 };
 
+// The same for any positions and triangles; `normals` is resized only when its size differs.
+void computeVertexNormals(const Eigen::Matrix3Xf& positions,
+                          const std::vector<Eigen::Vector3i>& triangles, Eigen::Matrix3Xf& normals);
+
 constexpr int kMaxInfluences = 4;
 
 // Up to four joints move each vertex; unused slots have weight 0 (and joint 0).

@@ -258,7 +258,9 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
                     offsets.offset_count == options_.refine.offsetLevels();
   if (fits) {
     applyOffsets(options_.refine, offsets.offsets, posed.positions, posed.normals, positions_);
-    normals_ = posed.normals;
+    // The refined surface's own normals (the lumigraph's facing term and rim dilation): 0.1 dB
+    // of leave-one-out over the posed mesh's.
+    computeVertexNormals(positions_, body_.rest.triangles, normals_);
   }
   releasePosedUpTo(message.frame_id);  // this frame and older ones are done with
   if (!fits || !set) return {};
