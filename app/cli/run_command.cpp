@@ -147,8 +147,11 @@ void addRunCommand(CLI::App& app) {
       view.height = height;
       studio.setView(view);
     }
-    const double cpu_start = processCpuSeconds();
-    const auto wall_start = std::chrono::steady_clock::now();
+    // CPU use is measured from the first frame done: the nodes' start-up (loading a session into
+    // memory, compiling shaders) is not the pipeline's load.
+    double cpu_start = processCpuSeconds(), nodes_cpu_start = 0;
+    auto wall_start = std::chrono::steady_clock::now();
+    bool measuring = false;
     double nodes_cpu = 0;
     fmt::print("studio at {} ({}), starting {} nodes\n", studio.endpoint(),
                a->plain ? "plain" : "CURVE", pipeline.nodeNames().size());
@@ -159,6 +162,12 @@ void addRunCommand(CLI::App& app) {
            (a->frames <= 0 || studio.framesDone() < a->frames)) {
       pipeline.runFor(std::chrono::milliseconds(100));
       nodes_cpu = std::max(nodes_cpu, pipeline.nodeCpuSeconds());
+      if (!measuring && studio.framesDone() > 0) {
+        measuring = true;
+        cpu_start = processCpuSeconds();
+        nodes_cpu_start = nodes_cpu;
+        wall_start = std::chrono::steady_clock::now();
+      }
       for (const std::string& exit : pipeline.takeExits()) {
         fmt::print(stderr, "lumistage run: {}; see its message above\n", exit);
       }
@@ -166,7 +175,8 @@ void addRunCommand(CLI::App& app) {
     const RunReport r = studio.report();
     const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    const CpuUse cpu{(processCpuSeconds() - cpu_start) / wall_s, nodes_cpu / wall_s};
+    const CpuUse cpu{(processCpuSeconds() - cpu_start) / wall_s,
+                     (nodes_cpu - nodes_cpu_start) / wall_s};
     fmt::print(
         "{} frames in all ({} dropped), {:.1f} frames a second; latency {:.1f} ms (median), {:.1f} "
         "ms (95%)\n",

@@ -96,7 +96,7 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
     // Where the mesh reaches beyond the actor in this camera, its colour is the screen's: the
     // camera's silhouette in 4-pixel cells (49,000 pixels keyed, 0.07 ms) masks it out.
     computeSilhouette(keyers_[k], image, cameras_[k], kMaskStep, mask_silhouette_);
-    silhouetteMask(mask_silhouette_, 0, mask_);
+    silhouetteMask(mask_silhouette_, mask_);
     renderer_->setMask(static_cast<int>(k), mask_, mask_silhouette_.width, mask_silhouette_.height);
   }
   for (const ViewData& view : views) {

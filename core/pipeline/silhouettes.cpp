@@ -1,7 +1,5 @@
 #include "core/pipeline/silhouettes.h"
 
-#include <algorithm>
-
 namespace lumistage {
 
 void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
@@ -21,18 +19,10 @@ void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int 
   }
 }
 
-void silhouetteMask(const LowResSilhouette& s, int grow_cells, std::vector<uint8_t>& out) {
-  out.assign(size_t(s.width) * s.height, 0);
-  for (int y = 0; y < s.height; ++y) {
-    for (int x = 0; x < s.width; ++x) {
-      if (!s.at(x, y)) continue;
-      for (int v = std::max(0, y - grow_cells); v <= std::min(s.height - 1, y + grow_cells); ++v) {
-        uint8_t* row = &out[size_t(v) * s.width];
-        std::fill(row + std::max(0, x - grow_cells), row + std::min(s.width, x + grow_cells + 1),
-                  uint8_t(255));
-      }
-    }
-  }
+void silhouetteMask(const LowResSilhouette& s, std::vector<uint8_t>& out) {
+  const size_t cells = size_t(s.width) * s.height;
+  out.resize(cells);
+  for (size_t i = 0; i < cells; ++i) out[i] = uint8_t(0u - ((s.bits[i >> 3] >> (i & 7)) & 1u));
 }
 
 }  // namespace lumistage

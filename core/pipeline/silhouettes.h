@@ -29,10 +29,9 @@ struct LowResSilhouette {
 void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
                        LowResSilhouette& out);
 
-// The silhouette as one byte a cell (255 foreground, 0 not), grown by `grow_cells` cells (a
-// square neighbourhood): the lumigraph's foreground mask (LumigraphRenderer::setMask), which
-// should only take away what is clearly off the actor. `out` is reused.
-void silhouetteMask(const LowResSilhouette& silhouette, int grow_cells, std::vector<uint8_t>& out);
+// The silhouette as one byte a cell (255 foreground, 0 not): the lumigraph's foreground mask
+// (LumigraphRenderer::setMask). `out` is reused.
+void silhouetteMask(const LowResSilhouette& silhouette, std::vector<uint8_t>& out);
 // The cell size of those masks, in pixels.
 inline constexpr int kMaskStep = 4;
 

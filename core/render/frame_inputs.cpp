@@ -10,7 +10,7 @@ void FrameInputs::set(LumigraphRenderer& renderer, const std::vector<CameraFrame
     renderer.setImage(static_cast<int>(c), image);
     if (learn) keyers_[c].learnScreen(image);
     computeSilhouette(keyers_[c], image, static_cast<int>(c), kMaskStep, silhouette_);
-    silhouetteMask(silhouette_, 0, mask_);
+    silhouetteMask(silhouette_, mask_);
     renderer.setMask(static_cast<int>(c), mask_, silhouette_.width, silhouette_.height);
   }
 }

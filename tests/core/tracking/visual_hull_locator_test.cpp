@@ -63,6 +63,11 @@ TEST(VisualHullLocator, SilhouetteBitsAreTheKeyAtCellCentres) {
     for (int x = 0; x < 8; ++x)
       EXPECT_EQ(s.at(x, y), x >= 2 && x < 4 && y >= 1 && y < 3) << x << "," << y;
   }
+  // The lumigraph's foreground mask: the same cells, a byte each.
+  std::vector<uint8_t> mask(3, 7);
+  silhouetteMask(s, mask);
+  ASSERT_EQ(mask.size(), 32u);
+  for (int i = 0; i < 32; ++i) EXPECT_EQ(mask[i], s.at(i % 8, i / 8) ? 255 : 0) << i;
 }
 
 }  // namespace
