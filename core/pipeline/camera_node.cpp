@@ -13,6 +13,7 @@
 #include "core/pipeline/posed_body.h"
 #include "core/refine/mesh_refiner.h"
 #include "core/render/clone_set.h"
+#include "core/render/frame_inputs.h"
 #include "core/render/partial_image_codec.h"
 
 namespace lumistage {
@@ -95,9 +96,7 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
     renderer_->setImage(static_cast<int>(k), image);
     // Where the mesh reaches beyond the actor in this camera, its colour is the screen's: the
     // camera's silhouette in 4-pixel cells (49,000 pixels keyed, 0.07 ms) masks it out.
-    computeSilhouette(keyers_[k], image, cameras_[k], kMaskStep, mask_silhouette_);
-    silhouetteMask(mask_silhouette_, mask_);
-    renderer_->setMask(static_cast<int>(k), mask_, mask_silhouette_.width, mask_silhouette_.height);
+    setForegroundMask(*renderer_, static_cast<int>(k), keyers_[k], image, mask_silhouette_, mask_);
   }
   for (const ViewData& view : views) {
     if (view.width <= 0 || view.height <= 0 || view.rotation.size() != 9 ||

@@ -101,6 +101,25 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
 
 namespace {
 
+bool validWidths(int sum_bytes, int square_bytes) {
+  return sum_bytes >= 1 && sum_bytes <= 2 && square_bytes >= 1 && square_bytes <= 4;
+}
+
+// Whether the packed form after its header holds exactly the n samples' counts and the values
+// they announce; the reason when not.
+const char* checkBody(std::span<const uint8_t> data, size_t n, int sum_bytes, int square_bytes) {
+  if (data.size() < kHeaderBytes + n) return "truncated counts";
+  const uint8_t* counts = data.data() + kHeaderBytes;
+  size_t coloured = 0, squared = 0;
+  for (size_t s = 0; s < n; ++s) {
+    const int c = counts[s] >> 4;
+    coloured += c != 0, squared += c > 1;
+  }
+  if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes)
+    return "size does not match its counts";
+  return nullptr;
+}
+
 bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std::string* error,
                   int max_samples) {
   auto fail = [&](const char* why) {
@@ -111,16 +130,11 @@ bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std:
   const uint32_t vertices = get(data.data(), 4);
   const int offsets = data[4], bits = data[5], sum_bytes = data[6], square_bytes = data[7];
   if (offsets == 0 || bits < 1 || bits > 8) return fail("bad offset count or colour bits");
-  if (sum_bytes < 1 || sum_bytes > 2 || square_bytes < 1 || square_bytes > 4)
-    return fail("bad value widths");
+  if (!validWidths(sum_bytes, square_bytes)) return fail("bad value widths");
   if (uint64_t(vertices) * offsets > uint64_t(max_samples)) return fail("too many samples");
   const size_t n = size_t(vertices) * offsets;
-  if (data.size() < kHeaderBytes + n) return fail("truncated counts");
+  if (const char* why = checkBody(data, n, sum_bytes, square_bytes)) return fail(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
-  size_t coloured = 0, squared = 0;
-  for (size_t s = 0; s < n; ++s) coloured += (counts[s] >> 4) != 0, squared += (counts[s] >> 4) > 1;
-  if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes)
-    return fail("size does not match its counts");
   out.reset(int(vertices), offsets, bits);
   const uint8_t* p = counts + n;
   for (size_t s = 0; s < n; ++s) {
@@ -150,18 +164,10 @@ bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::st
   const int offsets = data[4], bits = data[5], sum_bytes = data[6], square_bytes = data[7];
   if (int(vertices) != sum.vertex_count || offsets != sum.offset_count || bits != sum.colour_bits)
     return fail("sizes differ from the mesh's");
-  if (sum_bytes < 1 || sum_bytes > 2 || square_bytes < 1 || square_bytes > 4)
-    return fail("bad value widths");
+  if (!validWidths(sum_bytes, square_bytes)) return fail("bad value widths");
   const size_t n = size_t(vertices) * offsets;
-  if (data.size() < kHeaderBytes + n) return fail("truncated counts");
+  if (const char* why = checkBody(data, n, sum_bytes, square_bytes)) return fail(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
-  size_t coloured = 0, squared = 0;
-  for (size_t s = 0; s < n; ++s) {
-    const int c = counts[s] >> 4;
-    coloured += c != 0, squared += c > 1;
-  }
-  if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes)
-    return fail("size does not match its counts");
   const uint8_t* p = counts + n;
   for (size_t s = 0; s < n; ++s) {
     const int outside = counts[s] & 15, colour = counts[s] >> 4;

@@ -119,7 +119,14 @@ EglContext::EglContext() {
   const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   const char* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
   description_ = std::string(renderer ? renderer : "?") + " / " + (version ? version : "?");
-  software_ = software_ || description_.find("llvmpipe") != std::string::npos;
+  software_ = software_ || currentRendererIsSoftware();
+}
+
+bool currentRendererIsSoftware() {
+  const char* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  const std::string renderer = name ? name : "";
+  return renderer.find("llvmpipe") != std::string::npos ||
+         renderer.find("softpipe") != std::string::npos;
 }
 
 EglContext::~EglContext() {

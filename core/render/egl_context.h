@@ -30,4 +30,8 @@ class EglContext {
   bool software_ = false;
 };
 
+// Whether the OpenGL context current on this thread renders in software (Mesa llvmpipe or
+// softpipe), from its GL_RENDERER.
+bool currentRendererIsSoftware();
+
 }  // namespace lumistage

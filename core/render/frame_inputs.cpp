@@ -2,6 +2,14 @@
 
 namespace lumistage {
 
+void setForegroundMask(LumigraphRenderer& renderer, int own_index, const GreenScreenKeyer& keyer,
+                       const ImageView& image, LowResSilhouette& silhouette,
+                       std::vector<uint8_t>& mask) {
+  computeSilhouette(keyer, image, own_index, kMaskStep, silhouette);
+  silhouetteMask(silhouette, mask);
+  renderer.setMask(own_index, mask, silhouette.width, silhouette.height);
+}
+
 void FrameInputs::set(LumigraphRenderer& renderer, const std::vector<CameraFrame>& frames) {
   const bool learn = keyers_.size() != frames.size();
   if (learn) keyers_.assign(frames.size(), GreenScreenKeyer());
@@ -9,9 +17,7 @@ void FrameInputs::set(LumigraphRenderer& renderer, const std::vector<CameraFrame
     const ImageView image = frames[c].image.view();
     renderer.setImage(static_cast<int>(c), image);
     if (learn) keyers_[c].learnScreen(image);
-    computeSilhouette(keyers_[c], image, static_cast<int>(c), kMaskStep, silhouette_);
-    silhouetteMask(silhouette_, mask_);
-    renderer.setMask(static_cast<int>(c), mask_, silhouette_.width, silhouette_.height);
+    setForegroundMask(renderer, static_cast<int>(c), keyers_[c], image, silhouette_, mask_);
   }
 }
 

@@ -10,6 +10,13 @@
 
 namespace lumistage {
 
+// Keys `image`'s silhouette in kMaskStep-pixel cells and gives it to `renderer` as own camera
+// `own_index`'s foreground mask (what a node does for each of its cameras every frame).
+// `silhouette` and `mask` are scratch buffers, reused.
+void setForegroundMask(LumigraphRenderer& renderer, int own_index, const GreenScreenKeyer& keyer,
+                       const ImageView& image, LowResSilhouette& silhouette,
+                       std::vector<uint8_t>& mask);
+
 // A single-process renderer's inputs for a frame of a session (leave-one-out, `lumistage render`):
 // every camera's image and its foreground mask, as the nodes give theirs — the camera's
 // silhouette keyed in kMaskStep-pixel cells by a green-screen keyer that learns the screen from

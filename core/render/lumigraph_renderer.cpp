@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/base/error.h"
+#include "core/render/egl_context.h"
 #include "core/render/shader_program.h"
 
 namespace lumistage {
@@ -48,6 +49,27 @@ CameraUniforms uniformsOf(const Camera& camera) {
   return u;
 }
 
+// One camera's uniforms in a shader, under these names.
+struct CameraUniformNames {
+  const char *rotation, *translation, *focal_centre, *skew, *radial, *tangential, *size;
+};
+constexpr CameraUniformNames kDepthMapCamera{"rotation", "translation", "focal_centre", "skew",
+                                             "radial",   "tangential",  "image_size"};
+constexpr CameraUniformNames kDesiredCamera{
+    "view_rotation", "view_translation", "view_focal_centre", "view_skew",
+    "view_radial",   "view_tangential",  "view_size"};
+
+void setCameraUniforms(const ShaderProgram& p, const CameraUniformNames& names,
+                       const CameraUniforms& u) {
+  glUniformMatrix3fv(p.uniform(names.rotation), 1, GL_FALSE, u.rotation.data());
+  glUniform3fv(p.uniform(names.translation), 1, u.translation.data());
+  glUniform4fv(p.uniform(names.focal_centre), 1, u.focal_centre);
+  glUniform1f(p.uniform(names.skew), u.skew);
+  glUniform3fv(p.uniform(names.radial), 1, u.radial.data());
+  glUniform2fv(p.uniform(names.tangential), 1, u.tangential);
+  glUniform2fv(p.uniform(names.size), 1, u.size);
+}
+
 }  // namespace
 
 LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, LumigraphParams params)
@@ -67,12 +89,8 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
   params_.depth_map_divisor = std::max(1, params_.depth_map_divisor);
   params_.cpu_depth_map_divisor = std::max(1, params_.cpu_depth_map_divisor);
   if (params_.depth_maps == LumigraphParams::DepthMaps::kAuto) {
-    const char* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-    const std::string renderer = name ? name : "";
-    const bool software = renderer.find("llvmpipe") != std::string::npos ||
-                          renderer.find("softpipe") != std::string::npos;
-    params_.depth_maps =
-        software ? LumigraphParams::DepthMaps::kCpu : LumigraphParams::DepthMaps::kGpu;
+    params_.depth_maps = currentRendererIsSoftware() ? LumigraphParams::DepthMaps::kCpu
+                                                     : LumigraphParams::DepthMaps::kGpu;
   }
   cpu_depth_maps_ = params_.depth_maps == LumigraphParams::DepthMaps::kCpu;
   depth_divisor_ = cpu_depth_maps_ ? params_.cpu_depth_map_divisor : params_.depth_map_divisor;
@@ -311,19 +329,12 @@ void LumigraphRenderer::renderDepthMaps() {
   glUniform1f(p.uniform("map_scale"), 1.0f / float(depth_divisor_));
   glUniform2f(p.uniform("map_size"), float(depth_width_), float(depth_height_));
   glBindVertexArray(vao_);
-  const float far[4] = {1e30f, 1e30f, 1e30f, 1e30f};
+  const float far[4] = {DepthMap::kFar, DepthMap::kFar, DepthMap::kFar, DepthMap::kFar};
   for (int c = 0; c < rig_.cameraCount(); ++c) {
     glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, depth_maps_, 0, c);
     glClearBufferfv(GL_COLOR, 0, far);
     glClear(GL_DEPTH_BUFFER_BIT);
-    const CameraUniforms u = uniformsOf(rig_.camera(c));
-    glUniformMatrix3fv(p.uniform("rotation"), 1, GL_FALSE, u.rotation.data());
-    glUniform3fv(p.uniform("translation"), 1, u.translation.data());
-    glUniform4fv(p.uniform("focal_centre"), 1, u.focal_centre);
-    glUniform1f(p.uniform("skew"), u.skew);
-    glUniform3fv(p.uniform("radial"), 1, u.radial.data());
-    glUniform2fv(p.uniform("tangential"), 1, u.tangential);
-    glUniform2fv(p.uniform("image_size"), 1, u.size);
+    setCameraUniforms(p, kDepthMapCamera, uniformsOf(rig_.camera(c)));
     glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   }
   glBindVertexArray(0);
@@ -404,13 +415,7 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glActiveTexture(GL_TEXTURE0);
 
   const CameraUniforms v = uniformsOf(desired);
-  glUniformMatrix3fv(p.uniform("view_rotation"), 1, GL_FALSE, v.rotation.data());
-  glUniform3fv(p.uniform("view_translation"), 1, v.translation.data());
-  glUniform4fv(p.uniform("view_focal_centre"), 1, v.focal_centre);
-  glUniform1f(p.uniform("view_skew"), v.skew);
-  glUniform3fv(p.uniform("view_radial"), 1, v.radial.data());
-  glUniform2fv(p.uniform("view_tangential"), 1, v.tangential);
-  glUniform2fv(p.uniform("view_size"), 1, v.size);
+  setCameraUniforms(p, kDesiredCamera, v);
   glBindVertexArray(vao_);
   if (images_ && !own_.empty()) {
     for (const Eigen::Affine3f& clone : clones) {

@@ -71,6 +71,19 @@ Camera viewOf(int width, int height) {
                 -R * centre);
 }
 
+// The node's images, Bayer (one byte a pixel) or RGBA.
+void uploadNodeImages(LumigraphRenderer& r, bool bayer) {
+  Scene& s = scene();
+  for (size_t j = 0; j < s.node.size(); ++j) {
+    if (bayer) {
+      r.setImage(int(j), s.bayer[j].view());
+    } else {
+      const Camera& c = s.studio->rig().camera(s.node[j]);
+      r.setImageRgba(int(j), s.frame.images[s.node[j]].data(), c.width(), c.height());
+    }
+  }
+}
+
 // A node's renderer: mesh 0 the truth surface, 1 the generic human.
 std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int divisor = 2) {
   Scene& s = scene();
@@ -82,14 +95,7 @@ std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int di
   auto r = std::make_unique<LumigraphRenderer>(s.studio->rig(), s.node, params);
   const TriangleMesh& m = mesh == 0 ? s.frame.surface : s.generic;
   r->setMesh(m.positions, m.normals, m.triangles);
-  for (size_t j = 0; j < s.node.size(); ++j) {
-    if (bayer) {
-      r->setImage(int(j), s.bayer[j].view());
-    } else {
-      const Camera& c = s.studio->rig().camera(s.node[j]);
-      r->setImageRgba(int(j), s.frame.images[s.node[j]].data(), c.width(), c.height());
-    }
-  }
+  uploadNodeImages(*r, bayer);
   return r;
 }
 
@@ -141,19 +147,11 @@ BENCHMARK(nodeMeshAndPartialImage)
 
 // Uploading the node's 3 images of 1024x768: Bayer (1 byte a pixel) or RGBA (4).
 void uploadImages(benchmark::State& state) {
-  Scene& s = scene();
   const bool bayer = state.range(0) != 0;
   auto r = nodeRenderer(bayer);
   const double cpu = processCpuMs();
   for (auto _ : state) {
-    for (size_t j = 0; j < s.node.size(); ++j) {
-      if (bayer) {
-        r->setImage(int(j), s.bayer[j].view());
-      } else {
-        const Camera& c = s.studio->rig().camera(s.node[j]);
-        r->setImageRgba(int(j), s.frame.images[s.node[j]].data(), c.width(), c.height());
-      }
-    }
+    uploadNodeImages(*r, bayer);
     glFinish();  // the uploads done
   }
   state.counters["process_cpu_ms"] = (processCpuMs() - cpu) / double(state.iterations());
