@@ -101,6 +101,12 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
 
 namespace {
 
+// Says why a buffer is refused, when asked; false.
+bool refuse(std::string* error, const char* why) {
+  if (error) *error = std::string("refinement statistics: ") + why;
+  return false;
+}
+
 bool validWidths(int sum_bytes, int square_bytes) {
   return sum_bytes >= 1 && sum_bytes <= 2 && square_bytes >= 1 && square_bytes <= 4;
 }
@@ -122,10 +128,7 @@ const char* checkBody(std::span<const uint8_t> data, size_t n, int sum_bytes, in
 
 bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std::string* error,
                   int max_samples) {
-  auto fail = [&](const char* why) {
-    if (error) *error = std::string("refinement statistics: ") + why;
-    return false;
-  };
+  auto fail = [&](const char* why) { return refuse(error, why); };
   if (data.size() < kHeaderBytes) return fail("shorter than its header");
   const uint32_t vertices = get(data.data(), 4);
   const int offsets = data[4], bits = data[5], sum_bytes = data[6], square_bytes = data[7];
@@ -155,10 +158,7 @@ bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std:
 }
 
 bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::string* error) {
-  auto fail = [&](const char* why) {
-    if (error) *error = std::string("refinement statistics: ") + why;
-    return false;
-  };
+  auto fail = [&](const char* why) { return refuse(error, why); };
   if (data.size() < kHeaderBytes) return fail("shorter than its header");
   const uint32_t vertices = get(data.data(), 4);
   const int offsets = data[4], bits = data[5], sum_bytes = data[6], square_bytes = data[7];
