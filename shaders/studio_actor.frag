@@ -43,23 +43,50 @@ vec3 sensorNoise() {
   return n * noise_sigma;
 }
 
+// A camera's pixel integrates the light over its area (and its lens blurs): the pattern's sharp
+// edges are box-filtered over the pixel's footprint (fwidth), as a sensor would record them, not
+// point-sampled into stair-steps that no other view could reproduce.
+// The mean of step(edge, fract(x)) over [x - w/2, x + w/2]: the integral of the square wave is
+// floor(x) * (1 - edge) + max(fract(x) - edge, 0).
+float filteredSquare(float x, float edge) {
+  float w = max(fwidth(x), 1e-6);
+  float a = x - 0.5 * w, b = x + 0.5 * w;
+  float ia = floor(a) * (1.0 - edge) + max(fract(a) - edge, 0.0);
+  float ib = floor(b) * (1.0 - edge) + max(fract(b) - edge, 0.0);
+  return (ib - ia) / w;
+}
+// The share of the pixel's footprint where lo <= x <= hi.
+float filteredInterval(float x, float lo, float hi) {
+  float w = max(fwidth(x), 1e-6);
+  return clamp((min(x + 0.5 * w, hi) - max(x - 0.5 * w, lo)) / w, 0.0, 1.0);
+}
+// The mean of sin over the footprint of phase x: sin(x) * sinc(w / 2).
+float filteredSin(float x) {
+  float h = 0.5 * max(fwidth(x), 1e-6);
+  return sin(x) * sin(h) / h;
+}
+
 vec3 albedo() {
   vec3 p = v_rest;
   float fine = valueNoise(p * 180.0);   // ~5 mm grain
   float mid = valueNoise(p * 40.0);
   if (v_material == 1) {  // shirt: red and cream horizontal stripes, a printed band on the chest
-    float stripe = step(0.5, fract(p.z * 14.0));
+    float stripe = filteredSquare(p.z * 14.0, 0.5);
     vec3 c = mix(vec3(0.70, 0.12, 0.10), vec3(0.88, 0.82, 0.68), stripe);
-    float band = step(abs(p.z - 1.30), 0.04) * step(0.0, p.y);
-    c = mix(c, vec3(0.10, 0.25, 0.75), band * step(0.5, fract(p.x * 20.0)));
+    float band = filteredInterval(p.z, 1.26, 1.34) * filteredInterval(p.y, 0.0, 1e3);
+    c = mix(c, vec3(0.10, 0.25, 0.75), band * filteredSquare(p.x * 20.0, 0.5));
     return c * (0.85 + 0.25 * fine);
   }
   if (v_material == 2) {  // trousers: denim with a diagonal twill
-    float twill = 0.5 + 0.5 * sin((p.x + p.z) * 900.0);
+    float twill = 0.5 + 0.5 * filteredSin((p.x + p.z) * 900.0);
     return vec3(0.12, 0.20, 0.42) * (0.75 + 0.2 * twill + 0.3 * fine);
   }
   if (v_material == 3) return vec3(0.18, 0.11, 0.06) * (0.7 + 0.6 * fine);  // hair
-  if (v_material == 4) return vec3(0.10, 0.10, 0.11) * (0.8 + 0.4 * mid) + 0.25 * step(0.985, fine);  // shoes
+  if (v_material == 4) {  // shoes, with a few light specks
+    float w = max(fwidth(fine), 1e-4);
+    float speck = clamp((fine - 0.985) / w + 0.5, 0.0, 1.0);
+    return vec3(0.10, 0.10, 0.11) * (0.8 + 0.4 * mid) + 0.25 * speck;
+  }
   return vec3(0.86, 0.64, 0.52) * (0.9 + 0.1 * mid + 0.08 * fine);  // skin
 }
 
