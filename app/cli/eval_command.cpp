@@ -22,7 +22,9 @@ namespace {
 // Section "render": every camera's view rendered from the others with the unstructured
 // lumigraph, compared with its image over the truth mask (docs/lumigraph.md), on the pipeline's
 // own geometry — the generic human where the tracker sees the actor, refined from the images
-// (loo_psnr_db, loo_ssim) — on that mesh unrefined, and on the true surface (the upper bound).
+// (loo_psnr_db, loo_ssim) — the same refined without the scored camera's image (the strict
+// score: nothing of the view it renders went into its geometry; loo_psnr_db_strict), on that mesh
+// unrefined, and on the true surface (the upper bound).
 void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
                     const MocapEvalResult& tracked, const RefineConfig& refine, int frame_count,
                     EvalReport& report) {
@@ -36,38 +38,43 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   }
   EglContext gl;
   const LeaveOneOutSummary truth =
-      evaluateLeaveOneOut(session, frames, [&](int i) { return truthSurface(session, i); });
+      evaluateLeaveOneOut(session, frames, [&](int i, int) { return truthSurface(session, i); });
   std::vector<Eigen::Affine3f> transforms;
-  const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(session, frames, [&](int i) {
-    TriangleMesh mesh;
-    mesh.triangles = generic.rest.triangles;
-    posedBodyMesh(
-        generic,
-        poseMessageFor(generic.skeleton.restPositions()[0], tracked.skeleton, tracked.poses[i]),
-        transforms, mesh.positions, mesh.normals);
-    return mesh;
-  });
-  std::vector<CameraFrame> images;
-  const LeaveOneOutSummary refined = evaluateLeaveOneOut(session, frames, [&](int i) {
-    // A refiner per frame: the scored frames are far apart, no temporal coherence between them.
-    FrameRefiner refiner(session.rig(), refine, generic.rest.vertexCount(), generic.rest.triangles);
-    Eigen::Matrix3Xf positions, normals;
+  Eigen::Matrix3Xf positions, normals;
+  const auto posed = [&](int i) {
     posedBodyMesh(
         generic,
         poseMessageFor(generic.skeleton.restPositions()[0], tracked.skeleton, tracked.poses[i]),
         transforms, positions, normals);
+  };
+  const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(session, frames, [&](int i, int) {
+    posed(i);
+    TriangleMesh mesh{positions, normals, generic.rest.triangles};
+    return mesh;
+  });
+  std::vector<CameraFrame> images;
+  const auto refined_mesh = [&](int i, int left_out) {
+    // A refiner per mesh: the scored frames are far apart, no temporal coherence between them.
+    FrameRefiner refiner(session.rig(), refine, generic.rest.vertexCount(), generic.rest.triangles);
+    posed(i);
     session.readFrame(i, images);
     TriangleMesh mesh;
     mesh.triangles = generic.rest.triangles;
-    refiner.refine(images, positions, normals, mesh.positions);
+    refiner.refine(images, positions, normals, mesh.positions, left_out);
     mesh.computeNormals();
     return mesh;
-  });
+  };
+  const LeaveOneOutSummary refined = evaluateLeaveOneOut(session, frames, refined_mesh);
+  // Strict: camera c's view rendered on a mesh refined without camera c's image.
+  const LeaveOneOutSummary strict =
+      evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerLeftOutCamera);
   report.set("render", "loo_frames", double(frames.size()));
   report.set("render", "loo_psnr_db", refined.psnr_db);
   report.set("render", "loo_ssim", refined.ssim);
   report.set("render", "loo_psnr_db_unrefined", unrefined.psnr_db);
   report.set("render", "loo_ssim_unrefined", unrefined.ssim);
+  report.set("render", "loo_psnr_db_strict", strict.psnr_db);
+  report.set("render", "loo_ssim_strict", strict.ssim);
   report.set("render", "loo_psnr_db_truth_surface", truth.psnr_db);
   report.set("render", "loo_ssim_truth_surface", truth.ssim);
   for (size_t c = 0; c < truth.per_camera.size(); ++c) {
@@ -76,6 +83,8 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     report.set("render", "loo_ssim_" + name, refined.per_camera[c].ssim);
     report.set("render", "loo_psnr_db_unrefined_" + name, unrefined.per_camera[c].psnr_db);
     report.set("render", "loo_ssim_unrefined_" + name, unrefined.per_camera[c].ssim);
+    report.set("render", "loo_psnr_db_strict_" + name, strict.per_camera[c].psnr_db);
+    report.set("render", "loo_ssim_strict_" + name, strict.per_camera[c].ssim);
     report.set("render", "loo_psnr_db_truth_surface_" + name, truth.per_camera[c].psnr_db);
     report.set("render", "loo_ssim_truth_surface_" + name, truth.per_camera[c].ssim);
   }

@@ -16,8 +16,8 @@ TriangleMesh truthSurface(const SessionReader& session, int i) {
 }
 
 LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::vector<int>& frames,
-                                       const std::function<TriangleMesh(int)>& mesh_for,
-                                       const LumigraphParams& params) {
+                                       const std::function<TriangleMesh(int, int)>& mesh_for,
+                                       LeaveOneOutMeshes meshes, const LumigraphParams& params) {
   const Rig& rig = session.rig();
   const int n = rig.cameraCount();
   std::vector<int> all(n);
@@ -40,9 +40,18 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
         throw Error(path + ": cannot read the truth mask (8-bit PNG of the camera's size)");
       masks[c].assign(mask.data, mask.data + mask.total());
     }
-    const TriangleMesh mesh = mesh_for(i);
-    renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
-    const std::vector<ViewScore> scores = leaveOneOut(renderer, rig, truth, masks);
+    std::vector<ViewScore> scores;
+    if (meshes == LeaveOneOutMeshes::kOnePerFrame) {
+      const TriangleMesh mesh = mesh_for(i, -1);
+      renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
+      scores = leaveOneOut(renderer, rig, truth, masks);
+    } else {
+      for (int c = 0; c < n; ++c) {
+        const TriangleMesh mesh = mesh_for(i, c);
+        renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
+        scores.push_back(leaveOneOut(renderer, rig, truth, masks, c));
+      }
+    }
     for (int c = 0; c < n; ++c) {
       summary.per_camera[c].psnr_db += scores[c].psnr_db / frames.size();
       summary.per_camera[c].ssim += scores[c].ssim / frames.size();

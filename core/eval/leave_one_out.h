@@ -16,12 +16,18 @@ struct LeaveOneOutSummary {
   int frames = 0;
 };
 
+// Which mesh renders a frame's views: one for every camera's view (mesh_for(i, -1)), or one per
+// left-out camera (mesh_for(i, c) renders camera c's view only: the strict variant, whose mesh
+// never saw camera c's image).
+enum class LeaveOneOutMeshes { kOnePerFrame, kOnePerLeftOutCamera };
+
 // For each frame index in `frames`, renders every camera's view from the other cameras on the
-// mesh `mesh_for(frame index)` gives (the truth surface, the posed or the refined mesh; normals
-// set) and compares it with the camera's image over its truth mask. Needs a current OpenGL
-// context (EglContext). Throws Error naming the file when a mask cannot be read.
+// mesh `mesh_for` gives (the truth surface, the posed or the refined mesh; normals set) and
+// compares it with the camera's image over its truth mask. Needs a current OpenGL context
+// (EglContext). Throws Error naming the file when a mask cannot be read.
 LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::vector<int>& frames,
-                                       const std::function<TriangleMesh(int)>& mesh_for,
+                                       const std::function<TriangleMesh(int, int)>& mesh_for,
+                                       LeaveOneOutMeshes meshes = LeaveOneOutMeshes::kOnePerFrame,
                                        const LumigraphParams& params = {});
 
 // The truth surface of frame index i (truth/surface/NNNNNN.ply, normals computed).

@@ -92,22 +92,27 @@ void imageToRgba(const ImageView& image, std::vector<uint8_t>& rgba) {
   }
 }
 
+ViewScore leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
+                      const std::vector<std::vector<uint8_t>>& truth,
+                      const std::vector<std::vector<uint8_t>>& masks, int left_out) {
+  const int n = rig.cameraCount();
+  std::vector<bool> active(n, true);
+  active.at(left_out) = false;
+  renderer.setActive(active);
+  const Camera& camera = rig.camera(left_out);
+  std::vector<uint8_t> rendered;
+  renderer.render(camera, rendered);
+  renderer.setActive(std::vector<bool>(n, true));
+  return compareOverMask(rendered, truth.at(left_out), masks.at(left_out), camera.width(),
+                         camera.height());
+}
+
 std::vector<ViewScore> leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
                                    const std::vector<std::vector<uint8_t>>& truth,
                                    const std::vector<std::vector<uint8_t>>& masks) {
   std::vector<ViewScore> scores;
-  std::vector<uint8_t> rendered;
-  const int n = rig.cameraCount();
-  for (int c = 0; c < n; ++c) {
-    std::vector<bool> active(n, true);
-    active[c] = false;
-    renderer.setActive(active);
-    const Camera& camera = rig.camera(c);
-    renderer.render(camera, rendered);
-    scores.push_back(
-        compareOverMask(rendered, truth.at(c), masks.at(c), camera.width(), camera.height()));
-  }
-  renderer.setActive(std::vector<bool>(n, true));
+  for (int c = 0; c < rig.cameraCount(); ++c)
+    scores.push_back(leaveOneOut(renderer, rig, truth, masks, c));
   return scores;
 }
 

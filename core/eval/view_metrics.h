@@ -30,5 +30,9 @@ void imageToRgba(const ImageView& image, std::vector<uint8_t>& rgba);
 std::vector<ViewScore> leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
                                    const std::vector<std::vector<uint8_t>>& truth,
                                    const std::vector<std::vector<uint8_t>>& masks);
+// The same for camera `left_out` alone.
+ViewScore leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
+                      const std::vector<std::vector<uint8_t>>& truth,
+                      const std::vector<std::vector<uint8_t>>& masks, int left_out);
 
 }  // namespace lumistage

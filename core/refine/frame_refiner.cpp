@@ -16,7 +16,8 @@ FrameRefiner::FrameRefiner(const Rig& rig, const RefineConfig& config, int verte
       keyers_(rig.cameraCount()) {}
 
 void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::Matrix3Xf& positions,
-                          const Eigen::Matrix3Xf& normals, Eigen::Matrix3Xf& refined) {
+                          const Eigen::Matrix3Xf& normals, Eigen::Matrix3Xf& refined,
+                          int left_out) {
   if (!keyers_learnt_) {
     for (int c = 0; c < rig_.cameraCount(); ++c) keyers_[c].learnScreen(frames[c].image.view());
     keyers_learnt_ = true;
@@ -26,7 +27,8 @@ void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::M
   for (const RigNode& node : rig_.nodes()) {
     inputs_.clear();
     for (int c : node.cameras)
-      inputs_.push_back({&rig_.camera(c), frames[c].image.view(), &keyers_[c], nullptr});
+      if (c != left_out)
+        inputs_.push_back({&rig_.camera(c), frames[c].image.view(), &keyers_[c], nullptr});
     sampler_.sample(inputs_, positions, normals, triangles_, node_stats_);
     codec_.encode(node_stats_, wire_);
     wire_bytes_ += wire_.size();

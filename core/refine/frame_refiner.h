@@ -22,9 +22,10 @@ class FrameRefiner {
                const std::vector<Eigen::Vector3i>& triangles);
 
   // Refines the posed mesh (`positions`, `normals`) from a frame's images (indexed by rig
-  // camera) into `refined`. Throws Error if a node's statistics do not decode (a bug).
+  // camera) into `refined`; camera `left_out` (>= 0), if any, is not sampled (the strict
+  // leave-one-camera-out score). Throws Error if a node's statistics do not decode (a bug).
   void refine(const std::vector<CameraFrame>& frames, const Eigen::Matrix3Xf& positions,
-              const Eigen::Matrix3Xf& normals, Eigen::Matrix3Xf& refined);
+              const Eigen::Matrix3Xf& normals, Eigen::Matrix3Xf& refined, int left_out = -1);
 
   // The last frame's offset levels (RefineConfig::offsetLevels()).
   const std::vector<uint8_t>& offsets() const { return offsets_; }

@@ -5,6 +5,7 @@
 #include "core/body/human_model.h"
 #include "core/body/joint_pose_fit.h"
 #include "core/eval/surface_metrics.h"
+#include "core/refine/frame_refiner.h"
 #include "core/refine/mesh_refiner.h"
 #include "core/refine/refinement_sampler.h"
 #include "core/sim/virtual_studio.h"
@@ -55,6 +56,50 @@ TEST(StudioRefinement, RefinedWalkerIsMuchCloserToTheTrueSurface) {
         << "frame " << f << ": " << before.mean_mm << " mm -> " << after.mean_mm << " mm";
     EXPECT_LT(after.p95_mm, before.p95_mm) << "frame " << f;
   }
+}
+
+// The strict leave-one-camera-out score refines without the scored camera: with it left out, its
+// image has no say in the refined mesh (a ruined image changes nothing); sampled, it does.
+TEST(StudioRefinement, FrameRefinerLeavesTheLeftOutCameraUnsampled) {
+  StudioConfig config =
+      loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
+  config.actor.target_vertices = 3000;
+  VirtualStudio studio(config, 20);
+  const Rig& rig = studio.rig();
+  const SkinnedMesh generic = loadGenericHuman();
+  StudioFrame frame;
+  studio.renderFrame(10, frame);
+  std::vector<CameraFrame> frames(rig.cameraCount());
+  for (int c = 0; c < rig.cameraCount(); ++c) {
+    frames[c].camera = c;
+    rgbaToImage(frame.images[c].data(), rig.camera(c).width(), rig.camera(c).height(),
+                PixelFormat::kRgb8, frames[c].image);
+  }
+  const JointPoseFit fit = fitPoseToJoints(generic.skeleton, frame.joints,
+                                           initialJointPoseFit(generic.skeleton, frame.joints));
+  Eigen::Matrix3Xf positions, normals;
+  posedScaledMesh(generic, fit, positions, normals);
+  const auto refined = [&](int left_out) {
+    FrameRefiner refiner(rig, config.refine, generic.rest.vertexCount(), generic.rest.triangles);
+    Eigen::Matrix3Xf out;
+    refiner.refine(frames, positions, normals, out, left_out);
+    return out;
+  };
+  const int c = 4;
+  const Eigen::Matrix3Xf left_out = refined(c), sampled = refined(-1);
+  // The actor's half of camera c's image turned to screen green, as if nobody stood there.
+  std::vector<uint8_t>& pixels = frames[c].image.pixels;
+  for (size_t p = 0; p < pixels.size(); p += 3) {
+    if (frame.masks[c][p / 3] == 0) continue;
+    pixels[p] = 40;
+    pixels[p + 1] = 150;
+    pixels[p + 2] = 60;
+  }
+  EXPECT_EQ(refined(c), left_out);
+  const Eigen::Matrix3Xf ruined = refined(-1);
+  int moved = 0;
+  for (int v = 0; v < ruined.cols(); ++v) moved += (ruined.col(v) - sampled.col(v)).norm() > 1e-4f;
+  EXPECT_GT(moved, 100) << "camera " << c << "'s image does not shape the refinement";
 }
 
 }  // namespace
