@@ -700,7 +700,7 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
   double top_z = 0;
   const double volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z);
   out.hull_points = int(hull.size());
-  if (volume < opt.min_volume_m3 || top_z < 1.0) return false;
+  if (volume < opt.min_volume_m3 || volume > opt.max_volume_m3 || top_z < 1.0) return false;
   if (!shape_calibrated) {
     BodyShape s;
     s.height_m = std::clamp(s.height_m * top_z / generic_top_z, 1.3, 2.3);
@@ -864,7 +864,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
     const Eigen::Vector3i vhi = ((hi - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
     const double volume = m.carve(vlo, vhi, nullptr, nullptr);
     result_.hull_points = int(m.hull.size());
-    if (volume < m.opt.min_volume_m3) {
+    if (volume < m.opt.min_volume_m3 || volume > m.opt.max_volume_m3) {
       m.tracking = false;
       result_.state = TrackState::kLost;
     } else {

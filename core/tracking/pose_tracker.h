@@ -26,6 +26,10 @@ struct PoseTrackerOptions {
   double prior_weight = 0.2;       // temporal prior, per radian² (per m² for the root)
   double huber_m = 0.02;           // robust loss of hull samples outside the model (4x inside)
   double min_volume_m3 = 0.02;     // less hull than this: nobody on stage
+  // More hull than this is not a person (a keyer that takes the screen for the actor, the lights
+  // gone): nobody is tracked, and no time goes into fitting a body to it. One actor's hull is
+  // about 0.1 m³ with 12 cameras.
+  double max_volume_m3 = 1.0;
   double lost_rms_m = 0.05;        // hull fit error above this...
   int lost_frames = 3;             // ...for this many frames in a row: lost, re-initialise
   bool calibrate_shape = true;     // scale the generic skeleton to the actor at initialisation

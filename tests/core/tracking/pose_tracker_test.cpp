@@ -143,5 +143,24 @@ TEST(PoseTracker, SeesNobodyOnAnEmptyStage) {
   EXPECT_EQ(r.state, TrackState::kNoActor);
 }
 
+// A keyer that takes the whole screen for the actor: no body is fitted to the stage's volume.
+TEST(PoseTracker, SeesNobodyWhenEveryCellIsForeground) {
+  SyntheticStage stage(kStudio);
+  PoseTracker tracker(stage.config.rig, generic());
+  const MotionClip clip = makeBuiltinClip("walk", stage.actor.skeleton, 30.0, 1.0);
+  ASSERT_TRUE(tracker.track(stage.render(clip.sample(0))).valid());
+  std::vector<LowResSilhouette> full = stage.silhouettes;
+  std::vector<const LowResSilhouette*> pointers;
+  for (LowResSilhouette& s : full) {
+    std::fill(s.bits.begin(), s.bits.end(), uint8_t(0xff));
+    pointers.push_back(&s);
+  }
+  EXPECT_EQ(tracker.track(pointers).state, TrackState::kLost);      // while tracking
+  EXPECT_EQ(tracker.track(pointers).state, TrackState::kNoActor);  // and from then on
+  EXPECT_EQ(tracker.track(pointers).state, TrackState::kNoActor);
+  // The actor back in sight: found again.
+  EXPECT_TRUE(tracker.track(stage.render(clip.sample(0.1))).valid());
+}
+
 }  // namespace
 }  // namespace lumistage
