@@ -85,6 +85,13 @@ MainWindow::MainWindow(QWidget* parent)
   connect(pipeline_panel_, &PipelinePanel::snapshot, health_panel_, &HealthPanel::showSnapshot);
   connect(pipeline_panel_, &PipelinePanel::snapshot, overlay_panel_, &OverlayPanel::showSnapshot);
   connect(pipeline_panel_, &PipelinePanel::demoSessionWanted, this, &MainWindow::startDemo);
+  connect(viewport_panel_, &ViewportPanel::recordingRequested, this, [this](const QString& file) {
+    if (pipeline_panel_->startRecording(file)) return;
+    viewport_panel_->record(false);
+    status_->setText(tr("Nothing to record: start the pipeline first"));
+  });
+  connect(viewport_panel_, &ViewportPanel::recordingStopped, pipeline_panel_,
+          &PipelinePanel::stopRecording);
   connect(viewport_panel_->viewport(), &ViewportWidget::clonesChanged, clone_panel_,
           &ClonePanel::refresh);
   connect(clone_panel_, &ClonePanel::clonesChanged, this, [this] {

@@ -29,6 +29,44 @@ void PipelineWorker::killNode(const QString& name) {
   commands_.push_back([name](LocalPipelineRun& run) { run.killNode(name.toStdString()); });
 }
 
+void PipelineWorker::startRecording(const QString& file) {
+  QMutexLocker lock(&mutex_);
+  commands_.push_back([this, file](LocalPipelineRun& run) {
+    run.studio().setBlendedSink({});
+    recorder_.reset();
+    try {
+      recorder_ = std::make_unique<ViewRecorder>(file.toStdString(), run.frameRate());
+    } catch (const std::exception& e) {
+      emit message(tr("Cannot record the view: %1").arg(QString::fromStdString(e.what())));
+      return;
+    }
+    run.studio().setBlendedSink([this](int view, const BlendedImage& image) {
+      if (view != 0 || recorder_failed_) return;
+      try {
+        recorder_->add(image.frame_id, image.width, image.height, image.rgba);
+      } catch (const std::exception& e) {  // a full disk: the recording stops, not the pipeline
+        recorder_failed_ = true;
+        emit message(tr("Recording stopped: %1").arg(QString::fromStdString(e.what())));
+      }
+    });
+    recorder_failed_ = false;
+    emit message(tr("Recording the view to %1").arg(file));
+  });
+}
+
+void PipelineWorker::stopRecording() {
+  QMutexLocker lock(&mutex_);
+  commands_.push_back([this](LocalPipelineRun& run) {
+    run.studio().setBlendedSink({});
+    if (!recorder_) return;
+    recorder_->close();
+    emit message(tr("Recorded %1 frames of the view to %2")
+                     .arg(recorder_->framesWritten())
+                     .arg(QString::fromStdString(recorder_->file().string())));
+    recorder_.reset();
+  });
+}
+
 void PipelineWorker::run() {
   try {
     LocalPipelineRun pipeline(options_);
@@ -89,6 +127,14 @@ void PipelineWorker::run() {
         posedBodyMesh(human, pose_data, transforms, mesh->positions, mesh->normals);
         mesh->triangles = human.rest.triangles;
       }
+      if (recorder_ && recorder_failed_) {
+        pipeline.studio().setBlendedSink({});
+        recorder_.reset();
+      }
+      if (recorder_) {
+        s.recording = QString::fromStdString(recorder_->file().string());
+        s.recorded_frames = recorder_->framesWritten();
+      }
       s.pose_frame = posed_frame;
       s.joints = joints;
       s.parents = parents;
@@ -98,6 +144,7 @@ void PipelineWorker::run() {
   } catch (const std::exception& e) {
     emit message(tr("Pipeline stopped: %1").arg(QString::fromStdString(e.what())));
   }
+  recorder_.reset();  // finishes a recording (its sink went with the pipeline)
   emit finished();
 }
 
@@ -230,6 +277,16 @@ void PipelinePanel::setView(const ViewData& view) {
 
 void PipelinePanel::killNode(const QString& name) {
   if (worker_) worker_->killNode(name);
+}
+
+bool PipelinePanel::startRecording(const QString& file) {
+  if (!worker_) return false;
+  worker_->startRecording(file);
+  return true;
+}
+
+void PipelinePanel::stopRecording() {
+  if (worker_) worker_->stopRecording();
 }
 
 void PipelinePanel::show(const PipelineSnapshot& s) {

@@ -15,6 +15,7 @@
 
 #include "core/body/skinned_mesh.h"
 #include "core/pipeline/local_run.h"
+#include "core/render/view_recorder.h"
 
 class QComboBox;
 class QPushButton;
@@ -35,6 +36,8 @@ struct PipelineSnapshot {
   std::shared_ptr<const TriangleMesh> mesh;  // the placed body's surface
   QStringList exited;                        // nodes whose process is no longer running
   double time_s = 0;                         // since the pipeline started
+  QString recording;                         // the file the view is recorded to; empty: none
+  int64_t recorded_frames = 0;
 };
 
 // Runs a LocalPipelineRun on its own thread (move to a QThread, call run()), reporting a snapshot
@@ -50,6 +53,10 @@ class PipelineWorker : public QObject {
   void setView(const ViewData& view);
   // Thread-safe: kills a node's process (as if unplugged).
   void killNode(const QString& name);
+  // Thread-safe: records every blended image of the director's view (view 0) to `file` (.avi,
+  // ViewRecorder) until stopRecording() or the pipeline stops; what went wrong comes as message().
+  void startRecording(const QString& file);
+  void stopRecording();
 
  public slots:
   void run();
@@ -64,6 +71,8 @@ class PipelineWorker : public QObject {
   std::atomic<bool> stop_{false};
   QMutex mutex_;
   std::vector<std::function<void(LocalPipelineRun&)>> commands_;  // guarded by mutex_
+  std::unique_ptr<ViewRecorder> recorder_;                        // the worker thread's own
+  bool recorder_failed_ = false;
 };
 
 // The pipeline for technicians: frames a second, latency, per-stage times, frames in flight,
@@ -86,6 +95,9 @@ class PipelinePanel : public QWidget {
   QTableWidget* stageTable() const { return stages_; }
   void setView(const ViewData& view);
   void killNode(const QString& name);
+  // Records the director's view while the pipeline runs (false, nothing done, when it does not).
+  bool startRecording(const QString& file);
+  void stopRecording();
   // The session "Virtual studio" runs (set by the studio once its demo session exists).
   void setDemoSession(const QString& folder) { demo_session_ = folder; }
 

@@ -1,10 +1,14 @@
 #include "ui/viewport_panel.h"
 
+#include <QBuffer>
 #include <QCheckBox>
 #include <QComboBox>
+#include <QFileDialog>
+#include <QFileInfo>
 #include <QGuiApplication>
 #include <QHBoxLayout>
 #include <QLabel>
+#include <QMessageBox>
 #include <QMouseEvent>
 #include <QOpenGLWidget>
 #include <QPainter>
@@ -17,6 +21,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/base/atomic_file.h"
 #include "ui/stage_plan_view.h"
 
 namespace lumistage {
@@ -269,6 +274,16 @@ void ViewportWidget::paintScene(QPainter& painter, int w, int h) {
                         .arg(view_.distance(), 0, 'f', 1);
   if (snapshot_.view.isNull()) caption += tr("  -  waiting for the pipeline's first frame");
   painter.drawText(QRect(8, h - 24, w - 16, 20), Qt::AlignLeft, caption);
+  if (!snapshot_.recording.isEmpty()) {
+    painter.setPen(Qt::NoPen);
+    painter.setBrush(QColor(230, 40, 40));
+    painter.drawEllipse(QPoint(16, 16), 6, 6);
+    painter.setPen(QColor(255, 120, 120));
+    painter.drawText(QRect(28, 6, w - 36, 20), Qt::AlignLeft | Qt::AlignVCenter,
+                     tr("REC  %1  -  %2 frames")
+                         .arg(QFileInfo(snapshot_.recording).fileName())
+                         .arg(snapshot_.recorded_frames));
+  }
 }
 
 void ViewportWidget::mousePressEvent(QMouseEvent* event) {
@@ -334,6 +349,7 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
       timeline_(new QSlider(Qt::Horizontal, this)),
       time_label_(new QLabel(this)),
       play_(new QPushButton(tr("Play path"), this)),
+      record_(new QPushButton(tr("Record"), this)),
       player_(new QTimer(this)) {
   auto* layers = new QHBoxLayout;
   auto toggle = [&](const QString& name, bool ViewportLayers::*layer) {
@@ -356,6 +372,32 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
   layers->addWidget(reset);
   layers->addWidget(snap_);
   snap_->addItem(tr("Snap to camera..."));
+  auto* save = new QPushButton(tr("Save image..."), this);
+  save->setToolTip(tr("Write the pipeline's current view (without overlays) as PNG or JPEG"));
+  record_->setCheckable(true);
+  record_->setToolTip(tr("Record every frame of this view to a video (.avi, Motion-JPEG)"));
+  layers->addWidget(save);
+  layers->addWidget(record_);
+  connect(save, &QPushButton::clicked, this, [this] {
+    const QString file = QFileDialog::getSaveFileName(this, tr("Save the view"), "view.png",
+                                                      tr("Images (*.png *.jpg)"));
+    QString error;
+    if (!file.isEmpty() && !saveImage(file, &error))
+      QMessageBox::warning(this, tr("Save the view"), error);
+  });
+  connect(record_, &QPushButton::clicked, this, [this](bool on) {
+    QString file;
+    if (on) {
+      file = QFileDialog::getSaveFileName(this, tr("Record the view"), "view.avi",
+                                          tr("Motion-JPEG video (*.avi)"));
+      if (file.isEmpty()) {
+        record_->setChecked(false);
+        return;
+      }
+      if (!file.endsWith(".avi")) file += ".avi";
+    }
+    record(on, file);
+  });
   connect(reset, &QPushButton::clicked, this,
           [this] { viewport_->setView(OrbitView::studioDefault()); });
   connect(snap_, &QComboBox::activated, this, [this](int index) {
@@ -397,6 +439,41 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
   connect(viewport_, &ViewportWidget::viewChanged, this,
           [this] { emit viewChanged(viewport_->viewData()); });
   refreshTimeline();
+}
+
+bool ViewportPanel::saveImage(const QString& file, QString* error) {
+  const QImage& view = viewport_->snapshot().view;
+  auto fail = [&](const QString& why) {
+    if (error) *error = file + ": " + why;
+    return false;
+  };
+  if (view.isNull()) return fail(tr("no view yet: start the pipeline"));
+  const QByteArray format = file.toLower().endsWith(".jpg") || file.toLower().endsWith(".jpeg")
+                                ? QByteArray("JPG")
+                                : QByteArray("PNG");
+  QByteArray bytes;
+  QBuffer buffer(&bytes);
+  buffer.open(QIODevice::WriteOnly);
+  if (!view.save(&buffer, format.constData())) return fail(tr("cannot encode the image"));
+  try {
+    writeFileAtomically(file.toStdString(), std::string_view(bytes.constData(), bytes.size()));
+  } catch (const std::exception& e) {
+    return fail(QString::fromStdString(e.what()));
+  }
+  return true;
+}
+
+void ViewportPanel::record(bool on, const QString& file) {
+  record_->setChecked(on);
+  if (on) {
+    emit recordingRequested(file);
+  } else {
+    emit recordingStopped();
+  }
+}
+
+bool ViewportPanel::recording() const {
+  return record_->isChecked();
 }
 
 void ViewportPanel::setRig(const Rig& rig) {

@@ -115,9 +115,18 @@ class ViewportPanel : public QWidget {
   double time() const { return time_s_; }
   const CameraPath& path() const { return path_; }
   bool playing() const;
+  // Writes the pipeline's current view (the blended image, without overlays) to `file` (PNG or
+  // JPEG by its name), atomically. False with `error` set, nothing written, before the first
+  // frame or when the file cannot be written.
+  bool saveImage(const QString& file, QString* error = nullptr);
+  // As the Record button: on asks for recording to `file` (recordingRequested), off stops it.
+  void record(bool on, const QString& file = {});
+  bool recording() const;
 
  signals:
   void viewChanged(const lumistage::ViewData& view);
+  void recordingRequested(const QString& file);
+  void recordingStopped();
 
  private:
   void refreshTimeline();
@@ -127,6 +136,7 @@ class ViewportPanel : public QWidget {
   QSlider* timeline_;
   QLabel* time_label_;
   QPushButton* play_;
+  QPushButton* record_;
   QTimer* player_;
   CameraPath path_;
   double time_s_ = 0;

@@ -15,6 +15,7 @@
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/pipeline/local_run.h"
+#include "core/render/view_recorder.h"
 
 namespace lumistage {
 
@@ -77,7 +78,8 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
 
 void addRunCommand(CLI::App& app) {
   struct Args {
-    std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size;
+    std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size,
+                                     record_view;
     int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
     int64_t frames = 150;
     double seconds = 60;
@@ -112,6 +114,9 @@ void addRunCommand(CLI::App& app) {
                   "the virtual view's size, WxH (default 320x240), the same field of view");
   run->add_option("--image", a->image,
                   "write the last blended view as PNG (the pipeline's output)");
+  run->add_option("--record-view", a->record_view,
+                  "record every blended view to this video (.avi, Motion-JPEG, at the cameras' "
+                  "rate)");
   run->callback([a] {
     if (a->session.empty() == (a->rig.empty() || a->address.empty())) {
       throw CLI::ValidationError("--session",
@@ -147,6 +152,13 @@ void addRunCommand(CLI::App& app) {
       view.height = height;
       studio.setView(view);
     }
+    std::unique_ptr<ViewRecorder> recorder;
+    if (!a->record_view.empty()) {
+      recorder = std::make_unique<ViewRecorder>(a->record_view, pipeline.frameRate());
+      studio.setBlendedSink([&recorder](int view, const BlendedImage& image) {
+        if (view == 0) recorder->add(image.frame_id, image.width, image.height, image.rgba);
+      });
+    }
     // CPU use is measured from the first frame done: the nodes' start-up (loading a session into
     // memory, compiling shaders) is not the pipeline's load.
     double cpu_start = processCpuSeconds(), nodes_cpu_start = 0;
@@ -171,6 +183,13 @@ void addRunCommand(CLI::App& app) {
       for (const std::string& exit : pipeline.takeExits()) {
         fmt::print(stderr, "lumistage run: {}; see its message above\n", exit);
       }
+    }
+    if (recorder) {
+      studio.setBlendedSink({});
+      recorder->close();
+      fmt::print("recorded the view to {}: {} frames of {}x{} at {:g} fps\n",
+                 recorder->file().string(), recorder->framesWritten(), recorder->width(),
+                 recorder->height(), pipeline.frameRate());
     }
     const RunReport r = studio.report();
     const double wall_s =

@@ -78,8 +78,9 @@ int main(int argc, char** argv) {
       "screenshots",
       "With --demo: once the pipeline has shown frames, save the main window and each panel to "
       "<dir> (main_window.png, viewport.png, viewport_behind.png, health.png, overlay.png, "
-      "calibration.png, clones.png, pipeline.png), kill a node and save health_node_lost.png once "
-      "its cameras show lost, then quit.",
+      "calibration.png, clones.png, pipeline.png; the view from behind is recorded meanwhile to "
+      "viewport_behind.avi), kill a node and save health_node_lost.png once its cameras show "
+      "lost, then quit.",
       "dir");
   parser.addOption(demo_option);
   parser.addOption(screenshots_option);
@@ -198,11 +199,12 @@ int main(int argc, char** argv) {
       return true;
     });
     steps->push_back(save("clones", "clones.png"));
-    steps->push_back([&window, pipeline] {
+    steps->push_back([&window, dir] {
       lumistage::OrbitView view = lumistage::OrbitView::studioDefault();
       view.orbit(3.14159265, 0);
       window.viewport()->viewport()->setView(view);
-      (void)pipeline;
+      // Recording the director's view meanwhile: the viewport shows it (REC, frames so far).
+      window.viewport()->record(true, dir + "/viewport_behind.avi");
       return true;
     });
     // The nodes render the new view: wait for a frame of it.
@@ -212,6 +214,10 @@ int main(int argc, char** argv) {
       return pipeline->lastReport().frames > *turned_at + 10;
     });
     steps->push_back(save("viewport", "viewport_behind.png"));
+    steps->push_back([&window] {
+      window.viewport()->record(false);
+      return true;
+    });
     // A technician's check: kill a node and time how long its cameras take to show "lost".
     auto killed = std::make_shared<QElapsedTimer>();
     auto shown_after_ms = std::make_shared<qint64>(-1);

@@ -29,6 +29,7 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
   std::optional<SessionReader> reader;
   if (!options_.session.empty()) reader.emplace(options_.session);
   rig_ = reader ? reader->rig() : loadRig(options_.rig);
+  if (reader) frame_rate_ = reader->fps();
   options_.coordinator.raw_bytes_per_pixel =
       reader ? bytesPerPixel(reader->pixelFormat()) : 1;  // live: Bayer
   const int node_count =

@@ -50,6 +50,8 @@ class LocalPipelineRun {
   // technician uses to check that the studio notices. False when it is not running.
   bool killNode(const std::string& name);
 
+  // The cameras' frame rate: the session's; live cameras are taken to run at 30.
+  double frameRate() const { return frame_rate_; }
   StudioCoordinator& studio() { return *studio_; }
   const Rig& rig() const { return rig_; }
   const std::vector<std::string>& nodeNames() const { return names_; }
@@ -64,6 +66,7 @@ class LocalPipelineRun {
   std::vector<pid_t> children_;
   std::vector<bool> running_;
   std::vector<std::string> exits_;
+  double frame_rate_ = 30;
 };
 
 }  // namespace lumistage

@@ -317,6 +317,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     image.width = blender.width();
     image.height = blender.height();
     blender.finish(image.rgba);
+    if (blended_sink_) blended_sink_(view, image);
   }
 
   // A run asked for max_frames counts exactly those: frames that complete together (several are

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <set>
@@ -120,6 +121,11 @@ class StudioCoordinator {
   const ViewData& view() const { return views_.front(); }
   // The newest blended image of a view (empty before its first frame).
   const BlendedImage& lastImage(int view = 0) const;
+  // Called with every blended image of every view as it is made (a ViewRecorder records them);
+  // an empty function stops it.
+  void setBlendedSink(std::function<void(int view, const BlendedImage&)> sink) {
+    blended_sink_ = std::move(sink);
+  }
   // The body pose the motion capture module sent the nodes last (for overlays); its frame id.
   const PoseData& lastPose() const { return last_pose_; }
   int64_t lastPoseFrame() const { return last_pose_frame_; }
@@ -176,6 +182,7 @@ class StudioCoordinator {
   RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_, refine_ms_;
   std::vector<ViewData> views_;
   std::map<int, BlendedImage> last_images_;
+  std::function<void(int, const BlendedImage&)> blended_sink_;
   std::vector<uint8_t> decoded_;  // a partial image, reused
   PoseData last_pose_;
   int64_t last_pose_frame_ = -1;

@@ -270,11 +270,22 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
           " --frames 6 --bayer --out " + (folder / "session").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* security : {"", " --plain"}) {
-    const fs::path json = folder / "run.json";
+    const fs::path json = folder / "run.json", video = folder / "view.avi";
     r = run(kCli + " run --session " + (folder / "session").string() +
-            " --frames 20 --seconds 30 --json " + json.string() + security);
+            " --frames 20 --seconds 30 --json " + json.string() + " --record-view " +
+            video.string() + security);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("20 frames in all"), std::string::npos) << r.output;
+    // The view recorded as it was made (core/render/view_recorder_test reads such files back).
+    const size_t recorded = r.output.find("recorded the view to " + video.string() + ": ");
+    ASSERT_NE(recorded, std::string::npos) << r.output;
+    // Frames late out of order are left out, gaps over a second (a slow start) not filled.
+    EXPECT_GE(std::stoi(r.output.substr(r.output.find(": ", recorded) + 2)), 10) << r.output;
+    const std::string avi = readFile(video);
+    EXPECT_EQ(avi.substr(0, 4), "RIFF");
+    EXPECT_EQ(avi.substr(8, 4), "AVI ");
+    EXPECT_NE(avi.find("MJPG"), std::string::npos);
+    fs::remove(video);
     const std::string text = readFile(json);
     for (const char* key :
          {"\"fps\": ", "\"latency_ms_p50\": ", "\"latency_ms_p95\": ", "\"stage_ms\": {",

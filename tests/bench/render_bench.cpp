@@ -15,6 +15,7 @@
 #include "core/render/lumigraph_renderer.h"
 #include "core/render/partial_image_blender.h"
 #include "core/render/partial_image_codec.h"
+#include "core/render/view_recorder.h"
 #include "core/sim/virtual_studio.h"
 
 namespace {
@@ -206,5 +207,22 @@ void blendFourPartialImages(benchmark::State& state) {
   }
 }
 BENCHMARK(blendFourPartialImages)->Unit(benchmark::kMicrosecond);
+
+// Recording the director's view: one 640x480 blended image appended to the Motion-JPEG AVI.
+void recordView(benchmark::State& state) {
+  auto r = nodeRenderer(false);
+  std::vector<uint8_t> rgba;
+  r->render(viewOf(640, 480), rgba);
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / "render_bench.avi";
+  {
+    ViewRecorder recorder(file, 30);
+    int64_t id = 0;
+    for (auto _ : state) recorder.add(id++, 640, 480, rgba);
+    state.counters["bytes_per_frame"] =
+        double(std::filesystem::file_size(file)) / double(std::max<int64_t>(1, id));
+  }
+  std::filesystem::remove(file);
+}
+BENCHMARK(recordView)->Unit(benchmark::kMillisecond);
 
 }  // namespace

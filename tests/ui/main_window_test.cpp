@@ -3,6 +3,7 @@
 
 #include <QDockWidget>
 #include <QElapsedTimer>
+#include <QFile>
 #include <QImage>
 #include <QListWidget>
 #include <QMouseEvent>
@@ -14,6 +15,7 @@
 #include "core/capture/session_writer.h"
 #include "core/geometry/epipolar.h"
 #include "core/geometry/ring_rig.h"
+#include "core/sim/virtual_studio.h"
 #include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
 #include "ui/camera_overlay_view.h"
@@ -66,6 +68,34 @@ class MainWindowTest : public QObject {
       std::fill(image.pixels.begin(), image.pixels.end(), uint8_t(40 * f));
       writer.writeFrame(f, static_cast<int64_t>(f * 1e9 / fps),
                         std::vector<lumistage::ImageView>(cameras, image.view()));
+    }
+  }
+
+  // A small session of the virtual studio (an actor on stage, so that the pipeline renders it):
+  // a ring of 4 cameras of 320x240 on 2 nodes.
+  static void writeStudioSession(const QString& folder, int frames) {
+    lumistage::StudioConfig config;
+    lumistage::RingRigSpec spec;
+    spec.cameras = 4;
+    spec.cameras_per_node = 2;
+    spec.width = 320;
+    spec.height = 240;
+    config.rig = lumistage::makeRingRig(spec);
+    config.actor.target_vertices = 2000;
+    lumistage::VirtualStudio studio(config, frames);
+    lumistage::SessionWriter writer(folder.toStdString(), config.rig, lumistage::PixelFormat::kRgb8,
+                                    config.fps, "test");
+    lumistage::StudioFrame frame;
+    std::vector<lumistage::Image> images(spec.cameras);
+    for (int f = 0; f < frames; ++f) {
+      studio.renderFrame(f, frame);
+      std::vector<lumistage::ImageView> views;
+      for (int c = 0; c < spec.cameras; ++c) {
+        lumistage::rgbaToImage(frame.images[c].data(), spec.width, spec.height,
+                               lumistage::PixelFormat::kRgb8, images[c]);
+        views.push_back(images[c].view());
+      }
+      writer.writeFrame(f, static_cast<int64_t>(f * 1e9 / config.fps), views);
     }
   }
 
@@ -145,7 +175,7 @@ class MainWindowTest : public QObject {
 
   void pipelinePanelRunsNodesAndShowsTheirHealth() {
     QTemporaryDir dir;
-    writeSession(dir.filePath("session"), 4, 2, 20.0, 4);
+    writeStudioSession(dir.filePath("session"), 6);
     MainWindow window;
     lumistage::LocalRunOptions options;
     options.session = dir.filePath("session").toStdString();
@@ -158,8 +188,33 @@ class MainWindowTest : public QObject {
     for (const auto& node : report.nodes) QVERIFY2(!node.lost, node.name.c_str());
     QCOMPARE(window.pipeline()->table()->rowCount(), 4);  // a row per camera
     QCOMPARE(window.pipeline()->table()->item(0, 1)->text(), QString("streaming"));
+
+    // The director's view to a file and to a recording, from the viewport's controls.
+    lumistage::ViewportPanel* viewport = window.viewport();
+    QTRY_VERIFY_WITH_TIMEOUT(!viewport->viewport()->snapshot().view.isNull(), 5000);
+    QString error;
+    QVERIFY2(viewport->saveImage(dir.filePath("view.png"), &error), qPrintable(error));
+    const QImage saved(dir.filePath("view.png"));
+    QCOMPARE(saved.size(), viewport->viewport()->snapshot().view.size());
+    QVERIFY(!viewport->saveImage(dir.filePath("missing/view.png"), &error));
+    QVERIFY2(error.contains("missing/view.png"), qPrintable(error));
+    viewport->record(true, dir.filePath("view.avi"));
+    QTRY_VERIFY_WITH_TIMEOUT(viewport->viewport()->snapshot().recorded_frames >= 5, 10000);
+    QCOMPARE(viewport->viewport()->snapshot().recording, dir.filePath("view.avi"));
+    viewport->record(false);
+    QTRY_VERIFY_WITH_TIMEOUT(viewport->viewport()->snapshot().recording.isEmpty(), 5000);
+    QFile video(dir.filePath("view.avi"));
+    QVERIFY(video.open(QIODevice::ReadOnly));
+    const QByteArray head = video.read(12);
+    QCOMPARE(head.left(4), QByteArray("RIFF"));
+    QCOMPARE(head.mid(8, 4), QByteArray("AVI "));
+
     window.pipeline()->stop();
     QVERIFY(!window.pipeline()->running());
+    // Nothing to record without the pipeline: the button goes back up.
+    viewport->record(true, dir.filePath("again.avi"));
+    QVERIFY(!viewport->recording());
+    QVERIFY(!QFile::exists(dir.filePath("again.avi")));
   }
 
   void unknownSourceIsRefusedWithTheChoices() {

@@ -1,0 +1,41 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <span>
+
+namespace lumistage {
+
+// Records a stream of the studio's blended images (one virtual camera) to a video as they are
+// made: every frame the pipeline finishes, not the few a second a window shows. Motion-JPEG in an
+// AVI, OpenCV's own encoder (nothing to install; 2.2 ms a 640x480 frame, render_bench), at the
+// cameras' rate: frame ids the pipeline skipped (refused on arrival, lost) repeat the image before
+// them, so that the video plays in real time; a gap longer than `max_gap_frames` is not filled (a
+// paused source), and a frame older than the last one written is left out. Images of another size
+// than the first are scaled to it. Not thread-safe; add() reuses its conversion buffers.
+class ViewRecorder {
+ public:
+  // Throws Error naming the file when it cannot be written (no folder, no rights, not .avi).
+  ViewRecorder(const std::filesystem::path& file, double fps, int max_gap_frames = 30);
+  ~ViewRecorder();  // finishes the file (close())
+  ViewRecorder(const ViewRecorder&) = delete;
+  ViewRecorder& operator=(const ViewRecorder&) = delete;
+
+  // One blended image: RGBA8, rows top first (alpha is dropped: empty pixels are black). False,
+  // writing nothing, when it is older than the last frame written or its size is 0.
+  bool add(int64_t frame_id, int width, int height, std::span<const uint8_t> rgba);
+  // Writes the index and closes the file; later add() calls write nothing.
+  void close();
+
+  const std::filesystem::path& file() const;
+  int64_t framesWritten() const;  // repeats included
+  int width() const;              // of the video (the first image's); 0 before it
+  int height() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lumistage

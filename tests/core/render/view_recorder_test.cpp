@@ -1,0 +1,87 @@
+// The view recorder writes a real Motion-JPEG AVI that OpenCV reads back: frames in real time
+// (skipped frame ids repeat the image before), sizes kept, bad requests refused by name.
+#include "core/render/view_recorder.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/videoio.hpp>
+
+#include "core/base/error.h"
+#include "tests/test_util.h"
+
+namespace lumistage {
+namespace {
+
+using testing::errorOf;
+using testing::testFolder;
+
+std::vector<uint8_t> solid(int width, int height, uint8_t r, uint8_t g, uint8_t b) {
+  std::vector<uint8_t> rgba(size_t(width) * height * 4, 255);
+  for (size_t p = 0; p < rgba.size(); p += 4) {
+    rgba[p] = r;
+    rgba[p + 1] = g;
+    rgba[p + 2] = b;
+  }
+  return rgba;
+}
+
+// Every frame of the video, as the mean B, G, R of each.
+std::vector<cv::Scalar> readBack(const std::filesystem::path& file, cv::Size* size) {
+  cv::VideoCapture video(file.string(), cv::CAP_OPENCV_MJPEG);
+  EXPECT_TRUE(video.isOpened()) << file;
+  std::vector<cv::Scalar> means;
+  cv::Mat frame;
+  while (video.read(frame)) {
+    *size = frame.size();
+    means.push_back(cv::mean(frame));
+  }
+  return means;
+}
+
+TEST(ViewRecorder, WritesEveryFrameAtTheCamerasRate) {
+  const std::filesystem::path file = testFolder("view_recorder") / "view.avi";
+  {
+    ViewRecorder recorder(file, 30, 4);
+    const auto red = solid(64, 48, 220, 20, 20), green = solid(64, 48, 20, 220, 20),
+               blue = solid(64, 48, 20, 20, 220);
+    EXPECT_TRUE(recorder.add(10, 64, 48, red));
+    EXPECT_TRUE(recorder.add(11, 64, 48, green));
+    EXPECT_TRUE(recorder.add(14, 64, 48, blue));  // 12 and 13 were skipped: green twice more
+    EXPECT_FALSE(recorder.add(13, 64, 48, red));  // older than the last: left out
+    EXPECT_TRUE(recorder.add(30, 32, 24, solid(32, 24, 220, 20, 20)));  // a gap of 15: not filled
+    EXPECT_EQ(recorder.framesWritten(), 6);
+    EXPECT_EQ(recorder.width(), 64);
+  }
+  cv::Size size;
+  const std::vector<cv::Scalar> means = readBack(file, &size);
+  ASSERT_EQ(means.size(), 6u);
+  EXPECT_EQ(size, cv::Size(64, 48));           // the smaller image was scaled to the video's size
+  const int expected[6] = {2, 1, 1, 1, 0, 2};  // the dominant channel, B G R order
+  for (int i = 0; i < 6; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      if (c == expected[i]) {
+        EXPECT_GT(means[i][c], 180) << "frame " << i;
+      } else {
+        EXPECT_LT(means[i][c], 60) << "frame " << i << " channel " << c;
+      }
+    }
+  }
+}
+
+TEST(ViewRecorder, RefusesWhatItCannotWriteByName) {
+  const std::filesystem::path dir = testFolder("view_recorder");
+  EXPECT_NE(errorOf([&] { ViewRecorder(dir / "view.mp4", 30); })
+                .find("view.mp4: the view is "
+                      "recorded as Motion-JPEG"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { ViewRecorder(dir / "missing" / "view.avi", 30); }).find("no folder"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { ViewRecorder(dir / "view.avi", 0); }).find("0 to 1000"),
+            std::string::npos);
+  // Nothing is written before the first frame, and an empty recording leaves no file.
+  { ViewRecorder recorder(dir / "empty.avi", 30); }
+  EXPECT_FALSE(std::filesystem::exists(dir / "empty.avi"));
+}
+
+}  // namespace
+}  // namespace lumistage
