@@ -43,13 +43,18 @@ std::vector<uint8_t> projectedSilhouette(const Camera& camera, const Eigen::Matr
   return mask;
 }
 
-TEST(StudioRenderer, SilhouetteMatchesTheProjectedSurface) {
-  EglContext gl;
+// The virtual studio's actor (clothed), of about `vertices` vertices.
+SkinnedMesh clothedActor(int vertices, double height_m = HumanModelSpec{}.shape.height_m) {
   HumanModelSpec spec;
   spec.clothing = true;
-  spec.target_vertices = 4000;
-  spec.shape.height_m = 1.82;
-  const SkinnedMesh actor = makeHumanModel(spec);
+  spec.target_vertices = vertices;
+  spec.shape.height_m = height_m;
+  return makeHumanModel(spec);
+}
+
+TEST(StudioRenderer, SilhouetteMatchesTheProjectedSurface) {
+  EglContext gl;
+  const SkinnedMesh actor = clothedActor(4000, 1.82);
   // A pose with bent limbs, turned and off-centre.
   Pose pose = Pose::rest(actor.skeleton.jointCount());
   pose.angles_rad[0] = Eigen::Vector3d(0, 0, 0.6);
@@ -94,10 +99,7 @@ TEST(StudioRenderer, SilhouetteMatchesTheProjectedSurface) {
 
 TEST(StudioRenderer, ActorIsTexturedAndNoiseChangesWithTheSeed) {
   EglContext gl;
-  HumanModelSpec spec;
-  spec.clothing = true;
-  spec.target_vertices = 3000;
-  const SkinnedMesh actor = makeHumanModel(spec);
+  const SkinnedMesh actor = clothedActor(3000);
   StudioRenderer renderer(actor);
   const Rig rig = makeRingRig({});
   std::vector<uint8_t> a, b;
@@ -129,10 +131,7 @@ TEST(StudioRenderer, ActorIsTexturedAndNoiseChangesWithTheSeed) {
 // sampled).
 TEST(StudioRenderer, PatternIsIntegratedOverEachPixel) {
   EglContext gl;
-  HumanModelSpec spec;
-  spec.clothing = true;
-  spec.target_vertices = 3000;
-  const SkinnedMesh actor = makeHumanModel(spec);
+  const SkinnedMesh actor = clothedActor(3000);
   StudioRenderer renderer(actor);
   const Rig rig = makeRingRig({});
   StudioLook look;
