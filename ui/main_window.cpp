@@ -92,6 +92,8 @@ MainWindow::MainWindow(QWidget* parent)
   });
   connect(viewport_panel_, &ViewportPanel::recordingStopped, pipeline_panel_,
           &PipelinePanel::stopRecording);
+  connect(pipeline_panel_, &PipelinePanel::recordingEnded, viewport_panel_,
+          &ViewportPanel::recordingEnded);
   connect(viewport_panel_->viewport(), &ViewportWidget::clonesChanged, clone_panel_,
           &ClonePanel::refresh);
   connect(clone_panel_, &ClonePanel::clonesChanged, this, [this] {

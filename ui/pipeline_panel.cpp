@@ -38,6 +38,7 @@ void PipelineWorker::startRecording(const QString& file) {
       recorder_ = std::make_unique<ViewRecorder>(file.toStdString(), run.frameRate());
     } catch (const std::exception& e) {
       emit message(tr("Cannot record the view: %1").arg(QString::fromStdString(e.what())));
+      emit recordingEnded();
       return;
     }
     run.studio().setBlendedSink([this](int view, const BlendedImage& image) {
@@ -64,6 +65,7 @@ void PipelineWorker::stopRecording() {
                      .arg(recorder_->framesWritten())
                      .arg(QString::fromStdString(recorder_->file().string())));
     recorder_.reset();
+    emit recordingEnded();
   });
 }
 
@@ -130,6 +132,7 @@ void PipelineWorker::run() {
       if (recorder_ && recorder_failed_) {
         pipeline.studio().setBlendedSink({});
         recorder_.reset();
+        emit recordingEnded();
       }
       if (recorder_) {
         s.recording = QString::fromStdString(recorder_->file().string());
@@ -144,7 +147,10 @@ void PipelineWorker::run() {
   } catch (const std::exception& e) {
     emit message(tr("Pipeline stopped: %1").arg(QString::fromStdString(e.what())));
   }
-  recorder_.reset();  // finishes a recording (its sink went with the pipeline)
+  if (recorder_) {
+    recorder_.reset();  // finishes the recording (its sink went with the pipeline)
+    emit recordingEnded();
+  }
   emit finished();
 }
 
@@ -251,6 +257,7 @@ void PipelinePanel::start(LocalRunOptions options) {
   connect(thread_, &QThread::finished, worker_, &QObject::deleteLater);
   connect(worker_, &PipelineWorker::snapshot, this, &PipelinePanel::show);
   connect(worker_, &PipelineWorker::message, summary_, &QLabel::setText);
+  connect(worker_, &PipelineWorker::recordingEnded, this, &PipelinePanel::recordingEnded);
   start_button_->setEnabled(false);
   stop_button_->setEnabled(true);
   summary_->setText(tr("Starting the nodes..."));
@@ -268,6 +275,7 @@ void PipelinePanel::stop() {
   worker_ = nullptr;
   start_button_->setEnabled(true);
   stop_button_->setEnabled(false);
+  emit recordingEnded();  // whatever was recording is finished with its worker
 }
 
 void PipelinePanel::setView(const ViewData& view) {

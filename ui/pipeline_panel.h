@@ -64,6 +64,7 @@ class PipelineWorker : public QObject {
  signals:
   void snapshot(lumistage::PipelineSnapshot snapshot);
   void message(QString text);
+  void recordingEnded();  // stopped, failed, or the pipeline stopped
   void finished();
 
  private:
@@ -104,6 +105,8 @@ class PipelinePanel : public QWidget {
  signals:
   void snapshot(const lumistage::PipelineSnapshot& snapshot);
   void started();
+  // A recording of the view ended: asked to, a write failed, or the pipeline stopped.
+  void recordingEnded();
   // Asks the studio to make the virtual studio's demo session (a long action with progress).
   void demoSessionWanted();
 

@@ -476,6 +476,10 @@ bool ViewportPanel::recording() const {
   return record_->isChecked();
 }
 
+void ViewportPanel::recordingEnded() {
+  record_->setChecked(false);
+}
+
 void ViewportPanel::setRig(const Rig& rig) {
   rig_ = rig;
   viewport_->setRig(rig);

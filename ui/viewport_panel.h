@@ -122,6 +122,8 @@ class ViewportPanel : public QWidget {
   // As the Record button: on asks for recording to `file` (recordingRequested), off stops it.
   void record(bool on, const QString& file = {});
   bool recording() const;
+  // The recording ended elsewhere (a failed write, the pipeline stopped): the button goes up.
+  void recordingEnded();
 
  signals:
   void viewChanged(const lumistage::ViewData& view);

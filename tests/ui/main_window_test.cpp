@@ -1,9 +1,11 @@
 // The studio's main window under Qt's offscreen platform.
 #include "ui/main_window.h"
 
+#include <QDir>
 #include <QDockWidget>
 #include <QElapsedTimer>
 #include <QFile>
+#include <QFileInfo>
 #include <QImage>
 #include <QListWidget>
 #include <QMouseEvent>
@@ -208,9 +210,22 @@ class MainWindowTest : public QObject {
     const QByteArray head = video.read(12);
     QCOMPARE(head.left(4), QByteArray("RIFF"));
     QCOMPARE(head.mid(8, 4), QByteArray("AVI "));
+    QVERIFY(!viewport->recording());
+    // A recording that cannot be written (a folder has its name) ends; the pipeline goes on.
+    QVERIFY(QDir(dir.path()).mkdir("taken.avi"));
+    viewport->record(true, dir.filePath("taken.avi"));
+    QVERIFY(viewport->recording());
+    QTRY_VERIFY_WITH_TIMEOUT(!viewport->recording(), 5000);
+    const int64_t frames = window.pipeline()->lastReport().frames;
+    QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames > frames + 3, 5000);
+    // Stopping the pipeline ends a recording: the file is finished, the button goes up.
+    viewport->record(true, dir.filePath("last.avi"));
+    QTRY_VERIFY_WITH_TIMEOUT(viewport->viewport()->snapshot().recorded_frames >= 2, 10000);
 
     window.pipeline()->stop();
     QVERIFY(!window.pipeline()->running());
+    QVERIFY(!viewport->recording());
+    QVERIFY(QFileInfo(dir.filePath("last.avi")).size() > 1000);
     // Nothing to record without the pipeline: the button goes back up.
     viewport->record(true, dir.filePath("again.avi"));
     QVERIFY(!viewport->recording());
