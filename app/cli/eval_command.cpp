@@ -53,11 +53,15 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     return mesh;
   });
   std::vector<CameraFrame> images;
+  int images_frame = -1;  // the frame `images` and the posed mesh hold (strict asks once a camera)
   const auto refined_mesh = [&](int i, int left_out) {
     // A refiner per mesh: the scored frames are far apart, no temporal coherence between them.
     FrameRefiner refiner(session.rig(), refine, generic.rest.vertexCount(), generic.rest.triangles);
-    posed(i);
-    session.readFrame(i, images);
+    if (images_frame != i) {
+      posed(i);
+      session.readFrame(i, images);
+      images_frame = i;
+    }
     TriangleMesh mesh;
     mesh.triangles = generic.rest.triangles;
     refiner.refine(images, positions, normals, mesh.positions, left_out);

@@ -13,10 +13,16 @@
 namespace lumistage {
 namespace {
 
-TEST(StudioRefinement, RefinedWalkerIsMuchCloserToTheTrueSurface) {
+// The reference studio with an actor of about `actor_vertices` vertices.
+StudioConfig referenceStudio(int actor_vertices) {
   StudioConfig config =
       loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
-  config.actor.target_vertices = 4000;
+  config.actor.target_vertices = actor_vertices;
+  return config;
+}
+
+TEST(StudioRefinement, RefinedWalkerIsMuchCloserToTheTrueSurface) {
+  const StudioConfig config = referenceStudio(4000);
   VirtualStudio studio(config, 40);
   const Rig& rig = studio.rig();
   const SkinnedMesh generic = loadGenericHuman();
@@ -61,9 +67,7 @@ TEST(StudioRefinement, RefinedWalkerIsMuchCloserToTheTrueSurface) {
 // The strict leave-one-camera-out score refines without the scored camera: with it left out, its
 // image has no say in the refined mesh (a ruined image changes nothing); sampled, it does.
 TEST(StudioRefinement, FrameRefinerLeavesTheLeftOutCameraUnsampled) {
-  StudioConfig config =
-      loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
-  config.actor.target_vertices = 3000;
+  const StudioConfig config = referenceStudio(3000);
   VirtualStudio studio(config, 20);
   const Rig& rig = studio.rig();
   const SkinnedMesh generic = loadGenericHuman();
