@@ -16,11 +16,17 @@ fail() { echo "package_test: FAIL: $*" >&2; exit 1; }
   { cat "$work/cpack.log"; fail "cpack failed"; }
 
 deb() { ls "$work"/out/"$1"_*.deb 2>/dev/null | head -n1; }
+# Listings are read whole before grep -q looks at them: under pipefail, grep -q quitting at its
+# first match can kill the writer with SIGPIPE and fail the pipeline (a flaky "lacks" verdict).
 expect_file() {  # package, path inside it
-  dpkg-deb -c "$(deb "$1")" | awk '{print $6}' | grep -qx "./$2" || fail "$1 lacks /$2"
+  local files
+  files=$(dpkg-deb -c "$(deb "$1")" | awk '{print $6}')
+  grep -qx "./$2" <<<"$files" || fail "$1 lacks /$2"
 }
 expect_depends() {  # package, a dependency that must be listed
-  dpkg-deb -f "$(deb "$1")" Depends | grep -q "$2" || fail "$1 does not depend on $2: $(dpkg-deb -f "$(deb "$1")" Depends)"
+  local depends
+  depends=$(dpkg-deb -f "$(deb "$1")" Depends)
+  grep -q "$2" <<<"$depends" || fail "$1 does not depend on $2: $depends"
 }
 
 packages=(lumistage-common lumistage-node)
@@ -40,15 +46,18 @@ expect_file lumistage-node usr/bin/lumistage-node
 expect_file lumistage-node usr/lib/systemd/system/lumistage-node@.service
 expect_file lumistage-node usr/share/man/man1/lumistage-node.1.gz
 expect_depends lumistage-node lumistage-common
-dpkg-deb --ctrl-tarfile "$(deb lumistage-node)" | tar -t | grep -q postinst || fail "lumistage-node has no postinst"
-if dpkg-deb -c "$(deb lumistage-common)" | grep -q lumistage-node; then
+node_control=$(dpkg-deb --ctrl-tarfile "$(deb lumistage-node)" | tar -t)
+grep -qx './postinst' <<<"$node_control" || fail "lumistage-node has no postinst: $node_control"
+common_files=$(dpkg-deb -c "$(deb lumistage-common)")
+if grep -q lumistage-node <<<"$common_files"; then
   fail "lumistage-common carries the node's files"
 fi
 
 # The man pages are the programs' own --help.
 dpkg-deb -x "$(deb lumistage-node)" "$work/root"
 dpkg-deb -x "$(deb lumistage-common)" "$work/root"
-zcat "$work/root/usr/share/man/man1/lumistage-node.1.gz" | grep -qF -- '\-\-studio' ||
+node_man=$(zcat "$work/root/usr/share/man/man1/lumistage-node.1.gz")
+grep -qF -- '\-\-studio' <<<"$node_man" ||
   fail "lumistage-node.1 does not document --studio"
 grep -q '^ExecStart=/usr/bin/lumistage-node --node %i' "$work/root/usr/lib/systemd/system/lumistage-node@.service" ||
   fail "the unit does not start /usr/bin/lumistage-node for its instance"
