@@ -9,6 +9,7 @@
 #include "core/eval/eval_report.h"
 #include "core/eval/leave_one_out.h"
 #include "core/eval/mocap_eval.h"
+#include "core/eval/segmentation_eval.h"
 #include "core/eval/surface_metrics.h"
 #include "core/pipeline/posed_body.h"
 #include "core/refine/frame_refiner.h"
@@ -125,6 +126,20 @@ void addEvalCommand(CLI::App& app) {
     EvalReport report;
     report.setText("session", "session", args->session);
     // Stages add their sections in pipeline order; a later stage may use an earlier one's result.
+    // Segmentation: each camera's keyer, as the nodes learn it, against the truth masks of four
+    // frames spread over the session.
+    const int last =
+        args->frames > 0 ? std::min(args->frames, session.frameCount()) : session.frameCount();
+    std::vector<int> key_frames;
+    for (int k = 0; k < 4 && last > 0; ++k)
+      if (key_frames.empty() || key_frames.back() != (2 * k + 1) * last / 8)
+        key_frames.push_back((2 * k + 1) * last / 8);
+    const SegmentationScore key = evaluateSegmentation(session, key_frames);
+    report.set("segment", "key_frames", key.frames);
+    report.set("segment", "key_missed_pct", key.missed_pct);
+    report.set("segment", "key_extra_pct", key.extra_pct);
+    report.set("segment", "key_threshold", key.threshold);
+
     MocapEvalOptions mocap;
     mocap.camera_count = args->cameras;
     mocap.max_frames = args->frames;

@@ -2,10 +2,8 @@
 
 #include <fmt/format.h>
 
-#include <opencv2/imgcodecs.hpp>
-
-#include "core/base/error.h"
 #include "core/body/ply_mesh.h"
+#include "core/eval/segmentation_eval.h"
 #include "core/render/frame_inputs.h"
 
 namespace lumistage {
@@ -33,12 +31,7 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
     inputs.set(renderer, images);
     for (int c = 0; c < n; ++c) {
       imageToRgba(images[c].image.view(), truth[c]);
-      const std::string path = session.truthMaskPath(c, i).string();
-      const cv::Mat mask = cv::imread(path, cv::IMREAD_GRAYSCALE);
-      if (mask.empty() || mask.cols != rig.camera(c).width() ||
-          mask.rows != rig.camera(c).height() || !mask.isContinuous())
-        throw Error(path + ": cannot read the truth mask (8-bit PNG of the camera's size)");
-      masks[c].assign(mask.data, mask.data + mask.total());
+      masks[c] = readTruthMask(session, c, i);
     }
     std::vector<ViewScore> scores;
     if (meshes == LeaveOneOutMeshes::kOnePerFrame) {

@@ -1,0 +1,54 @@
+#include "core/eval/segmentation_eval.h"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/base/error.h"
+#include "core/imaging/keyer.h"
+
+namespace lumistage {
+
+std::vector<uint8_t> readTruthMask(const SessionReader& session, int camera, int i) {
+  const std::string path = session.truthMaskPath(camera, i).string();
+  const cv::Mat mask = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  const Camera& c = session.rig().camera(camera);
+  if (mask.empty() || mask.cols != c.width() || mask.rows != c.height() || !mask.isContinuous())
+    throw Error(path + ": cannot read the truth mask (8-bit PNG of the camera's size)");
+  return {mask.data, mask.data + mask.total()};
+}
+
+SegmentationScore evaluateSegmentation(const SessionReader& session,
+                                       const std::vector<int>& frames) {
+  const int n = session.rig().cameraCount();
+  SegmentationScore score;
+  if (session.frameCount() == 0 || n == 0) return score;
+  std::vector<CameraFrame> images;
+  std::vector<GreenScreenKeyer> keyers(n);
+  session.readFrame(0, images);
+  for (int c = 0; c < n; ++c)
+    score.threshold += keyers[c].learnScreen(images[c].image.view()) / double(n);
+  size_t actor = 0, missed = 0, extra = 0;
+  for (int i : frames) {
+    session.readFrame(i, images);
+    for (int c = 0; c < n; ++c) {
+      const std::vector<uint8_t> truth = readTruthMask(session, c, i);
+      const ImageView image = images[c].image.view();
+      for (int y = 0; y < image.height; ++y) {
+        for (int x = 0; x < image.width; ++x) {
+          const bool on_actor = truth[size_t(y) * image.width + x] != 0;
+          const bool keyed = keyers[c].isForeground(image, x, y);
+          actor += on_actor;
+          missed += on_actor && !keyed;
+          extra += !on_actor && keyed;
+        }
+      }
+    }
+    ++score.frames;
+  }
+  if (actor > 0) {
+    score.missed_pct = 100.0 * double(missed) / double(actor);
+    score.extra_pct = 100.0 * double(extra) / double(actor);
+  }
+  return score;
+}
+
+}  // namespace lumistage

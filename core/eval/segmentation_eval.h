@@ -1,0 +1,29 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/capture/session_reader.h"
+
+namespace lumistage {
+
+// The segmentation as the nodes run it: each camera's GreenScreenKeyer learns its screen from the
+// session's first frame, then keys every pixel of the scored frames, compared with the truth
+// masks (truth/masks) of a virtual-studio session.
+struct SegmentationScore {
+  double missed_pct = 0;  // the actor's pixels keyed as screen, % of the actor's pixels
+  double extra_pct = 0;   // screen pixels keyed as the actor, % of the actor's pixels
+  double threshold = 0;   // the learned green-excess thresholds, mean over cameras
+  int frames = 0;
+};
+
+// Scores `frames` (indices into the session). Throws Error naming the file when a truth mask
+// cannot be read.
+SegmentationScore evaluateSegmentation(const SessionReader& session,
+                                       const std::vector<int>& frames);
+
+// Camera `camera`'s truth mask at frame index i: one byte a pixel, non-zero on the actor, of the
+// camera's size. Throws Error naming the file when it is missing or of another size.
+std::vector<uint8_t> readTruthMask(const SessionReader& session, int camera, int i);
+
+}  // namespace lumistage
