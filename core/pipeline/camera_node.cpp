@@ -37,8 +37,8 @@ Message CameraNode::silhouettesOf(const Set& set) const {
   SilhouettesData silhouettes;
   LowResSilhouette s;
   for (size_t k = 0; k < cameras_.size(); ++k) {
-    computeSilhouette(keyers_[k], set.frames[k].image.view(), cameras_[k], options_.silhouette_step,
-                      s);
+    computeSilhouette(silhouette_keyer_, set.frames[k].image.view(), cameras_[k],
+                      options_.silhouette_step, s);
     silhouettes.masks.push_back({s.camera, s.width, s.height, std::move(s.bits)});
   }
   Message message;
@@ -157,6 +157,13 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     for (const CameraFrame& f : set->frames) complete += f.frame_id == set->frame_id;
     if (complete == static_cast<int>(cameras_.size())) {
       set->captured_ns = steadyNowNs();
+      // Each camera's keyer learns its screen from the first set, before another thread reads it
+      // (the queue hands the set over).
+      if (!screen_learnt_) {
+        for (size_t c = 0; c < cameras_.size(); ++c)
+          keyers_[c].learnScreen(set->frames[c].image.view());
+        screen_learnt_ = true;
+      }
       sets_.push(set);
       assembling.erase(set->frame_id);
     }
