@@ -62,7 +62,7 @@ class GreenScreenKeyer {
   // the view): sets the threshold at three quarters of the 1st percentile of the screen's green
   // excess, and at least `minimum`. Returns the threshold. At half of it, the actor's edges that
   // the screen's green light spills on (dark hair, skin at a grazing angle) fell below it: 0.64%
-  // of the reference actor's pixels keyed as screen, against 0.07% now, none of the screen keyed
+  // of the reference actor's pixels keyed as screen, against 0.10% now, none of the screen keyed
   // as the actor either way.
   int learnScreen(const ImageView& screen, int step = 8, int minimum = 12);
   int threshold() const { return threshold_; }
