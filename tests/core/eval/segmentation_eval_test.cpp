@@ -6,10 +6,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "core/base/error.h"
 #include "core/capture/session_writer.h"
 #include "core/geometry/ring_rig.h"
 #include "core/sim/virtual_studio.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -17,9 +17,8 @@ namespace {
 namespace fs = std::filesystem;
 
 // The reference studio's actor, clothes and green spill, filmed by 4 cameras of 640x480 in RGB.
-fs::path writeSession(const std::string& name, int frames) {
-  const fs::path folder = fs::path(::testing::TempDir()) / name;
-  fs::remove_all(folder);
+fs::path writeSession(int frames) {
+  const fs::path folder = testing::testFolder("segmentation") / "session";
   StudioConfig config =
       loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
   RingRigSpec spec;
@@ -48,7 +47,7 @@ fs::path writeSession(const std::string& name, int frames) {
 }
 
 TEST(Segmentation, KeyerLearntWithTheActorInViewFindsTheSpilledEdges) {
-  const SessionReader session(writeSession("segmentation", 3));
+  const SessionReader session(writeSession(3));
   const SegmentationScore score = evaluateSegmentation(session, {1, 2});
   EXPECT_EQ(score.frames, 2);
   EXPECT_GT(score.threshold, 12);
@@ -56,19 +55,16 @@ TEST(Segmentation, KeyerLearntWithTheActorInViewFindsTheSpilledEdges) {
   // green excess missed 0.68% of the actor's pixels here; at three quarters, 0.14%.
   EXPECT_LT(score.missed_pct, 0.3);
   EXPECT_LT(score.extra_pct, 0.05);
+  fs::remove_all(session.folder().parent_path());
 }
 
 TEST(Segmentation, AnUnreadableTruthMaskIsNamed) {
-  const fs::path folder = writeSession("segmentation_bad_mask", 1);
-  const SessionReader session(folder);
+  const SessionReader session(writeSession(1));
   const fs::path mask = session.truthMaskPath(2, 0);
   std::ofstream(mask, std::ios::trunc) << "not a png";
-  try {
-    evaluateSegmentation(session, {0});
-    FAIL() << "a corrupt mask was accepted";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(mask.string()), std::string::npos) << e.what();
-  }
+  EXPECT_NE(testing::errorOf([&] { evaluateSegmentation(session, {0}); }).find(mask.string()),
+            std::string::npos);
+  fs::remove_all(session.folder().parent_path());
 }
 
 }  // namespace
