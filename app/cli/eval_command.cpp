@@ -139,6 +139,7 @@ void addEvalCommand(CLI::App& app) {
     report.set("segment", "key_missed_pct", key.missed_pct);
     report.set("segment", "key_extra_pct", key.extra_pct);
     report.set("segment", "key_threshold", key.threshold);
+    report.set("segment", "key_screen_excess_min", key.dimmest_screen);
 
     MocapEvalOptions mocap;
     mocap.camera_count = args->cameras;

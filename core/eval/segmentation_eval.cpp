@@ -1,5 +1,6 @@
 #include "core/eval/segmentation_eval.h"
 
+#include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/base/error.h"
@@ -24,8 +25,11 @@ SegmentationScore evaluateSegmentation(const SessionReader& session,
   std::vector<CameraFrame> images;
   std::vector<GreenScreenKeyer> keyers(n);
   session.readFrame(0, images);
-  for (int c = 0; c < n; ++c)
+  for (int c = 0; c < n; ++c) {
     score.threshold += keyers[c].learnScreen(images[c].image.view()) / double(n);
+    const int excess = keyers[c].screenExcess();
+    score.dimmest_screen = c == 0 ? excess : std::min(score.dimmest_screen, excess);
+  }
   size_t actor = 0, missed = 0, extra = 0;
   for (int i : frames) {
     session.readFrame(i, images);

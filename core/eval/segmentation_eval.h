@@ -11,9 +11,10 @@ namespace lumistage {
 // session's first frame, then keys every pixel of the scored frames, compared with the truth
 // masks (truth/masks) of a virtual-studio session.
 struct SegmentationScore {
-  double missed_pct = 0;  // the actor's pixels keyed as screen, % of the actor's pixels
-  double extra_pct = 0;   // screen pixels keyed as the actor, % of the actor's pixels
-  double threshold = 0;   // the learned green-excess thresholds, mean over cameras
+  double missed_pct = 0;   // the actor's pixels keyed as screen, % of the actor's pixels
+  double extra_pct = 0;    // screen pixels keyed as the actor, % of the actor's pixels
+  double threshold = 0;    // the learned green-excess thresholds, mean over cameras
+  int dimmest_screen = 0;  // the lowest of the cameras' darkest screen green excess
   int frames = 0;
 };
 

@@ -17,6 +17,7 @@ int GreenScreenKeyer::learnScreen(const ImageView& screen, int step, int minimum
   if (excess.empty()) return threshold_;
   const size_t at = excess.size() / 100;
   std::nth_element(excess.begin(), excess.begin() + at, excess.end());
+  screen_excess_ = excess[at];
   threshold_ = std::max(minimum, 3 * excess[at] / 4);
   return threshold_;
 }

@@ -160,8 +160,24 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       // Each camera's keyer learns its screen from the first set, before another thread reads it
       // (the queue hands the set over).
       if (!screen_learnt_) {
-        for (size_t c = 0; c < cameras_.size(); ++c)
+        for (size_t c = 0; c < cameras_.size(); ++c) {
           keyers_[c].learnScreen(set->frames[c].image.view());
+          const std::string& camera = rig_.camera(cameras_[c]).name();
+          const int excess = keyers_[c].screenExcess();
+          if (excess == 0) {
+            spdlog::warn("node {}: camera {} sees no green screen; keying at threshold {}", name_,
+                         camera, keyers_[c].threshold());
+          } else if (excess < GreenScreenKeyer::kDimScreenExcess) {
+            spdlog::warn(
+                "node {}: camera {}: the green screen is dim (its darkest green excess is {} of "
+                "255 levels, {} or more keys cleanly): the actor's edges may be lost; light the "
+                "screen brighter or more evenly",
+                name_, camera, excess, GreenScreenKeyer::kDimScreenExcess);
+          } else {
+            spdlog::info("node {}: camera {}: green screen learnt, key threshold {}", name_, camera,
+                         keyers_[c].threshold());
+          }
+        }
         screen_learnt_ = true;
       }
       sets_.push(set);

@@ -202,6 +202,31 @@ TEST(Cli, NodeChecksItsPlaceInTheRig) {
       << r.output;
 }
 
+// A screen lit a third as bright as the reference one: each node says which of its cameras sees
+// it too dim to key cleanly, and runs on.
+TEST(Cli, RunWarnsOfADimScreenNamingTheCamera) {
+  const fs::path folder = tempPath("dim");
+  fs::create_directories(folder);
+  Result r = run(kCli + " rig ring --cameras 2 --width 320 --height 240 --out " +
+                 (folder / "rig.yaml").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ofstream(folder / "studio.yaml")
+      << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\nactor:\n  vertices: 2000\n"
+         "look:\n  screen_green: [0.05, 0.17, 0.07]\n";
+  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " --frames 4 --out " +
+          (folder / "session").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run(kCli + " run --session " + (folder / "session").string() + " --frames 4 --seconds 30");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* camera : {"cam01", "cam02"}) {
+    EXPECT_NE(r.output.find(std::string("camera ") + camera + ": the green screen is dim"),
+              std::string::npos)
+        << r.output;
+  }
+  EXPECT_EQ(r.output.find("green screen learnt"), std::string::npos) << r.output;
+  fs::remove_all(folder);
+}
+
 }  // namespace
 }  // namespace lumistage
 
@@ -276,6 +301,10 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
             video.string() + security);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("20 frames in all"), std::string::npos) << r.output;
+    // Each node learnt its cameras' screen.
+    EXPECT_NE(r.output.find("node node1: camera cam01: green screen learnt, key threshold"),
+              std::string::npos)
+        << r.output;
     // The view recorded as it was made (core/render/view_recorder_test reads such files back).
     const size_t recorded = r.output.find("recorded the view to " + video.string() + ": ");
     ASSERT_NE(recorded, std::string::npos) << r.output;

@@ -8,6 +8,7 @@
 
 #include "core/capture/session_writer.h"
 #include "core/geometry/ring_rig.h"
+#include "core/imaging/keyer.h"
 #include "core/sim/virtual_studio.h"
 #include "tests/test_util.h"
 
@@ -51,6 +52,7 @@ TEST(Segmentation, KeyerLearntWithTheActorInViewFindsTheSpilledEdges) {
   const SegmentationScore score = evaluateSegmentation(session, {1, 2});
   EXPECT_EQ(score.frames, 2);
   EXPECT_GT(score.threshold, 12);
+  EXPECT_GE(score.dimmest_screen, GreenScreenKeyer::kDimScreenExcess);
   // The actor's edges take the screen's green light. A threshold at half the screen's darkest
   // green excess missed 0.68% of the actor's pixels here; at three quarters, 0.14%.
   EXPECT_LT(score.missed_pct, 0.3);

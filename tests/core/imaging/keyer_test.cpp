@@ -67,6 +67,8 @@ TEST_F(KeyerTest, GreenScreenKeyMatchesTheTrueSilhouetteOnBayerImages) {
     GreenScreenKeyer keyer;
     const int threshold = keyer.learnScreen(screen.view());
     EXPECT_GT(threshold, 12);
+    // The reference screen is bright enough: the nodes do not warn of it.
+    EXPECT_GE(keyer.screenExcess(), GreenScreenKeyer::kDimScreenExcess) << camera.name();
     const Agreement a = compare(keyer, image.view(), frame.masks[c]);
     // Disagreement is confined to the silhouette's edge (a Bayer cell straddles it).
     EXPECT_GT(a.iou(), 0.93) << camera.name() << " threshold " << threshold;
