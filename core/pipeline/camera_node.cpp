@@ -31,6 +31,7 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
   if (!node) throw Error("camera node: no node '" + name_ + "' in the rig");
   cameras_ = rig_.nodes()[*node].cameras;
   keyers_.resize(cameras_.size());
+  screen_warnings_.resize(cameras_.size());
 }
 
 Message CameraNode::silhouettesOf(const Set& set) const {
@@ -164,18 +165,23 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
           keyers_[c].learnScreen(set->frames[c].image.view());
           const std::string& camera = rig_.camera(cameras_[c]).name();
           const int excess = keyers_[c].screenExcess();
+          std::string warning;
           if (excess == 0) {
-            spdlog::warn("node {}: camera {} sees no green screen; keying at threshold {}", name_,
-                         camera, keyers_[c].threshold());
+            warning = "sees no green screen to key";
           } else if (excess < GreenScreenKeyer::kDimScreenExcess) {
-            spdlog::warn(
-                "node {}: camera {}: the green screen is dim (its darkest green excess is {} of "
-                "255 levels, {} or more keys cleanly): the actor's edges may be lost; light the "
-                "screen brighter or more evenly",
-                name_, camera, excess, GreenScreenKeyer::kDimScreenExcess);
-          } else {
+            warning = fmt::format(
+                "green screen too dim to key cleanly (darkest green excess {} of 255 levels, {} "
+                "wanted): light it brighter or more evenly",
+                excess, GreenScreenKeyer::kDimScreenExcess);
+          }
+          if (warning.empty()) {
             spdlog::info("node {}: camera {}: green screen learnt, key threshold {}", name_, camera,
                          keyers_[c].threshold());
+          } else {
+            spdlog::warn("node {}: camera {}: {}", name_, camera, warning);
+            // Shown in the studio's camera health while the camera reports no error of its own.
+            std::lock_guard lock(source_mutex_);
+            screen_warnings_[c] = std::move(warning);
           }
         }
         screen_learnt_ = true;
@@ -332,10 +338,12 @@ void CameraNode::run(const std::atomic<bool>& stop) {
       HeartbeatData heartbeat;
       {
         std::lock_guard lock(source_mutex_);
-        for (int c : cameras_) {
+        for (size_t k = 0; k < cameras_.size(); ++k) {
+          const int c = cameras_[k];
           const CameraStats s = source_->stats(c);
-          heartbeat.cameras.push_back(
-              {rig_.camera(c).name(), s.frames, s.dropped, float(s.frame_rate_hz), s.last_error});
+          heartbeat.cameras.push_back({rig_.camera(c).name(), s.frames, s.dropped,
+                                       float(s.frame_rate_hz),
+                                       s.last_error.empty() ? screen_warnings_[k] : s.last_error});
         }
       }
       heartbeat.bytes_sent = bytes_sent_;

@@ -97,8 +97,11 @@ class CameraNode {
   std::vector<int> cameras_;  // rig indices of this node's cameras
   std::unique_ptr<FrameSource> source_;
   std::mutex source_mutex_;  // next() on the capture thread, stats() on the network thread
-  NodeEndpoint endpoint_;    // the network thread's alone
-  SkinnedMesh body_;         // the statistics thread's alone
+  // Per own camera, what learning its green screen found wrong (empty: nothing); under
+  // source_mutex_, written once by the capture thread, sent in every heartbeat.
+  std::vector<std::string> screen_warnings_;
+  NodeEndpoint endpoint_;  // the network thread's alone
+  SkinnedMesh body_;       // the statistics thread's alone
   CameraNodeOptions options_;
   // The refinement's samples and the renderer's masks key with each own camera's screen, learnt
   // by the capture thread from the first complete set before it hands the set on (the other
