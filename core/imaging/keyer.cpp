@@ -14,7 +14,10 @@ int GreenScreenKeyer::learnScreen(const ImageView& screen, int step, int minimum
       if (e > 0) excess.push_back(e);  // what is not green at all is not screen
     }
   }
-  if (excess.empty()) return threshold_;
+  if (excess.empty()) {
+    screen_excess_ = 0;
+    return threshold_;
+  }
   const size_t at = excess.size() / 100;
   std::nth_element(excess.begin(), excess.begin() + at, excess.end());
   screen_excess_ = excess[at];

@@ -63,7 +63,7 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   // The refinement's samples: every vertex's offsets along its normal in this node's cameras.
   sampler_cameras_.resize(cameras_.size());
   for (size_t k = 0; k < cameras_.size(); ++k) {
-    sampler_cameras_[k] = {&rig_.camera(cameras_[k]), set->frames[k].image.view(), &keyers_[k],
+    sampler_cameras_[k] = {&rig_.camera(cameras_[k]), set->frames[k].image.view(), &set->keyers[k],
                            nullptr};
   }
   sampler_.sample(sampler_cameras_, positions_, normals_, body_.rest.triangles, refine_stats_);
@@ -97,7 +97,8 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
     renderer_->setImage(static_cast<int>(k), image);
     // Where the mesh reaches beyond the actor in this camera, its colour is the screen's: the
     // camera's silhouette in 4-pixel cells (49,000 pixels keyed, 0.07 ms) masks it out.
-    setForegroundMask(*renderer_, static_cast<int>(k), keyers_[k], image, mask_silhouette_, mask_);
+    setForegroundMask(*renderer_, static_cast<int>(k), set.keyers[k], image, mask_silhouette_,
+                      mask_);
   }
   for (const ViewData& view : views) {
     if (view.width <= 0 || view.height <= 0 || view.rotation.size() != 9 ||
@@ -158,40 +159,47 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     for (const CameraFrame& f : set->frames) complete += f.frame_id == set->frame_id;
     if (complete == static_cast<int>(cameras_.size())) {
       set->captured_ns = steadyNowNs();
-      // Each camera's keyer learns its screen from the first set, before another thread reads it
-      // (the queue hands the set over).
-      if (!screen_learnt_) {
-        for (size_t c = 0; c < cameras_.size(); ++c) {
-          keyers_[c].learnScreen(set->frames[c].image.view());
-          const std::string& camera = rig_.camera(cameras_[c]).name();
-          const int excess = keyers_[c].screenExcess();
-          std::string warning;
-          if (excess == 0) {
-            warning = "sees no green screen to key";
-          } else if (excess < GreenScreenKeyer::kDimScreenExcess) {
-            warning = fmt::format(
-                "green screen too dim to key cleanly (darkest green excess {} of 255 levels, {} "
-                "wanted): light it brighter or more evenly",
-                excess, GreenScreenKeyer::kDimScreenExcess);
-          }
-          if (warning.empty()) {
-            spdlog::info("node {}: camera {}: green screen learnt, key threshold {}", name_, camera,
-                         keyers_[c].threshold());
-          } else {
-            spdlog::warn("node {}: camera {}: {}", name_, camera, warning);
-            // Shown in the studio's camera health while the camera reports no error of its own.
-            std::lock_guard lock(source_mutex_);
-            screen_warnings_[c] = std::move(warning);
-          }
-        }
-        screen_learnt_ = true;
-      }
+      if (screen_sets_learnt_ < kScreenWarmupSets) learnScreens(*set);
+      set->keyers = keyers_;
       sets_.push(set);
       assembling.erase(set->frame_id);
     }
     while (assembling.size() > 4) assembling.erase(assembling.begin());  // a camera fell behind
   }
   source_finished_ = true;
+}
+
+void CameraNode::learnScreens(const Set& set) {
+  bool clean = true;
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    keyers_[c].learnScreen(set.frames[c].image.view());
+    clean = clean && keyers_[c].screenExcess() >= GreenScreenKeyer::kDimScreenExcess;
+  }
+  ++screen_sets_learnt_;
+  if (!clean && screen_sets_learnt_ < kScreenWarmupSets) return;  // settling, perhaps
+  screen_sets_learnt_ = kScreenWarmupSets;                        // fixed from now on
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    const std::string& camera = rig_.camera(cameras_[c]).name();
+    const int excess = keyers_[c].screenExcess();
+    std::string warning;
+    if (excess == 0) {
+      warning = "sees no green screen to key";
+    } else if (excess < GreenScreenKeyer::kDimScreenExcess) {
+      warning = fmt::format(
+          "green screen too dim to key cleanly (darkest green excess {} of 255 levels, {} "
+          "wanted): light it brighter or more evenly",
+          excess, GreenScreenKeyer::kDimScreenExcess);
+    }
+    if (warning.empty()) {
+      spdlog::info("node {}: camera {}: green screen learnt, key threshold {}", name_, camera,
+                   keyers_[c].threshold());
+    } else {
+      spdlog::warn("node {}: camera {}: {}", name_, camera, warning);
+      // Shown in the studio's camera health while the camera reports no error of its own.
+      std::lock_guard lock(source_mutex_);
+      screen_warnings_[c] = std::move(warning);
+    }
+  }
 }
 
 void CameraNode::silhouetteLoop(const std::atomic<bool>& stop) {

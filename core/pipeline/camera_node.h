@@ -73,7 +73,12 @@ class CameraNode {
     int64_t frame_id = -1;
     int64_t captured_ns = 0;
     std::vector<CameraFrame> frames;  // per own camera
+    // Per own camera, the green-screen key of the refinement's samples and the renderer's masks
+    // for this set, as learnt when it was captured.
+    std::vector<GreenScreenKeyer> keyers;
   };
+  // Learns the own cameras' green screens from a set (the capture thread's, during warm-up).
+  void learnScreens(const Set& set);
 
   void captureLoop(const std::atomic<bool>& stop);
   void silhouetteLoop(const std::atomic<bool>& stop);
@@ -103,15 +108,17 @@ class CameraNode {
   NodeEndpoint endpoint_;  // the network thread's alone
   SkinnedMesh body_;       // the statistics thread's alone
   CameraNodeOptions options_;
-  // The refinement's samples and the renderer's masks key with each own camera's screen, learnt
-  // by the capture thread from the first complete set before it hands the set on (the other
-  // threads only read them). The tracker's silhouettes keep the fixed threshold its shape
-  // calibration was tuned with: keyed with the learnt one (0.1% of the actor's pixels missed
-  // instead of 0.6%), the joints came closer on three clips of four but the calibrated body
-  // sized the generic mesh worse (leave-one-out 1 to 2 dB lower).
+  // The capture thread's alone: each own camera's green-screen key, learnt from the first set
+  // whose screen keys cleanly, or else from each of the first kScreenWarmupSets sets (a camera
+  // whose exposure is still settling), then fixed; every set carries a copy. The tracker's
+  // silhouettes keep the fixed threshold its shape calibration was tuned with: keyed with the
+  // learnt one (0.1% of the actor's pixels missed instead of 0.6%), the joints came closer on
+  // three clips of four but the calibrated body sized the generic mesh worse (leave-one-out 1 to
+  // 2 dB lower).
+  static constexpr int kScreenWarmupSets = 30;
   std::vector<GreenScreenKeyer> keyers_;
+  int screen_sets_learnt_ = 0;  // sets learnt from so far; kScreenWarmupSets once fixed
   const GreenScreenKeyer silhouette_keyer_;
-  bool screen_learnt_ = false;  // the capture thread's alone
   BoundedQueue<std::shared_ptr<const Set>> sets_{2};
   BoundedQueue<Message> poses_{4};
   BoundedQueue<Message> offsets_{4};

@@ -216,7 +216,9 @@ TEST(Cli, RunWarnsOfADimScreenNamingTheCamera) {
   r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " --frames 4 --out " +
           (folder / "session").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = run(kCli + " run --session " + (folder / "session").string() + " --frames 4 --seconds 30");
+  // Long enough for the nodes to give up waiting for a brighter screen (30 frame sets).
+  r = run(kCli + " run --session " + (folder / "session").string() +
+          " --frames 100000 --seconds 4");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const std::string camera : {"cam01", "cam02"}) {
     // In the node's log, and in its camera's health as the studio shows it.

@@ -67,7 +67,10 @@ class MainWindowTest : public QObject {
     lumistage::Image image;
     image.resize(lumistage::PixelFormat::kBayerRggb8, 64, 48);
     for (int f = 0; f < frames; ++f) {
-      std::fill(image.pixels.begin(), image.pixels.end(), uint8_t(40 * f));
+      // An empty green screen (RGGB), a little brighter each frame.
+      for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 64; ++x)
+          image.pixels[y * 64 + x] = uint8_t((x + y) % 2 == 1 ? 150 + 10 * f : 30 + 5 * f);
       writer.writeFrame(f, static_cast<int64_t>(f * 1e9 / fps),
                         std::vector<lumistage::ImageView>(cameras, image.view()));
     }
