@@ -20,6 +20,17 @@ namespace lumistage {
 
 namespace {
 
+// `count` frame indices spread evenly over [0, total), each in the middle of its share, without
+// repeats.
+std::vector<int> spreadFrames(int total, int count) {
+  std::vector<int> frames;
+  for (int k = 0; k < count && total > 0; ++k) {
+    const int i = int((k + 0.5) * total / count);
+    if (frames.empty() || frames.back() != i) frames.push_back(i);
+  }
+  return frames;
+}
+
 // Section "render": every camera's view rendered from the others with the unstructured
 // lumigraph, compared with its image over the truth mask (docs/lumigraph.md), on the pipeline's
 // own geometry — the generic human where the tracker sees the actor, refined from the images
@@ -31,12 +42,8 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
                     EvalReport& report) {
   const int total = std::min<int>(session.frameCount(), static_cast<int>(tracked.poses.size()));
   std::vector<int> frames;
-  for (int k = 0; k < frame_count && total > 0; ++k) {
-    const int i = int((k + 0.5) * total / frame_count);
-    if (i < static_cast<int>(tracked.valid.size()) && tracked.valid[i] &&
-        (frames.empty() || frames.back() != i))
-      frames.push_back(i);
-  }
+  for (int i : spreadFrames(total, frame_count))
+    if (i < static_cast<int>(tracked.valid.size()) && tracked.valid[i]) frames.push_back(i);
   EglContext gl;
   const LeaveOneOutSummary truth =
       evaluateLeaveOneOut(session, frames, [&](int i, int) { return truthSurface(session, i); });
@@ -130,11 +137,7 @@ void addEvalCommand(CLI::App& app) {
     // frames spread over the session.
     const int last =
         args->frames > 0 ? std::min(args->frames, session.frameCount()) : session.frameCount();
-    std::vector<int> key_frames;
-    for (int k = 0; k < 4 && last > 0; ++k)
-      if (key_frames.empty() || key_frames.back() != (2 * k + 1) * last / 8)
-        key_frames.push_back((2 * k + 1) * last / 8);
-    const SegmentationScore key = evaluateSegmentation(session, key_frames);
+    const SegmentationScore key = evaluateSegmentation(session, spreadFrames(last, 4));
     report.set("segment", "key_frames", key.frames);
     report.set("segment", "key_missed_pct", key.missed_pct);
     report.set("segment", "key_extra_pct", key.extra_pct);

@@ -257,6 +257,15 @@ fs::path SessionReader::truthMaskPath(int camera, int i) const {
          fmt::format("{:06}.png", frameId(i));
 }
 
+std::vector<uint8_t> SessionReader::readTruthMask(int camera, int i) const {
+  const std::string path = truthMaskPath(camera, i).string();
+  const cv::Mat mask = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  const Camera& c = rig_.camera(camera);
+  if (mask.empty() || mask.cols != c.width() || mask.rows != c.height() || !mask.isContinuous())
+    throw Error(path + ": cannot read the truth mask (8-bit PNG of the camera's size)");
+  return {mask.data, mask.data + mask.total()};
+}
+
 void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
                               const std::vector<int>& cameras) const {
   const int64_t id = frameId(i), timestamp = timestampNs(i);

@@ -49,6 +49,9 @@ class SessionReader {
   std::vector<std::vector<Eigen::Vector3d>> readTruthJoints(
       std::vector<std::string>* joint_names = nullptr) const;
   std::filesystem::path truthMaskPath(int camera, int i) const;
+  // Camera `camera`'s truth mask at frame i: one byte a pixel, non-zero on the actor, of the
+  // camera's size. Throws Error naming the file when it is missing or of another size.
+  std::vector<uint8_t> readTruthMask(int camera, int i) const;
 
  private:
   struct FrameEntry {

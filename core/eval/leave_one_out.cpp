@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include "core/body/ply_mesh.h"
-#include "core/eval/segmentation_eval.h"
 #include "core/render/frame_inputs.h"
 
 namespace lumistage {
@@ -31,7 +30,7 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
     inputs.set(renderer, images);
     for (int c = 0; c < n; ++c) {
       imageToRgba(images[c].image.view(), truth[c]);
-      masks[c] = readTruthMask(session, c, i);
+      masks[c] = session.readTruthMask(c, i);
     }
     std::vector<ViewScore> scores;
     if (meshes == LeaveOneOutMeshes::kOnePerFrame) {

@@ -1,21 +1,10 @@
 #include "core/eval/segmentation_eval.h"
 
 #include <algorithm>
-#include <opencv2/imgcodecs.hpp>
 
-#include "core/base/error.h"
 #include "core/imaging/keyer.h"
 
 namespace lumistage {
-
-std::vector<uint8_t> readTruthMask(const SessionReader& session, int camera, int i) {
-  const std::string path = session.truthMaskPath(camera, i).string();
-  const cv::Mat mask = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  const Camera& c = session.rig().camera(camera);
-  if (mask.empty() || mask.cols != c.width() || mask.rows != c.height() || !mask.isContinuous())
-    throw Error(path + ": cannot read the truth mask (8-bit PNG of the camera's size)");
-  return {mask.data, mask.data + mask.total()};
-}
 
 SegmentationScore evaluateSegmentation(const SessionReader& session,
                                        const std::vector<int>& frames) {
@@ -34,7 +23,7 @@ SegmentationScore evaluateSegmentation(const SessionReader& session,
   for (int i : frames) {
     session.readFrame(i, images);
     for (int c = 0; c < n; ++c) {
-      const std::vector<uint8_t> truth = readTruthMask(session, c, i);
+      const std::vector<uint8_t> truth = session.readTruthMask(c, i);
       const ImageView image = images[c].image.view();
       for (int y = 0; y < image.height; ++y) {
         for (int x = 0; x < image.width; ++x) {

@@ -1,6 +1,5 @@
 #pragma once
 
-#include <cstdint>
 #include <vector>
 
 #include "core/capture/session_reader.h"
@@ -22,9 +21,5 @@ struct SegmentationScore {
 // cannot be read.
 SegmentationScore evaluateSegmentation(const SessionReader& session,
                                        const std::vector<int>& frames);
-
-// Camera `camera`'s truth mask at frame index i: one byte a pixel, non-zero on the actor, of the
-// camera's size. Throws Error naming the file when it is missing or of another size.
-std::vector<uint8_t> readTruthMask(const SessionReader& session, int camera, int i);
 
 }  // namespace lumistage

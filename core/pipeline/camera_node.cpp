@@ -31,6 +31,7 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
   if (!node) throw Error("camera node: no node '" + name_ + "' in the rig");
   cameras_ = rig_.nodes()[*node].cameras;
   keyers_.resize(cameras_.size());
+  published_keyers_ = std::make_shared<const std::vector<GreenScreenKeyer>>(keyers_);
   screen_warnings_.resize(cameras_.size());
 }
 
@@ -63,8 +64,8 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   // The refinement's samples: every vertex's offsets along its normal in this node's cameras.
   sampler_cameras_.resize(cameras_.size());
   for (size_t k = 0; k < cameras_.size(); ++k) {
-    sampler_cameras_[k] = {&rig_.camera(cameras_[k]), set->frames[k].image.view(), &set->keyers[k],
-                           nullptr};
+    sampler_cameras_[k] = {&rig_.camera(cameras_[k]), set->frames[k].image.view(),
+                           &(*set->keyers)[k], nullptr};
   }
   sampler_.sample(sampler_cameras_, positions_, normals_, body_.rest.triangles, refine_stats_);
   VertexStatisticsData stats;
@@ -97,7 +98,7 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
     renderer_->setImage(static_cast<int>(k), image);
     // Where the mesh reaches beyond the actor in this camera, its colour is the screen's: the
     // camera's silhouette in 4-pixel cells (49,000 pixels keyed, 0.07 ms) masks it out.
-    setForegroundMask(*renderer_, static_cast<int>(k), set.keyers[k], image, mask_silhouette_,
+    setForegroundMask(*renderer_, static_cast<int>(k), (*set.keyers)[k], image, mask_silhouette_,
                       mask_);
   }
   for (const ViewData& view : views) {
@@ -160,7 +161,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     if (complete == static_cast<int>(cameras_.size())) {
       set->captured_ns = steadyNowNs();
       if (screen_sets_learnt_ < kScreenWarmupSets) learnScreens(*set);
-      set->keyers = keyers_;
+      set->keyers = published_keyers_;
       sets_.push(set);
       assembling.erase(set->frame_id);
     }
@@ -175,6 +176,7 @@ void CameraNode::learnScreens(const Set& set) {
     keyers_[c].learnScreen(set.frames[c].image.view());
     clean = clean && keyers_[c].screenExcess() >= GreenScreenKeyer::kDimScreenExcess;
   }
+  published_keyers_ = std::make_shared<const std::vector<GreenScreenKeyer>>(keyers_);
   ++screen_sets_learnt_;
   if (!clean && screen_sets_learnt_ < kScreenWarmupSets) return;  // settling, perhaps
   screen_sets_learnt_ = kScreenWarmupSets;                        // fixed from now on

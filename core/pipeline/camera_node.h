@@ -74,8 +74,8 @@ class CameraNode {
     int64_t captured_ns = 0;
     std::vector<CameraFrame> frames;  // per own camera
     // Per own camera, the green-screen key of the refinement's samples and the renderer's masks
-    // for this set, as learnt when it was captured.
-    std::vector<GreenScreenKeyer> keyers;
+    // for this set, as learnt when it was captured (shared by every set since).
+    std::shared_ptr<const std::vector<GreenScreenKeyer>> keyers;
   };
   // Learns the own cameras' green screens from a set (the capture thread's, during warm-up).
   void learnScreens(const Set& set);
@@ -110,13 +110,15 @@ class CameraNode {
   CameraNodeOptions options_;
   // The capture thread's alone: each own camera's green-screen key, learnt from the first set
   // whose screen keys cleanly, or else from each of the first kScreenWarmupSets sets (a camera
-  // whose exposure is still settling), then fixed; every set carries a copy. The tracker's
+  // whose exposure is still settling), then fixed; published_keyers_ is the copy every set
+  // carries, replaced only when learning changes the keys. The tracker's
   // silhouettes keep the fixed threshold its shape calibration was tuned with: keyed with the
   // learnt one (0.1% of the actor's pixels missed instead of 0.6%), the joints came closer on
   // three clips of four but the calibrated body sized the generic mesh worse (leave-one-out 1 to
   // 2 dB lower).
   static constexpr int kScreenWarmupSets = 30;
   std::vector<GreenScreenKeyer> keyers_;
+  std::shared_ptr<const std::vector<GreenScreenKeyer>> published_keyers_;
   int screen_sets_learnt_ = 0;  // sets learnt from so far; kScreenWarmupSets once fixed
   const GreenScreenKeyer silhouette_keyer_;
   BoundedQueue<std::shared_ptr<const Set>> sets_{2};
