@@ -37,6 +37,21 @@ TEST(SurfaceDistance, MatchesAKnownSphereAndBruteForce) {
   EXPECT_NEAR(e.max_mm, 30.0, 1.5);
 }
 
+TEST(SurfaceDistance, BestOffsetsReachTheSurfaceWithinTheRangeOnly) {
+  // A coarse sphere of 0.3 m in a true one of 0.32 m: every vertex reaches it 2 cm out; in a true
+  // one of 0.36 m it stops at the range's 4 cm, where nothing closer lies on its line.
+  const Eigen::Vector3d centre(0.1, 0.2, 1.0);
+  const TriangleMesh coarse = testing::icosphere(centre, 0.3, 2);
+  for (const auto& [radius, expected] : {std::pair{0.32, 0.32}, std::pair{0.36, 0.34}}) {
+    const SurfaceDistance truth(testing::icosphere(centre, radius, 5));
+    Eigen::Matrix3Xf moved;
+    nearestOffsetsAlongNormals(coarse.positions, coarse.normals, truth, 0.04, 0.0005, moved);
+    ASSERT_EQ(moved.cols(), coarse.positions.cols());
+    for (Eigen::Index v = 0; v < moved.cols(); ++v)
+      ASSERT_NEAR((moved.col(v).cast<double>() - centre).norm(), expected, 0.001) << v;
+  }
+}
+
 TEST(SurfaceDistance, ReadsTruthSurfacesAndRefusesBrokenOnes) {
   const auto folder = testing::testFolder("surface");
   const std::string header =
