@@ -31,6 +31,10 @@ std::vector<int> spreadFrames(int total, int count) {
   return frames;
 }
 
+// Frames the refinement runs before a scored frame, so that its temporal term holds as in the
+// pipeline (4 and 10 score the same on the walk).
+constexpr int kWarmFrames = 4;
+
 // Section "render": every camera's view rendered from the others with the unstructured
 // lumigraph, compared with its image over the truth mask (docs/lumigraph.md), on the pipeline's
 // own geometry — the generic human where the tracker sees the actor, refined from the images
@@ -73,17 +77,25 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     return mesh;
   });
   std::vector<CameraFrame> images;
-  int images_frame = -1;  // the frame `images` and the posed mesh hold (strict asks once a camera)
+  int images_frame = -1;  // the frame `images` holds (strict asks once a camera)
+  std::vector<CameraFrame> warm_images;
   const auto refined_mesh = [&](int i, int left_out) {
-    // A refiner per mesh: the scored frames are far apart, no temporal coherence between them.
+    // As the pipeline refines: frame after frame, each pulled toward the previous one's offsets
+    // (the temporal term), here from kWarmFrames tracked frames before the scored one.
     FrameRefiner refiner(session.rig(), refine, generic.rest.vertexCount(), generic.rest.triangles);
+    TriangleMesh mesh;
+    mesh.triangles = generic.rest.triangles;
+    for (int f = std::max(0, i - kWarmFrames); f < i; ++f) {
+      if (!tracked.valid[f]) continue;
+      posed(f);
+      session.readFrame(f, warm_images);
+      refiner.refine(warm_images, positions, normals, mesh.positions, left_out);
+    }
+    posed(i);
     if (images_frame != i) {
-      posed(i);
       session.readFrame(i, images);
       images_frame = i;
     }
-    TriangleMesh mesh;
-    mesh.triangles = generic.rest.triangles;
     refiner.refine(images, positions, normals, mesh.positions, left_out);
     mesh.computeNormals();
     return mesh;
