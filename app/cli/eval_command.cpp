@@ -65,8 +65,9 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     TriangleMesh mesh{positions, normals, generic.rest.triangles};
     return mesh;
   });
-  // The refinement's ceiling on this mesh and pose: every vertex at the offset along its normal
-  // nearest the true surface, in the refinement's range, at 0.5 mm steps.
+  // Every vertex at the offset along its normal nearest the true surface, in the refinement's
+  // range, at 0.5 mm steps: the choice a refinement that knew the truth would make (not a bound:
+  // where the pose is off, the nearest point may lie on another limb).
   const LeaveOneOutSummary best_offsets = evaluateLeaveOneOut(session, frames, [&](int i, int) {
     posed(i);
     TriangleMesh mesh;
