@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <assimp/Importer.hpp>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -341,6 +342,53 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
 
 namespace lumistage {
 namespace {
+
+// The number after "key": in a flat JSON report; NaN when the key is missing.
+double reportNumber(const std::string& text, const std::string& key) {
+  const size_t at = text.find("\"" + key + "\": ");
+  return at == std::string::npos ? std::nan("") : std::stod(text.substr(at + key.size() + 4));
+}
+
+// Every stage scored against the virtual studio's truth, each in its place: the pipeline's
+// refined mesh renders the left-out views better than the unrefined one and worse than the true
+// surface, the refinement brings the mesh to the truth, the key finds the actor.
+TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
+  const fs::path folder = tempPath("eval");
+  fs::create_directories(folder);
+  Result r = run(kCli + " rig ring --cameras 8 --width 640 --height 480 --out " +
+                 (folder / "rig.yaml").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ofstream(folder / "studio.yaml") << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
+                                           "actor:\n  clothing: true\n  vertices: 2000\n";
+  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " --frames 8 --out " +
+          (folder / "session").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path json = folder / "eval.json";
+  r = run(kCli + " eval --session " + (folder / "session").string() + " --loo-frames 1 --json " +
+          json.string() + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string text = readFile(json);
+  EXPECT_LT(reportNumber(text, "key_missed_pct"), 0.5) << text;
+  EXPECT_EQ(reportNumber(text, "key_extra_pct"), 0.0) << text;
+  EXPECT_EQ(reportNumber(text, "frames_tracked"), 8.0) << text;
+  EXPECT_LT(reportNumber(text, "mpjpe_mm"), 50.0) << text;
+  EXPECT_EQ(reportNumber(text, "loo_frames"), 1.0) << text;
+  const double unrefined = reportNumber(text, "loo_psnr_db_unrefined"),
+               refined = reportNumber(text, "loo_psnr_db"),
+               strict = reportNumber(text, "loo_psnr_db_strict"),
+               best = reportNumber(text, "loo_psnr_db_best_offsets"),
+               truth = reportNumber(text, "loo_psnr_db_truth_surface");
+  EXPECT_GT(refined, unrefined + 3.0) << text;
+  EXPECT_GT(truth, refined + 2.0) << text;
+  EXPECT_NEAR(strict, refined, 1.0) << text;
+  EXPECT_GT(best, unrefined + 3.0) << text;
+  EXPECT_LT(best, truth) << text;
+  EXPECT_LT(reportNumber(text, "surface_mm_refined"),
+            0.5 * reportNumber(text, "surface_mm_unrefined"))
+      << text;
+  EXPECT_FALSE(std::isnan(reportNumber(text, "loo_psnr_db_cam08"))) << text;
+  fs::remove_all(folder);
+}
 
 TEST(Cli, ExportWritesTheCaptureAsBvhGltfAndPlyThatReadBack) {
   const fs::path folder = tempPath("export");
