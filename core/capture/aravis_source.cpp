@@ -63,6 +63,7 @@ struct AravisSource::Device {
   ArvCamera* camera = nullptr;
   ArvStream* stream = nullptr;
   int width = 0, height = 0;
+  guint payload = 0;  // bytes of a frame, as the camera says
   std::thread thread;
   // Counters, guarded by AravisSource::mutex_.
   CameraStats stats;
@@ -140,12 +141,26 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
       if (!d->stream)
         throw Error(
             fmt::format("camera {}: cannot open its stream: {}", d->name, takeError(error)));
-      const guint payload = arv_camera_get_payload(d->camera, &error);
+      d->payload = arv_camera_get_payload(d->camera, &error);
       check("payload size");
+    }
+    // Every stream exists before any camera sends, and the streams get their buffers only then:
+    // Aravis's packet-socket receiver binds to the interface before it filters by address, so a
+    // stream opened while another camera streams takes in that camera's packets for an instant,
+    // and with buffers waiting could assemble them into a whole frame under the wrong camera's
+    // name: the virtual cameras' frame ids agree, so their packets fit (the likely cause of the
+    // wrong frame Aravis.VirtualCamerasStreamTheSyntheticFramesBitExact once saw under load).
+    for (auto& d : devices_) {
+      if (!d->stream) continue;
       for (int b = 0; b < d->config.buffer_count; ++b)
-        arv_stream_push_buffer(d->stream, arv_buffer_new(payload, nullptr));
+        arv_stream_push_buffer(d->stream, arv_buffer_new(d->payload, nullptr));
+    }
+    for (auto& d : devices_) {
+      if (!d->camera) continue;
+      GError* error = nullptr;
       arv_camera_start_acquisition(d->camera, &error);
-      check("start of acquisition");
+      if (error)
+        throw Error(fmt::format("camera {}: start of acquisition: {}", d->name, takeError(error)));
     }
   } catch (...) {
     running_ = false;

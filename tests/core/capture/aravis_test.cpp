@@ -70,8 +70,9 @@ TEST(Aravis, VirtualCamerasStreamTheSyntheticFramesBitExact) {
     const Image& sent =
         loop->frames[frame.camera][loopFrameAt(frame.timestamp_ns, fps, loop->length())];
     if (frame.image.pixels != sent.pixels) {
-      // Which frame it is instead (seen once under CI load, not reproduced since): of another
-      // instant, of the other camera, or none (a torn frame).
+      // Which frame it is instead: of another instant, of the other camera, or none (a torn
+      // frame). Seen once under CI load on camera 1, the second opened (AravisSource now opens
+      // every stream before any camera sends).
       std::string instead = "no frame of the loop";
       for (int c = 0; c < 2; ++c)
         for (int k = 0; k < loop->length(); ++k)
