@@ -343,6 +343,23 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
 namespace lumistage {
 namespace {
 
+// A ring of 8 cameras at 640x480 (folder/rig.yaml) filming the actor of `actor` (the studio
+// file's actor: map, indented) for `frames` frames into `session`.
+::testing::AssertionResult synthRingSession(const fs::path& folder, const std::string& actor,
+                                            int frames, const fs::path& session) {
+  fs::create_directories(folder);
+  Result r = run(kCli + " rig ring --cameras 8 --width 640 --height 480 --out " +
+                 (folder / "rig.yaml").string());
+  if (r.exit_code != 0) return ::testing::AssertionFailure() << r.output;
+  std::ofstream(folder / "studio.yaml")
+      << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\nactor:\n"
+      << actor;
+  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " --frames " +
+          std::to_string(frames) + " --out " + session.string());
+  if (r.exit_code != 0) return ::testing::AssertionFailure() << r.output;
+  return ::testing::AssertionSuccess();
+}
+
 // The number after "key": in a flat JSON report; NaN when the key is missing.
 double reportNumber(const std::string& text, const std::string& key) {
   const size_t at = text.find("\"" + key + "\": ");
@@ -353,19 +370,11 @@ double reportNumber(const std::string& text, const std::string& key) {
 // refined mesh renders the left-out views better than the unrefined one and worse than the true
 // surface, the refinement brings the mesh to the truth, the key finds the actor.
 TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
-  const fs::path folder = tempPath("eval");
-  fs::create_directories(folder);
-  Result r = run(kCli + " rig ring --cameras 8 --width 640 --height 480 --out " +
-                 (folder / "rig.yaml").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  std::ofstream(folder / "studio.yaml") << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
-                                           "actor:\n  clothing: true\n  vertices: 2000\n";
-  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " --frames 8 --out " +
-          (folder / "session").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path folder = tempPath("eval"), session = folder / "session";
+  ASSERT_TRUE(synthRingSession(folder, "  clothing: true\n  vertices: 2000\n", 8, session));
   const fs::path json = folder / "eval.json";
-  r = run(kCli + " eval --session " + (folder / "session").string() + " --loo-frames 1 --json " +
-          json.string() + " --quiet");
+  const Result r = run(kCli + " eval --session " + session.string() + " --loo-frames 1 --json " +
+                       json.string() + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string text = readFile(json);
   EXPECT_LT(reportNumber(text, "key_missed_pct"), 0.5) << text;
@@ -392,18 +401,10 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
 
 TEST(Cli, ExportWritesTheCaptureAsBvhGltfAndPlyThatReadBack) {
   const fs::path folder = tempPath("export");
-  fs::create_directories(folder);
-  Result r = run(kCli + " rig ring --cameras 8 --width 640 --height 480 --out " +
-                 (folder / "rig.yaml").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  std::ofstream(folder / "studio.yaml") << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
-                                           "actor:\n  vertices: 2000\n";
   const fs::path session = folder / "session", out = folder / "export";
-  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " --frames 5 --out " +
-          session.string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = run(kCli + " export --session " + session.string() + " --out " + out.string() +
-          " --bvh --glb --ply");
+  ASSERT_TRUE(synthRingSession(folder, "  vertices: 2000\n", 5, session));
+  Result r = run(kCli + " export --session " + session.string() + " --out " + out.string() +
+                 " --bvh --glb --ply");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("5 frames exported"), std::string::npos) << r.output;
 
