@@ -77,27 +77,29 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     mesh.computeNormals();
     return mesh;
   });
-  std::vector<CameraFrame> images;
-  int images_frame = -1;  // the frame `images` holds (strict asks once a camera)
-  std::vector<CameraFrame> warm_images;
+  // The tracked frames from kWarmFrames before a scored frame to it, read once for all the meshes
+  // of that frame (strict asks for one a camera).
+  std::vector<int> window;
+  std::vector<std::vector<CameraFrame>> window_images;
+  int window_for = -1;
   const auto refined_mesh = [&](int i, int left_out) {
+    if (window_for != i) {
+      window.clear();
+      for (int f = std::max(0, i - kWarmFrames); f <= i; ++f)
+        if (f == i || tracked.valid[f]) window.push_back(f);
+      window_images.resize(window.size());
+      for (size_t k = 0; k < window.size(); ++k) session.readFrame(window[k], window_images[k]);
+      window_for = i;
+    }
     // As the pipeline refines: frame after frame, each pulled toward the previous one's offsets
-    // (the temporal term), here from kWarmFrames tracked frames before the scored one.
+    // (the temporal term).
     FrameRefiner refiner(session.rig(), refine, generic.rest.vertexCount(), generic.rest.triangles);
     TriangleMesh mesh;
     mesh.triangles = generic.rest.triangles;
-    for (int f = std::max(0, i - kWarmFrames); f < i; ++f) {
-      if (!tracked.valid[f]) continue;
-      posed(f);
-      session.readFrame(f, warm_images);
-      refiner.refine(warm_images, positions, normals, mesh.positions, left_out);
+    for (size_t k = 0; k < window.size(); ++k) {
+      posed(window[k]);
+      refiner.refine(window_images[k], positions, normals, mesh.positions, left_out);
     }
-    posed(i);
-    if (images_frame != i) {
-      session.readFrame(i, images);
-      images_frame = i;
-    }
-    refiner.refine(images, positions, normals, mesh.positions, left_out);
     mesh.computeNormals();
     return mesh;
   };

@@ -81,13 +81,9 @@ void addSynthCommand(CLI::App& app) {
         studio.clip().name, studio.clip().durationSeconds(), studio.rendererDescription(),
         millisecondsSince(setup_start));
 
-    std::vector<std::string> joint_names;
-    for (const Joint& joint : studio.actor().skeleton.joints()) joint_names.push_back(joint.name);
-    SessionWriter writer(args->out, studio.rig(), studio.config().pixel_format, studio.config().fps,
-                         "virtual-studio", joint_names);
+    const std::unique_ptr<SessionWriter> writer = openStudioSession(studio, args->out);
     StudioFrame frame;
-    std::vector<Image> images(studio.rig().cameraCount());
-    std::vector<ImageView> views(images.size());
+    std::vector<Image> images;
     double render_ms = 0, write_ms = 0;
     const auto start = Clock::now();
     for (int f = 0; f < args->frames; ++f) {
@@ -95,18 +91,11 @@ void addSynthCommand(CLI::App& app) {
       studio.renderFrame(f, frame);
       render_ms += millisecondsSince(t0);
       t0 = Clock::now();
-      for (size_t c = 0; c < images.size(); ++c) {
-        const Camera& camera = studio.rig().camera(static_cast<int>(c));
-        rgbaToImage(frame.images[c].data(), camera.width(), camera.height(),
-                    studio.config().pixel_format, images[c]);
-        views[c] = images[c].view();
-      }
-      FrameTruth truth{frame.joints, &frame.surface, &frame.masks};
-      writer.writeFrame(f, static_cast<int64_t>(frame.time_s * 1e9 + 0.5), views, &truth);
+      writeStudioFrame(studio, frame, f, *writer, images);
       write_ms += millisecondsSince(t0);
       if (f == args->frames / 2) {  // mid-motion: more telling than the T-pose of frame 0
         const cv::Mat sheet = contactSheet(studio.rig(), frame);
-        cv::imwrite((writer.folder() / "contact_sheet.png").string(), sheet);
+        cv::imwrite((writer->folder() / "contact_sheet.png").string(), sheet);
         if (!args->sheet.empty() && !cv::imwrite(args->sheet, sheet)) {
           throw Error(args->sheet + ": cannot write the contact sheet");
         }

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <string>
+#include <string_view>
 
 #include "core/base/error.h"
 #include "core/capture/aravis_pixel_format.h"
@@ -17,6 +19,11 @@ std::string takeError(GError*& error) {
   std::string message = error ? error->message : "unknown error";
   g_clear_error(&error);
   return message;
+}
+
+// A failed Aravis call as an Error naming the camera and the step.
+void throwIfFailed(GError*& error, const std::string& camera, std::string_view step) {
+  if (error) throw Error(fmt::format("camera {}: {}: {}", camera, step, takeError(error)));
 }
 
 const char* statusName(ArvBufferStatus status) {
@@ -93,9 +100,7 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
     for (auto& d : devices_) {
       if (d->config.device.empty()) continue;  // another node's camera
       GError* error = nullptr;
-      auto check = [&](const char* step) {
-        if (error) throw Error(fmt::format("camera {}: {}: {}", d->name, step, takeError(error)));
-      };
+      auto check = [&](std::string_view step) { throwIfFailed(error, d->name, step); };
       d->camera = arv_camera_new(d->config.device.c_str(), &error);
       if (!d->camera) {
         throw Error(fmt::format(
@@ -159,8 +164,7 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
       if (!d->camera) continue;
       GError* error = nullptr;
       arv_camera_start_acquisition(d->camera, &error);
-      if (error)
-        throw Error(fmt::format("camera {}: start of acquisition: {}", d->name, takeError(error)));
+      throwIfFailed(error, d->name, "start of acquisition");
     }
   } catch (...) {
     running_ = false;

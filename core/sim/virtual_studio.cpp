@@ -55,6 +55,29 @@ void VirtualStudio::renderEmptyStage(int camera, int take, std::vector<uint8_t>&
   renderer_->render(config_.rig.camera(camera), config_.look, seed, rgba, /*with_actor=*/false);
 }
 
+std::unique_ptr<SessionWriter> openStudioSession(const VirtualStudio& studio,
+                                                 const std::filesystem::path& folder) {
+  std::vector<std::string> joint_names;
+  for (const Joint& joint : studio.actor().skeleton.joints()) joint_names.push_back(joint.name);
+  return std::make_unique<SessionWriter>(folder, studio.rig(), studio.config().pixel_format,
+                                         studio.config().fps, "virtual-studio", joint_names);
+}
+
+void writeStudioFrame(const VirtualStudio& studio, const StudioFrame& frame, int64_t frame_id,
+                      SessionWriter& writer, std::vector<Image>& images) {
+  const int n = studio.rig().cameraCount();
+  images.resize(n);
+  std::vector<ImageView> views(n);
+  for (int c = 0; c < n; ++c) {
+    const Camera& camera = studio.rig().camera(c);
+    rgbaToImage(frame.images[c].data(), camera.width(), camera.height(),
+                studio.config().pixel_format, images[c]);
+    views[c] = images[c].view();
+  }
+  FrameTruth truth{frame.joints, &frame.surface, &frame.masks};
+  writer.writeFrame(frame_id, static_cast<int64_t>(frame.time_s * 1e9 + 0.5), views, &truth);
+}
+
 FrameLoop renderFrameLoop(VirtualStudio& studio, int frame_count, PixelFormat format,
                           const std::function<void(int, int)>& progress) {
   FrameLoop loop;

@@ -1,10 +1,12 @@
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <vector>
 
 #include "core/body/motion_clip.h"
+#include "core/capture/session_writer.h"
 #include "core/capture/virtual_gige_cameras.h"
 #include "core/render/egl_context.h"
 #include "core/sim/studio_config.h"
@@ -53,6 +55,15 @@ class VirtualStudio {
   std::unique_ptr<StudioRenderer> renderer_;
   std::vector<Eigen::Affine3f> transforms_;
 };
+
+// The studio's frames as a recorded session (docs/session-format.md): a writer for its rig, pixel
+// format, frame rate and actor's joints (source "virtual-studio"), and each rendered frame written
+// with its truth, at its time in the clip. Throw Error as SessionWriter does.
+std::unique_ptr<SessionWriter> openStudioSession(const VirtualStudio& studio,
+                                                 const std::filesystem::path& folder);
+// `images` is scratch, reused.
+void writeStudioFrame(const VirtualStudio& studio, const StudioFrame& frame, int64_t frame_id,
+                      SessionWriter& writer, std::vector<Image>& images);
 
 // Renders frames 0..frame_count-1 of the studio into a loop for virtual cameras, in `format`.
 // `progress(done, total)` is called after each frame.

@@ -51,6 +51,22 @@ fs::path tempPath(const std::string& name) {
   return fs::temp_directory_path() / ("lumistage_cli_" + std::to_string(::getpid()) + "_" + name);
 }
 
+// folder/session: `lumistage synth <synth_options>` of a studio whose rig is `lumistage rig ring
+// <rig_options>` (folder/rig.yaml) and whose other sections are `studio` (YAML).
+::testing::AssertionResult synthRingSession(const fs::path& folder, const std::string& rig_options,
+                                            const std::string& studio,
+                                            const std::string& synth_options) {
+  fs::create_directories(folder);
+  Result r = run(kCli + " rig ring " + rig_options + " --out " + (folder / "rig.yaml").string());
+  if (r.exit_code != 0) return ::testing::AssertionFailure() << r.output;
+  std::ofstream(folder / "studio.yaml") << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
+                                        << studio;
+  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " " + synth_options +
+          " --out " + (folder / "session").string());
+  if (r.exit_code != 0) return ::testing::AssertionFailure() << r.output;
+  return ::testing::AssertionSuccess();
+}
+
 TEST(Cli, RigShowListsCamerasNodesAndCentres) {
   const Result r = run(kCli + " rig show " + kReference);
   EXPECT_EQ(r.exit_code, 0) << r.output;
@@ -207,19 +223,12 @@ TEST(Cli, NodeChecksItsPlaceInTheRig) {
 // it too dim to key cleanly, and runs on.
 TEST(Cli, RunWarnsOfADimScreenNamingTheCamera) {
   const fs::path folder = tempPath("dim");
-  fs::create_directories(folder);
-  Result r = run(kCli + " rig ring --cameras 2 --width 320 --height 240 --out " +
-                 (folder / "rig.yaml").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  std::ofstream(folder / "studio.yaml")
-      << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\nactor:\n  vertices: 2000\n"
-         "look:\n  screen_green: [0.05, 0.17, 0.07]\n";
-  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " --frames 4 --out " +
-          (folder / "session").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(synthRingSession(
+      folder, "--cameras 2 --width 320 --height 240",
+      "actor:\n  vertices: 2000\nlook:\n  screen_green: [0.05, 0.17, 0.07]\n", "--frames 4"));
   // Long enough for the nodes to give up waiting for a brighter screen (30 frame sets).
-  r = run(kCli + " run --session " + (folder / "session").string() +
-          " --frames 100000 --seconds 4");
+  const Result r = run(kCli + " run --session " + (folder / "session").string() +
+                       " --frames 100000 --seconds 4");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const std::string camera : {"cam01", "cam02"}) {
     // In the node's log, and in its camera's health as the studio shows it.
@@ -294,21 +303,13 @@ namespace {
 
 TEST(Cli, RunWritesTheFiguresAsJson) {
   const fs::path folder = tempPath("run");
-  fs::create_directories(folder);
-  Result r =
-      run(kCli + " rig ring --cameras 4 --width 320 --height 240 --cameras-per-node 2 --out " +
-          (folder / "rig.yaml").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  std::ofstream(folder / "studio.yaml") << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
-                                           "actor:\n  vertices: 2000\n";
-  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() +
-          " --frames 6 --bayer --out " + (folder / "session").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
+                               "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
   for (const char* security : {"", " --plain"}) {
     const fs::path json = folder / "run.json", video = folder / "view.avi";
-    r = run(kCli + " run --session " + (folder / "session").string() +
-            " --frames 20 --seconds 30 --json " + json.string() + " --record-view " +
-            video.string() + security);
+    const Result r = run(kCli + " run --session " + (folder / "session").string() +
+                         " --frames 20 --seconds 30 --json " + json.string() + " --record-view " +
+                         video.string() + security);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("20 frames in all"), std::string::npos) << r.output;
     // Each node learnt its cameras' screen.
@@ -343,23 +344,6 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
 namespace lumistage {
 namespace {
 
-// A ring of 8 cameras at 640x480 (folder/rig.yaml) filming the actor of `actor` (the studio
-// file's actor: map, indented) for `frames` frames into `session`.
-::testing::AssertionResult synthRingSession(const fs::path& folder, const std::string& actor,
-                                            int frames, const fs::path& session) {
-  fs::create_directories(folder);
-  Result r = run(kCli + " rig ring --cameras 8 --width 640 --height 480 --out " +
-                 (folder / "rig.yaml").string());
-  if (r.exit_code != 0) return ::testing::AssertionFailure() << r.output;
-  std::ofstream(folder / "studio.yaml")
-      << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\nactor:\n"
-      << actor;
-  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() + " --frames " +
-          std::to_string(frames) + " --out " + session.string());
-  if (r.exit_code != 0) return ::testing::AssertionFailure() << r.output;
-  return ::testing::AssertionSuccess();
-}
-
 // The number after "key": in a flat JSON report; NaN when the key is missing.
 double reportNumber(const std::string& text, const std::string& key) {
   const size_t at = text.find("\"" + key + "\": ");
@@ -371,7 +355,8 @@ double reportNumber(const std::string& text, const std::string& key) {
 // surface, the refinement brings the mesh to the truth, the key finds the actor.
 TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
   const fs::path folder = tempPath("eval"), session = folder / "session";
-  ASSERT_TRUE(synthRingSession(folder, "  clothing: true\n  vertices: 2000\n", 8, session));
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 8 --width 640 --height 480",
+                               "actor:\n  clothing: true\n  vertices: 2000\n", "--frames 8"));
   const fs::path json = folder / "eval.json";
   const Result r = run(kCli + " eval --session " + session.string() + " --loo-frames 1 --json " +
                        json.string() + " --quiet");
@@ -402,7 +387,8 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
 TEST(Cli, ExportWritesTheCaptureAsBvhGltfAndPlyThatReadBack) {
   const fs::path folder = tempPath("export");
   const fs::path session = folder / "session", out = folder / "export";
-  ASSERT_TRUE(synthRingSession(folder, "  vertices: 2000\n", 5, session));
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 8 --width 640 --height 480",
+                               "actor:\n  vertices: 2000\n", "--frames 5"));
   Result r = run(kCli + " export --session " + session.string() + " --out " + out.string() +
                  " --bvh --glb --ply");
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -6,10 +6,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "core/capture/session_writer.h"
-#include "core/geometry/ring_rig.h"
 #include "core/imaging/keyer.h"
 #include "core/sim/virtual_studio.h"
+#include "tests/core/sim/reference_studio.h"
 #include "tests/test_util.h"
 
 namespace lumistage {
@@ -17,32 +16,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The reference studio's actor, clothes and green spill, filmed by 4 cameras of 640x480 in RGB.
+// The reference studio's actor, clothes and green spill, filmed by 4 cameras of 640x480 in RGB,
+// every tenth frame of the clip.
 fs::path writeSession(int frames) {
   const fs::path folder = testing::testFolder("segmentation") / "session";
-  StudioConfig config =
-      loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
-  RingRigSpec spec;
-  spec.cameras = 4;
-  spec.width = 640;
-  spec.height = 480;
-  config.rig = makeRingRig(spec);
-  config.actor.target_vertices = 4000;
-  VirtualStudio studio(config, frames);
-  std::vector<std::string> joints;
-  for (const Joint& joint : studio.actor().skeleton.joints()) joints.push_back(joint.name);
-  SessionWriter writer(folder, config.rig, PixelFormat::kRgb8, config.fps, "test", joints);
+  VirtualStudio studio(testing::referenceStudioOnRing(4000, 4, 640, 480), frames * 10);
+  const std::unique_ptr<SessionWriter> writer = openStudioSession(studio, folder);
   StudioFrame frame;
-  std::vector<Image> images(spec.cameras);
-  std::vector<ImageView> views(spec.cameras);
+  std::vector<Image> images;
   for (int f = 0; f < frames; ++f) {
     studio.renderFrame(f * 10, frame);
-    for (int c = 0; c < spec.cameras; ++c) {
-      rgbaToImage(frame.images[c].data(), spec.width, spec.height, PixelFormat::kRgb8, images[c]);
-      views[c] = images[c].view();
-    }
-    FrameTruth truth{frame.joints, &frame.surface, &frame.masks};
-    writer.writeFrame(f, f * 33'333'333, views, &truth);
+    writeStudioFrame(studio, frame, f, *writer, images);
   }
   return folder;
 }

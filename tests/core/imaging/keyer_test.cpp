@@ -3,8 +3,8 @@
 
 #include <gtest/gtest.h>
 
-#include "core/geometry/ring_rig.h"
 #include "core/sim/virtual_studio.h"
+#include "tests/core/sim/reference_studio.h"
 
 namespace lumistage {
 namespace {
@@ -34,15 +34,7 @@ Agreement compare(const Key& key, const ImageView& image, const std::vector<uint
 class KeyerTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    StudioConfig config =
-        loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
-    RingRigSpec rig;
-    rig.cameras = 4;
-    rig.width = 512;
-    rig.height = 384;
-    config.rig = makeRingRig(rig);
-    config.actor.target_vertices = 4000;
-    studio_ = new VirtualStudio(config, 30);
+    studio_ = new VirtualStudio(testing::referenceStudioOnRing(4000, 4, 512, 384), 30);
   }
   static void TearDownTestSuite() {
     delete studio_;

@@ -9,20 +9,13 @@
 #include "core/refine/mesh_refiner.h"
 #include "core/refine/refinement_sampler.h"
 #include "core/sim/virtual_studio.h"
+#include "tests/core/sim/reference_studio.h"
 
 namespace lumistage {
 namespace {
 
-// The reference studio with an actor of about `actor_vertices` vertices.
-StudioConfig referenceStudio(int actor_vertices) {
-  StudioConfig config =
-      loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
-  config.actor.target_vertices = actor_vertices;
-  return config;
-}
-
 TEST(StudioRefinement, RefinedWalkerIsMuchCloserToTheTrueSurface) {
-  const StudioConfig config = referenceStudio(4000);
+  const StudioConfig config = testing::referenceStudio(4000);
   VirtualStudio studio(config, 40);
   const Rig& rig = studio.rig();
   const SkinnedMesh generic = loadGenericHuman();
@@ -67,7 +60,7 @@ TEST(StudioRefinement, RefinedWalkerIsMuchCloserToTheTrueSurface) {
 // The strict leave-one-camera-out score refines without the scored camera: with it left out, its
 // image has no say in the refined mesh (a ruined image changes nothing); sampled, it does.
 TEST(StudioRefinement, FrameRefinerLeavesTheLeftOutCameraUnsampled) {
-  const StudioConfig config = referenceStudio(3000);
+  const StudioConfig config = testing::referenceStudio(3000);
   VirtualStudio studio(config, 20);
   const Rig& rig = studio.rig();
   const SkinnedMesh generic = loadGenericHuman();

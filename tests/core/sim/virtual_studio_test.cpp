@@ -7,7 +7,7 @@
 #include <fstream>
 
 #include "core/base/error.h"
-#include "core/geometry/ring_rig.h"
+#include "tests/core/sim/reference_studio.h"
 
 namespace lumistage {
 namespace {
@@ -46,7 +46,8 @@ TEST(StudioConfig, MistakesAreNamed) {
                 .find("studio.yaml:5: motion.clip: unknown clip 'moonwalk'; expected one of: walk"),
             std::string::npos);
   EXPECT_NE(errorOf(head + "look:\n  pixel_format: yuv\n")
-                .find("look.pixel_format: expected one of mono8, bayer_rggb8, bayer_grbg8, bayer_gbrg8, bayer_bggr8, rgb8"),
+                .find("look.pixel_format: expected one of mono8, bayer_rggb8, bayer_grbg8, "
+                      "bayer_gbrg8, bayer_bggr8, rgb8"),
             std::string::npos);
   EXPECT_NE(
       errorOf(head + "actor:\n  height_m: -2\n").find("actor.height_m: expected a positive number"),
@@ -58,13 +59,7 @@ TEST(StudioConfig, MistakesAreNamed) {
 }
 
 TEST(VirtualStudio, FramesCarryConsistentTruth) {
-  StudioConfig config = loadStudioConfig(kReference);
-  RingRigSpec small;
-  small.cameras = 4;
-  small.width = 512;
-  small.height = 384;
-  config.rig = makeRingRig(small);
-  config.actor.target_vertices = 3000;
+  const StudioConfig config = testing::referenceStudioOnRing(3000, 4, 512, 384);
   VirtualStudio studio(config, 10);
   ASSERT_GE(studio.clip().frames.size(), 10u);
   StudioFrame frame;

@@ -5,15 +5,13 @@
 
 #include "core/body/human_skeleton.h"
 #include "core/sim/virtual_studio.h"
+#include "tests/core/sim/reference_studio.h"
 
 namespace lumistage {
 namespace {
 
 TEST(VisualHullLocator, FindsTheWalkingActorFromSilhouettes) {
-  StudioConfig config =
-      loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
-  config.actor.target_vertices = 3000;
-  VirtualStudio studio(config, 60);
+  VirtualStudio studio(testing::referenceStudio(3000), 60);
   const Rig& rig = studio.rig();
   const VisualHullLocator locator(rig, 8);
   StudioFrame frame;
