@@ -5,19 +5,39 @@
 
 #include <filesystem>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #include "core/base/error.h"
 
 namespace lumistage::testing {
 
+// The folders testFolder() made, removed when the test process ends if every test passed (kept
+// for a look otherwise: a failure's message names its files).
+class TestFolders {
+ public:
+  ~TestFolders() {
+    if (!::testing::UnitTest::GetInstance()->Passed()) return;
+    std::error_code ignored;
+    for (const std::filesystem::path& folder : folders_)
+      std::filesystem::remove_all(folder, ignored);
+  }
+  void add(const std::filesystem::path& folder) { folders_.push_back(folder); }
+
+ private:
+  std::vector<std::filesystem::path> folders_;
+};
+
 // An empty folder of the running test's own (ctest runs tests in parallel, as processes).
 inline std::filesystem::path testFolder(const std::string& prefix) {
+  static TestFolders folders;
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   const std::filesystem::path folder =
       std::filesystem::temp_directory_path() /
       ("lumistage_" + prefix + "_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(folder);
   std::filesystem::create_directories(folder);
+  folders.add(folder);
   return folder;
 }
 
