@@ -65,3 +65,44 @@ void locateActor(benchmark::State& state) {
 BENCHMARK(locateActor)->Unit(benchmark::kMillisecond);
 
 }  // namespace
+
+#include <algorithm>
+#include <filesystem>
+
+#include "core/capture/session_writer.h"
+
+namespace {
+
+// A node's part of a take: its three 1024x768 Bayer cameras' set written as PNGs (encoded in
+// parallel, written to files) by SessionWriter, as TakeRecorder's writer thread does. The frames
+// carry sensor-like noise (+-8 levels), which is what the encoder spends its time on.
+void recordNodeSet(benchmark::State& state) {
+  lumistage::RingRigSpec spec;
+  spec.cameras = 3;
+  const lumistage::Rig rig = lumistage::makeRingRig(spec);
+  std::vector<lumistage::Image> images(3, stageFrame());
+  std::mt19937 rng(5);
+  for (lumistage::Image& image : images) {
+    for (uint8_t& p : image.pixels)
+      p = static_cast<uint8_t>(std::clamp(int(p) + int(rng() % 17) - 8, 0, 255));
+  }
+  std::vector<lumistage::ImageView> views;
+  for (const lumistage::Image& image : images) views.push_back(image.view());
+  const std::filesystem::path folder =
+      std::filesystem::temp_directory_path() / "lumistage_bench_record_node_set";
+  std::filesystem::remove_all(folder);
+  int64_t frame = 0;
+  {
+    lumistage::SessionWriter writer(folder, rig, lumistage::PixelFormat::kBayerRggb8, 25, "bench");
+    for (auto _ : state) {
+      writer.writeFrame(frame, frame * 40'000'000, views);
+      ++frame;
+    }
+    state.counters["MB_per_set"] =
+        double(writer.bytesWritten()) / std::max<int64_t>(1, frame) / 1e6;
+  }
+  std::filesystem::remove_all(folder);
+}
+BENCHMARK(recordNodeSet)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
