@@ -1,10 +1,12 @@
 #include "ui/pipeline_panel.h"
 
 #include <QComboBox>
+#include <QDir>
 #include <QFileDialog>
 #include <QHBoxLayout>
 #include <QHeaderView>
 #include <QInputDialog>
+#include <QLineEdit>
 #include <QMessageBox>
 #include <QMutexLocker>
 #include <QPixmap>
@@ -67,6 +69,20 @@ void PipelineWorker::stopRecording() {
     recorder_.reset();
     emit recordingEnded();
   });
+}
+
+void PipelineWorker::startTake(const QString& name) {
+  QMutexLocker lock(&mutex_);
+  commands_.push_back([this, name](LocalPipelineRun& run) {
+    const std::string error = run.studio().startTake(name.toStdString());
+    if (!error.empty())
+      emit message(tr("Cannot record the take: %1").arg(QString::fromStdString(error)));
+  });
+}
+
+void PipelineWorker::stopTake() {
+  QMutexLocker lock(&mutex_);
+  commands_.push_back([](LocalPipelineRun& run) { run.studio().stopTake(); });
 }
 
 void PipelineWorker::run() {
@@ -138,6 +154,9 @@ void PipelineWorker::run() {
         s.recording = QString::fromStdString(recorder_->file().string());
         s.recorded_frames = recorder_->framesWritten();
       }
+      s.take = pipeline.studio().take();
+      s.take_recording = pipeline.studio().recordingTake();
+      s.takes_folder = QString::fromStdString(options_.takes.string());
       s.pose_frame = posed_frame;
       s.joints = joints;
       s.parents = parents;
@@ -165,16 +184,20 @@ PipelinePanel::PipelinePanel(QWidget* parent)
       stages_(new QTableWidget(this)),
       source_(new QComboBox(this)),
       start_button_(new QPushButton(tr("Start"), this)),
-      stop_button_(new QPushButton(tr("Stop"), this)) {
+      stop_button_(new QPushButton(tr("Stop"), this)),
+      take_name_(new QLineEdit("take-001", this)),
+      take_button_(new QPushButton(tr("Record take"), this)),
+      take_status_(new QLabel(this)),
+      takes_folder_(QDir::homePath() + "/lumistage-takes") {
   qRegisterMetaType<lumistage::RunReport>();
   qRegisterMetaType<lumistage::PipelineSnapshot>();
   summary_->setWordWrap(true);
   summary_->setObjectName("pipeline_summary");
   source_->addItems(
       {tr("Virtual studio (demo session)"), tr("Recorded session..."), tr("Aravis cameras...")});
-  table_->setColumnCount(7);
+  table_->setColumnCount(8);
   table_->setHorizontalHeaderLabels({tr("Node"), tr("State"), tr("Camera"), tr("fps"), tr("Frames"),
-                                     tr("Dropped"), tr("Last error")});
+                                     tr("Dropped"), tr("Take"), tr("Last error")});
   table_->verticalHeader()->setVisible(false);
   table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
   table_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
@@ -190,10 +213,25 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   buttons->addWidget(source_);
   buttons->addWidget(start_button_);
   buttons->addWidget(stop_button_);
+  buttons->addSpacing(24);
+  buttons->addWidget(new QLabel(tr("Take:"), this));
+  take_name_->setObjectName("take_name");
+  take_name_->setToolTip(
+      tr("The take's name: every node records its cameras' frames into "
+         "TAKES/<take>/<node>/ on its own disk (letters, digits, '-', '_', '.')"));
+  take_name_->setMaximumWidth(160);
+  buttons->addWidget(take_name_);
+  take_button_->setObjectName("record_take");
+  take_button_->setEnabled(false);
+  buttons->addWidget(take_button_);
   buttons->addStretch(1);
+  take_status_->setObjectName("take_status");
+  take_status_->setWordWrap(true);
+  take_status_->setTextInteractionFlags(Qt::TextSelectableByMouse);
   auto* layout = new QVBoxLayout(this);
   layout->addWidget(summary_);
   layout->addLayout(buttons);
+  layout->addWidget(take_status_);
   auto* row = new QHBoxLayout;
   row->addWidget(table_, 1);
   row->addWidget(stages_);
@@ -206,6 +244,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   stop_button_->setEnabled(false);
   connect(start_button_, &QPushButton::clicked, this, &PipelinePanel::startChosen);
   connect(stop_button_, &QPushButton::clicked, this, &PipelinePanel::stop);
+  connect(take_button_, &QPushButton::clicked, this, &PipelinePanel::toggleTake);
 }
 
 PipelinePanel::~PipelinePanel() {
@@ -248,6 +287,7 @@ void PipelinePanel::startChosen() {
 
 void PipelinePanel::start(LocalRunOptions options) {
   stop();
+  if (options.takes.empty()) options.takes = takes_folder_.toStdString();
   thread_ = new QThread(this);
   worker_ = new PipelineWorker(std::move(options));
   worker_->moveToThread(thread_);
@@ -260,6 +300,7 @@ void PipelinePanel::start(LocalRunOptions options) {
   connect(worker_, &PipelineWorker::recordingEnded, this, &PipelinePanel::recordingEnded);
   start_button_->setEnabled(false);
   stop_button_->setEnabled(true);
+  take_button_->setEnabled(true);
   summary_->setText(tr("Starting the nodes..."));
   thread_->start();
   emit started();
@@ -275,6 +316,8 @@ void PipelinePanel::stop() {
   worker_ = nullptr;
   start_button_->setEnabled(true);
   stop_button_->setEnabled(false);
+  take_button_->setEnabled(false);
+  take_button_->setText(tr("Record take"));
   emit recordingEnded();  // whatever was recording is finished with its worker
 }
 
@@ -297,8 +340,90 @@ void PipelinePanel::stopRecording() {
   if (worker_) worker_->stopRecording();
 }
 
+bool PipelinePanel::startTake(const QString& name) {
+  if (!worker_) return false;
+  worker_->startTake(name);
+  return true;
+}
+
+void PipelinePanel::stopTake() {
+  if (worker_) worker_->stopTake();
+}
+
+void PipelinePanel::toggleTake() {
+  if (last_.take_recording) {
+    stopTake();
+  } else {
+    startTake(take_name_->text().trimmed());
+  }
+}
+
+namespace {
+
+// "take-007" -> "take-008": the name the next take is offered (digits at the end counted up,
+// their width kept; "-2" added to a name without).
+QString nextTakeName(const QString& name) {
+  int digits = 0;
+  while (digits < name.size() && name[name.size() - 1 - digits].isDigit()) ++digits;
+  if (digits == 0) return name + "-2";
+  const qlonglong number = name.right(digits).toLongLong() + 1;
+  return name.left(name.size() - digits) + QString::number(number).rightJustified(digits, '0');
+}
+
+// A node's part of the take, for its row: sets written and dropped, or what went wrong.
+QString takeCell(const TakeStatusData& t) {
+  if (t.take.empty()) return {};
+  if (!t.error.empty()) return QString::fromStdString(t.error);
+  QString text = QObject::tr("%1 sets, %2 MB").arg(t.written).arg(t.bytes / 1e6, 0, 'f', 1);
+  if (t.dropped > 0) text += QObject::tr(", %1 dropped").arg(t.dropped);
+  if (t.finished) text += QObject::tr(", closed");
+  return text;
+}
+
+}  // namespace
+
 void PipelinePanel::show(const PipelineSnapshot& s) {
+  const bool was_recording = last_.take_recording;
   last_ = s;
+  take_button_->setText(s.take_recording ? tr("Stop take") : tr("Record take"));
+  take_name_->setEnabled(!s.take_recording);
+  if (s.take.take.empty()) {
+    take_status_->setText(tr("Takes are recorded by every node into %1/&lt;take&gt;/&lt;node&gt;/; "
+                             "lumistage session merge joins them.")
+                              .arg(s.takes_folder.toHtmlEscaped()));
+  } else {
+    const QString take = QString::fromStdString(s.take.take);
+    const QString folder = (s.takes_folder + "/" + take).toHtmlEscaped();
+    int64_t sets = 0, dropped = 0, closed = 0, failed = 0;
+    for (const NodeReport& n : s.report.nodes) {
+      if (n.take.take != s.take.take) continue;
+      sets += n.take.written;
+      dropped += n.take.dropped;
+      closed += n.take.finished;
+      failed += !n.take.error.empty();
+    }
+    QString text =
+        s.take_recording
+            ? tr("<b style='color:#e33'>&#9679; Recording take %1</b> from frame %2 into %3")
+                  .arg(take.toHtmlEscaped())
+                  .arg(s.take.first_frame)
+                  .arg(folder)
+            : tr("Take %1: frames %2 to %3 in %4 (%5 of %6 nodes closed)")
+                  .arg(take.toHtmlEscaped())
+                  .arg(s.take.first_frame)
+                  .arg(s.take.last_frame)
+                  .arg(folder)
+                  .arg(closed)
+                  .arg(s.report.nodes.size());
+    text += tr(" &middot; %1 frame sets written, %2 dropped").arg(sets).arg(dropped);
+    if (failed > 0)
+      text += tr(" &middot; <b style='color:#e33'>%1 nodes failed: see the Take column</b>")
+                  .arg(failed);
+    take_status_->setText(text);
+    // The take just stopped: offer the next name.
+    if (was_recording && !s.take_recording && take_name_->text() == take)
+      take_name_->setText(nextTakeName(take));
+  }
   const RunReport& r = s.report;
   if (!s.view.isNull())
     view_->setPixmap(QPixmap::fromImage(s.view).scaled(view_->size(), Qt::KeepAspectRatio));
@@ -344,8 +469,11 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
         set(3, QString::number(c.frame_rate_hz, 'f', 1));
         set(4, QString::number(c.frames));
         set(5, QString::number(c.dropped));
-        set(6, QString::fromStdString(c.last_error));
+        set(7, QString::fromStdString(c.last_error));
       }
+      set(6, k == 0 ? takeCell(n.take) : QString());
+      if (k == 0 && !n.take.error.empty())
+        table_->item(row, 6)->setForeground(QColor(0xe3, 0x33, 0x33));
     }
   }
   emit snapshot(s);

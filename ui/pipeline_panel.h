@@ -18,6 +18,7 @@
 #include "core/render/view_recorder.h"
 
 class QComboBox;
+class QLineEdit;
 class QPushButton;
 class QTableWidget;
 class QThread;
@@ -38,6 +39,9 @@ struct PipelineSnapshot {
   double time_s = 0;                         // since the pipeline started
   QString recording;                         // the file the view is recorded to; empty: none
   int64_t recorded_frames = 0;
+  RecordData take;  // the take asked of the nodes (name empty: none yet); theirs in report.nodes
+  bool take_recording = false;
+  QString takes_folder;  // where the nodes write their parts of a take
 };
 
 // Runs a LocalPipelineRun on its own thread (move to a QThread, call run()), reporting a snapshot
@@ -57,6 +61,10 @@ class PipelineWorker : public QObject {
   // ViewRecorder) until stopRecording() or the pipeline stops; what went wrong comes as message().
   void startRecording(const QString& file);
   void stopRecording();
+  // Thread-safe: every node records its cameras' frames as the take `name` (on its own disk,
+  // StudioCoordinator::startTake) until stopTake(); why it cannot start comes as message().
+  void startTake(const QString& name);
+  void stopTake();
 
  public slots:
   void run();
@@ -99,6 +107,14 @@ class PipelinePanel : public QWidget {
   // Records the director's view while the pipeline runs (false, nothing done, when it does not).
   bool startRecording(const QString& file);
   void stopRecording();
+  // Takes: the nodes record their cameras' frames (each to TAKES/<take>/<node>/); the Record take
+  // button does the same. False when the pipeline is not running.
+  bool startTake(const QString& name);
+  void stopTake();
+  // Where the nodes started from here record takes (default ~/lumistage-takes); from the next
+  // start on.
+  void setTakesFolder(const QString& folder) { takes_folder_ = folder; }
+  const QString& takesFolder() const { return takes_folder_; }
   // The session "Virtual studio" runs (set by the studio once its demo session exists).
   void setDemoSession(const QString& folder) { demo_session_ = folder; }
 
@@ -113,6 +129,7 @@ class PipelinePanel : public QWidget {
  private:
   void show(const PipelineSnapshot& snapshot);
   void startChosen();
+  void toggleTake();
 
   QLabel* summary_;
   QLabel* view_;  // the pipeline's output: the blended view
@@ -121,6 +138,10 @@ class PipelinePanel : public QWidget {
   QComboBox* source_;
   QPushButton* start_button_;
   QPushButton* stop_button_;
+  QLineEdit* take_name_;
+  QPushButton* take_button_;
+  QLabel* take_status_;
+  QString takes_folder_;
   QThread* thread_ = nullptr;
   PipelineWorker* worker_ = nullptr;
   PipelineSnapshot last_;

@@ -15,6 +15,7 @@
 #include "app/cli/render_command.h"
 #include "app/cli/rig_commands.h"
 #include "app/cli/run_command.h"
+#include "app/cli/session_commands.h"
 #include "app/cli/synth_command.h"
 
 int main(int argc, char** argv) {
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
   lumistage::addEvalCommand(app);
   lumistage::addExportCommand(app);
   lumistage::addRenderCommand(app);
+  lumistage::addSessionCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -74,12 +74,37 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       machine, nodes);
 }
 
+// Stops the take, waits (at most 30 s) for every node to close its part, and says how each went.
+void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
+  StudioCoordinator& studio = pipeline.studio();
+  studio.stopTake();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  auto finished = [&] {
+    for (const NodeReport& n : studio.report().nodes) {
+      if (!n.lost && !(n.take.take == studio.take().take && n.take.finished)) return false;
+    }
+    return true;
+  };
+  while (std::chrono::steady_clock::now() < end && pipeline.anyNodeRunning() && !finished())
+    pipeline.runFor(std::chrono::milliseconds(100));
+  const RecordData& take = studio.take();
+  fmt::print("take {}: frames {} to {}\n", take.take, take.first_frame, take.last_frame);
+  for (const NodeReport& n : studio.report().nodes) {
+    const TakeStatusData& t = n.take;
+    fmt::print("  node {:<8} {} frame sets, {:.1f} MB, {} dropped{}{}\n", n.name, t.written,
+               t.bytes / 1e6, t.dropped, t.finished ? "" : ", not closed",
+               t.error.empty() ? "" : ", " + t.error);
+  }
+  fmt::print("join the nodes' parts with: lumistage session merge {} --out {}-session\n", folder,
+             folder);
+}
+
 }  // namespace
 
 void addRunCommand(CLI::App& app) {
   struct Args {
     std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size,
-                                     record_view;
+                                     record_view, record_take;
     int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
     int64_t frames = 150;
     double seconds = 60;
@@ -117,6 +142,10 @@ void addRunCommand(CLI::App& app) {
   run->add_option("--record-view", a->record_view,
                   "record every blended view to this video (.avi, Motion-JPEG, at the cameras' "
                   "rate)");
+  run->add_option("--record-take", a->record_take,
+                  "record the cameras' frames as a take: each node writes its cameras to "
+                  "DIR/<node>/ from the first frame done to the end (lumistage session merge "
+                  "DIR joins them)");
   run->callback([a] {
     if (a->session.empty() == (a->rig.empty() || a->address.empty())) {
       throw CLI::ValidationError("--session",
@@ -131,6 +160,16 @@ void addRunCommand(CLI::App& app) {
     options.plain = a->plain;
     options.keys = a->keys;
     options.coordinator.max_frames = a->frames;
+    std::string take;
+    if (!a->record_take.empty()) {
+      const std::filesystem::path dir = std::filesystem::absolute(a->record_take);
+      take = dir.filename().string();
+      if (const std::string error = takeNameError(take); !error.empty())
+        throw CLI::ValidationError("--record-take", error);
+      options.takes = dir.parent_path();
+      // The studio keeps listening after the last frame, until the nodes have closed the take.
+      options.coordinator.max_frames = 0;
+    }
     options.coordinator.max_frames_in_flight = a->max_in_flight;
     LocalPipelineRun pipeline(options);
     StudioCoordinator& studio = pipeline.studio();
@@ -176,6 +215,9 @@ void addRunCommand(CLI::App& app) {
       nodes_cpu = std::max(nodes_cpu, pipeline.nodeCpuSeconds());
       if (!measuring && studio.framesDone() > 0) {
         measuring = true;
+        if (!take.empty()) {
+          if (const std::string error = studio.startTake(take); !error.empty()) throw Error(error);
+        }
         cpu_start = processCpuSeconds();
         nodes_cpu_start = nodes_cpu;
         wall_start = std::chrono::steady_clock::now();
@@ -184,6 +226,7 @@ void addRunCommand(CLI::App& app) {
         fmt::print(stderr, "lumistage run: {}; see its message above\n", exit);
       }
     }
+    if (!take.empty() && !studio.take().take.empty()) finishTake(pipeline, a->record_take);
     if (recorder) {
       studio.setBlendedSink({});
       recorder->close();

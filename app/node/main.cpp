@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> devices;
   double fps = 25;
   bool plain = false, monitor = false;
-  std::string monitor_screenshot;
+  std::string monitor_screenshot, takes;
   app.add_option("--rig", rig_path, "rig file (default with --session: the session's)");
   app.add_option("--node", node_name, "this node's name in the rig")->required();
   app.add_option("--session", session, "serve this node's cameras of a recorded session");
@@ -53,6 +53,9 @@ int main(int argc, char** argv) {
   app.add_option("--studio", studio, "the studio's endpoint, e.g. tcp://studio-pc:5570");
   app.add_option("--keys", keys,
                  "key store folder (lumistage keys init): this node's key and the studio's");
+  app.add_option("--takes", takes,
+                 "record the takes the studio asks for into this folder, on this PC "
+                 "(TAKES/<take>/<node>/; lumistage session merge joins the nodes' parts)");
   app.add_flag("--plain", plain, "no encryption or authentication (a closed lab network only)");
   app.add_flag("--monitor", monitor,
                "open a small window on this PC: the node's cameras, silhouettes and counters");
@@ -86,6 +89,9 @@ int main(int argc, char** argv) {
       return 0;
     }
     std::unique_ptr<lumistage::FrameSource> source;
+    lumistage::CameraNodeOptions node_options;
+    node_options.takes = takes;
+    node_options.fps = fps;
     if (!session.empty()) {
       lumistage::ReplayOptions options;
       options.mode = replay == "memory" ? lumistage::ReplayMode::kFromMemory
@@ -93,7 +99,9 @@ int main(int argc, char** argv) {
       options.cameras = node.cameras;
       // Every node shows the same recorded instant at the same time, as triggered cameras do.
       options.synchronized = true;
-      source = std::make_unique<lumistage::SessionSource>(session, options);
+      auto replay_source = std::make_unique<lumistage::SessionSource>(session, options);
+      node_options.fps = replay_source->reader().fps();
+      source = std::move(replay_source);
     } else if (!address.empty() || !devices.empty()) {
       if (!devices.empty() && devices.size() != node.cameras.size()) {
         throw std::runtime_error(fmt::format("--device given {} times for the node's {} cameras",
@@ -131,7 +139,7 @@ int main(int argc, char** argv) {
       endpoint.studio_public_key = store.studioPublicKey();
     }
     lumistage::CameraNode camera_node(rig, node.name, std::move(source), endpoint,
-                                      lumistage::loadGenericHuman());
+                                      lumistage::loadGenericHuman(), node_options);
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
     fmt::print("node {}: {} cameras, serving {}\n", node.name, node.cameras.size(), studio);

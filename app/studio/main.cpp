@@ -78,8 +78,10 @@ int main(int argc, char** argv) {
       "screenshots",
       "With --demo: once the pipeline has shown frames, save the main window and each panel to "
       "<dir> (main_window.png, viewport.png, viewport_behind.png, health.png, overlay.png, "
-      "calibration.png, clones.png, pipeline.png; the view from behind is recorded meanwhile to "
-      "viewport_behind.avi), kill a node and save health_node_lost.png once its cameras show "
+      "calibration.png, clones.png, pipeline.png while the nodes record a take into <dir>/takes; "
+      "the "
+      "view from behind is recorded meanwhile to viewport_behind.avi), kill a node and save "
+      "health_node_lost.png once its cameras show "
       "lost, then quit.",
       "dir");
   parser.addOption(demo_option);
@@ -108,6 +110,9 @@ int main(int argc, char** argv) {
     }
   }
   const QString source = parser.value(source_option);
+  // The screenshots' take goes beside them, not into the user's takes.
+  if (parser.isSet(screenshots_option))
+    window.pipeline()->setTakesFolder(parser.value(screenshots_option) + "/takes");
   if (parser.isSet(demo_option)) {
     QObject::connect(&window, &lumistage::MainWindow::demoFailed, &app, [&](const QString& error) {
       std::fprintf(stderr, "lumistage-studio: demo: %s\n", qPrintable(error));
@@ -175,7 +180,19 @@ int main(int argc, char** argv) {
       return true;
     });
     steps->push_back(save("overlay", "overlay.png"));
+    // A take: every node records its cameras; the panel shows it recording.
+    steps->push_back([pipeline] { return pipeline->startTake("take-001"); });
+    steps->push_back([pipeline] {
+      int recording = 0;
+      for (const lumistage::NodeReport& n : pipeline->lastReport().nodes)
+        recording += n.take.take == "take-001" && n.take.written >= 10;
+      return recording == static_cast<int>(pipeline->lastReport().nodes.size());
+    });
     steps->push_back(save("pipeline", "pipeline.png"));
+    steps->push_back([pipeline] {
+      pipeline->stopTake();
+      return true;
+    });
     steps->push_back([&window] {
       // A point on the chest (spine3) in the first camera: its epipolar lines in the others.
       auto* cal = window.calibration();

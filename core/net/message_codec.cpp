@@ -46,7 +46,16 @@ struct BodyEncoder {
       cameras.push_back(fb::CreateCameraHealth(b, name, c.frames, c.dropped, c.frame_rate, error));
     }
     const auto vector = b.CreateVector(cameras);
-    return {fb::Body::Heartbeat, fb::CreateHeartbeat(b, vector, m.bytes_sent, m.cpu).Union()};
+    const TakeStatusData& t = m.take;
+    const auto take_name = b.CreateString(t.take);
+    const auto take_error = b.CreateString(t.error);
+    const auto take = fb::CreateTakeStatus(b, take_name, t.first_frame, t.last_frame, t.written,
+                                           t.dropped, t.bytes, t.finished, take_error);
+    return {fb::Body::Heartbeat, fb::CreateHeartbeat(b, vector, m.bytes_sent, m.cpu, take).Union()};
+  }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const RecordData& m) const {
+    const auto take = b.CreateString(m.take);
+    return {fb::Body::Record, fb::CreateRecord(b, take, m.first_frame, m.last_frame).Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const SilhouettesData& m) const {
     std::vector<flatbuffers::Offset<fb::SilhouetteMask>> masks;
@@ -197,6 +206,15 @@ Check decodeHeartbeat(const fb::Heartbeat& in, const MessageLimits& limits, Hear
     out.cameras.push_back({copyString(c->camera()), c->frames(), c->dropped(), c->frame_rate(),
                            copyString(c->last_error())});
   }
+  if (const fb::TakeStatus* t = in.take()) {
+    const std::string take = copyString(t->take());
+    if (!take.empty()) {
+      if (std::string e = takeNameError(take); !e.empty()) return "heartbeat: take: " + e;
+    }
+    if (Check e = checkString(t->error(), "heartbeat: take error", limits); !e.empty()) return e;
+    out.take = {take,         t->first_frame(), t->last_frame(), t->written(),
+                t->dropped(), t->bytes(),       t->finished(),   copyString(t->error())};
+  }
   return {};
 }
 
@@ -320,6 +338,20 @@ Check decodeView(const fb::View& in, const MessageLimits& limits, ViewData& out)
   out.width = in.width();
   out.height = in.height();
   out.fx = in.fx(), out.fy = in.fy(), out.cx = in.cx(), out.cy = in.cy();
+  return {};
+}
+
+Check decodeRecord(const fb::Record& in, const MessageLimits&, RecordData& out) {
+  out.take = copyString(in.take());
+  if (!out.take.empty()) {
+    if (std::string e = takeNameError(out.take); !e.empty()) return "record: " + e;
+  }
+  out.first_frame = in.first_frame();
+  out.last_frame = in.last_frame();
+  if (out.first_frame < 0 || out.last_frame < out.first_frame) {
+    return "record: frames " + std::to_string(out.first_frame) + " to " +
+           std::to_string(out.last_frame) + ", expected 0 <= first <= last";
+  }
   return {};
 }
 
@@ -500,6 +532,10 @@ DecodeResult decodeMessage(const uint8_t* data, size_t size, const MessageLimits
       c = decodeBody<fb::View, ViewData>(envelope->body_as_View(), "view", limits, decodeView,
                                          message.body);
       break;
+    case fb::Body::Record:
+      c = decodeBody<fb::Record, RecordData>(envelope->body_as_Record(), "record", limits,
+                                             decodeRecord, message.body);
+      break;
     case fb::Body::NONE:
       c = "message without a body";
       break;
@@ -557,10 +593,25 @@ std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_co
   return out;
 }
 
+std::string takeNameError(std::string_view take) {
+  if (take.empty() || take.size() > 64)
+    return "take name of " + std::to_string(take.size()) + " characters, expected 1 to 64";
+  if (take.front() == '.') return "take name '" + std::string(take) + "' starts with '.'";
+  for (const char c : take) {
+    const bool fine = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                      c == '-' || c == '_' || c == '.';
+    if (!fine) {
+      return "take name '" + std::string(take) +
+             "' has a character other than letters, digits, '-', '_' and '.'";
+    }
+  }
+  return {};
+}
+
 const char* messageTypeName(const MessageBody& body) {
-  static constexpr const char* kNames[] = {"hello",         "heartbeat",         "silhouettes",
-                                           "pose",          "vertex statistics", "offsets",
-                                           "partial image", "frame timestamps",  "view"};
+  static constexpr const char* kNames[] = {
+      "hello",   "heartbeat",     "silhouettes",      "pose", "vertex statistics",
+      "offsets", "partial image", "frame timestamps", "view", "record"};
   static_assert(std::size(kNames) == std::variant_size_v<MessageBody>);
   return kNames[body.index()];
 }

@@ -8,10 +8,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -23,8 +25,9 @@ namespace lumistage {
 
 // Raised whenever a table changes in a way an older peer would misread.
 // 2: compact refinement statistics; 3: compressed refinement statistics (a version 2 studio would
-// count every node's statistics as a bad message).
-inline constexpr uint16_t kProtocolVersion = 3;
+// count every node's statistics as a bad message); 4: takes recorded on the nodes (a version 3
+// node would refuse the studio's record command).
+inline constexpr uint16_t kProtocolVersion = 4;
 
 struct HelloData {
   std::string node_name;
@@ -43,10 +46,21 @@ struct CameraHealthData {
   bool operator==(const CameraHealthData&) const = default;
 };
 
+// Where a node's recording of a take stands (core/pipeline/take_recorder.h).
+struct TakeStatusData {
+  std::string take;  // empty: no take asked for
+  int64_t first_frame = 0, last_frame = 0;
+  int64_t written = 0, dropped = 0, bytes = 0;
+  bool finished = false;
+  std::string error;
+  bool operator==(const TakeStatusData&) const = default;
+};
+
 struct HeartbeatData {
   std::vector<CameraHealthData> cameras;
   int64_t bytes_sent = 0;
   float cpu = 0;
+  TakeStatusData take;
   bool operator==(const HeartbeatData&) const = default;
 };
 
@@ -120,9 +134,22 @@ struct ViewData {
   bool operator==(const ViewData&) const = default;
 };
 
+// The studio asks the nodes to record a take: their own cameras' frame sets with ids in
+// [first_frame, last_frame], into <takes folder>/<take>/<node>/. An empty take asks for none.
+struct RecordData {
+  std::string take;
+  int64_t first_frame = 0;
+  int64_t last_frame = std::numeric_limits<int64_t>::max();
+  bool operator==(const RecordData&) const = default;
+};
+
+// Why `take` cannot name a take (a folder on every node); empty when it can: 1 to 64 letters,
+// digits, '-', '_' or '.', not starting with '.'.
+std::string takeNameError(std::string_view take);
+
 using MessageBody =
     std::variant<HelloData, HeartbeatData, SilhouettesData, PoseData, VertexStatisticsData,
-                 OffsetsData, PartialImageData, FrameTimestampsData, ViewData>;
+                 OffsetsData, PartialImageData, FrameTimestampsData, ViewData, RecordData>;
 
 struct Message {
   uint16_t version = kProtocolVersion;

@@ -26,6 +26,7 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
       endpoint_(std::move(endpoint)),
       body_(std::move(body)),
       options_(options),
+      takes_(options.takes, rig, name, options.fps),
       sampler_(options.refine) {
   const std::optional<int> node = rig_.findNode(name_);
   if (!node) throw Error("camera node: no node '" + name_ + "' in the rig");
@@ -162,6 +163,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       set->captured_ns = steadyNowNs();
       if (screen_sets_learnt_ < kScreenWarmupSets) learnScreens(*set);
       set->keyers = published_keyers_;
+      takes_.offer(set->frame_id, set->frames);
       sets_.push(set);
       assembling.erase(set->frame_id);
     }
@@ -340,6 +342,8 @@ void CameraNode::run(const std::atomic<bool>& stop) {
         std::lock_guard lock(view_mutex_);
         const ViewData& view = std::get<ViewData>(received->message->body);
         views_[view.view] = view;
+      } else if (received->ok() && std::holds_alternative<RecordData>(received->message->body)) {
+        takes_.command(std::get<RecordData>(received->message->body));
       }
     }
     const auto now = std::chrono::steady_clock::now();
@@ -357,6 +361,7 @@ void CameraNode::run(const std::atomic<bool>& stop) {
         }
       }
       heartbeat.bytes_sent = bytes_sent_;
+      heartbeat.take = takes_.status();
       Message message;
       message.sent_ns = steadyNowNs();
       message.body = std::move(heartbeat);

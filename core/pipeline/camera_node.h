@@ -3,6 +3,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -16,6 +17,7 @@
 #include "core/net/transport.h"
 #include "core/pipeline/bounded_queue.h"
 #include "core/pipeline/silhouettes.h"
+#include "core/pipeline/take_recorder.h"
 #include "core/refine/refinement_sampler.h"
 #include "core/refine/refinement_statistics.h"
 #include "core/render/egl_context.h"
@@ -28,6 +30,10 @@ struct CameraNodeOptions {
   std::chrono::milliseconds heartbeat{250};
   int frames_kept = 8;  // frame sets kept for the statistics (poses arrive a few frames later)
   RefineConfig refine;  // the mesh refinement's parameters (offsets, depth maps, colour bits)
+  // Where the node records the takes the studio asks for (<takes>/<take>/<node>/); empty: it
+  // records none and says so when asked.
+  std::filesystem::path takes;
+  double fps = 25;  // the cameras' frame rate, written with every take
 };
 
 // The node's part of every frame, on the PC that owns the cameras (see DESIGN.md §1):
@@ -37,7 +43,8 @@ struct CameraNodeOptions {
 // (RefinementSampler: outside-silhouette counts, colour counts, sums and squares, compact) —
 // what the studio's refinement module combines exactly across nodes; when the studio's chosen
 // offsets arrive, move the vertices and render the partial image of the refined mesh.
-// Heartbeats carry every camera's counters.
+// Heartbeats carry every camera's counters. Takes the studio asks for are recorded on the node's
+// own disk (TakeRecorder), from the capture thread's complete sets.
 //
 // Threads joined by drop-oldest bounded queues, so that capture, keying and statistics work on
 // different frames at once and a slow stage loses old frames rather than delaying new ones:
@@ -137,6 +144,7 @@ class CameraNode {
   std::mutex kept_mutex_;
   std::map<int64_t, std::shared_ptr<const Set>> kept_;  // sets awaiting their pose
   std::atomic<bool> source_finished_{false};
+  TakeRecorder takes_;
   MessageEncoder encoder_;
   std::vector<Eigen::Affine3f> transforms_;
   Eigen::Matrix3Xf positions_, normals_;

@@ -70,6 +70,7 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
       args.insert(args.end(),
                   {"--session", options_.session.string(), "--replay", options_.replay});
     }
+    if (!options_.takes.empty()) args.insert(args.end(), {"--takes", options_.takes.string()});
     if (options_.plain) {
       args.push_back("--plain");
     } else {

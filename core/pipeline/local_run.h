@@ -22,6 +22,7 @@ struct LocalRunOptions {
   bool plain = false;                 // no CURVE
   std::filesystem::path keys;         // key store; empty: fresh keys in a temporary folder
   std::filesystem::path node_binary;  // lumistage-node; empty: beside this executable
+  std::filesystem::path takes;        // where the nodes record takes; empty: none
   StudioCoordinatorOptions coordinator;
 };
 

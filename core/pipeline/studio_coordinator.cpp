@@ -87,6 +87,32 @@ std::string StudioCoordinator::nodeState(const std::string& node) const {
   return it->second.report.lost ? "lost" : "streaming";
 }
 
+std::string StudioCoordinator::startTake(const std::string& take) {
+  if (std::string error = takeNameError(take); !error.empty()) return error;
+  if (recordingTake()) return "take " + take_.take + " is recording: stop it first";
+  if (take == take_.take) return "take " + take + " was recorded already: give the next a new name";
+  take_ = RecordData{take, std::max<int64_t>(0, newest_seen_ + kTakeLeadFrames)};
+  spdlog::info("take {}: recording from frame {}", take_.take, take_.first_frame);
+  for (auto& [name, node] : nodes_) sendTake(node);
+  return {};
+}
+
+void StudioCoordinator::stopTake() {
+  if (!recordingTake()) return;
+  take_.last_frame = std::max(take_.first_frame, newest_seen_ + kTakeLeadFrames);
+  spdlog::info("take {}: frames {} to {}", take_.take, take_.first_frame, take_.last_frame);
+  for (auto& [name, node] : nodes_) sendTake(node);
+}
+
+void StudioCoordinator::sendTake(NodeState& node) {
+  if (node.report.lost || node.peer.empty() || take_.take.empty()) return;
+  Message message;
+  message.sender = "studio";
+  message.sent_ns = steadyNowNs();
+  message.body = take_;
+  endpoint_.send(node.peer, encoder_.encode(message), std::chrono::milliseconds(5));
+}
+
 void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   const auto node_it = nodes_.find(received.node);
   if (node_it == nodes_.end()) return;  // authorised but not in this rig: ignored
@@ -115,9 +141,17 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     for (const CameraHealthData& c : heartbeat->cameras) {
       node.report.cameras.push_back({c.camera, c.frames, c.dropped, c.frame_rate, c.last_error});
     }
+    node.report.take = heartbeat->take;
+    // A node that missed the take's command (or its stop), or came back during it: again.
+    const TakeStatusData& t = heartbeat->take;
+    if (t.take != take_.take || t.first_frame != take_.first_frame ||
+        t.last_frame != take_.last_frame)
+      sendTake(node);
     return;
   }
-  if (message.frame_id <= newest_done_) return;  // a frame already done or given up
+  if (std::holds_alternative<SilhouettesData>(message.body))
+    newest_seen_ = std::max(newest_seen_, message.frame_id);  // where the cameras are (takes)
+  if (message.frame_id <= newest_done_) return;               // a frame already done or given up
   if (std::find(refused_.begin(), refused_.end(), message.frame_id) != refused_.end())
     return;  // dropped at admission
   if (const auto* silhouettes = std::get_if<SilhouettesData>(&message.body)) {

@@ -56,6 +56,7 @@ struct NodeReport {
   int64_t times_lost = 0;     // how often it was marked lost (and came back, or not)
   int64_t bad_messages = 0;
   double silent_ms = -1;  // since its last message, when reported; < 0: never heard from
+  TakeStatusData take;    // its recording of the take, from the latest heartbeat
 };
 
 // The pipeline's output for a frame: the nodes' partial images normalised and blended.
@@ -132,6 +133,23 @@ class StudioCoordinator {
   // "streaming", "lost" or "unknown" (never heard from).
   std::string nodeState(const std::string& node) const;
 
+  // Takes: every node records its own cameras' frames on its own disk (TakeRecorder), the same
+  // frame ids on every node, from a frame kTakeLeadFrames ahead of the newest the studio has seen
+  // (the command reaches every node before its cameras get there). A node that misses the
+  // command, or comes back during the take, is told again at its next heartbeat. Returns why the
+  // take cannot start (a bad name, one already recording, the name of the last take), empty when
+  // asked.
+  std::string startTake(const std::string& take);
+  // Ends the take kTakeLeadFrames frames ahead of the newest seen, the same on every node; the
+  // nodes close their parts when their cameras pass it. Nothing when no take is recording.
+  void stopTake();
+  // The take asked for (its name empty before the first), and whether it is still recording.
+  const RecordData& take() const { return take_; }
+  bool recordingTake() const {
+    return !take_.take.empty() && take_.last_frame == RecordData{}.last_frame;
+  }
+  static constexpr int64_t kTakeLeadFrames = 15;
+
  private:
   struct FrameState {
     int64_t first_ns = 0;     // steady clock, when the first node's silhouettes arrived
@@ -159,6 +177,7 @@ class StudioCoordinator {
   void finishFrame(int64_t frame_id, FrameState& frame);
   void checkDeadlines(int64_t now_ns);
   void maybeFinish(int64_t frame_id, FrameState& frame);
+  void sendTake(NodeState& node);
 
   Rig rig_;
   StudioEndpoint endpoint_;
@@ -174,6 +193,8 @@ class StudioCoordinator {
   std::map<std::string, NodeState> nodes_;
   MessageEncoder encoder_;
   int64_t newest_done_ = -1;
+  int64_t newest_seen_ = -1;  // the newest frame any node sent silhouettes of
+  RecordData take_;
   std::array<int64_t, 8> refused_{-1, -1, -1, -1, -1, -1, -1, -1};  // the latest frames dropped
   size_t next_refused_ = 0;                                         // at admission (a ring)
   int64_t start_ns_ = 0, last_done_ns_ = 0;

@@ -25,17 +25,58 @@ int runCommand(const std::string& command) {
 }
 
 pid_t startNode(const std::string& name, const fs::path& session, const std::string& studio,
-                const fs::path& keys) {
+                const fs::path& keys, const std::vector<std::string>& more = {}) {
+  std::vector<std::string> args = {LUMISTAGE_NODE, "--node",         name,
+                                   "--session",    session.string(), "--studio",
+                                   studio,         "--keys",         keys.string()};
+  args.insert(args.end(), more.begin(), more.end());
   const pid_t pid = fork();
   if (pid == 0) {
     const int null = ::open("/dev/null", O_WRONLY);
     dup2(null, STDOUT_FILENO);
     dup2(null, STDERR_FILENO);
-    execl(LUMISTAGE_NODE, LUMISTAGE_NODE, "--node", name.c_str(), "--session", session.c_str(),
-          "--studio", studio.c_str(), "--keys", keys.c_str(), static_cast<char*>(nullptr));
+    std::vector<char*> argv;
+    for (std::string& arg : args) argv.push_back(arg.data());
+    argv.push_back(nullptr);
+    execv(LUMISTAGE_NODE, argv.data());
     _exit(127);
   }
   return pid;
+}
+
+// A ring of four 320x240 cameras, one a node, a 12-frame Bayer session of the virtual studio
+// filmed by it, and keys for the nodes: in a fresh folder.
+struct Stage {
+  fs::path folder, session, keys;
+  Rig rig;
+  StudioEndpointConfig endpoint;
+};
+
+Stage makeStage(const std::string& name) {
+  Stage stage;
+  stage.folder =
+      fs::temp_directory_path() / ("lumistage_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(stage.folder);
+  fs::create_directories(stage.folder);
+  const std::string cli = LUMISTAGE_CLI;
+  EXPECT_EQ(runCommand(
+                cli + " rig ring --cameras 4 --cameras-per-node 1 --width 320 --height 240 --out " +
+                (stage.folder / "rig.yaml").string()),
+            0);
+  std::ofstream(stage.folder / "studio.yaml")
+      << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
+         "actor:\n  vertices: 2000\nmotion:\n  clip: walk\n";
+  stage.session = stage.folder / "session";
+  EXPECT_EQ(runCommand(cli + " synth --config " + (stage.folder / "studio.yaml").string() +
+                       " --frames 12 --bayer --out " + stage.session.string()),
+            0);
+  stage.rig = SessionReader(stage.session).rig();
+  stage.keys = stage.folder / "keys";
+  KeyStore(stage.keys).init({"node1", "node2", "node3", "node4"});
+  stage.endpoint.bind = "tcp://127.0.0.1:*";
+  stage.endpoint.studio_key = KeyStore(stage.keys).studioKey();
+  stage.endpoint.authorized = KeyStore(stage.keys).authorizedNodes();
+  return stage;
 }
 
 // Runs the studio until `done` holds or `seconds` pass; true if it held.
@@ -50,30 +91,13 @@ bool runUntil(StudioCoordinator& studio, double seconds, Done done) {
 }
 
 TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
-  const fs::path folder =
-      fs::temp_directory_path() / ("lumistage_pipeline_" + std::to_string(::getpid()));
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  const std::string cli = LUMISTAGE_CLI;
-  ASSERT_EQ(runCommand(
-                cli + " rig ring --cameras 4 --cameras-per-node 1 --width 320 --height 240 --out " +
-                (folder / "rig.yaml").string()),
-            0);
-  std::ofstream(folder / "studio.yaml") << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
-                                           "actor:\n  vertices: 2000\nmotion:\n  clip: walk\n";
-  const fs::path session = folder / "session";
-  ASSERT_EQ(runCommand(cli + " synth --config " + (folder / "studio.yaml").string() +
-                       " --frames 12 --bayer --out " + session.string()),
-            0);
-  const Rig rig = SessionReader(session).rig();
+  const Stage stage = makeStage("pipeline");
+  const fs::path& folder = stage.folder;
+  const fs::path& session = stage.session;
+  const fs::path& keys = stage.keys;
+  const Rig& rig = stage.rig;
   ASSERT_EQ(rig.nodeCount(), 4);
-
-  const fs::path keys = folder / "keys";
-  KeyStore(keys).init({"node1", "node2", "node3", "node4"});
-  StudioEndpointConfig endpoint;
-  endpoint.bind = "tcp://127.0.0.1:*";
-  endpoint.studio_key = KeyStore(keys).studioKey();
-  endpoint.authorized = KeyStore(keys).authorizedNodes();
+  const StudioEndpointConfig& endpoint = stage.endpoint;
   StudioCoordinatorOptions options;
   options.max_frames_in_flight = 2;
   StudioCoordinator studio(rig, endpoint, kHumanJointCount, options);
@@ -165,6 +189,81 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   // camera a node may send about what the camera delivers. The ratio is a figure of the reference
   // rig, measured by `lumistage run` and ./studio bench (README, Figures).
   fs::remove_all(folder);
+}
+
+TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessionTheyFilmed) {
+  const Stage stage = makeStage("take");
+  StudioCoordinator studio(stage.rig, stage.endpoint, kHumanJointCount);
+  const fs::path takes = stage.folder / "takes";
+  std::vector<pid_t> nodes;
+  for (const char* node : {"node1", "node2", "node3", "node4"}) {
+    nodes.push_back(
+        startNode(node, stage.session, studio.endpoint(), stage.keys, {"--takes", takes.string()}));
+  }
+  ASSERT_TRUE(runUntil(studio, 30, [&] {
+    for (const char* node : {"node1", "node2", "node3", "node4"}) {
+      if (studio.nodeState(node) != "streaming") return false;
+    }
+    return studio.framesDone() >= 3;
+  }));
+  EXPECT_NE(studio.startTake("../take"), "");  // a folder name, nothing else
+  ASSERT_EQ(studio.startTake("take-1"), "");
+  EXPECT_EQ(studio.startTake("take-2"), "take take-1 is recording: stop it first");
+  EXPECT_TRUE(studio.recordingTake());
+  // Every node records its camera, and says so in its heartbeats.
+  ASSERT_TRUE(runUntil(studio, 30, [&] {
+    for (const NodeReport& n : studio.report().nodes)
+      if (n.take.take != "take-1" || n.take.written < 10) return false;
+    return true;
+  }));
+  studio.stopTake();
+  EXPECT_FALSE(studio.recordingTake());
+  const RecordData take = studio.take();
+  EXPECT_GE(take.last_frame - take.first_frame + 1, 10);
+  ASSERT_TRUE(runUntil(studio, 20, [&] {
+    for (const NodeReport& n : studio.report().nodes)
+      if (!n.take.finished || n.take.last_frame != take.last_frame) return false;
+    return true;
+  }));
+  for (pid_t pid : nodes) kill(pid, SIGTERM);
+  for (pid_t pid : nodes) waitpid(pid, nullptr, 0);
+
+  const SessionReader filmed(stage.session);
+  std::vector<CameraFrame> truth, frames;
+  for (const NodeReport& n : studio.report().nodes) {
+    EXPECT_EQ(n.take.error, "") << n.name;
+    EXPECT_EQ(n.take.first_frame, take.first_frame) << n.name;
+    // Its part on its disk: the frames asked for, each the camera's image of that instant.
+    const SessionReader part(takes / "take-1" / n.name);
+    EXPECT_EQ(part.frameCount(), n.take.written) << n.name;
+    EXPECT_TRUE(part.warnings().empty()) << n.name;
+    const int camera = *filmed.rig().findCamera(part.rig().camera(0).name());
+    for (int i = 0; i < part.frameCount(); ++i) {
+      EXPECT_GE(part.frameId(i), take.first_frame);
+      EXPECT_LE(part.frameId(i), take.last_frame);
+      part.readFrame(i, frames);
+      filmed.readFrame(static_cast<int>(part.frameId(i) % filmed.frameCount()), truth);
+      EXPECT_EQ(frames[0].image.pixels, truth[camera].image.pixels) << n.name << " " << i;
+    }
+  }
+  // The parts merge into one session of every camera, in the rig's order.
+  const fs::path merged = stage.folder / "merged";
+  ASSERT_EQ(
+      runCommand(std::string(LUMISTAGE_CLI) + " session merge " + (takes / "take-1").string() +
+                 " --out " + merged.string() + " --rig " + (stage.session / "rig.yaml").string()),
+      0);
+  const SessionReader all(merged);
+  EXPECT_EQ(all.rig(), filmed.rig());
+  EXPECT_GE(all.frameCount(), 5);
+  for (int i = 0; i < all.frameCount(); ++i) {
+    all.readFrame(i, frames);
+    filmed.readFrame(static_cast<int>(all.frameId(i) % filmed.frameCount()), truth);
+    for (int c = 0; c < 4; ++c) EXPECT_EQ(frames[c].image.pixels, truth[c].image.pixels) << i;
+  }
+  // A take's name is its folder on every node: not twice.
+  EXPECT_EQ(studio.startTake("take-1"),
+            "take take-1 was recorded already: give the next a new name");
+  fs::remove_all(stage.folder);
 }
 
 }  // namespace

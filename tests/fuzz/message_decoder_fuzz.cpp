@@ -46,6 +46,10 @@ void writeSeeds(const std::string& dir) {
   bodies.push_back(PartialImageData{0, 4, 3, ImageEncoding::kRawRgba, rgba});
   bodies.push_back(PartialImageData{0, 4, 3, ImageEncoding::kRleRgba, encodeRleRgba(rgba)});
   bodies.push_back(FrameTimestampsData{{{"capture", 1}, {"sent", 2}}});
+  bodies.push_back(RecordData{"take-1", 10, 20});
+  HeartbeatData recording;
+  recording.take = {"take-1", 10, 20, 5, 1, 4096, false, ""};
+  bodies.push_back(recording);
   for (size_t i = 0; i < bodies.size(); ++i) {
     Message m;
     m.sender = "node1";

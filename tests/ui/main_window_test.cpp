@@ -7,13 +7,17 @@
 #include <QFile>
 #include <QFileInfo>
 #include <QImage>
+#include <QLabel>
+#include <QLineEdit>
 #include <QListWidget>
 #include <QMouseEvent>
+#include <QPushButton>
 #include <QSettings>
 #include <QTableWidget>
 #include <QTemporaryDir>
 #include <QtTest>
 
+#include "core/capture/session_reader.h"
 #include "core/capture/session_writer.h"
 #include "core/geometry/epipolar.h"
 #include "core/geometry/ring_rig.h"
@@ -185,6 +189,7 @@ class MainWindowTest : public QObject {
     lumistage::LocalRunOptions options;
     options.session = dir.filePath("session").toStdString();
     options.node_binary = LUMISTAGE_NODE;
+    options.takes = dir.filePath("takes").toStdString();
     window.pipeline()->start(options);
     QVERIFY(window.pipeline()->running());
     QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames >= 10, 20000);
@@ -193,6 +198,44 @@ class MainWindowTest : public QObject {
     for (const auto& node : report.nodes) QVERIFY2(!node.lost, node.name.c_str());
     QCOMPARE(window.pipeline()->table()->rowCount(), 4);  // a row per camera
     QCOMPARE(window.pipeline()->table()->item(0, 1)->text(), QString("streaming"));
+
+    // A take, from the panel's button: every node records its cameras into takes/take-001/<node>.
+    auto* take_button = window.pipeline()->findChild<QPushButton*>("record_take");
+    auto* take_name = window.pipeline()->findChild<QLineEdit*>("take_name");
+    auto* take_status = window.pipeline()->findChild<QLabel*>("take_status");
+    QVERIFY(take_button && take_name && take_status);
+    QVERIFY(take_button->isEnabled());
+    QCOMPARE(take_name->text(), QString("take-001"));
+    take_button->click();
+    QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastSnapshot().take_recording, 5000);
+    QTRY_COMPARE_WITH_TIMEOUT(take_button->text(), QString("Stop take"), 2000);
+    QVERIFY2(take_status->text().contains("Recording take take-001"),
+             qPrintable(take_status->text()));
+    auto written = [&] {
+      int64_t least = std::numeric_limits<int64_t>::max();
+      for (const auto& node : window.pipeline()->lastReport().nodes)
+        least = std::min(least, node.take.take == "take-001" ? node.take.written : 0);
+      return least;
+    };
+    QTRY_VERIFY_WITH_TIMEOUT(written() >= 3, 20000);
+    QVERIFY2(window.pipeline()->table()->item(0, 6)->text().contains("sets"),
+             qPrintable(window.pipeline()->table()->item(0, 6)->text()));
+    take_button->click();
+    QTRY_VERIFY_WITH_TIMEOUT(!window.pipeline()->lastSnapshot().take_recording, 5000);
+    QTRY_VERIFY_WITH_TIMEOUT(
+        [&] {
+          for (const auto& node : window.pipeline()->lastReport().nodes)
+            if (!node.take.finished) return false;
+          return true;
+        }(),
+        20000);
+    QCOMPARE(take_name->text(), QString("take-002"));  // the next take's name, offered
+    for (const auto& node : window.pipeline()->lastReport().nodes) {
+      const lumistage::SessionReader part(
+          (dir.filePath("takes/take-001/") + QString::fromStdString(node.name)).toStdString());
+      QCOMPARE(int64_t(part.frameCount()), node.take.written);
+      QVERIFY(part.frameCount() >= 3);
+    }
 
     // The director's view to a file and to a recording, from the viewport's controls.
     lumistage::ViewportPanel* viewport = window.viewport();

@@ -22,8 +22,11 @@ Message envelope(MessageBody body) {
 
 std::vector<Message> oneOfEach() {
   HelloData hello{"node2", {"cam04", "cam05", "cam06"}, kProtocolVersion, {"silhouettes", "rle"}};
-  HeartbeatData heartbeat{
-      {{"cam04", 1000, 3, 29.97f, ""}, {"cam05", 998, 5, 30.f, "timeout"}}, 123456789, 0.42f};
+  HeartbeatData heartbeat{{{"cam04", 1000, 3, 29.97f, ""}, {"cam05", 998, 5, 30.f, "timeout"}},
+                          123456789,
+                          0.42f,
+                          {"take-7", 120, 480, 300, 2, 123456, false, "disk full"}};
+  RecordData record{"take-7", 120, 480};
   SilhouettesData silhouettes;
   silhouettes.masks.push_back({4, 13, 7, std::vector<uint8_t>((13 * 7 + 7) / 8, 0x5a)});
   silhouettes.masks.push_back({5, 8, 8, std::vector<uint8_t>(8, 0xff)});
@@ -56,7 +59,7 @@ std::vector<Message> oneOfEach() {
   FrameTimestampsData stamps{{{"capture", 100}, {"silhouettes", 250}, {"sent", 300}}};
   std::vector<Message> all;
   for (MessageBody body : std::vector<MessageBody>{hello, heartbeat, silhouettes, pose, stats,
-                                                   offsets, raw, rle, stamps, view}) {
+                                                   offsets, raw, rle, stamps, view, record}) {
     all.push_back(envelope(std::move(body)));
   }
   return all;
@@ -246,6 +249,33 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
 
 namespace lumistage {
 namespace {
+
+TEST(MessageCodec, TakeNamesThatAreNotAPlainFolderNameAreRefused) {
+  // A take names a folder on every node's disk: nothing that climbs out of the takes folder,
+  // hides, or needs quoting gets through the decoder.
+  for (const std::string& take :
+       std::vector<std::string>{"../etc", "a/b", ".hidden", "take one", std::string(65, 'a'),
+                                std::string("nul\0byte", 8)}) {
+    EXPECT_NE(decodeError(envelope(RecordData{take, 0, 10})).find("record: take name"),
+              std::string::npos)
+        << take;
+    HeartbeatData heartbeat;
+    heartbeat.take.take = take;
+    EXPECT_NE(decodeError(envelope(heartbeat)).find("heartbeat: take: take name"),
+              std::string::npos)
+        << take;
+  }
+  EXPECT_EQ(decodeError(envelope(RecordData{"a/b", 0, 10})),
+            "record: take name 'a/b' has a character other than letters, digits, '-', '_' and '.'");
+  EXPECT_EQ(decodeError(envelope(RecordData{"t", 10, 9})),
+            "record: frames 10 to 9, expected 0 <= first <= last");
+  EXPECT_EQ(decodeError(envelope(RecordData{"t", -1, 9})),
+            "record: frames -1 to 9, expected 0 <= first <= last");
+  EXPECT_EQ(takeNameError("Take_2026-12-01.a"), "");
+  // An empty take is "none": the stop of every take.
+  const std::vector<uint8_t> bytes = encodeMessage(envelope(RecordData{}));
+  EXPECT_TRUE(decodeMessage(bytes.data(), bytes.size()).ok());
+}
 
 TEST(MessageCodec, MalformedViewsAreRefusedWithTheirReason) {
   Message message;

@@ -1,0 +1,36 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/geometry/rig.h"
+
+namespace lumistage {
+
+// The parts of a take: the folders holding session.yaml among `paths`, where a path without one
+// stands for its sub-folders that hold one (a take folder with a part per node). Sorted by path.
+// Throws Error naming a path that is neither.
+std::vector<std::filesystem::path> takeParts(const std::vector<std::filesystem::path>& paths);
+
+struct TakeMergeReport {
+  int frames = 0;                  // frame sets in the merged session
+  std::vector<std::string> notes;  // per part: the frames it had that others lacked
+  int64_t bytes = 0;               // image bytes written
+};
+
+// Joins the parts of a take that the camera nodes recorded (each a session of its own cameras,
+// core/pipeline/take_recorder.h) into one session of every camera at `out`
+// (docs/session-format.md): the frames whose id every part holds, timestamps from the first
+// part's. Cameras and nodes in the order of `rig` when given (its cameras must be exactly the
+// parts'), else part after part. `progress(done, total)` after each frame. Throws Error naming the
+// part and the reason: parts of different pixel formats or rates, a camera in two parts, no frame
+// in common, `out` not empty.
+TakeMergeReport mergeTake(const std::vector<std::filesystem::path>& parts,
+                          const std::filesystem::path& out, const std::optional<Rig>& rig = {},
+                          const std::function<void(int, int)>& progress = {});
+
+}  // namespace lumistage

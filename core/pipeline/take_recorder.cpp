@@ -1,0 +1,123 @@
+#include "core/pipeline/take_recorder.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/base/error.h"
+#include "core/capture/session_recorder.h"
+
+namespace lumistage {
+
+namespace {
+
+// The node's cameras and the node alone: what its part of a take was filmed with.
+Rig nodeRig(const Rig& rig, const std::string& node) {
+  const std::optional<int> index = rig.findNode(node);
+  if (!index) throw Error("take recorder: no node '" + node + "' in the rig");
+  RigNode part = rig.nodes()[*index];
+  std::vector<Camera> cameras;
+  for (int& c : part.cameras) {
+    cameras.push_back(rig.camera(c));
+    c = static_cast<int>(cameras.size()) - 1;
+  }
+  return Rig(std::move(cameras), {std::move(part)});
+}
+
+}  // namespace
+
+TakeRecorder::TakeRecorder(std::filesystem::path folder, const Rig& rig, std::string node,
+                           double fps)
+    : folder_(std::move(folder)), rig_(nodeRig(rig, node)), node_(std::move(node)), fps_(fps) {}
+
+TakeRecorder::~TakeRecorder() {
+  {
+    std::lock_guard lock(mutex_);
+    close();
+  }
+  if (finisher_.joinable()) finisher_.join();
+}
+
+void TakeRecorder::close() {
+  closed_ = true;
+  if (!recorder_) return;
+  if (finisher_.joinable()) finisher_.join();  // the take before (drained long since)
+  closing_ = std::move(recorder_);
+  closing_done_ = false;
+  finisher_ = std::thread([this, recorder = closing_.get()] {
+    recorder->stop();
+    closing_done_ = true;
+  });
+}
+
+void TakeRecorder::command(const RecordData& record) {
+  std::lock_guard lock(mutex_);
+  if (record.take != wanted_.take) {
+    close();
+    counted_ = nullptr;
+    status_ = {};
+    status_.take = record.take;
+    closed_ = record.take.empty();
+    if (!record.take.empty() && folder_.empty()) {
+      status_.error = "this node records no takes: start it with --takes FOLDER";
+      closed_ = true;
+      spdlog::error("node {}: take {}: {}", node_, record.take, status_.error);
+    }
+  }
+  wanted_ = record;
+  status_.first_frame = record.first_frame;
+  status_.last_frame = record.last_frame;
+}
+
+void TakeRecorder::open(int64_t frame_id, const std::vector<CameraFrame>& frames) {
+  const std::filesystem::path part = folder_ / wanted_.take / node_;
+  try {
+    // A second of sets queued: a disk's hiccup loses nothing (the reference node: 70 MB).
+    const int queue = std::max(8, static_cast<int>(std::ceil(fps_)));
+    recorder_ = std::make_unique<SessionRecorder>(part, rig_, frames.front().image.format, fps_,
+                                                  "lumistage-node " + node_, queue);
+    counted_ = recorder_.get();
+    first_timestamp_ns_ = frames.front().timestamp_ns;
+    spdlog::info("node {}: recording take {} from frame {} into {}", node_, wanted_.take, frame_id,
+                 part.string());
+  } catch (const Error& e) {
+    status_.error = e.what();
+    closed_ = true;
+    spdlog::error("node {}: take {}: {}", node_, wanted_.take, status_.error);
+  }
+}
+
+void TakeRecorder::offer(int64_t frame_id, const std::vector<CameraFrame>& frames) {
+  std::lock_guard lock(mutex_);
+  if (closed_ || wanted_.take.empty() || frames.empty() || frame_id < wanted_.first_frame) return;
+  if (frame_id > wanted_.last_frame) {
+    close();
+    spdlog::info("node {}: take {} closed after frame {}", node_, wanted_.take, wanted_.last_frame);
+    return;
+  }
+  if (!recorder_) open(frame_id, frames);
+  if (!recorder_) return;
+  recorder_->takeSpareImages(images_);
+  images_.resize(frames.size());
+  for (size_t k = 0; k < frames.size(); ++k) images_[k] = frames[k].image;  // reuses the buffers
+  recorder_->push(frame_id, frames.front().timestamp_ns - first_timestamp_ns_, std::move(images_));
+  images_.clear();
+}
+
+TakeStatusData TakeRecorder::status() const {
+  std::lock_guard lock(mutex_);
+  TakeStatusData status = status_;
+  if (counted_ != nullptr) {
+    const RecorderStats stats = counted_->stats();
+    status.written = stats.written;
+    status.dropped = stats.dropped + stats.refused;
+    status.bytes = stats.bytes;
+    if (stats.failed) status.error = stats.last_error;
+  }
+  status.finished = closed_ && (counted_ == nullptr || closing_done_);
+  return status;
+}
+
+}  // namespace lumistage

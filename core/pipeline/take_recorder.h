@@ -1,0 +1,74 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/capture/frame_source.h"
+#include "core/geometry/rig.h"
+#include "core/net/message_codec.h"
+
+namespace lumistage {
+
+class SessionRecorder;
+
+// A camera node's recording of takes, as the studio asks for them (RecordData): the node's own
+// cameras' complete frame sets with ids in [first_frame, last_frame], written on the node's PC to
+// <folder>/<take>/<node>/, a session of the node's cameras (docs/session-format.md) that
+// `lumistage session merge` joins with the other nodes' parts into the take of the whole rig.
+// Nothing of the frames crosses the network: twelve 1024x768 cameras at 25 frames a second are
+// 236 MB/s of raw pixels, more than a studio's link takes.
+//
+// Capture never waits for the disk: sets go through a SessionRecorder (a bounded queue a second
+// of sets deep and its own writer thread; a full queue drops the set and counts it), and a
+// closed take finishes writing its queue on a thread of its own. A write error (disk full) stops
+// that take with the error, and its part stays a valid session up to its last complete set.
+class TakeRecorder {
+ public:
+  // `folder` empty: the node records nothing, and a take asked of it says so in its status.
+  // `fps`: the cameras' frame rate, written in each part's session.yaml.
+  TakeRecorder(std::filesystem::path folder, const Rig& rig, std::string node, double fps);
+  ~TakeRecorder();  // writes what is queued of the open take, then closes it
+  TakeRecorder(const TakeRecorder&) = delete;
+  TakeRecorder& operator=(const TakeRecorder&) = delete;
+
+  // The studio's command (any thread). The same take again moves its frame range (the stop);
+  // another take closes the open one; an empty take closes it and asks for none.
+  void command(const RecordData& record);
+  // A complete set of the node's cameras, in the node's camera order (the capture thread's):
+  // queued when the take asks for its frame. Copies the images into buffers of sets already
+  // written, so it allocates only while warming up.
+  void offer(int64_t frame_id, const std::vector<CameraFrame>& frames);
+  // For heartbeats (any thread).
+  TakeStatusData status() const;
+
+ private:
+  void close();  // under mutex_: the open take stops taking sets and drains on finisher_
+  void open(int64_t frame_id, const std::vector<CameraFrame>& frames);  // under mutex_
+
+  const std::filesystem::path folder_;
+  const Rig rig_;  // the node's cameras only, and the node
+  const std::string node_;
+  const double fps_;
+
+  mutable std::mutex mutex_;
+  RecordData wanted_;  // the studio's latest command
+  TakeStatusData status_;
+  std::unique_ptr<SessionRecorder> recorder_;  // the open take's
+  std::vector<Image> images_;                  // the set being queued, reused
+  const SessionRecorder* counted_ = nullptr;   // the recorder of status_.take (open or closing)
+  int64_t first_timestamp_ns_ = 0;
+  bool closed_ = true;  // the take in status_ takes no more sets (none asked for yet)
+
+  // The closed take, writing its queue out.
+  std::unique_ptr<SessionRecorder> closing_;
+  std::thread finisher_;
+  std::atomic<bool> closing_done_{true};
+};
+
+}  // namespace lumistage

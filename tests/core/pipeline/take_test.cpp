@@ -1,0 +1,204 @@
+// Takes recorded on the nodes (TakeRecorder) and joined into one session (mergeTake), with real
+// files: each node's part holds exactly the frames asked of it, bit-exact, and the parts merge
+// into the session of every camera.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "core/capture/session_reader.h"
+#include "core/capture/take_merge.h"
+#include "core/pipeline/take_recorder.h"
+#include "tests/core/capture/capture_test_util.h"
+#include "tests/test_util.h"
+
+namespace lumistage {
+namespace {
+
+using namespace lumistage::test;
+
+// Three 64x48 cameras, one a node (node1..node3).
+Rig takeRig() {
+  RingRigSpec spec;
+  spec.cameras = 3;
+  spec.cameras_per_node = 1;
+  spec.width = 64;
+  spec.height = 48;
+  return makeRingRig(spec);
+}
+
+// Node n's set of frame f: its camera's image of frameImages(rig, mono8, f).
+std::vector<CameraFrame> nodeSet(const Rig& rig, int node, int64_t f) {
+  const int camera = rig.nodes()[node].cameras[0];
+  std::vector<CameraFrame> set(1);
+  set[0].camera = camera;
+  set[0].frame_id = f;
+  set[0].timestamp_ns = timestampOf(f);
+  set[0].image = frameImages(rig, PixelFormat::kMono8, f)[camera];
+  return set;
+}
+
+// Waits (at most 10 s) until the recorder has closed its take.
+TakeStatusData finished(const TakeRecorder& recorder) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!recorder.status().finished && std::chrono::steady_clock::now() < end)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  return recorder.status();
+}
+
+TEST(Take, NodesRecordTheAskedFramesAndTheirPartsMergeBitExact) {
+  const Rig rig = takeRig();
+  const fs::path folder = testing::testFolder("take");
+  std::vector<std::unique_ptr<TakeRecorder>> nodes;
+  for (const RigNode& node : rig.nodes())
+    nodes.push_back(std::make_unique<TakeRecorder>(folder / "takes", rig, node.name, 30.0));
+  for (auto& node : nodes) node->command({"take-1", 5});
+  for (int64_t f = 0; f < 20; ++f) {
+    if (f == 12) {
+      for (auto& node : nodes) node->command({"take-1", 5, 14});  // the stop
+    }
+    for (int n = 0; n < 3; ++n) {
+      if (n == 2 && f == 8) continue;  // node3's cameras lost frame 8
+      nodes[n]->offer(f, nodeSet(rig, n, f));
+    }
+  }
+  for (int n = 0; n < 3; ++n) {
+    const TakeStatusData status = finished(*nodes[n]);
+    EXPECT_TRUE(status.finished);
+    EXPECT_EQ(status.take, "take-1");
+    EXPECT_EQ(status.first_frame, 5);
+    EXPECT_EQ(status.last_frame, 14);
+    EXPECT_EQ(status.written, n == 2 ? 9 : 10);
+    EXPECT_EQ(status.dropped, 0);
+    EXPECT_GT(status.bytes, 0);
+    EXPECT_EQ(status.error, "");
+    // The part: a session of the node's own camera, frames 5 to 14, bit-exact.
+    const SessionReader part(folder / "takes" / "take-1" / rig.nodes()[n].name);
+    ASSERT_EQ(part.rig().cameraCount(), 1);
+    const int camera = rig.nodes()[n].cameras[0];
+    EXPECT_EQ(part.rig().camera(0).name(), rig.camera(camera).name());
+    EXPECT_EQ(part.rig().nodes()[0].name, rig.nodes()[n].name);
+    ASSERT_EQ(part.frameCount(), n == 2 ? 9 : 10);
+    EXPECT_EQ(part.frameId(0), 5);
+    EXPECT_EQ(part.frameId(part.frameCount() - 1), 14);
+    std::vector<CameraFrame> frames;
+    for (int i = 0; i < part.frameCount(); ++i) {
+      part.readFrame(i, frames);
+      EXPECT_EQ(frames[0].image.pixels,
+                frameImages(rig, PixelFormat::kMono8, part.frameId(i))[camera].pixels);
+    }
+  }
+  nodes.clear();
+
+  const std::vector<fs::path> parts = takeParts({folder / "takes" / "take-1"});
+  ASSERT_EQ(parts.size(), 3u);
+  const TakeMergeReport report = mergeTake(parts, folder / "merged", rig);
+  EXPECT_EQ(report.frames, 9);  // frame 8 is not in every part
+  ASSERT_EQ(report.notes.size(), 2u);
+  EXPECT_NE(report.notes[0].find("node1: 1 of its 10 frames are not in every part"),
+            std::string::npos)
+      << report.notes[0];
+  const SessionReader merged(folder / "merged");
+  EXPECT_EQ(merged.rig(), rig);
+  ASSERT_EQ(merged.frameCount(), 9);
+  std::vector<CameraFrame> frames;
+  for (int i = 0; i < merged.frameCount(); ++i) {
+    const int64_t f = merged.frameId(i);
+    EXPECT_NE(f, 8);
+    EXPECT_EQ(merged.timestampNs(i), timestampOf(f) - timestampOf(5));
+    merged.readFrame(i, frames);
+    const std::vector<Image> truth = frameImages(rig, PixelFormat::kMono8, f);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(frames[c].image.pixels, truth[c].pixels) << f << c;
+  }
+}
+
+TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
+  const Rig rig = takeRig();
+  const fs::path folder = testing::testFolder("take");
+
+  // Started without a takes folder.
+  TakeRecorder nowhere({}, rig, "node1", 30.0);
+  nowhere.command({"take-1", 0});
+  nowhere.offer(0, nodeSet(rig, 0, 0));
+  EXPECT_EQ(nowhere.status().error, "this node records no takes: start it with --takes FOLDER");
+  EXPECT_TRUE(nowhere.status().finished);
+  EXPECT_EQ(nowhere.status().written, 0);
+
+  // The take's folder holds files already (a take of that name, recorded before): untouched.
+  const fs::path old = folder / "takes" / "take-1" / "node1";
+  fs::create_directories(old);
+  std::ofstream(old / "keep.txt") << "an earlier take";
+  TakeRecorder taken(folder / "takes", rig, "node1", 30.0);
+  taken.command({"take-1", 0});
+  taken.offer(0, nodeSet(rig, 0, 0));
+  const TakeStatusData status = taken.status();
+  EXPECT_NE(status.error.find(old.string()), std::string::npos) << status.error;
+  EXPECT_TRUE(status.finished);
+  EXPECT_EQ(readFile(old / "keep.txt"), "an earlier take");
+
+  // A new take closes the open one, complete; no take (an empty name) closes it too.
+  TakeRecorder recorder(folder / "takes", rig, "node2", 30.0);
+  recorder.command({"a", 0});
+  for (int64_t f = 0; f < 4; ++f) recorder.offer(f, nodeSet(rig, 1, f));
+  recorder.command({"b", 0});
+  EXPECT_EQ(recorder.status().take, "b");
+  EXPECT_EQ(recorder.status().written, 0);
+  for (int64_t f = 4; f < 6; ++f) recorder.offer(f, nodeSet(rig, 1, f));
+  recorder.command({});
+  EXPECT_TRUE(finished(recorder).finished);
+  recorder.offer(6, nodeSet(rig, 1, 6));
+  EXPECT_EQ(SessionReader(folder / "takes" / "a" / "node2").frameCount(), 4);
+  EXPECT_EQ(SessionReader(folder / "takes" / "b" / "node2").frameCount(), 2);
+}
+
+TEST(Take, PartsThatDoNotBelongTogetherAreRefusedByName) {
+  const Rig rig = takeRig();
+  const fs::path folder = testing::testFolder("take");
+  // Each part a session of one node's camera.
+  auto part = [&](const std::string& name, int node, PixelFormat format, int64_t first, int count) {
+    const int camera = rig.nodes()[node].cameras[0];
+    RigNode only = rig.nodes()[node];
+    only.cameras = {0};
+    const Rig part_rig({rig.camera(camera)}, {only});
+    SessionWriter writer(folder / name, part_rig, format, 30.0, "test");
+    for (int64_t f = first; f < first + count; ++f)
+      writer.writeFrame(f, timestampOf(f), {frameImages(rig, format, f)[camera].view()});
+    return folder / name;
+  };
+  const fs::path a = part("a", 0, PixelFormat::kMono8, 0, 3);
+  const fs::path b = part("b", 1, PixelFormat::kMono8, 2, 3);
+  const fs::path rgb = part("rgb", 2, PixelFormat::kRgb8, 0, 3);
+  const fs::path late = part("late", 2, PixelFormat::kMono8, 5, 3);
+  const fs::path again = part("again", 0, PixelFormat::kMono8, 0, 3);
+
+  EXPECT_EQ(
+      testing::errorOf([&] {
+        mergeTake({a, rgb}, folder / "out1");
+      }),
+      "take: " + rgb.string() + ": rgb8 at 30 fps, but " + a.string() + " is mono8 at 30 fps");
+  EXPECT_EQ(testing::errorOf([&] {
+              mergeTake({a, again}, folder / "out2");
+            }),
+            "take: camera " + rig.camera(0).name() + " is in both " + a.string() + " and " +
+                again.string());
+  EXPECT_EQ(testing::errorOf([&] {
+              mergeTake({a, late}, folder / "out3");
+            }),
+            "take: the 2 parts have no frame in common (first part: " + a.string() + ")");
+  EXPECT_EQ(testing::errorOf([&] {
+              mergeTake({a, b}, folder / "out4", rig);
+            }),
+            "take: the rig's camera " + rig.camera(2).name() + " is in none of the parts");
+  EXPECT_NE(testing::errorOf([&] { takeParts({folder / "nothing"}); }).find("no such folder"),
+            std::string::npos);
+  // Frames 2 of a and b in common; the out folder must be new.
+  EXPECT_EQ(mergeTake({a, b}, folder / "out5").frames, 1);
+  EXPECT_NE(testing::errorOf([&] {
+              mergeTake({a, b}, folder / "out5");
+            }).find("out5"),
+            std::string::npos);
+  EXPECT_EQ(SessionReader(folder / "out5").frameCount(), 1);
+}
+
+}  // namespace
+}  // namespace lumistage
