@@ -88,7 +88,9 @@ void PipelineWorker::stopTake() {
 void PipelineWorker::run() {
   try {
     LocalPipelineRun pipeline(options_);
-    emit message(tr("Pipeline running: %1 nodes, studio at %2")
+    emit message((pipeline.nodesElsewhere()
+                      ? tr("Studio at %2: waiting for the rig's %1 nodes on the stage's PCs")
+                      : tr("Pipeline running: %1 nodes, studio at %2"))
                      .arg(pipeline.nodeNames().size())
                      .arg(QString::fromStdString(pipeline.studio().endpoint())));
     // The body the studio places, to draw over the views: the generic human (as the nodes use).
@@ -193,8 +195,13 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   qRegisterMetaType<lumistage::PipelineSnapshot>();
   summary_->setWordWrap(true);
   summary_->setObjectName("pipeline_summary");
-  source_->addItems(
-      {tr("Virtual studio (demo session)"), tr("Recorded session..."), tr("Aravis cameras...")});
+  source_->addItems({tr("Virtual studio (demo session)"), tr("Recorded session..."),
+                     tr("Aravis cameras..."), tr("Nodes on the stage's PCs...")});
+  source_->setItemData(3,
+                       tr("The nodes run on the camera PCs (lumistage-node --studio, or their "
+                          "systemd unit); the studio listens for them with the keys they were "
+                          "given"),
+                       Qt::ToolTipRole);
   table_->setColumnCount(8);
   table_->setHorizontalHeaderLabels({tr("Node"), tr("State"), tr("Camera"), tr("fps"), tr("Frames"),
                                      tr("Dropped"), tr("Take"), tr("Last error")});
@@ -268,6 +275,24 @@ void PipelinePanel::startChosen() {
       options.session = folder.toStdString();
       break;
     }
+    case 3: {
+      const QString rig = QFileDialog::getOpenFileName(this, tr("The stage's rig file"), {},
+                                                       tr("Rig files (*.yaml *.yml)"));
+      if (rig.isEmpty()) return;
+      const QString keys = QFileDialog::getExistingDirectory(
+          this, tr("The key store the nodes were given (lumistage keys init)"));
+      if (keys.isEmpty()) return;
+      bool ok = false;
+      const QString listen = QInputDialog::getText(
+          this, tr("Nodes on the stage's PCs"),
+          tr("Listen for the nodes at (their --studio, with this PC's name):"), QLineEdit::Normal,
+          "tcp://*:5570", &ok);
+      if (!ok || listen.isEmpty()) return;
+      options.rig = rig.toStdString();
+      options.keys = keys.toStdString();
+      options.listen = listen.toStdString();
+      break;
+    }
     default: {
       const QString rig = QFileDialog::getOpenFileName(this, tr("The cameras' rig file"), {},
                                                        tr("Rig files (*.yaml *.yml)"));
@@ -287,7 +312,9 @@ void PipelinePanel::startChosen() {
 
 void PipelinePanel::start(LocalRunOptions options) {
   stop();
-  if (options.takes.empty()) options.takes = takes_folder_.toStdString();
+  // Nodes started here record takes into the studio's folder; nodes on the stage's PCs into
+  // their own (lumistage-node --takes).
+  if (options.takes.empty() && options.listen.empty()) options.takes = takes_folder_.toStdString();
   thread_ = new QThread(this);
   worker_ = new PipelineWorker(std::move(options));
   worker_->moveToThread(thread_);
@@ -387,13 +414,16 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   last_ = s;
   take_button_->setText(s.take_recording ? tr("Stop take") : tr("Record take"));
   take_name_->setEnabled(!s.take_recording);
+  const QString takes = s.takes_folder.isEmpty()
+                            ? tr("its own takes folder (lumistage-node --takes)")
+                            : s.takes_folder.toHtmlEscaped();
   if (s.take.take.empty()) {
     take_status_->setText(tr("Takes are recorded by every node into %1/&lt;take&gt;/&lt;node&gt;/; "
                              "lumistage session merge joins them.")
-                              .arg(s.takes_folder.toHtmlEscaped()));
+                              .arg(takes));
   } else {
     const QString take = QString::fromStdString(s.take.take);
-    const QString folder = (s.takes_folder + "/" + take).toHtmlEscaped();
+    const QString folder = takes + "/" + take.toHtmlEscaped();
     int64_t sets = 0, dropped = 0, closed = 0, failed = 0;
     for (const NodeReport& n : s.report.nodes) {
       if (n.take.take != s.take.take) continue;

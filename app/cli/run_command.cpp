@@ -95,8 +95,15 @@ void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
                t.bytes / 1e6, t.dropped, t.finished ? "" : ", not closed",
                t.error.empty() ? "" : ", " + t.error);
   }
-  fmt::print("join the nodes' parts with: lumistage session merge {} --out {}-session\n", folder,
-             folder);
+  if (pipeline.nodesElsewhere()) {
+    fmt::print(
+        "each node wrote its part to its own TAKES/{}/<node>/: gather them into one folder "
+        "and join them with lumistage session merge\n",
+        take.take);
+  } else {
+    fmt::print("join the nodes' parts with: lumistage session merge {} --out {}-session\n", folder,
+               folder);
+  }
 }
 
 }  // namespace
@@ -104,7 +111,7 @@ void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
 void addRunCommand(CLI::App& app) {
   struct Args {
     std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size,
-                                     record_view, record_take;
+                                     record_view, record_take, listen;
     int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
     int64_t frames = 150;
     double seconds = 60;
@@ -118,6 +125,9 @@ void addRunCommand(CLI::App& app) {
   run->add_option("--rig", a->rig, "or live Aravis cameras: the rig...");
   run->add_option("--address", a->address,
                   "...and its first camera's address (camera i at ADDRESS+i)");
+  run->add_option("--listen", a->listen,
+                  "or nodes on the stage's PCs: listen for them here (e.g. tcp://*:5570), with "
+                  "--rig and --keys; no node process is started on this machine");
   run->add_option("--nodes", a->nodes, "how many of the rig's nodes to start (default: all)");
   run->add_option("--frames", a->frames, "stop after this many complete frames")
       ->capture_default_str();
@@ -147,7 +157,11 @@ void addRunCommand(CLI::App& app) {
                   "DIR/<node>/ from the first frame done to the end (lumistage session merge "
                   "DIR joins them)");
   run->callback([a] {
-    if (a->session.empty() == (a->rig.empty() || a->address.empty())) {
+    if (!a->listen.empty()) {
+      if (a->rig.empty() || !a->session.empty() || !a->address.empty())
+        throw CLI::ValidationError("--listen",
+                                   "give --rig FILE (the nodes bring their own cameras)");
+    } else if (a->session.empty() == (a->rig.empty() || a->address.empty())) {
       throw CLI::ValidationError("--session",
                                  "give either --session DIR, or --rig FILE with --address A");
     }
@@ -159,6 +173,7 @@ void addRunCommand(CLI::App& app) {
     options.nodes = a->nodes;
     options.plain = a->plain;
     options.keys = a->keys;
+    options.listen = a->listen;
     options.coordinator.max_frames = a->frames;
     std::string take;
     if (!a->record_take.empty()) {
@@ -204,8 +219,13 @@ void addRunCommand(CLI::App& app) {
     auto wall_start = std::chrono::steady_clock::now();
     bool measuring = false;
     double nodes_cpu = 0;
-    fmt::print("studio at {} ({}), starting {} nodes\n", studio.endpoint(),
-               a->plain ? "plain" : "CURVE", pipeline.nodeNames().size());
+    if (pipeline.nodesElsewhere()) {
+      fmt::print("studio at {} ({}), waiting for the rig's {} nodes\n", studio.endpoint(),
+                 a->plain ? "plain" : "CURVE", pipeline.nodeNames().size());
+    } else {
+      fmt::print("studio at {} ({}), starting {} nodes\n", studio.endpoint(),
+                 a->plain ? "plain" : "CURVE", pipeline.nodeNames().size());
+    }
     // Run in slices, watching the clock and the node processes: a node that exits (bad session,
     // wrong key file...) is reported; when none is left, stop.
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);

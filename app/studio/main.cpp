@@ -64,12 +64,21 @@ int main(int argc, char** argv) {
                                    "source", "virtual");
   QCommandLineOption screenshot_option(
       "screenshot",
-      "Save a screenshot of the main window to <png> once every camera shows a picture, then quit.",
+      "Save a screenshot of the main window to <png> once every camera shows a picture (and a "
+      "pipeline started with the studio has shown frames), then quit.",
       "png");
   QCommandLineOption pipeline_option(
       "pipeline",
       "Also run the distributed pipeline on a recorded session: a node process per rig node.",
       "session");
+  QCommandLineOption listen_option(
+      "listen",
+      "Run the distributed pipeline with the nodes on the stage's PCs (lumistage-node --studio, "
+      "or their systemd unit): listen for them at <endpoint> (e.g. tcp://*:5570), with --rig and "
+      "--keys.",
+      "endpoint");
+  QCommandLineOption keys_option(
+      "keys", "With --listen: the key store the nodes were given (lumistage keys init).", "dir");
   QCommandLineOption demo_option(
       "demo",
       "The demo: film the virtual studio once (a short session, kept in the cache folder), replay "
@@ -89,6 +98,8 @@ int main(int argc, char** argv) {
   parser.addOption(rig_option);
   parser.addOption(source_option);
   parser.addOption(pipeline_option);
+  parser.addOption(listen_option);
+  parser.addOption(keys_option);
   parser.addOption(screenshot_option);
   parser.process(app);
 
@@ -127,6 +138,14 @@ int main(int argc, char** argv) {
     }
     spec.rig = parser.value(rig_option);
     window.startSource(spec);
+  }
+  if (parser.isSet(listen_option)) {
+    lumistage::LocalRunOptions options;
+    options.rig = rig_path.toStdString();
+    options.keys = parser.value(keys_option).toStdString();
+    options.listen = parser.value(listen_option).toStdString();
+    window.pipeline()->start(options);
+    window.showPipeline();
   }
   if (parser.isSet(pipeline_option)) {
     lumistage::LocalRunOptions options;
@@ -290,9 +309,13 @@ int main(int argc, char** argv) {
     clock.start();
     QObject::connect(timer, &QTimer::timeout, &window, [&window, png, clock, source, timer] {
       const auto* grid = window.cameraGrid();
-      const bool ready = source == "none" || (grid->cameraCount() > 0 &&
-                                              grid->camerasWithPictures() == grid->cameraCount() &&
-                                              clock.elapsed() > 5000);
+      // A pipeline started with the studio (--pipeline, --listen): once it has shown frames.
+      const bool pipeline_ready =
+          !window.pipeline()->running() || window.pipeline()->lastReport().frames >= 10;
+      const bool ready = pipeline_ready &&
+                         (source == "none" || (grid->cameraCount() > 0 &&
+                                               grid->camerasWithPictures() == grid->cameraCount() &&
+                                               clock.elapsed() > 5000));
       if (!ready && clock.elapsed() < 60000) return;
       timer->stop();
       const bool ok = window.grab().save(png);

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -23,7 +24,15 @@ namespace lumistage {
 namespace fs = std::filesystem;
 
 LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move(options)) {
-  if (options_.session.empty() == (options_.rig.empty() || options_.address.empty())) {
+  if (!options_.listen.empty()) {
+    if (options_.rig.empty() || !options_.session.empty() || !options_.address.empty())
+      throw Error("pipeline: nodes on the network need the rig file, and their own cameras");
+    if (options_.keys.empty() && !options_.plain) {
+      throw Error(
+          "pipeline: nodes on the network need the key store they were given (lumistage keys "
+          "init), or --plain on a closed network");
+    }
+  } else if (options_.session.empty() == (options_.rig.empty() || options_.address.empty())) {
     throw Error("pipeline: give a session, or a rig with the first camera's address");
   }
   std::optional<SessionReader> reader;
@@ -37,7 +46,7 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
   for (int n = 0; n < node_count; ++n) names_.push_back(rig_.nodes()[n].name);
 
   StudioEndpointConfig endpoint;
-  endpoint.bind = "tcp://127.0.0.1:*";
+  endpoint.bind = options_.listen.empty() ? "tcp://127.0.0.1:*" : options_.listen;
   keys_ = options_.keys;
   if (options_.plain) {
     endpoint.security = TransportSecurity::kPlain;
@@ -58,6 +67,7 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
   studio_ =
       std::make_unique<StudioCoordinator>(rig_, endpoint, kHumanJointCount, options_.coordinator);
 
+  if (nodesElsewhere()) return;  // they connect by themselves
   std::string node_binary = options_.node_binary.string();
   if (node_binary.empty())
     node_binary = (fs::read_symlink("/proc/self/exe").parent_path() / "lumistage-node").string();
@@ -149,6 +159,7 @@ double LocalPipelineRun::nodeCpuSeconds() const {
 }
 
 bool LocalPipelineRun::anyNodeRunning() const {
+  if (nodesElsewhere()) return true;
   for (bool r : running_) {
     if (r) return true;
   }
@@ -156,6 +167,7 @@ bool LocalPipelineRun::anyNodeRunning() const {
 }
 
 bool LocalPipelineRun::nodeRunning(const std::string& name) const {
+  if (nodesElsewhere()) return std::find(names_.begin(), names_.end(), name) != names_.end();
   for (size_t n = 0; n < names_.size(); ++n) {
     if (names_[n] == name) return running_[n];
   }

@@ -23,16 +23,21 @@ struct LocalRunOptions {
   std::filesystem::path keys;         // key store; empty: fresh keys in a temporary folder
   std::filesystem::path node_binary;  // lumistage-node; empty: beside this executable
   std::filesystem::path takes;        // where the nodes record takes; empty: none
+  // Nodes on the stage's PCs instead (lumistage-node --studio, e.g. from its systemd unit): the
+  // studio listens here (e.g. tcp://*:5570) for the rig's nodes and starts no node process; needs
+  // `rig` and the key store they were given (or `plain`).
+  std::string listen;
   StudioCoordinatorOptions coordinator;
 };
 
 // The whole distributed pipeline on one machine: the studio's coordinator in this process and a
 // lumistage-node process per rig node, with keys. What `lumistage run` and the studio's pipeline
 // panel drive. Node processes that exit are reported (their own messages go to stderr); the rest
-// go on.
+// go on. With `listen`, the studio's side alone, for nodes running on the stage's PCs.
 class LocalPipelineRun {
  public:
-  // Throws Error naming what is missing (session, rig, keys) or what cannot start.
+  // Throws Error naming what is missing (session, rig, keys) or what cannot start (a listen
+  // address already in use).
   explicit LocalPipelineRun(LocalRunOptions options);
   ~LocalPipelineRun();  // stops the nodes, removes temporary keys
   LocalPipelineRun(const LocalPipelineRun&) = delete;
@@ -42,14 +47,17 @@ class LocalPipelineRun {
   void runFor(std::chrono::milliseconds duration);
   // "node node3 exited (status 1)" for each node that exited since the last call.
   std::vector<std::string> takeExits();
+  // Whether a node process started here still runs (always, for nodes on other PCs).
   bool anyNodeRunning() const;
   // CPU time (user + system, seconds) the running node processes have used so far.
   double nodeCpuSeconds() const;
-  // Whether the process of a node is still running (false for a name not run here).
+  // Whether the process of a node is still running (false for a name not run here; true for a
+  // node on another PC: the studio's node state says whether it streams).
   bool nodeRunning(const std::string& name) const;
   // Kills a node's process at once (SIGKILL), as pulling its plug would stop it: what a test or a
   // technician uses to check that the studio notices. False when it is not running.
   bool killNode(const std::string& name);
+  bool nodesElsewhere() const { return !options_.listen.empty(); }
 
   // The cameras' frame rate: the session's; live cameras are taken to run at 30.
   double frameRate() const { return frame_rate_; }

@@ -338,6 +338,42 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
   fs::remove_all(folder);
 }
 
+// A real stage: the nodes run on their own PCs (here: processes started apart, as systemd would)
+// and connect to a studio that listens for them, with the key store they were given.
+TEST(Cli, RunListensForNodesStartedOnTheStagesPCs) {
+  const fs::path folder = tempPath("listen");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
+                               "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
+  const fs::path keys = folder / "keys";
+  ASSERT_EQ(run(kCli + " keys init --dir " + keys.string() + " --nodes node1,node2").exit_code, 0);
+  const std::string studio =
+      "tcp://127.0.0.1:" + std::to_string(20000 + ::getpid() % 30000);  // free, most likely
+  std::string nodes, pids;
+  for (const char* node : {"node1", "node2"}) {
+    nodes += kNode + " --node " + node + " --session " + (folder / "session").string() +
+             " --studio " + studio + " --keys " + keys.string() + " > /dev/null 2>&1 & " + node +
+             "=$!; ";
+    pids += std::string(" $") + node;
+  }
+  const Result r =
+      run("(" + nodes + kCli + " run --rig " + (folder / "session/rig.yaml").string() +
+          " --listen " + studio + " --keys " + keys.string() +
+          " --frames 15 --seconds 40; status=$?; kill" + pids + "; wait; exit $status)");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("studio at " + studio + " (CURVE), waiting for the rig's 2 nodes"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("15 frames in all"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("node node2    streaming"), std::string::npos) << r.output;
+  // Without the key store the nodes have, nobody could join: said before listening.
+  const Result no_keys = run(kCli + " run --rig " + (folder / "session/rig.yaml").string() +
+                             " --listen " + studio + " --frames 1 --seconds 1");
+  EXPECT_NE(no_keys.exit_code, 0);
+  EXPECT_NE(no_keys.output.find("need the key store they were given"), std::string::npos)
+      << no_keys.output;
+  fs::remove_all(folder);
+}
+
 }  // namespace
 }  // namespace lumistage
 
