@@ -99,11 +99,13 @@ void TakeRecorder::offer(int64_t frame_id, const std::vector<CameraFrame>& frame
   }
   if (!recorder_) open(frame_id, frames);
   if (!recorder_) return;
-  recorder_->takeSpareImages(images_);
+  if (images_.empty()) recorder_->takeSpareImages(images_);  // a written set's buffers
   images_.resize(frames.size());
   for (size_t k = 0; k < frames.size(); ++k) images_[k] = frames[k].image;  // reuses the buffers
-  recorder_->push(frame_id, frames.front().timestamp_ns - first_timestamp_ns_, std::move(images_));
-  images_.clear();
+  // Queued: moved from. Dropped (the queue is full): kept for the next set.
+  if (recorder_->push(frame_id, frames.front().timestamp_ns - first_timestamp_ns_,
+                      std::move(images_)))
+    images_.clear();
 }
 
 TakeStatusData TakeRecorder::status() const {
