@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <set>
@@ -37,6 +38,17 @@ std::vector<fs::path> takeParts(const std::vector<fs::path>& paths) {
   return parts;
 }
 
+namespace {
+
+// The cameras' names of a part, in its order.
+std::vector<std::string> cameraNames(const Rig& rig) {
+  std::vector<std::string> names;
+  for (const Camera& camera : rig.cameras()) names.push_back(camera.name());
+  return names;
+}
+
+}  // namespace
+
 TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& out,
                           const std::optional<Rig>& rig,
                           const std::function<void(int, int)>& progress) {
@@ -45,7 +57,9 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
   for (const fs::path& part : parts) readers.push_back(std::make_unique<SessionReader>(part));
   const SessionReader& first = *readers.front();
 
-  // Every camera once, at its place in the merged rig: (part, camera in the part).
+  // Parts of the same cameras (a node's part and its continuations after a restart) form a
+  // group; every camera is in one group, at its place in the merged rig: (group, camera).
+  std::vector<std::vector<size_t>> groups;  // parts, in path order
   std::map<std::string, std::pair<size_t, int>> owner;
   std::vector<Camera> cameras;
   std::vector<RigNode> nodes;
@@ -56,14 +70,22 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
                               pixelFormatName(r.pixelFormat()), r.fps(), parts[0].string(),
                               pixelFormatName(first.pixelFormat()), first.fps()));
     }
-    for (int c = 0; c < r.rig().cameraCount(); ++c) {
-      const std::string& name = r.rig().camera(c).name();
-      if (const auto it = owner.find(name); it != owner.end()) {
-        throw Error("take: camera " + name + " is in both " + parts[it->second.first].string() +
-                    " and " + parts[p].string());
-      }
-      owner[name] = {p, c};
+    const std::vector<std::string> names = cameraNames(r.rig());
+    size_t g = 0;
+    while (g < groups.size() && cameraNames(readers[groups[g].front()]->rig()) != names) ++g;
+    if (g < groups.size()) {
+      groups[g].push_back(p);
+      continue;
     }
+    for (size_t k = 0; k < names.size(); ++k) {
+      if (const auto it = owner.find(names[k]); it != owner.end()) {
+        throw Error("take: camera " + names[k] + " is in both " +
+                    parts[groups[it->second.first].front()].string() + " and " + parts[p].string() +
+                    " with other cameras");
+      }
+      owner[names[k]] = {groups.size(), static_cast<int>(k)};
+    }
+    groups.push_back({p});
     for (RigNode node : r.rig().nodes()) {
       for (int& c : node.cameras) c += static_cast<int>(cameras.size());
       nodes.push_back(std::move(node));
@@ -80,7 +102,7 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
     }
     for (const auto& [name, where] : owner) {
       if (!names.count(name))
-        throw Error("take: camera " + name + " of " + parts[where.first].string() +
+        throw Error("take: camera " + name + " of " + parts[groups[where.first].front()].string() +
                     " is not in the rig");
     }
     merged_rig = *rig;
@@ -88,15 +110,35 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
     merged_rig = Rig(std::move(cameras), std::move(nodes));
   }
 
-  // The frames every part holds.
-  std::vector<std::map<int64_t, int>> index(readers.size());  // frame id -> frame in the part
-  for (size_t p = 0; p < readers.size(); ++p) {
-    for (int i = 0; i < readers[p]->frameCount(); ++i) index[p][readers[p]->frameId(i)] = i;
+  // Per group, every frame its parts hold: frame id -> (part, frame in the part). A part's
+  // timestamps count from its own start: a continuation's are moved to follow the part before
+  // it at the session's rate across the frames between them.
+  std::vector<std::map<int64_t, std::pair<size_t, int>>> index(groups.size());
+  std::vector<int64_t> offset_ns(readers.size(), 0);
+  for (size_t g = 0; g < groups.size(); ++g) {
+    std::vector<size_t>& group = groups[g];
+    std::erase_if(group, [&](size_t p) { return readers[p]->frameCount() == 0; });
+    if (group.empty()) continue;
+    std::sort(group.begin(), group.end(),
+              [&](size_t a, size_t b) { return readers[a]->frameId(0) < readers[b]->frameId(0); });
+    for (size_t k = 1; k < group.size(); ++k) {
+      const SessionReader& before = *readers[group[k - 1]];
+      const SessionReader& part = *readers[group[k]];
+      const int last = before.frameCount() - 1;
+      offset_ns[group[k]] =
+          offset_ns[group[k - 1]] + before.timestampNs(last) - part.timestampNs(0) +
+          std::llround(double(part.frameId(0) - before.frameId(last)) * 1e9 / first.fps());
+    }
+    for (const size_t p : group) {
+      for (int i = 0; i < readers[p]->frameCount(); ++i)
+        index[g].emplace(readers[p]->frameId(i), std::make_pair(p, i));  // the earlier part's
+    }
   }
+  // The frames every group holds.
   std::vector<int64_t> common;
-  for (const auto& [id, i] : index[0]) {
+  for (const auto& [id, where] : index[0]) {
     bool everywhere = true;
-    for (size_t p = 1; p < readers.size(); ++p) everywhere = everywhere && index[p].count(id);
+    for (size_t g = 1; g < groups.size(); ++g) everywhere = everywhere && index[g].count(id);
     if (everywhere) common.push_back(id);
   }
   if (common.empty()) {
@@ -104,11 +146,12 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
                             parts.size(), parts[0].string()));
   }
   TakeMergeReport report;
-  for (size_t p = 0; p < readers.size(); ++p) {
-    const size_t extra = index[p].size() - common.size();
+  for (size_t g = 0; g < groups.size(); ++g) {
+    const size_t extra = index[g].size() - common.size();
     if (extra > 0) {
       report.notes.push_back(fmt::format("{}: {} of its {} frames are not in every part, left out",
-                                         parts[p].string(), extra, index[p].size()));
+                                         parts[groups[g].front()].string(), extra,
+                                         index[g].size()));
     }
   }
 
@@ -116,15 +159,24 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
                        fmt::format("take of {} parts", parts.size()));
   std::vector<std::vector<CameraFrame>> frames(readers.size());
   std::vector<ImageView> views(merged_rig.cameraCount());
-  const int64_t start_ns = first.timestampNs(index[0].at(common.front()));
+  // Timestamps: the first group's, from the first common frame.
+  auto timestamp = [&](int64_t id) {
+    const auto [p, i] = index[0].at(id);
+    return readers[p]->timestampNs(i) + offset_ns[p];
+  };
+  const int64_t start_ns = timestamp(common.front());
+  std::vector<size_t> read(groups.size());  // the part each group's frame was read from
   for (size_t f = 0; f < common.size(); ++f) {
-    for (size_t p = 0; p < readers.size(); ++p)
-      readers[p]->readFrame(index[p].at(common[f]), frames[p]);
-    for (int c = 0; c < merged_rig.cameraCount(); ++c) {
-      const auto [p, k] = owner.at(merged_rig.camera(c).name());
-      views[c] = frames[p][k].image.view();
+    for (size_t g = 0; g < groups.size(); ++g) {
+      const auto [p, i] = index[g].at(common[f]);
+      readers[p]->readFrame(i, frames[p]);
+      read[g] = p;
     }
-    writer.writeFrame(common[f], first.timestampNs(index[0].at(common[f])) - start_ns, views);
+    for (int c = 0; c < merged_rig.cameraCount(); ++c) {
+      const auto [g, k] = owner.at(merged_rig.camera(c).name());
+      views[c] = frames[read[g]][k].image.view();
+    }
+    writer.writeFrame(common[f], timestamp(common[f]) - start_ns, views);
     if (progress) progress(static_cast<int>(f) + 1, static_cast<int>(common.size()));
   }
   report.frames = writer.framesWritten();

@@ -24,11 +24,13 @@ struct TakeMergeReport {
 
 // Joins the parts of a take that the camera nodes recorded (each a session of its own cameras,
 // core/pipeline/take_recorder.h) into one session of every camera at `out`
-// (docs/session-format.md): the frames whose id every part holds, timestamps from the first
-// part's. Cameras and nodes in the order of `rig` when given (its cameras must be exactly the
-// parts'), else part after part. `progress(done, total)` after each frame. Throws Error naming the
-// part and the reason: parts of different pixel formats or rates, a camera in two parts, no frame
-// in common, `out` not empty.
+// (docs/session-format.md): the frames whose id every node's parts hold, timestamps from the
+// first node's. Parts of the same cameras are one node's (<node>, then <node>-2... after a
+// restart during the take): their frames are joined, a continuation's timestamps moved to follow
+// on at the session's rate. Cameras and nodes in the order of `rig` when given (its cameras must be
+// exactly the parts'), else part after part. `progress(done, total)` after each frame. Throws Error
+// naming the part and the reason: parts of different pixel formats or rates, a camera in two parts,
+// no frame in common, `out` not empty.
 TakeMergeReport mergeTake(const std::vector<std::filesystem::path>& parts,
                           const std::filesystem::path& out, const std::optional<Rig>& rig = {},
                           const std::function<void(int, int)>& progress = {});

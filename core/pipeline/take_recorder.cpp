@@ -72,7 +72,13 @@ void TakeRecorder::command(const RecordData& record) {
 }
 
 void TakeRecorder::open(int64_t frame_id, const std::vector<CameraFrame>& frames) {
-  const std::filesystem::path part = folder_ / wanted_.take / node_;
+  // A node restarted during the take (a crash, a power cut) finds its first part there, valid up
+  // to its last complete set: the rest goes beside it, <node>-2, <node>-3..., and the merge
+  // joins them.
+  std::filesystem::path part = folder_ / wanted_.take / node_;
+  std::error_code ec;
+  for (int k = 2; k < 100 && std::filesystem::exists(part / "session.yaml", ec); ++k)
+    part = folder_ / wanted_.take / (node_ + "-" + std::to_string(k));
   try {
     // A second of sets queued: a disk's hiccup loses nothing (the reference node: 70 MB).
     const int queue = std::max(8, static_cast<int>(std::ceil(fps_)));
