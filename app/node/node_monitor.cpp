@@ -130,6 +130,15 @@ void runNodeMonitor(CameraNode& node, const Rig& rig, const std::string& node_na
     ImGui::Text("node %s: frame %lld, %lld sets sent, %.1f MB", node_name.c_str(),
                 static_cast<long long>(state.frame_id), static_cast<long long>(state.sets_sent),
                 state.bytes_sent / 1e6);
+    if (const TakeStatusData& t = state.take; !t.take.empty()) {
+      const ImVec4 colour = !t.error.empty() ? ImVec4(0.95f, 0.3f, 0.3f, 1)
+                            : t.finished     ? ImVec4(0.8f, 0.8f, 0.8f, 1)
+                                             : ImVec4(0.95f, 0.45f, 0.35f, 1);
+      ImGui::TextColored(colour, "take %s: %s, %lld sets written, %lld dropped, %.1f MB %s",
+                         t.take.c_str(), t.finished ? "closed" : "recording",
+                         static_cast<long long>(t.written), static_cast<long long>(t.dropped),
+                         t.bytes / 1e6, t.error.c_str());
+    }
     for (int k = 0; k < cameras; ++k) {
       const Camera& camera = rig.camera(node.cameras()[k]);
       ImGui::Separator();

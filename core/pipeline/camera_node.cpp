@@ -242,6 +242,7 @@ CameraNode::MonitorState CameraNode::monitorState() {
   }
   state.sets_sent = sets_sent_;
   state.bytes_sent = bytes_sent_;
+  state.take = takes_.status();
   return state;
 }
 

@@ -71,6 +71,7 @@ class CameraNode {
     std::vector<SilhouetteMaskData> silhouettes;
     std::vector<CameraStats> stats;  // per own camera
     int64_t sets_sent = 0, bytes_sent = 0;
+    TakeStatusData take;  // the take the studio asked for, and how its recording goes
   };
   MonitorState monitorState();
   const std::vector<int>& cameras() const { return cameras_; }
