@@ -105,7 +105,7 @@ void StudioCoordinator::stopTake() {
 }
 
 void StudioCoordinator::sendTake(NodeState& node) {
-  if (node.report.lost || node.peer.empty() || take_.take.empty()) return;
+  if (node.report.lost || node.peer.empty()) return;
   Message message;
   message.sender = "studio";
   message.sent_ns = steadyNowNs();
@@ -142,11 +142,15 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       node.report.cameras.push_back({c.camera, c.frames, c.dropped, c.frame_rate, c.last_error});
     }
     node.report.take = heartbeat->take;
-    // A node that missed the take's command (or its stop), or came back during it: again.
+    // A node that missed the take's command (or its stop), or came back during it: told again.
+    // One still recording a take this studio never asked for (the studio restarted mid-take):
+    // told to stop, rather than fill its disk unattended.
     const TakeStatusData& t = heartbeat->take;
-    if (t.take != take_.take || t.first_frame != take_.first_frame ||
-        t.last_frame != take_.last_frame)
-      sendTake(node);
+    const bool stale = take_.take.empty()
+                           ? !t.take.empty() && !t.finished
+                           : t.take != take_.take || t.first_frame != take_.first_frame ||
+                                 t.last_frame != take_.last_frame;
+    if (stale) sendTake(node);
     return;
   }
   if (std::holds_alternative<SilhouettesData>(message.body))

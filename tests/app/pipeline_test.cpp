@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "core/body/human_skeleton.h"
 #include "core/capture/session_reader.h"
@@ -194,7 +195,9 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
 
 TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessionTheyFilmed) {
   const Stage stage = makeStage("take");
-  StudioCoordinator studio(stage.rig, stage.endpoint, kHumanJointCount);
+  std::optional<StudioCoordinator> first_studio;
+  first_studio.emplace(stage.rig, stage.endpoint, kHumanJointCount);
+  StudioCoordinator& studio = *first_studio;
   const fs::path takes = stage.folder / "takes";
   std::vector<pid_t> nodes;
   for (const char* node : {"node1", "node2", "node3", "node4"}) {
@@ -236,9 +239,6 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
       if (!n.take.finished || n.take.last_frame != take.last_frame) return false;
     return true;
   }));
-  for (pid_t pid : nodes) kill(pid, SIGTERM);
-  for (pid_t pid : nodes) waitpid(pid, nullptr, 0);
-
   const SessionReader filmed(stage.session);
   std::vector<CameraFrame> truth, frames;
   for (const NodeReport& n : studio.report().nodes) {
@@ -281,6 +281,31 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
   // A take's name is its folder on every node: not twice.
   EXPECT_EQ(studio.startTake("take-1"),
             "take take-1 was recorded already: give the next a new name");
+
+  // The studio restarts during a take (a crash): the new one, at the same address, tells the
+  // nodes still recording a take it never asked for to stop, rather than fill their disks.
+  ASSERT_EQ(studio.startTake("take-2"), "");
+  ASSERT_TRUE(runUntil(studio, 30, [&] {
+    for (const NodeReport& n : studio.report().nodes)
+      if (n.lost || n.take.take != "take-2" || n.take.written < 3) return false;
+    return true;
+  }));
+  StudioEndpointConfig same_address = stage.endpoint;
+  same_address.bind = studio.endpoint();
+  first_studio.reset();
+  StudioCoordinator restarted(stage.rig, same_address, kHumanJointCount);
+  ASSERT_TRUE(runUntil(restarted, 30, [&] {
+    for (const NodeReport& n : restarted.report().nodes)
+      if (n.lost || !n.take.take.empty() || !n.take.finished) return false;
+    return true;
+  }));
+  for (const char* node : {"node1", "node2", "node3", "node4"}) {
+    const SessionReader part(takes / "take-2" / node);
+    EXPECT_GE(part.frameCount(), 3) << node;
+    EXPECT_TRUE(part.warnings().empty()) << node;
+  }
+  for (pid_t pid : nodes) kill(pid, SIGTERM);
+  for (pid_t pid : nodes) waitpid(pid, nullptr, 0);
   fs::remove_all(stage.folder);
 }
 
