@@ -207,6 +207,7 @@ Check decodeHeartbeat(const fb::Heartbeat& in, const MessageLimits& limits, Hear
                            copyString(c->last_error())});
   }
   if (const fb::TakeStatus* t = in.take()) {
+    if (Check e = checkString(t->take(), "heartbeat: take name", limits); !e.empty()) return e;
     const std::string take = copyString(t->take());
     if (!take.empty()) {
       if (std::string e = takeNameError(take); !e.empty()) return "heartbeat: take: " + e;
@@ -341,7 +342,8 @@ Check decodeView(const fb::View& in, const MessageLimits& limits, ViewData& out)
   return {};
 }
 
-Check decodeRecord(const fb::Record& in, const MessageLimits&, RecordData& out) {
+Check decodeRecord(const fb::Record& in, const MessageLimits& limits, RecordData& out) {
+  if (Check e = checkString(in.take(), "record: take name", limits); !e.empty()) return e;
   out.take = copyString(in.take());
   if (!out.take.empty()) {
     if (std::string e = takeNameError(out.take); !e.empty()) return "record: " + e;
@@ -596,12 +598,15 @@ std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_co
 std::string takeNameError(std::string_view take) {
   if (take.empty() || take.size() > 64)
     return "take name of " + std::to_string(take.size()) + " characters, expected 1 to 64";
-  if (take.front() == '.') return "take name '" + std::string(take) + "' starts with '.'";
+  // Quoted in the message with anything unprintable as '?': it goes to logs as it is.
+  std::string shown(take);
+  for (char& c : shown) c = (c >= 0x20 && c < 0x7f) ? c : '?';
+  if (take.front() == '.') return "take name '" + shown + "' starts with '.'";
   for (const char c : take) {
     const bool fine = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
                       c == '-' || c == '_' || c == '.';
     if (!fine) {
-      return "take name '" + std::string(take) +
+      return "take name '" + shown +
              "' has a character other than letters, digits, '-', '_' and '.'";
     }
   }

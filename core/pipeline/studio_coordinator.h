@@ -142,14 +142,18 @@ class StudioCoordinator {
   // empty when asked.
   std::string startTake(const std::string& take);
   // Ends the take kTakeLeadFrames frames ahead of the newest seen, the same on every node; the
-  // nodes close their parts when their cameras pass it. Nothing when no take is recording.
+  // nodes close their parts when their cameras pass it (a node already past it when the stop
+  // arrives, behind a studio that lags, closes at once; the merge keeps the frames every node
+  // holds). Nothing when no take is recording.
   void stopTake();
   // The take asked for (its name empty before the first), and whether it is still recording.
   const RecordData& take() const { return take_; }
   bool recordingTake() const {
     return !take_.take.empty() && take_.last_frame == RecordData{}.last_frame;
   }
-  static constexpr int64_t kTakeLeadFrames = 15;
+  // A second at 30 fps: enough for the command to reach every node before its cameras get there,
+  // even from a studio that sees the frames late (a loaded PC; in the tests, 15 was not).
+  static constexpr int64_t kTakeLeadFrames = 30;
 
  private:
   struct FrameState {

@@ -248,8 +248,10 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
     const fs::path last = takes / "take-1" / (n.name == "node2" ? "node2-2" : n.name);
     EXPECT_EQ(SessionReader(last).frameCount(), n.take.written) << n.name;
   }
-  // Every part: the frames asked for, each its camera's image of that instant; node2's first
-  // part intact up to the power cut.
+  // Every part: frames from the first asked for, each its camera's image of that instant; node2's
+  // first part intact up to the power cut. (A part may end past the last frame asked for: a node
+  // already past it when the stop reached it, behind a studio that sees the frames late, ends
+  // there; the merge keeps the frames every node holds.)
   const std::vector<fs::path> parts = takeParts({takes / "take-1"});
   ASSERT_EQ(parts.size(), 5u);
   for (const fs::path& path : parts) {
@@ -258,7 +260,6 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
     const int camera = *filmed.rig().findCamera(part.rig().camera(0).name());
     for (int i = 0; i < part.frameCount(); ++i) {
       EXPECT_GE(part.frameId(i), take.first_frame);
-      EXPECT_LE(part.frameId(i), take.last_frame);
       part.readFrame(i, frames);
       filmed.readFrame(static_cast<int>(part.frameId(i) % filmed.frameCount()), truth);
       EXPECT_EQ(frames[0].image.pixels, truth[camera].image.pixels) << path << " " << i;

@@ -267,6 +267,11 @@ TEST(MessageCodec, TakeNamesThatAreNotAPlainFolderNameAreRefused) {
   }
   EXPECT_EQ(decodeError(envelope(RecordData{"a/b", 0, 10})),
             "record: take name 'a/b' has a character other than letters, digits, '-', '_' and '.'");
+  EXPECT_EQ(decodeError(envelope(RecordData{"a\nb", 0, 10})),
+            "record: take name 'a?b' has a character other than letters, digits, '-', '_' and "
+            "'.'");  // nothing unprintable reaches a log
+  EXPECT_EQ(decodeError(envelope(RecordData{std::string(2000, 'a'), 0, 10})),
+            "record: take name: 2000 bytes, at most 1024 allowed");
   EXPECT_EQ(decodeError(envelope(RecordData{"t", 10, 9})),
             "record: frames 10 to 9, expected 0 <= first <= last");
   EXPECT_EQ(decodeError(envelope(RecordData{"t", -1, 9})),
