@@ -145,10 +145,32 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
     joints_ << "\n";
     joints_.flush();
   }
-  // Last: the frame exists for readers only once its line is complete.
+  if (truth && !joints_)
+    throw Error(fmt::format("{}: cannot append frame {} (disk full?); the session ends before it",
+                            (folder_ / "truth" / "joints.csv").string(), frame_id));
+  appendIndex(frame_id, timestamp_ns, bytes);
+}
+
+void SessionWriter::copyFrame(int64_t frame_id, int64_t timestamp_ns,
+                              const std::vector<fs::path>& pngs) {
+  if (pngs.size() != static_cast<size_t>(rig_.cameraCount())) {
+    throw Error(fmt::format("{}: frame {} has {} images for {} cameras", folder_.string(), frame_id,
+                            pngs.size(), rig_.cameraCount()));
+  }
+  const std::string name = fmt::format("{:06}.png", frame_id);
+  int64_t bytes = 0;
+  for (int c = 0; c < rig_.cameraCount(); ++c) {
+    const std::string png = readFile(pngs[c]);
+    writeFileAtomically(folder_ / rig_.camera(c).name() / name, png, {.sync = false});
+    bytes += static_cast<int64_t>(png.size());
+  }
+  appendIndex(frame_id, timestamp_ns, bytes);
+}
+
+void SessionWriter::appendIndex(int64_t frame_id, int64_t timestamp_ns, int64_t bytes) {
   index_ << frame_id << "," << timestamp_ns << "\n";
   index_.flush();
-  if (!index_ || (truth && !joints_))
+  if (!index_)
     throw Error(fmt::format("{}: cannot append frame {} (disk full?); the session ends before it",
                             (folder_ / "index.csv").string(), frame_id));
   ++frames_;

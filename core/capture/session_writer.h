@@ -36,11 +36,20 @@ class SessionWriter {
   // frame is then not in the index and the session stays valid.
   void writeFrame(int64_t frame_id, int64_t timestamp_ns, const std::vector<ImageView>& images,
                   const FrameTruth* truth = nullptr);
+  // One frame from PNG files of another session in this one's pixel format, one per camera of the
+  // camera's size (as its SessionReader checked them on opening): copied byte for byte, written
+  // as writeFrame writes (beside their place, renamed in, then the index line). Joins sessions
+  // without decoding and encoding again. Throws Error naming the file as writeFrame does.
+  void copyFrame(int64_t frame_id, int64_t timestamp_ns,
+                 const std::vector<std::filesystem::path>& pngs);
   int framesWritten() const { return frames_; }
   int64_t bytesWritten() const { return bytes_; }  // camera images' PNG bytes of indexed frames
   const std::filesystem::path& folder() const { return folder_; }
 
  private:
+  // Last of a frame: its index line (it exists for readers only once this is complete).
+  void appendIndex(int64_t frame_id, int64_t timestamp_ns, int64_t bytes);
+
   std::filesystem::path folder_;
   Rig rig_;
   PixelFormat format_;

@@ -157,26 +157,21 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
 
   SessionWriter writer(out, merged_rig, first.pixelFormat(), first.fps(),
                        fmt::format("take of {} parts", parts.size()));
-  std::vector<std::vector<CameraFrame>> frames(readers.size());
-  std::vector<ImageView> views(merged_rig.cameraCount());
+  std::vector<fs::path> files(merged_rig.cameraCount());
   // Timestamps: the first group's, from the first common frame.
   auto timestamp = [&](int64_t id) {
     const auto [p, i] = index[0].at(id);
     return readers[p]->timestampNs(i) + offset_ns[p];
   };
   const int64_t start_ns = timestamp(common.front());
-  std::vector<size_t> read(groups.size());  // the part each group's frame was read from
   for (size_t f = 0; f < common.size(); ++f) {
-    for (size_t g = 0; g < groups.size(); ++g) {
-      const auto [p, i] = index[g].at(common[f]);
-      readers[p]->readFrame(i, frames[p]);
-      read[g] = p;
-    }
+    // The parts' PNGs as they are (checked when their readers opened them): no decoding.
     for (int c = 0; c < merged_rig.cameraCount(); ++c) {
       const auto [g, k] = owner.at(merged_rig.camera(c).name());
-      views[c] = frames[read[g]][k].image.view();
+      const auto [p, i] = index[g].at(common[f]);
+      files[c] = readers[p]->imagePath(k, i);
     }
-    writer.writeFrame(common[f], timestamp(common[f]) - start_ns, views);
+    writer.copyFrame(common[f], timestamp(common[f]) - start_ns, files);
     if (progress) progress(static_cast<int>(f) + 1, static_cast<int>(common.size()));
   }
   report.frames = writer.framesWritten();
