@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -128,6 +129,20 @@ void LocalPipelineRun::runFor(std::chrono::milliseconds duration) {
                                                      : fmt::format("signal {}", WTERMSIG(status))));
     }
   }
+}
+
+double LocalPipelineRun::frameRate() const {
+  if (!options_.session.empty()) return frame_rate_;
+  double sum = 0;
+  int cameras = 0;
+  for (const NodeReport& node : studio_->report().nodes) {
+    for (const CameraHealth& camera : node.cameras) {
+      if (node.lost || !(camera.frame_rate_hz > 0)) continue;
+      sum += camera.frame_rate_hz;
+      ++cameras;
+    }
+  }
+  return cameras > 0 ? std::round(100 * sum / cameras) / 100 : frame_rate_;
 }
 
 std::vector<std::string> LocalPipelineRun::takeExits() {

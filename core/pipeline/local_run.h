@@ -59,8 +59,9 @@ class LocalPipelineRun {
   bool killNode(const std::string& name);
   bool nodesElsewhere() const { return !options_.listen.empty(); }
 
-  // The cameras' frame rate: the session's; live cameras are taken to run at 30.
-  double frameRate() const { return frame_rate_; }
+  // The cameras' frame rate: the session's; for live cameras, the mean of the rates the nodes
+  // report (rounded to a hundredth), or 30 before any has reported one.
+  double frameRate() const;
   StudioCoordinator& studio() { return *studio_; }
   const Rig& rig() const { return rig_; }
   const std::vector<std::string>& nodeNames() const { return names_; }
