@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -15,6 +16,7 @@
 #include "core/capture/session_reader.h"
 #include "core/capture/take_merge.h"
 #include "core/net/curve_keys.h"
+#include "core/pipeline/local_run.h"
 #include "core/pipeline/studio_coordinator.h"
 
 namespace lumistage {
@@ -54,7 +56,7 @@ struct Stage {
   StudioEndpointConfig endpoint;
 };
 
-Stage makeStage(const std::string& name) {
+Stage makeStage(const std::string& name, double fps = 30) {
   Stage stage;
   stage.folder =
       fs::temp_directory_path() / ("lumistage_" + name + "_" + std::to_string(::getpid()));
@@ -67,7 +69,8 @@ Stage makeStage(const std::string& name) {
             0);
   std::ofstream(stage.folder / "studio.yaml")
       << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\n"
-         "actor:\n  vertices: 2000\nmotion:\n  clip: walk\n";
+         "actor:\n  vertices: 2000\nmotion:\n  clip: walk\n  fps: "
+      << fps << "\n";
   stage.session = stage.folder / "session";
   EXPECT_EQ(runCommand(cli + " synth --config " + (stage.folder / "studio.yaml").string() +
                        " --frames 12 --bayer --out " + stage.session.string()),
@@ -305,6 +308,31 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
     EXPECT_GE(part.frameCount(), 3) << node;
     EXPECT_TRUE(part.warnings().empty()) << node;
   }
+  for (pid_t pid : nodes) kill(pid, SIGTERM);
+  for (pid_t pid : nodes) waitpid(pid, nullptr, 0);
+  fs::remove_all(stage.folder);
+}
+
+// The studio on the stage (LocalPipelineRun with `listen`): nodes started apart join it, and the
+// cameras' rate (for the director's view recordings) is what the nodes report, not a guess.
+TEST(DistributedPipeline, AStudioListeningForNodesTakesTheCamerasRateFromThem) {
+  const Stage stage = makeStage("listen", 20);
+  LocalRunOptions options;
+  options.rig = stage.session / "rig.yaml";
+  options.keys = stage.keys;
+  options.listen = "tcp://127.0.0.1:" + std::to_string(20000 + (::getpid() + 7) % 30000);
+  LocalPipelineRun run(options);
+  EXPECT_TRUE(run.nodesElsewhere());
+  EXPECT_EQ(run.frameRate(), 30);  // nothing reported yet
+  std::vector<pid_t> nodes;
+  for (const char* node : {"node1", "node2", "node3", "node4"})
+    nodes.push_back(startNode(node, stage.session, options.listen, stage.keys));
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (std::chrono::steady_clock::now() < end &&
+         (run.studio().framesDone() < 20 || std::abs(run.frameRate() - 20) > 2))
+    run.runFor(std::chrono::milliseconds(100));
+  EXPECT_GE(run.studio().framesDone(), 20);
+  EXPECT_NEAR(run.frameRate(), 20, 2);
   for (pid_t pid : nodes) kill(pid, SIGTERM);
   for (pid_t pid : nodes) waitpid(pid, nullptr, 0);
   fs::remove_all(stage.folder);
