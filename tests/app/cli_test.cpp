@@ -1,6 +1,9 @@
 // The command-line tools run as a user runs them: real processes, real files.
+#include <arpa/inet.h>
 #include <assimp/scene.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -46,6 +49,21 @@ Result run(const std::string& command) {
 const std::string kCli = LUMISTAGE_CLI;
 const std::string kNode = LUMISTAGE_NODE;
 const std::string kReference = std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/rigs/reference.yaml";
+
+// A TCP port on 127.0.0.1 that nothing listens on (the system's pick, released at once).
+int freePort() {
+  const int s = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t size = sizeof(address);
+  if (s < 0 || ::bind(s, reinterpret_cast<sockaddr*>(&address), size) != 0 ||
+      ::getsockname(s, reinterpret_cast<sockaddr*>(&address), &size) != 0) {
+    ADD_FAILURE() << "no free port";
+  }
+  ::close(s);
+  return ntohs(address.sin_port);
+}
 
 fs::path tempPath(const std::string& name) {
   return fs::temp_directory_path() / ("lumistage_cli_" + std::to_string(::getpid()) + "_" + name);
@@ -346,8 +364,7 @@ TEST(Cli, RunListensForNodesStartedOnTheStagesPCs) {
                                "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
   const fs::path keys = folder / "keys";
   ASSERT_EQ(run(kCli + " keys init --dir " + keys.string() + " --nodes node1,node2").exit_code, 0);
-  const std::string studio =
-      "tcp://127.0.0.1:" + std::to_string(20000 + ::getpid() % 30000);  // free, most likely
+  const std::string studio = "tcp://127.0.0.1:" + std::to_string(freePort());
   std::string nodes, pids;
   for (const char* node : {"node1", "node2"}) {
     nodes += kNode + " --node " + node + " --session " + (folder / "session").string() +
