@@ -75,8 +75,7 @@ void PipelineWorker::startTake(const QString& name) {
   QMutexLocker lock(&mutex_);
   commands_.push_back([this, name](LocalPipelineRun& run) {
     const std::string error = run.studio().startTake(name.toStdString());
-    if (!error.empty())
-      emit message(tr("Cannot record the take: %1").arg(QString::fromStdString(error)));
+    if (!error.empty()) emit takeRefused(QString::fromStdString(error));
   });
 }
 
@@ -325,6 +324,7 @@ void PipelinePanel::start(LocalRunOptions options) {
   connect(worker_, &PipelineWorker::snapshot, this, &PipelinePanel::show);
   connect(worker_, &PipelineWorker::message, summary_, &QLabel::setText);
   connect(worker_, &PipelineWorker::recordingEnded, this, &PipelinePanel::recordingEnded);
+  connect(worker_, &PipelineWorker::takeRefused, this, &PipelinePanel::refuseTake);
   start_button_->setEnabled(false);
   stop_button_->setEnabled(true);
   take_button_->setEnabled(true);
@@ -378,11 +378,22 @@ void PipelinePanel::stopTake() {
 }
 
 void PipelinePanel::toggleTake() {
+  take_error_.clear();
   if (last_.take_recording) {
     stopTake();
-  } else {
-    startTake(take_name_->text().trimmed());
+    return;
   }
+  const QString name = take_name_->text().trimmed();
+  if (const std::string error = takeNameError(name.toStdString()); !error.empty()) {
+    refuseTake(QString::fromStdString(error));  // said at once, no round trip
+    return;
+  }
+  startTake(name);
+}
+
+void PipelinePanel::refuseTake(const QString& reason) {
+  take_error_ = tr("Cannot record the take: %1").arg(reason);
+  take_status_->setText("<b style='color:#e33'>" + take_error_.toHtmlEscaped() + "</b>");
 }
 
 namespace {
@@ -412,12 +423,15 @@ QString takeCell(const TakeStatusData& t) {
 void PipelinePanel::show(const PipelineSnapshot& s) {
   const bool was_recording = last_.take_recording;
   last_ = s;
+  if (s.take_recording) take_error_.clear();
   take_button_->setText(s.take_recording ? tr("Stop take") : tr("Record take"));
   take_name_->setEnabled(!s.take_recording);
   const QString takes = s.takes_folder.isEmpty()
                             ? tr("its own takes folder (lumistage-node --takes)")
                             : s.takes_folder.toHtmlEscaped();
-  if (s.take.take.empty()) {
+  if (!take_error_.isEmpty()) {
+    // Kept until the next try: the refusal, not the last take's figures.
+  } else if (s.take.take.empty()) {
     take_status_->setText(tr("Takes are recorded by every node into %1/&lt;take&gt;/&lt;node&gt;/; "
                              "lumistage session merge joins them.")
                               .arg(takes));

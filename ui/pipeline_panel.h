@@ -72,7 +72,8 @@ class PipelineWorker : public QObject {
  signals:
   void snapshot(lumistage::PipelineSnapshot snapshot);
   void message(QString text);
-  void recordingEnded();  // stopped, failed, or the pipeline stopped
+  void recordingEnded();             // stopped, failed, or the pipeline stopped
+  void takeRefused(QString reason);  // startTake(): why the take cannot start
   void finished();
 
  private:
@@ -130,6 +131,7 @@ class PipelinePanel : public QWidget {
   void show(const PipelineSnapshot& snapshot);
   void startChosen();
   void toggleTake();
+  void refuseTake(const QString& reason);
 
   QLabel* summary_;
   QLabel* view_;  // the pipeline's output: the blended view
@@ -141,6 +143,7 @@ class PipelinePanel : public QWidget {
   QLineEdit* take_name_;
   QPushButton* take_button_;
   QLabel* take_status_;
+  QString take_error_;  // why the last take asked for could not start; shown until the next
   QString takes_folder_;
   QThread* thread_ = nullptr;
   PipelineWorker* worker_ = nullptr;

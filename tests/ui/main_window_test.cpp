@@ -206,6 +206,17 @@ class MainWindowTest : public QObject {
     QVERIFY(take_button && take_name && take_status);
     QVERIFY(take_button->isEnabled());
     QCOMPARE(take_name->text(), QString("take-001"));
+    // A name that is not a folder name is refused at once, and says why.
+    take_name->setText("take one");
+    take_button->click();
+    QVERIFY2(take_status->text().contains("Cannot record the take: take name 'take one' has a "
+                                          "character other than"),
+             qPrintable(take_status->text()));
+    QTest::qWait(500);  // snapshots come and go; the refusal stays, no take starts
+    QVERIFY(!window.pipeline()->lastSnapshot().take_recording);
+    QVERIFY2(take_status->text().contains("Cannot record the take"),
+             qPrintable(take_status->text()));
+    take_name->setText("take-001");
     take_button->click();
     QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastSnapshot().take_recording, 5000);
     QTRY_COMPARE_WITH_TIMEOUT(take_button->text(), QString("Stop take"), 2000);
