@@ -56,6 +56,10 @@ int main(int argc, char** argv) {
   app.add_option("--takes", takes,
                  "record the takes the studio asks for into this folder, on this PC "
                  "(TAKES/<take>/<node>/; lumistage session merge joins the nodes' parts)");
+  double unattended_take_limit_s = 30;
+  app.add_option("--unattended-take-limit", unattended_take_limit_s,
+                 "close an open take after this many seconds without word from the studio")
+      ->capture_default_str();
   app.add_flag("--plain", plain, "no encryption or authentication (a closed lab network only)");
   app.add_flag("--monitor", monitor,
                "open a small window on this PC: the node's cameras, silhouettes and counters");
@@ -91,6 +95,8 @@ int main(int argc, char** argv) {
     std::unique_ptr<lumistage::FrameSource> source;
     lumistage::CameraNodeOptions node_options;
     node_options.takes = takes;
+    node_options.unattended_take_limit =
+        std::chrono::milliseconds(static_cast<int64_t>(1000 * unattended_take_limit_s));
     node_options.fps = fps;
     if (!session.empty()) {
       lumistage::ReplayOptions options;

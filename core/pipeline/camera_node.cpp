@@ -331,10 +331,12 @@ void CameraNode::run(const std::atomic<bool>& stop) {
   std::thread silhouettes([&] { silhouetteLoop(stop_workers); });
   std::thread statistics([&] { statisticsLoop(stop_workers); });
   auto last_heartbeat = std::chrono::steady_clock::now() - options_.heartbeat;
+  auto last_from_studio = std::chrono::steady_clock::now();
   while (!stop && !source_finished_) {
     while (std::optional<Message> out = outbox_.pop(std::chrono::milliseconds(0)))
       send(std::move(*out));
     if (std::optional<DecodeResult> received = endpoint_.receive(std::chrono::milliseconds(2))) {
+      if (received->ok()) last_from_studio = std::chrono::steady_clock::now();
       if (received->ok() && std::holds_alternative<PoseData>(received->message->body)) {
         poses_.push(std::move(*received->message));
       } else if (received->ok() && std::holds_alternative<OffsetsData>(received->message->body)) {
@@ -362,6 +364,12 @@ void CameraNode::run(const std::atomic<bool>& stop) {
         }
       }
       heartbeat.bytes_sent = bytes_sent_;
+      if (now - last_from_studio > options_.unattended_take_limit) {
+        takes_.abandon(fmt::format(
+            "closed: no word from the studio for {} s",
+            std::chrono::duration_cast<std::chrono::seconds>(options_.unattended_take_limit)
+                .count()));
+      }
       heartbeat.take = takes_.status();
       Message message;
       message.sent_ns = steadyNowNs();

@@ -34,6 +34,10 @@ struct CameraNodeOptions {
   // records none and says so when asked.
   std::filesystem::path takes;
   double fps = 25;  // the cameras' frame rate, written with every take
+  // An open take goes on while the studio is silent (a restart, a network outage) for at most
+  // this long; then the node closes it, so that a studio that crashed for good does not fill the
+  // node's disk.
+  std::chrono::milliseconds unattended_take_limit{30'000};
 };
 
 // The node's part of every frame, on the PC that owns the cameras (see DESIGN.md §1):

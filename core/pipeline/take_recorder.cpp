@@ -71,6 +71,14 @@ void TakeRecorder::command(const RecordData& record) {
   status_.last_frame = record.last_frame;
 }
 
+void TakeRecorder::abandon(const std::string& why) {
+  std::lock_guard lock(mutex_);
+  if (closed_) return;
+  close();
+  status_.error = why;
+  spdlog::warn("node {}: take {}: {}", node_, wanted_.take, why);
+}
+
 void TakeRecorder::open(int64_t frame_id, const std::vector<CameraFrame>& frames) {
   // A node restarted during the take (a crash, a power cut) finds its first part there, valid up
   // to its last complete set: the rest goes beside it, <node>-2, <node>-3..., and the merge

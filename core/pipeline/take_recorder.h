@@ -40,6 +40,8 @@ class TakeRecorder {
   // The studio's command (any thread). The same take again moves its frame range (the stop);
   // another take closes the open one; an empty take closes it and asks for none.
   void command(const RecordData& record);
+  // Closes the open take (if any) for `why`, which its status then carries as its error.
+  void abandon(const std::string& why);
   // A complete set of the node's cameras, in the node's camera order (the capture thread's):
   // queued when the take asks for its frame. Copies the images into buffers of sets already
   // written, so it allocates only while warming up.

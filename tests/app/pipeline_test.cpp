@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <thread>
 
 #include "core/body/human_skeleton.h"
 #include "core/capture/session_reader.h"
@@ -204,8 +205,8 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
   const fs::path takes = stage.folder / "takes";
   std::vector<pid_t> nodes;
   for (const char* node : {"node1", "node2", "node3", "node4"}) {
-    nodes.push_back(
-        startNode(node, stage.session, studio.endpoint(), stage.keys, {"--takes", takes.string()}));
+    nodes.push_back(startNode(node, stage.session, studio.endpoint(), stage.keys,
+                              {"--takes", takes.string(), "--unattended-take-limit", "3"}));
   }
   ASSERT_TRUE(runUntil(studio, 30, [&] {
     for (const char* node : {"node1", "node2", "node3", "node4"}) {
@@ -229,8 +230,8 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
   kill(nodes[1], SIGKILL);
   waitpid(nodes[1], nullptr, 0);
   ASSERT_TRUE(runUntil(studio, 5, [&] { return studio.nodeState("node2") == "lost"; }));
-  nodes[1] =
-      startNode("node2", stage.session, studio.endpoint(), stage.keys, {"--takes", takes.string()});
+  nodes[1] = startNode("node2", stage.session, studio.endpoint(), stage.keys,
+                       {"--takes", takes.string(), "--unattended-take-limit", "3"});
   ASSERT_TRUE(runUntil(studio, 30, [&] { return recorded(5); }));
   EXPECT_TRUE(fs::exists(takes / "take-1" / "node2-2" / "session.yaml"));
   studio.stopTake();
@@ -297,15 +298,38 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
   StudioEndpointConfig same_address = stage.endpoint;
   same_address.bind = studio.endpoint();
   first_studio.reset();
-  StudioCoordinator restarted(stage.rig, same_address, kHumanJointCount);
-  ASSERT_TRUE(runUntil(restarted, 30, [&] {
-    for (const NodeReport& n : restarted.report().nodes)
+  std::optional<StudioCoordinator> restarted;
+  restarted.emplace(stage.rig, same_address, kHumanJointCount);
+  ASSERT_TRUE(runUntil(*restarted, 30, [&] {
+    for (const NodeReport& n : restarted->report().nodes)
       if (n.lost || !n.take.take.empty() || !n.take.finished) return false;
     return true;
   }));
   for (const char* node : {"node1", "node2", "node3", "node4"}) {
     const SessionReader part(takes / "take-2" / node);
     EXPECT_GE(part.frameCount(), 3) << node;
+    EXPECT_TRUE(part.warnings().empty()) << node;
+  }
+
+  // The studio goes for good during a take: after --unattended-take-limit (3 s here) without word
+  // from it, every node closes its part rather than fill its disk.
+  ASSERT_EQ(restarted->startTake("take-3"), "");
+  ASSERT_TRUE(runUntil(*restarted, 30, [&] {
+    for (const NodeReport& n : restarted->report().nodes)
+      if (n.lost || n.take.take != "take-3" || n.take.written < 3) return false;
+    return true;
+  }));
+  restarted.reset();
+  std::this_thread::sleep_for(std::chrono::seconds(5));
+  std::vector<int> closed_at;
+  for (const char* node : {"node1", "node2", "node3", "node4"})
+    closed_at.push_back(SessionReader(takes / "take-3" / node).frameCount());
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // 30 more frames if still recording
+  for (int k = 0; k < 4; ++k) {
+    const std::string node = "node" + std::to_string(k + 1);
+    const SessionReader part(takes / "take-3" / node);
+    EXPECT_GE(part.frameCount(), 3) << node;
+    EXPECT_EQ(part.frameCount(), closed_at[k]) << node;
     EXPECT_TRUE(part.warnings().empty()) << node;
   }
   for (pid_t pid : nodes) kill(pid, SIGTERM);
