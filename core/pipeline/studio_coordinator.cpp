@@ -150,7 +150,9 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
                            ? !t.take.empty() && !t.finished
                            : t.take != take_.take || t.first_frame != take_.first_frame ||
                                  t.last_frame != take_.last_frame;
-    if (stale) sendTake(node);
+    // While a take records, every heartbeat is answered: the node's word that the studio is
+    // still there (it closes a take after --unattended-take-limit of silence).
+    if (stale || recordingTake()) sendTake(node);
     return;
   }
   if (std::holds_alternative<SilhouettesData>(message.body))

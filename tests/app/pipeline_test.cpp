@@ -206,7 +206,7 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
   std::vector<pid_t> nodes;
   for (const char* node : {"node1", "node2", "node3", "node4"}) {
     nodes.push_back(startNode(node, stage.session, studio.endpoint(), stage.keys,
-                              {"--takes", takes.string(), "--unattended-take-limit", "3"}));
+                              {"--takes", takes.string(), "--unattended-take-limit", "5"}));
   }
   ASSERT_TRUE(runUntil(studio, 30, [&] {
     for (const char* node : {"node1", "node2", "node3", "node4"}) {
@@ -231,7 +231,7 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
   waitpid(nodes[1], nullptr, 0);
   ASSERT_TRUE(runUntil(studio, 5, [&] { return studio.nodeState("node2") == "lost"; }));
   nodes[1] = startNode("node2", stage.session, studio.endpoint(), stage.keys,
-                       {"--takes", takes.string(), "--unattended-take-limit", "3"});
+                       {"--takes", takes.string(), "--unattended-take-limit", "5"});
   ASSERT_TRUE(runUntil(studio, 30, [&] { return recorded(5); }));
   EXPECT_TRUE(fs::exists(takes / "take-1" / "node2-2" / "session.yaml"));
   studio.stopTake();
@@ -311,7 +311,7 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
     EXPECT_TRUE(part.warnings().empty()) << node;
   }
 
-  // The studio goes for good during a take: after --unattended-take-limit (3 s here) without word
+  // The studio goes for good during a take: after --unattended-take-limit (5 s here) without word
   // from it, every node closes its part rather than fill its disk.
   ASSERT_EQ(restarted->startTake("take-3"), "");
   ASSERT_TRUE(runUntil(*restarted, 30, [&] {
@@ -320,7 +320,7 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
     return true;
   }));
   restarted.reset();
-  std::this_thread::sleep_for(std::chrono::seconds(5));
+  std::this_thread::sleep_for(std::chrono::seconds(7));
   std::vector<int> closed_at;
   for (const char* node : {"node1", "node2", "node3", "node4"})
     closed_at.push_back(SessionReader(takes / "take-3" / node).frameCount());
