@@ -49,6 +49,32 @@ pid_t startNode(const std::string& name, const fs::path& session, const std::str
   return pid;
 }
 
+// The node processes a test starts: stopped (SIGTERM, then reaped) however the test ends, so that
+// a failed assertion never leaves them replaying beside the tests after it.
+class NodeProcesses {
+ public:
+  ~NodeProcesses() { stopAll(); }
+  pid_t start(const std::string& name, const fs::path& session, const std::string& studio,
+              const fs::path& keys, const std::vector<std::string>& more = {}) {
+    pids_.push_back(startNode(name, session, studio, keys, more));
+    return pids_.back();
+  }
+  // Kills one at once (SIGKILL), as pulling its plug would, and reaps it.
+  void pull(pid_t pid) {
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+    std::erase(pids_, pid);
+  }
+  void stopAll() {
+    for (pid_t pid : pids_) kill(pid, SIGTERM);
+    for (pid_t pid : pids_) waitpid(pid, nullptr, 0);
+    pids_.clear();
+  }
+
+ private:
+  std::vector<pid_t> pids_;
+};
+
 // A ring of four 320x240 cameras, one a node, a 12-frame Bayer session of the virtual studio
 // filmed by it, and keys for the nodes: in a fresh folder.
 struct Stage {
@@ -117,10 +143,10 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   for (int k : {0, 1, 3, 4, 6, 7}) preview.rotation[k] = -preview.rotation[k];
   studio.setView(preview);
 
-  pid_t node1 = startNode("node1", session, studio.endpoint(), keys);
-  pid_t node2 = startNode("node2", session, studio.endpoint(), keys);
-  const pid_t node3 = startNode("node3", session, studio.endpoint(), keys);
-  const pid_t node4 = startNode("node4", session, studio.endpoint(), keys);
+  NodeProcesses processes;
+  for (const char* node : {"node1", "node3", "node4"})
+    processes.start(node, session, studio.endpoint(), keys);
+  pid_t node2 = processes.start("node2", session, studio.endpoint(), keys);
   // All four stream, and frames complete, in order, with every node's part; both views have
   // blended images (the nodes' OpenGL start-up takes a moment; on a loaded machine a frame can
   // close at its deadline with some nodes' images still on their way, so wait for one with all).
@@ -163,8 +189,7 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   EXPECT_TRUE(runUntil(studio, 10, [&] { return coverage(1) > alone * 3 / 2; })) << alone;
 
   // kill -9 one node: it is marked lost within about a second, and frames go on without it.
-  kill(node2, SIGKILL);
-  waitpid(node2, nullptr, 0);
+  processes.pull(node2);
   const auto killed = std::chrono::steady_clock::now();
   ASSERT_TRUE(runUntil(studio, 3, [&] { return studio.nodeState("node2") == "lost"; }));
   // Lost after a second of silence (the deadline), noticed within one more slice of work.
@@ -173,7 +198,7 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   EXPECT_TRUE(runUntil(studio, 5, [&] { return studio.framesDone() >= before + 15; }));
 
   // Restarted, it rejoins by itself.
-  node2 = startNode("node2", session, studio.endpoint(), keys);
+  node2 = processes.start("node2", session, studio.endpoint(), keys);
   EXPECT_TRUE(runUntil(studio, 10, [&] { return studio.nodeState("node2") == "streaming"; }));
 
   // A node whose key the studio does not know is refused and reported.
@@ -182,11 +207,10 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   KeyStore(stranger_keys).init({"node1"});
   fs::copy_file(keys / "studio.pub", stranger_keys / "studio.pub",
                 fs::copy_options::overwrite_existing);
-  const pid_t stranger = startNode("node1", session, studio.endpoint(), stranger_keys);
+  processes.start("node1", session, studio.endpoint(), stranger_keys);
   EXPECT_TRUE(runUntil(studio, 10, [&] { return studio.report().refusals > 0; }));
 
-  for (pid_t pid : {node1, node2, node3, node4, stranger}) kill(pid, SIGTERM);
-  for (pid_t pid : {node1, node2, node3, node4, stranger}) waitpid(pid, nullptr, 0);
+  processes.stopAll();
   report = studio.report();
   EXPECT_GE(report.nodes[1].times_lost, 1);
   EXPECT_GT(report.node_bytes_per_frame, 0);
@@ -203,10 +227,11 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
   first_studio.emplace(stage.rig, stage.endpoint, kHumanJointCount);
   StudioCoordinator& studio = *first_studio;
   const fs::path takes = stage.folder / "takes";
+  NodeProcesses processes;
   std::vector<pid_t> nodes;
   for (const char* node : {"node1", "node2", "node3", "node4"}) {
-    nodes.push_back(startNode(node, stage.session, studio.endpoint(), stage.keys,
-                              {"--takes", takes.string(), "--unattended-take-limit", "5"}));
+    nodes.push_back(processes.start(node, stage.session, studio.endpoint(), stage.keys,
+                                    {"--takes", takes.string(), "--unattended-take-limit", "5"}));
   }
   ASSERT_TRUE(runUntil(studio, 30, [&] {
     for (const char* node : {"node1", "node2", "node3", "node4"}) {
@@ -227,11 +252,10 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
   ASSERT_TRUE(runUntil(studio, 30, [&] { return recorded(10); }));
   // node2's PC loses power mid-take; its service brings it back: told the take again, it
   // records the rest beside its first part.
-  kill(nodes[1], SIGKILL);
-  waitpid(nodes[1], nullptr, 0);
+  processes.pull(nodes[1]);
   ASSERT_TRUE(runUntil(studio, 5, [&] { return studio.nodeState("node2") == "lost"; }));
-  nodes[1] = startNode("node2", stage.session, studio.endpoint(), stage.keys,
-                       {"--takes", takes.string(), "--unattended-take-limit", "5"});
+  nodes[1] = processes.start("node2", stage.session, studio.endpoint(), stage.keys,
+                             {"--takes", takes.string(), "--unattended-take-limit", "5"});
   ASSERT_TRUE(runUntil(studio, 30, [&] { return recorded(5); }));
   EXPECT_TRUE(fs::exists(takes / "take-1" / "node2-2" / "session.yaml"));
   studio.stopTake();
@@ -332,8 +356,7 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
     EXPECT_EQ(part.frameCount(), closed_at[k]) << node;
     EXPECT_TRUE(part.warnings().empty()) << node;
   }
-  for (pid_t pid : nodes) kill(pid, SIGTERM);
-  for (pid_t pid : nodes) waitpid(pid, nullptr, 0);
+  processes.stopAll();
   fs::remove_all(stage.folder);
 }
 
@@ -348,17 +371,16 @@ TEST(DistributedPipeline, AStudioListeningForNodesTakesTheCamerasRateFromThem) {
   LocalPipelineRun run(options);
   EXPECT_TRUE(run.nodesElsewhere());
   EXPECT_EQ(run.frameRate(), 30);  // nothing reported yet
-  std::vector<pid_t> nodes;
+  NodeProcesses processes;
   for (const char* node : {"node1", "node2", "node3", "node4"})
-    nodes.push_back(startNode(node, stage.session, run.studio().endpoint(), stage.keys));
+    processes.start(node, stage.session, run.studio().endpoint(), stage.keys);
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (std::chrono::steady_clock::now() < end &&
          (run.studio().framesDone() < 20 || std::abs(run.frameRate() - 20) > 2))
     run.runFor(std::chrono::milliseconds(100));
   EXPECT_GE(run.studio().framesDone(), 20);
   EXPECT_NEAR(run.frameRate(), 20, 2);
-  for (pid_t pid : nodes) kill(pid, SIGTERM);
-  for (pid_t pid : nodes) waitpid(pid, nullptr, 0);
+  processes.stopAll();
   fs::remove_all(stage.folder);
 }
 
