@@ -158,6 +158,9 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
   SessionWriter writer(out, merged_rig, first.pixelFormat(), first.fps(),
                        fmt::format("take of {} parts", parts.size()));
   std::vector<fs::path> files(merged_rig.cameraCount());
+  std::vector<std::pair<size_t, int>> source(merged_rig.cameraCount());  // (group, camera in it)
+  for (int c = 0; c < merged_rig.cameraCount(); ++c)
+    source[c] = owner.at(merged_rig.camera(c).name());
   // Timestamps: the first group's, from the first common frame.
   auto timestamp = [&](int64_t id) {
     const auto [p, i] = index[0].at(id);
@@ -167,7 +170,7 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
   for (size_t f = 0; f < common.size(); ++f) {
     // The parts' PNGs as they are (checked when their readers opened them): no decoding.
     for (int c = 0; c < merged_rig.cameraCount(); ++c) {
-      const auto [g, k] = owner.at(merged_rig.camera(c).name());
+      const auto [g, k] = source[c];
       const auto [p, i] = index[g].at(common[f]);
       files[c] = readers[p]->imagePath(k, i);
     }

@@ -51,16 +51,6 @@ std::optional<Eigen::Vector2d> Distortion::remove(const Eigen::Vector2d& distort
   return x;
 }
 
-bool isValidName(const std::string& name) {
-  if (name.empty() || name.size() > 64 || name[0] == '.' || name[0] == '-') return false;
-  for (char c : name) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '_' || c == '.' || c == '-';
-    if (!ok) return false;
-  }
-  return true;
-}
-
 namespace {
 
 void require(bool ok, const std::string& camera, const std::string& what) {

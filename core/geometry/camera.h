@@ -4,6 +4,8 @@
 #include <optional>
 #include <string>
 
+#include "core/base/names.h"  // isValidName: camera and node names
+
 namespace lumistage {
 
 // Pinhole intrinsics in pixels. Pixel (0, 0) is the centre of the top-left pixel (OpenCV's
@@ -100,10 +102,6 @@ class Camera {
   Eigen::Matrix3d R_ = Eigen::Matrix3d::Identity();
   Eigen::Vector3d t_ = Eigen::Vector3d::Zero();
 };
-
-// Whether a name may be used for a camera or node: 1-64 characters of [A-Za-z0-9_.-], not
-// starting with '.' or '-'. Names become file and folder names in recordings.
-bool isValidName(const std::string& name);
 
 template <typename T>
 void Distortion::apply(T x, T y, T& xd, T& yd) const {

@@ -77,4 +77,16 @@ std::vector<RigNode> dealCamerasToNodes(int camera_count, int cameras_per_node) 
   return nodes;
 }
 
+Rig nodeRig(const Rig& rig, std::string_view node) {
+  const std::optional<int> index = rig.findNode(node);
+  if (!index) throw std::invalid_argument("no node '" + std::string(node) + "' in the rig");
+  RigNode part = rig.nodes()[*index];
+  std::vector<Camera> cameras;
+  for (int& c : part.cameras) {
+    cameras.push_back(rig.camera(c));
+    c = static_cast<int>(cameras.size()) - 1;
+  }
+  return Rig(std::move(cameras), {std::move(part)});
+}
+
 }  // namespace lumistage

@@ -55,4 +55,8 @@ namespace lumistage {
 // the whole view and any virtual camera loads the nodes evenly.
 std::vector<RigNode> dealCamerasToNodes(int camera_count, int cameras_per_node);
 
+// The rig of one node: its cameras (in its order) and itself, as a session it records holds it.
+// Throws std::invalid_argument when the rig has no such node.
+Rig nodeRig(const Rig& rig, std::string_view node);
+
 }  // namespace lumistage

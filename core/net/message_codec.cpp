@@ -7,6 +7,7 @@
 #include <cstring>
 #include <type_traits>
 
+#include "core/base/names.h"
 #include "core/refine/refinement_statistics.h"
 #include "core/render/partial_image_codec.h"
 #include "messages_generated.h"
@@ -596,21 +597,15 @@ std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_co
 }
 
 std::string takeNameError(std::string_view take) {
+  if (isValidName(take)) return {};  // the rule of camera and node names; below, why not
   if (take.empty() || take.size() > 64)
     return "take name of " + std::to_string(take.size()) + " characters, expected 1 to 64";
   // Quoted in the message with anything unprintable as '?': it goes to logs as it is.
   std::string shown(take);
   for (char& c : shown) c = (c >= 0x20 && c < 0x7f) ? c : '?';
-  if (take.front() == '.') return "take name '" + shown + "' starts with '.'";
-  for (const char c : take) {
-    const bool fine = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                      c == '-' || c == '_' || c == '.';
-    if (!fine) {
-      return "take name '" + shown +
-             "' has a character other than letters, digits, '-', '_' and '.'";
-    }
-  }
-  return {};
+  if (take.front() == '.' || take.front() == '-')
+    return "take name '" + shown + "' starts with '" + take.front() + "'";
+  return "take name '" + shown + "' has a character other than letters, digits, '-', '_' and '.'";
 }
 
 const char* messageTypeName(const MessageBody& body) {

@@ -143,8 +143,8 @@ struct RecordData {
   bool operator==(const RecordData&) const = default;
 };
 
-// Why `take` cannot name a take (a folder on every node); empty when it can: 1 to 64 letters,
-// digits, '-', '_' or '.', not starting with '.'.
+// Why `take` cannot name a take (a folder on every node); empty when it can: a valid name as
+// cameras and nodes have (core/base/names.h).
 std::string takeNameError(std::string_view take);
 
 using MessageBody =

@@ -11,23 +11,6 @@
 
 namespace lumistage {
 
-namespace {
-
-// The node's cameras and the node alone: what its part of a take was filmed with.
-Rig nodeRig(const Rig& rig, const std::string& node) {
-  const std::optional<int> index = rig.findNode(node);
-  if (!index) throw Error("take recorder: no node '" + node + "' in the rig");
-  RigNode part = rig.nodes()[*index];
-  std::vector<Camera> cameras;
-  for (int& c : part.cameras) {
-    cameras.push_back(rig.camera(c));
-    c = static_cast<int>(cameras.size()) - 1;
-  }
-  return Rig(std::move(cameras), {std::move(part)});
-}
-
-}  // namespace
-
 TakeRecorder::TakeRecorder(std::filesystem::path folder, const Rig& rig, std::string node,
                            double fps)
     : folder_(std::move(folder)), rig_(nodeRig(rig, node)), node_(std::move(node)), fps_(fps) {}
@@ -67,8 +50,6 @@ void TakeRecorder::command(const RecordData& record) {
     }
   }
   wanted_ = record;
-  status_.first_frame = record.first_frame;
-  status_.last_frame = record.last_frame;
 }
 
 void TakeRecorder::abandon(const std::string& why) {
@@ -125,6 +106,8 @@ void TakeRecorder::offer(int64_t frame_id, const std::vector<CameraFrame>& frame
 TakeStatusData TakeRecorder::status() const {
   std::lock_guard lock(mutex_);
   TakeStatusData status = status_;
+  status.first_frame = wanted_.first_frame;
+  status.last_frame = wanted_.last_frame;
   if (counted_ != nullptr) {
     const RecorderStats stats = counted_->stats();
     status.written = stats.written;

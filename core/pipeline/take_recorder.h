@@ -59,8 +59,8 @@ class TakeRecorder {
   const double fps_;
 
   mutable std::mutex mutex_;
-  RecordData wanted_;  // the studio's latest command
-  TakeStatusData status_;
+  RecordData wanted_;      // the studio's latest command
+  TakeStatusData status_;  // take, error; frames from wanted_, counts from counted_
   std::unique_ptr<SessionRecorder> recorder_;  // the open take's
   std::vector<Image> images_;                  // the set being queued, reused
   const SessionRecorder* counted_ = nullptr;   // the recorder of status_.take (open or closing)

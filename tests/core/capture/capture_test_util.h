@@ -19,9 +19,10 @@ namespace lumistage::test {
 namespace fs = std::filesystem;
 
 // Three 64x48 cameras: small enough that a session is written and read in milliseconds.
-inline Rig smallRig() {
+inline Rig smallRig(int cameras_per_node = 3) {
   RingRigSpec spec;
   spec.cameras = 3;
+  spec.cameras_per_node = cameras_per_node;
   spec.width = 64;
   spec.height = 48;
   return makeRingRig(spec);

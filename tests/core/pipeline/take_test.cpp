@@ -19,12 +19,7 @@ using namespace lumistage::test;
 
 // Three 64x48 cameras, one a node (node1..node3).
 Rig takeRig() {
-  RingRigSpec spec;
-  spec.cameras = 3;
-  spec.cameras_per_node = 1;
-  spec.width = 64;
-  spec.height = 48;
-  return makeRingRig(spec);
+  return smallRig(/*cameras_per_node=*/1);
 }
 
 // Node n's set of frame f: its camera's image of frameImages(rig, mono8, f).
@@ -174,10 +169,7 @@ TEST(Take, PartsThatDoNotBelongTogetherAreRefusedByName) {
   // Each part a session of one node's camera.
   auto part = [&](const std::string& name, int node, PixelFormat format, int64_t first, int count) {
     const int camera = rig.nodes()[node].cameras[0];
-    RigNode only = rig.nodes()[node];
-    only.cameras = {0};
-    const Rig part_rig({rig.camera(camera)}, {only});
-    SessionWriter writer(folder / name, part_rig, format, 30.0, "test");
+    SessionWriter writer(folder / name, nodeRig(rig, rig.nodes()[node].name), format, 30.0, "test");
     for (int64_t f = first; f < first + count; ++f)
       writer.writeFrame(f, timestampOf(f), {frameImages(rig, format, f)[camera].view()});
     return folder / name;
