@@ -161,7 +161,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   if (std::find(refused_.begin(), refused_.end(), message.frame_id) != refused_.end())
     return;  // dropped at admission
   if (const auto* silhouettes = std::get_if<SilhouettesData>(&message.body)) {
-    FrameState& frame = frames_[message.frame_id];
+    FrameState& frame = frameState(message.frame_id);
     if (frame.first_ns == 0) {
       frame.first_ns = node.last_ns;
       frame.captured_ns = message.sent_ns;
@@ -218,24 +218,58 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       return;  // a view no longer asked for, or resized since
     FrameState& frame = it->second;
     const size_t pixels = size_t(image->width) * image->height;
-    std::span<const uint8_t> rgba;
-    if (image->encoding == ImageEncoding::kAlphaRuns) {
-      if (!decodeAlphaRuns(image->data, pixels, decoded_)) return;
-      rgba = decoded_;
-    } else if (image->encoding == ImageEncoding::kRleRgba) {
-      decoded_ = decodeRleRgba(image->data, pixels);
-      rgba = decoded_;
-    } else {
-      rgba = image->data;
-    }
     PartialImageBlender& blender = frame.blends[image->view];
     if (blender.width() != image->width || blender.height() != image->height)
       blender.reset(image->width, image->height);
-    // The paper's blend: colours add weighted by the nodes' alphas, normalised at the end.
-    if (!blender.add(rgba)) return;
+    // The paper's blend: colours add weighted by the nodes' alphas, normalised at the end. An
+    // image that arrives in alpha runs is added from them: only the actor's pixels are touched.
+    bool added = false;
+    if (image->encoding == ImageEncoding::kAlphaRuns) {
+      added = blender.addAlphaRuns(image->data);
+    } else if (image->encoding == ImageEncoding::kRleRgba) {
+      decoded_ = decodeRleRgba(image->data, pixels);
+      added = blender.add(decoded_);
+    } else {
+      added = blender.add(image->data);
+    }
+    if (!added) return;
     frame.image_nodes[image->view].insert(node.report.name);
     maybeFinish(message.frame_id, frame);
   }
+}
+
+void StudioCoordinator::FrameState::clearForReuse() {
+  first_ns = captured_ns = pose_sent_ns = offsets_sent_ns = 0;
+  silhouettes.clear();
+  silhouette_nodes.clear();
+  pose_nodes.clear();
+  statistics_nodes.clear();
+  pose = PoseData();
+  refine_sum.vertex_count = 0;  // reset() when the first node's statistics arrive
+  image_nodes.clear();
+  for (auto& [view, blender] : blends) blender.reset(blender.width(), blender.height());
+}
+
+StudioCoordinator::FrameState& StudioCoordinator::frameState(int64_t frame_id) {
+  const auto it = frames_.find(frame_id);
+  if (it != frames_.end()) return it->second;
+  if (spare_frames_.empty()) return frames_[frame_id];
+  auto node = std::move(spare_frames_.back());
+  spare_frames_.pop_back();
+  node.key() = frame_id;
+  return frames_.insert(std::move(node)).position->second;
+}
+
+std::map<int64_t, StudioCoordinator::FrameState>::iterator StudioCoordinator::retireFrame(
+    std::map<int64_t, FrameState>::iterator it) {
+  const auto next = std::next(it);
+  auto node = frames_.extract(it);
+  // As many as are in flight at once (four at most with the default admission), and a few more.
+  if (spare_frames_.size() < 8) {
+    node.mapped().clearForReuse();
+    spare_frames_.push_back(std::move(node));
+  }
+  return next;
 }
 
 void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
@@ -243,7 +277,7 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   for (const auto& [id, f] : frames_) begun += f.pose_sent_ns > 0;
   if (options_.max_frames_in_flight > 0 && begun >= options_.max_frames_in_flight) {
     if (counting_) ++frames_dropped_, ++frames_refused_;
-    frames_.erase(frame_id);                                 // the callers hold no iterator to it
+    retireFrame(frames_.find(frame_id));                     // the callers hold no iterator to it
     refused_[next_refused_++ % refused_.size()] = frame_id;  // its late silhouettes are ignored
     return;
   }
@@ -380,7 +414,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   // Older frames still open will never be shown: they are dropped.
   for (auto it = frames_.begin(); it != frames_.end() && it->first <= frame_id;) {
     if (it->first < frame_id && counting_) ++frames_dropped_;
-    it = frames_.erase(it);
+    it = retireFrame(it);
   }
   newest_done_ = frame_id;
 }

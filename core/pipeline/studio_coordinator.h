@@ -167,6 +167,10 @@ class StudioCoordinator {
     int64_t offsets_sent_ns = 0;
     std::map<int, std::set<std::string>> image_nodes;  // per view
     std::map<int, PartialImageBlender> blends;         // per view
+
+    // Empties it for another frame, keeping its buffers (the statistics' half a megabyte, a
+    // blend's five at 640x480), which a fresh frame would allocate and fault in again.
+    void clearForReuse();
   };
   struct NodeState {
     std::string peer;
@@ -174,6 +178,10 @@ class StudioCoordinator {
     NodeReport report;
   };
 
+  // The frame's state, a spare one when it is new.
+  FrameState& frameState(int64_t frame_id);
+  // Removes the frame, keeping its state for another; returns the next frame.
+  std::map<int64_t, FrameState>::iterator retireFrame(std::map<int64_t, FrameState>::iterator it);
   void onMessage(const ReceivedMessage& received);
   void runMocap(int64_t frame_id, FrameState& frame);
   // The refinement module: chooses every vertex's offset from the combined statistics and sends
@@ -195,6 +203,8 @@ class StudioCoordinator {
   RefinementStatisticsCodec statistics_codec_;  // the nodes' statistics, decompressed here
   int joints_;
   std::map<int64_t, FrameState> frames_;
+  // Frames done or given up, kept for the next ones (frameState, retireFrame).
+  std::vector<std::map<int64_t, FrameState>::node_type> spare_frames_;
   std::map<std::string, NodeState> nodes_;
   MessageEncoder encoder_;
   int64_t newest_done_ = -1;

@@ -83,4 +83,20 @@ bool validAlphaRuns(std::span<const uint8_t> data, size_t pixel_count) {
   return at == data.size();
 }
 
+bool forEachLiteralRun(std::span<const uint8_t> data, size_t pixel_count,
+                       const std::function<void(size_t, const uint8_t*, size_t)>& run) {
+  if (!validAlphaRuns(data, pixel_count)) return false;
+  size_t at = 0, i = 0;
+  while (i < pixel_count) {
+    uint64_t empty_run = 0, literal_run = 0;
+    getVarint(data, at, empty_run);
+    getVarint(data, at, literal_run);
+    i += empty_run;
+    if (literal_run > 0) run(i, data.data() + at, literal_run);
+    at += 4 * literal_run;
+    i += literal_run;
+  }
+  return true;
+}
+
 }  // namespace lumistage

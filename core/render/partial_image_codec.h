@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -22,5 +23,12 @@ bool decodeAlphaRuns(std::span<const uint8_t> data, size_t pixel_count, std::vec
 
 // Whether `data` is a valid encoding of exactly pixel_count pixels (no decoding, no allocation).
 bool validAlphaRuns(std::span<const uint8_t> data, size_t pixel_count);
+
+// Calls run(first_pixel, rgba, count) for every run of literal pixels (`rgba` points at its
+// count*4 bytes in `data`), in order, without touching the empty pixels: the studio blends the
+// nodes' images straight from the wire. Returns false, having called nothing, when `data` is not
+// a valid encoding of exactly pixel_count pixels.
+bool forEachLiteralRun(std::span<const uint8_t> data, size_t pixel_count,
+                       const std::function<void(size_t, const uint8_t*, size_t)>& run);
 
 }  // namespace lumistage

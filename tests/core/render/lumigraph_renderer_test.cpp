@@ -374,5 +374,60 @@ TEST(PartialImageBlender, NormalisesAlphasPerPixel) {
   EXPECT_EQ(out, (std::vector<uint8_t>{180, 24, 0, 255, 0, 0, 0, 0}));
 }
 
+TEST(PartialImageBlender, BlendsFromTheWireAndForgetsTheLastFrame) {
+  // Two partial images of 7x5 with drawn pixels scattered across rows (runs that cross a row's
+  // end, lone pixels, a pixel with colour and no weight), added from their alpha runs and as
+  // whole images: the same blend.
+  const int w = 7, h = 5;
+  std::vector<uint8_t> a(w * h * 4, 0), b(w * h * 4, 0);
+  for (int i : {5, 6, 7, 8, 20, 34}) {
+    a[4 * i] = uint8_t(10 * i), a[4 * i + 1] = 3, a[4 * i + 2] = uint8_t(i), a[4 * i + 3] = 100;
+  }
+  for (int i : {0, 8, 9, 21, 33}) {
+    b[4 * i] = 200, b[4 * i + 1] = uint8_t(7 * i), b[4 * i + 3] = uint8_t(20 + i);
+  }
+  b[4 * 22] = 50;  // colour without weight: not drawn
+  std::vector<uint8_t> encoded_a, encoded_b, whole, runs;
+  encodeAlphaRuns(a, encoded_a);
+  encodeAlphaRuns(b, encoded_b);
+  PartialImageBlender blender;
+  blender.reset(w, h);
+  ASSERT_TRUE(blender.add(a));
+  ASSERT_TRUE(blender.add(b));
+  blender.finish(whole);
+  blender.reset(w, h);
+  ASSERT_TRUE(blender.addAlphaRuns(encoded_a));
+  ASSERT_TRUE(blender.addAlphaRuns(encoded_b));
+  EXPECT_EQ(blender.added(), 2);
+  blender.finish(runs);
+  EXPECT_EQ(runs, whole);
+  EXPECT_EQ(whole[4 * 8 + 3], 255);
+  EXPECT_EQ(whole[4 * 22 + 3], 0);
+  EXPECT_EQ(whole[4 * 8], (10 * 8 * 100 + 200 * 28 + 64) / 128);
+
+  // The next frame draws b alone: nothing of a is left, neither where b is empty nor where both
+  // drew.
+  blender.reset(w, h);
+  ASSERT_TRUE(blender.addAlphaRuns(encoded_b));
+  std::vector<uint8_t> next, b_alone;
+  blender.finish(next);
+  PartialImageBlender fresh;
+  fresh.reset(w, h);
+  fresh.add(b);
+  fresh.finish(b_alone);
+  EXPECT_EQ(next, b_alone);
+
+  // Runs that are not an encoding of this size add nothing.
+  blender.reset(w, h);
+  EXPECT_FALSE(blender.addAlphaRuns(std::span(encoded_a).first(encoded_a.size() - 1)));
+  std::vector<uint8_t> other_size;
+  encodeAlphaRuns(std::vector<uint8_t>(4 * (w * h + 1), 9), other_size);
+  EXPECT_FALSE(blender.addAlphaRuns(other_size));
+  EXPECT_EQ(blender.added(), 0);
+  std::vector<uint8_t> empty;
+  blender.finish(empty);
+  EXPECT_EQ(empty, std::vector<uint8_t>(w * h * 4, 0));
+}
+
 }  // namespace
 }  // namespace lumistage
