@@ -2,16 +2,15 @@
 // The renderer's own cameras blended with the interpolated lumigraph weights: colour = their
 // weighted mean, alpha = their share of the weight of every camera of the rig (1 when the
 // renderer has them all; less where a foreground mask takes weight away). Images are RGBA8, or
-// Bayer (one byte a pixel) demosaiced here.
+// the colours of a Bayer image's 2x2 cells.
 // kOwnCameras is defined when compiling; own camera j's image is layer j of `images`.
 in float v_weight[kOwnCameras];
 in vec2 v_texel[kOwnCameras];
 in float v_total;
 
 uniform sampler2DArray images;
-uniform vec2 images_size;  // texels of the array (the largest camera)
-uniform int bayer;         // 0: RGBA; 1: Bayer, R at red_index in each 2x2 cell
-uniform int red_index;     // 0: top left, 1: top right, 2: bottom left, 3: bottom right
+uniform vec2 images_size;  // texels of the cameras' images (the largest camera)
+uniform vec2 texel_scale;  // image texel to texture coordinate of `images`
 // The own cameras' low-resolution foreground masks (cells covering the image as the image array
 // does), when the renderer has them: a camera's weight scales by its mask where it samples.
 uniform sampler2DArray masks;
@@ -19,25 +18,10 @@ uniform int use_masks;
 
 out vec4 colour;
 
-// A 2x2 Bayer cell's colour (R, mean of the two G, B) from one gather of its four texels.
-vec3 cellColour(ivec2 cell, float layer) {
-  vec4 g = textureGather(images, vec3((vec2(cell * 2) + 1.0) / images_size, layer));
-  vec4 q = vec4(g.w, g.z, g.x, g.y);  // top left, top right, bottom left, bottom right
-  float r = q[red_index], b = q[3 - red_index];
-  return vec3(r, 0.5 * (q.x + q.y + q.z + q.w - r - b), b);
-}
-
+// Bilinear in RGBA images, or, for Bayer images (the array holds their 2x2 cells' colours, cell
+// centres at texels 2c + 1), between the colours of the four nearest cells.
 vec3 sampleImage(vec2 texel, int layer) {
-  if (bayer == 0) return texture(images, vec3(texel / images_size, float(layer))).rgb;
-  // Bilinear between the colours of the four nearest 2x2 cells (cell centres at 2c + 1 texels).
-  vec2 s = (texel - 1.0) * 0.5;
-  ivec2 c0 = ivec2(floor(s));
-  vec2 f = s - vec2(c0);
-  ivec2 last = ivec2(images_size) / 2 - 1;
-  ivec2 a = clamp(c0, ivec2(0), last), b = clamp(c0 + 1, ivec2(0), last);
-  float l = float(layer);
-  return mix(mix(cellColour(a, l), cellColour(ivec2(b.x, a.y), l), f.x),
-             mix(cellColour(ivec2(a.x, b.y), l), cellColour(b, l), f.x), f.y);
+  return texture(images, vec3(texel * texel_scale, float(layer))).rgb;
 }
 
 void main() {

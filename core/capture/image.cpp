@@ -1,5 +1,9 @@
 #include "core/capture/image.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace lumistage {
 
 const char* pixelFormatName(PixelFormat format) {
@@ -51,6 +55,56 @@ void rgbaToBayer(const uint8_t* rgba, int width, int height, BayerLayout layout,
     const int at_red_x = red_row ? 0 : 1, other = red_row ? 1 : 2;
     for (int x = 0; x < width; ++x)
       out[x] = row[4 * x + (((x & 1) == layout.red_x) ? at_red_x : other)];
+  }
+}
+
+namespace {
+
+template <int kRedX>
+void cellRow(const uint8_t* red_row, const uint8_t* blue_row, int cells, uint8_t* out) {
+  int x = 0;
+#if defined(__SSE2__)
+  // Eight cells at a time: 16-bit lanes hold a cell's two bytes of each row.
+  const __m128i low = _mm_set1_epi16(0x00ff), opaque = _mm_set1_epi16(int16_t(0xff00));
+  for (; x + 8 <= cells; x += 8) {
+    const __m128i r_row = _mm_loadu_si128(reinterpret_cast<const __m128i*>(red_row + 2 * x));
+    const __m128i b_row = _mm_loadu_si128(reinterpret_cast<const __m128i*>(blue_row + 2 * x));
+    const __m128i r_even = _mm_and_si128(r_row, low), r_odd = _mm_srli_epi16(r_row, 8);
+    const __m128i b_even = _mm_and_si128(b_row, low), b_odd = _mm_srli_epi16(b_row, 8);
+    const __m128i r = kRedX == 0 ? r_even : r_odd, g1 = kRedX == 0 ? r_odd : r_even;
+    const __m128i g2 = kRedX == 0 ? b_even : b_odd, b = kRedX == 0 ? b_odd : b_even;
+    const __m128i g = _mm_avg_epu16(g1, g2);  // (g1 + g2 + 1) >> 1
+    const __m128i rg = _mm_or_si128(r, _mm_slli_epi16(g, 8)), ba = _mm_or_si128(b, opaque);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + 4 * x), _mm_unpacklo_epi16(rg, ba));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + 4 * x + 16), _mm_unpackhi_epi16(rg, ba));
+  }
+#endif
+  for (; x < cells; ++x) {
+    const uint8_t* r = red_row + 2 * x;
+    const uint8_t* b = blue_row + 2 * x;
+    out[4 * x] = r[kRedX];
+    out[4 * x + 1] = uint8_t((unsigned(r[1 - kRedX]) + b[kRedX] + 1) >> 1);
+    out[4 * x + 2] = b[1 - kRedX];
+    out[4 * x + 3] = 255;
+  }
+}
+
+}  // namespace
+
+void bayerCellsToRgba(const ImageView& image, uint8_t* rgba) {
+  const BayerLayout layout = bayerLayout(image.format);
+  const int cells_x = image.width / 2, cells_y = image.height / 2;
+  for (int y = 0; y < cells_y; ++y) {
+    const uint8_t* top = image.data + size_t(2 * y) * image.width;
+    const uint8_t* bottom = top + image.width;
+    const uint8_t* red_row = layout.red_y == 0 ? top : bottom;
+    const uint8_t* blue_row = layout.red_y == 0 ? bottom : top;
+    uint8_t* out = rgba + size_t(y) * cells_x * 4;
+    if (layout.red_x == 0) {
+      cellRow<0>(red_row, blue_row, cells_x, out);
+    } else {
+      cellRow<1>(red_row, blue_row, cells_x, out);
+    }
   }
 }
 

@@ -80,4 +80,8 @@ void rgbaToBayer(const uint8_t* rgba, int width, int height, BayerLayout layout,
 void rgbaToRgb(const uint8_t* rgba, int width, int height, uint8_t* rgb);
 void rgbaToImage(const uint8_t* rgba, int width, int height, PixelFormat format, Image& out);
 
+// A Bayer image's 2x2 cells as RGBA8 (R, the mean of the two G rounded, B, 255), rows top first:
+// (width / 2) x (height / 2) texels. Mono8 is read as a Bayer image of the default layout.
+void bayerCellsToRgba(const ImageView& image, uint8_t* rgba);
+
 }  // namespace lumistage

@@ -152,9 +152,9 @@ LumigraphRenderer::~LumigraphRenderer() {
   glDeleteTextures(1, &depth_maps_);
   glDeleteTextures(1, &images_);
   glDeleteTextures(1, &masks_);
-  glDeleteBuffers(1, &upload_buffer_);
   glDeleteBuffers(1, &vertex_buffer_);
   glDeleteBuffers(1, &index_buffer_);
+  glDeleteBuffers(1, &upload_buffer_);
   glDeleteVertexArrays(1, &vao_);
 }
 
@@ -213,33 +213,34 @@ void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::
 }
 
 void LumigraphRenderer::setImage(int own_index, const ImageView& image) {
-  if (image.format == PixelFormat::kRgb8) {
-    // Widened straight into the pixel-buffer object (RGB uploads are slow: never RGB).
-    widened_.resize(size_t(image.width) * image.height * 4);
-    const size_t n = size_t(image.width) * image.height;
-    for (size_t i = 0; i < n; ++i) {
-      widened_[4 * i] = image.data[3 * i];
-      widened_[4 * i + 1] = image.data[3 * i + 1];
-      widened_[4 * i + 2] = image.data[3 * i + 2];
-      widened_[4 * i + 3] = 255;
-    }
-    setImageRgba(own_index, widened_.data(), image.width, image.height);
-    return;
-  }
   if (own_index < 0 || own_index >= static_cast<int>(own_.size()))
     throw Error("LumigraphRenderer::setImage: no own camera " + std::to_string(own_index));
+  if (image.format == PixelFormat::kRgb8) {
+    // Widened to RGBA (RGB uploads are slow: never RGB).
+    const size_t n = size_t(image.width) * image.height;
+    staging_.resize(n * 4);
+    for (size_t i = 0; i < n; ++i) {
+      staging_[4 * i] = image.data[3 * i];
+      staging_[4 * i + 1] = image.data[3 * i + 1];
+      staging_[4 * i + 2] = image.data[3 * i + 2];
+      staging_[4 * i + 3] = 255;
+    }
+    useImageFormat(false);
+    uploadImage(own_index, image.width, image.height, staging_.data());
+    return;
+  }
+  // Bayer (and mono8, as a Bayer image whose every cell is grey): a 2x2 cell's colour a texel.
+  staging_.resize(size_t(image.width / 2) * (image.height / 2) * 4);
+  bayerCellsToRgba(image, staging_.data());
   useImageFormat(true);
-  // Mono8 goes through the same path as a Bayer image whose every cell is grey.
-  const bool bayer = image.format != PixelFormat::kMono8;
-  bayer_layout_ = bayer ? bayerLayout(image.format) : BayerLayout{};
-  uploadImage(own_index, image.data, image.width, image.height);
+  uploadImage(own_index, image.width / 2, image.height / 2, staging_.data());
 }
 
 void LumigraphRenderer::setImageRgba(int own_index, const uint8_t* rgba, int width, int height) {
   if (own_index < 0 || own_index >= static_cast<int>(own_.size()))
     throw Error("LumigraphRenderer::setImage: no own camera " + std::to_string(own_index));
   useImageFormat(false);
-  uploadImage(own_index, rgba, width, height);
+  uploadImage(own_index, width, height, rgba);
 }
 
 void LumigraphRenderer::setMask(int own_index, std::span<const uint8_t> mask, int width,
@@ -271,32 +272,30 @@ void LumigraphRenderer::setMask(int own_index, std::span<const uint8_t> mask, in
                   GL_UNSIGNED_BYTE, mask.data());
 }
 
-void LumigraphRenderer::useImageFormat(bool bayer) {
-  if (images_ && bayer_ == bayer) return;
+void LumigraphRenderer::useImageFormat(bool cells) {
+  if (images_ && cells_ == cells) return;
   glDeleteTextures(1, &images_);
   glGenTextures(1, &images_);
   glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
-  glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, bayer ? GL_R8 : GL_RGBA8, images_width_, images_height_,
-                 std::max<int>(1, own_.size()));
-  // Bayer cells are demosaiced in the shader from exact texels; RGBA is filtered.
-  const GLint filter = bayer ? GL_NEAREST : GL_LINEAR;
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
-  if (!bayer) {
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  }
-  bayer_ = bayer;
+  const int divisor = cells ? 2 : 1;
+  glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RGBA8, std::max(1, images_width_ / divisor),
+                 std::max(1, images_height_ / divisor), std::max<int>(1, own_.size()));
+  // Filtered: between pixels, or between the colours of the four nearest Bayer cells.
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  cells_ = cells;
 }
 
-void LumigraphRenderer::uploadImage(int own_index, const void* pixels, int width, int height) {
-  const size_t bytes = size_t(width) * height * (bayer_ ? 1 : 4);
+void LumigraphRenderer::uploadImage(int own_index, int width, int height, const uint8_t* rgba) {
+  const size_t bytes = size_t(width) * height * 4;
   glBindBuffer(GL_PIXEL_UNPACK_BUFFER, upload_buffer_);
-  glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(bytes), pixels, GL_STREAM_DRAW);
+  glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(bytes), rgba, GL_STREAM_DRAW);
   glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, width, height, 1,
-                  bayer_ ? GL_RED : GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, width, height, 1, GL_RGBA,
+                  GL_UNSIGNED_BYTE, nullptr);
   glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
 }
 
@@ -400,8 +399,15 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform1f(p.uniform("max_angle"), params_.max_angle_rad);
   glUniform1f(p.uniform("epsilon"), params_.epsilon_rad);
   glUniform2f(p.uniform("images_size"), float(images_width_), float(images_height_));
-  glUniform1i(p.uniform("bayer"), bayer_ ? 1 : 0);
-  glUniform1i(p.uniform("red_index"), bayer_layout_.red_y * 2 + bayer_layout_.red_x);
+  // Texel to texture coordinate: a Bayer cell's centre, at texel 2c + 1, is the centre of cell
+  // texel c of the half-size array.
+  if (cells_) {
+    glUniform2f(p.uniform("texel_scale"), 0.5f / float(std::max(1, images_width_ / 2)),
+                0.5f / float(std::max(1, images_height_ / 2)));
+  } else {
+    glUniform2f(p.uniform("texel_scale"), 1.0f / float(images_width_),
+                1.0f / float(images_height_));
+  }
   glUniform1i(p.uniform("images"), 0);
   glUniform1i(p.uniform("depth_maps"), 1);
   glUniform1i(p.uniform("masks"), 2);

@@ -65,9 +65,11 @@ class LumigraphRenderer {
   // lazily by the next render(). `normals` unit, outward. Allocates only when the mesh grows.
   void setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                std::span<const Eigen::Vector3i> triangles);
-  // The image of own camera `own_index` (index into ownCameras()). Bayer and mono8 upload one
-  // byte a pixel (demosaiced in the shader); rgb8 is widened to RGBA first. All own images must
-  // share one format (a renderer's are one session's or one node's cameras).
+  // The image of own camera `own_index` (index into ownCameras()). Bayer and mono8 upload their
+  // 2x2 cells' colours (R, the mean of the two G, B; as many bytes as the Bayer image), which the
+  // shader samples bilinearly: one filtered texture read a camera and fragment instead of four
+  // gathers; rgb8 is widened to RGBA. All own images must share one format (a renderer's are one
+  // session's or one node's cameras).
   void setImage(int own_index, const ImageView& image);
   // RGBA8 (rows top first) as setImage(rgb8) would take it.
   void setImageRgba(int own_index, const uint8_t* rgba, int width, int height);
@@ -91,10 +93,11 @@ class LumigraphRenderer {
   void render(const Camera& desired, std::vector<uint8_t>& rgba);
 
  private:
-  // The cameras' texture array, one byte a pixel (Bayer, mono) or RGBA; remade on a change.
-  void useImageFormat(bool bayer);
-  // Through the pixel-buffer object, in the array's current format.
-  void uploadImage(int own_index, const void* pixels, int width, int height);
+  // The cameras' texture array, RGBA8: of the cameras' size, or of their Bayer cells (half the
+  // size); remade on a change.
+  void useImageFormat(bool cells);
+  // width x height RGBA texels into the array's layer `own_index`, through the pixel-buffer object.
+  void uploadImage(int own_index, int width, int height, const uint8_t* rgba);
   void renderDepthMaps();
 
   struct Programs;
@@ -110,8 +113,7 @@ class LumigraphRenderer {
   GLuint masks_ = 0;   // 2D array texture of the own cameras' foreground masks, once given
   int mask_width_ = 0, mask_height_ = 0;
   int images_width_ = 0, images_height_ = 0;
-  bool bayer_ = false;
-  BayerLayout bayer_layout_;
+  bool cells_ = false;  // the array holds Bayer cells' colours
   GLuint depth_maps_ = 0, depth_framebuffer_ = 0, depth_renderbuffer_ = 0;
   bool cpu_depth_maps_ = false;
   int depth_divisor_ = 1;
@@ -121,11 +123,11 @@ class LumigraphRenderer {
   int depth_width_ = 0, depth_height_ = 0;
   bool depth_dirty_ = true;
   RenderTarget target_;
-  GLuint upload_buffer_ = 0;     // pixel-buffer object for image uploads
-  std::vector<float> vertices_;  // interleaved positions, normals and rim dilations, reused
-  std::vector<float> rim_sum_;   // per vertex: the sagittas of its edges, and their count
+  GLuint upload_buffer_ = 0;      // pixel-buffer object for image uploads
+  std::vector<float> vertices_;   // interleaved positions, normals and rim dilations, reused
+  std::vector<uint8_t> staging_;  // an image's texels on their way up, reused
+  std::vector<float> rim_sum_;    // per vertex: the sagittas of its edges, and their count
   std::vector<int> rim_count_;
-  std::vector<uint8_t> widened_;  // rgb8 -> RGBA, reused
 };
 
 }  // namespace lumistage

@@ -51,5 +51,33 @@ TEST(Image, BayerLayoutsPutRedWhereTheirNamesSay) {
   EXPECT_FALSE(parsePixelFormat("bayer_rgbg8"));
 }
 
+TEST(Image, BayerCellsAreTheirRedTheMeanOfTheirGreensAndTheirBlue) {
+  // An image of odd width and height (its last column and row belong to no cell) whose 18 cells
+  // a row take the eight-at-a-time path and the cell-at-a-time tail: every cell against the
+  // colour its four pixels say, in every layout (mono8 read as the default one).
+  const int width = 37, height = 9, cells_x = width / 2, cells_y = height / 2;
+  std::vector<uint8_t> pixels(width * height);
+  for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = uint8_t((i * 97 + 13) % 256);
+  for (PixelFormat format : kAllPixelFormats) {
+    if (format == PixelFormat::kRgb8) continue;
+    const BayerLayout layout = bayerLayout(format);
+    std::vector<uint8_t> rgba(cells_x * cells_y * 4, 7);
+    bayerCellsToRgba({format, width, height, pixels.data()}, rgba.data());
+    for (int cy = 0; cy < cells_y; ++cy) {
+      for (int cx = 0; cx < cells_x; ++cx) {
+        auto at = [&](int dx, int dy) { return int(pixels[(2 * cy + dy) * width + 2 * cx + dx]); };
+        const int r = at(layout.red_x, layout.red_y), b = at(1 - layout.red_x, 1 - layout.red_y);
+        const int g =
+            (at(1 - layout.red_x, layout.red_y) + at(layout.red_x, 1 - layout.red_y) + 1) / 2;
+        const uint8_t* texel = &rgba[4 * (cy * cells_x + cx)];
+        EXPECT_EQ(texel[0], r) << pixelFormatName(format) << " cell " << cx << "," << cy;
+        EXPECT_EQ(texel[1], g) << pixelFormatName(format) << " cell " << cx << "," << cy;
+        EXPECT_EQ(texel[2], b) << pixelFormatName(format) << " cell " << cx << "," << cy;
+        EXPECT_EQ(texel[3], 255);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace lumistage

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "core/base/error.h"
+#include "core/capture/image.h"
 #include "core/eval/view_metrics.h"
 #include "core/render/partial_image_blender.h"
 #include "core/render/partial_image_codec.h"
@@ -87,6 +88,68 @@ TEST_F(LumigraphRendererTest, DesiredCameraOnAnInputCameraGivesThatCamerasImage)
     EXPECT_GT(score.pixels, 10000) << camera.name();
     EXPECT_GT(score.psnr_db, 38.0) << camera.name();
     EXPECT_GT(score.ssim, 0.97) << camera.name();
+  }
+}
+
+// A Bayer image is sampled as the bilinear blend of its 2x2 cells' colours (R, the mean of the two
+// G, B) at the texel: cells of known colours, mosaicked in two layouts, rendered from an input
+// camera, against that blend computed here.
+TEST_F(LumigraphRendererTest, BayerImagesAreSampledAsTheirCellsColours) {
+  auto cellColour = [](int cx, int cy, int k) {
+    const double v = k == 0   ? cx / 2.0                                    // a gentle ramp
+                     : k == 1 ? 128 + 100 * std::sin(cx * 0.4 + cy * 0.25)  // steep waves
+                              : 255 - cy / 2.0;
+    return uint8_t(std::lround(std::clamp(v, 0.0, 255.0)));
+  };
+  const int render_camera = 5;
+  for (PixelFormat format : {PixelFormat::kBayerRggb8, PixelFormat::kBayerGbrg8}) {
+    std::vector<int> all;
+    for (int c = 0; c < rig().cameraCount(); ++c) all.push_back(c);
+    LumigraphRenderer renderer(rig(), all);
+    renderer.setMesh(frame_->surface.positions, frame_->surface.normals, frame_->surface.triangles);
+    for (int c = 0; c < rig().cameraCount(); ++c) {
+      const Camera& camera = rig().camera(c);
+      std::vector<uint8_t> rgba(size_t(camera.width()) * camera.height() * 4, 255);
+      for (int y = 0; y < camera.height(); ++y)
+        for (int x = 0; x < camera.width(); ++x)
+          for (int k = 0; k < 3; ++k)
+            rgba[4 * (size_t(y) * camera.width() + x) + k] = cellColour(x / 2, y / 2, k);
+      Image bayer;
+      rgbaToImage(rgba.data(), camera.width(), camera.height(), format, bayer);
+      renderer.setImage(c, bayer.view());
+    }
+    const Camera& camera = rig().camera(render_camera);
+    std::vector<uint8_t> rendered;
+    renderer.render(camera, rendered);
+    const int cells_x = camera.width() / 2, cells_y = camera.height() / 2;
+    double error = 0;
+    int64_t pixels = 0, far_off = 0;
+    for (int y = 0; y < camera.height(); ++y) {
+      for (int x = 0; x < camera.width(); ++x) {
+        const size_t i = size_t(y) * camera.width() + x;
+        if (rendered[4 * i + 3] == 0 || !frame_->masks[render_camera][i]) continue;
+        // Texel x + 0.5; cell centres at 2c + 1 texels.
+        const double sx = (x - 0.5) / 2, sy = (y - 0.5) / 2;
+        const int x0 = int(std::floor(sx)), y0 = int(std::floor(sy));
+        const double fx = sx - x0, fy = sy - y0;
+        const int xa = std::clamp(x0, 0, cells_x - 1), xb = std::clamp(x0 + 1, 0, cells_x - 1);
+        const int ya = std::clamp(y0, 0, cells_y - 1), yb = std::clamp(y0 + 1, 0, cells_y - 1);
+        for (int k = 0; k < 3; ++k) {
+          const double expected =
+              (1 - fy) * ((1 - fx) * cellColour(xa, ya, k) + fx * cellColour(xb, ya, k)) +
+              fy * ((1 - fx) * cellColour(xa, yb, k) + fx * cellColour(xb, yb, k));
+          const double d = std::abs(rendered[4 * i + k] - expected);
+          error += d;
+          far_off += d > 4;
+        }
+        ++pixels;
+      }
+    }
+    ASSERT_GT(pixels, 10000);
+    // Texture coordinates interpolated over triangles sit within a small fraction of a pixel of
+    // the camera's own projection; the steep waves change by up to 20 levels a pixel.
+    EXPECT_LT(error / (3 * pixels), 1.0) << int(format);
+    EXPECT_LT(double(far_off) / (3 * pixels), 0.01) << int(format);
   }
 }
 
