@@ -42,9 +42,11 @@ bool sendFrame(zmq::socket_t& socket, std::span<const uint8_t> bytes, bool more,
   return result.has_value();
 }
 
-bool waitReadable(zmq::socket_t& socket, std::chrono::milliseconds timeout) {
-  zmq::pollitem_t item{socket.handle(), 0, ZMQ_POLLIN, 0};
-  return zmq::poll(&item, 1, timeout) > 0 && (item.revents & ZMQ_POLLIN) != 0;
+bool waitReadable(zmq::socket_t& socket, std::chrono::milliseconds timeout, int wake_fd = -1) {
+  zmq::pollitem_t items[2] = {{socket.handle(), 0, ZMQ_POLLIN, 0},
+                              {nullptr, wake_fd, ZMQ_POLLIN, 0}};
+  return zmq::poll(items, wake_fd >= 0 ? 2 : 1, timeout) > 0 &&
+         (items[0].revents & ZMQ_POLLIN) != 0;
 }
 
 }  // namespace
@@ -292,10 +294,10 @@ bool NodeEndpoint::send(const Message& message, std::chrono::milliseconds timeou
   return send(bytes, timeout);
 }
 
-std::optional<DecodeResult> NodeEndpoint::receive(std::chrono::milliseconds timeout) {
+std::optional<DecodeResult> NodeEndpoint::receive(std::chrono::milliseconds timeout, int wake_fd) {
   State& s = *state_;
   try {
-    if (!waitReadable(s.dealer, timeout)) return std::nullopt;
+    if (!waitReadable(s.dealer, timeout, wake_fd)) return std::nullopt;
     std::vector<zmq::message_t> frames;
     if (!zmq::recv_multipart(s.dealer, std::back_inserter(frames), zmq::recv_flags::dontwait)) {
       return std::nullopt;

@@ -100,8 +100,9 @@ class NodeEndpoint {
   // studio is down, unreachable, or refused this node's key. Nothing is queued for later.
   bool send(std::span<const uint8_t> bytes, std::chrono::milliseconds timeout);
   bool send(const Message& message, std::chrono::milliseconds timeout);
-  // The next message from the studio, decoded or with the reason it was dropped.
-  std::optional<DecodeResult> receive(std::chrono::milliseconds timeout);
+  // The next message from the studio, decoded or with the reason it was dropped. Waits at most
+  // `timeout`, and no longer than until `wake_fd` (a file descriptor, when not -1) is readable.
+  std::optional<DecodeResult> receive(std::chrono::milliseconds timeout, int wake_fd = -1);
   int64_t badMessages() const;
 
  private:

@@ -221,7 +221,7 @@ void CameraNode::silhouetteLoop(const std::atomic<bool>& stop) {
       monitor_set_ = *set;
       monitor_silhouettes_ = std::get<SilhouettesData>(silhouettes.body).masks;
     }
-    outbox_.push(std::move(silhouettes));
+    post(std::move(silhouettes));
   }
 }
 
@@ -255,15 +255,18 @@ void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {
   } catch (const Error& e) {
     spdlog::error("node {}: no lumigraph rendering: {}", name_, e.what());
   }
+  const auto is_offsets = [](const Message& m) {
+    return std::holds_alternative<OffsetsData>(m.body);
+  };
   while (!stop) {
-    while (std::optional<Message> offsets = offsets_.pop(std::chrono::milliseconds(0))) {
-      for (Message& image : partialImagesWithOffsets(*offsets)) outbox_.push(std::move(image));
+    std::optional<Message> work =
+        from_studio_.popPreferring(std::chrono::milliseconds(20), is_offsets);
+    if (!work) continue;
+    if (is_offsets(*work)) {
+      for (Message& image : partialImagesWithOffsets(*work)) post(std::move(image));
+    } else if (std::optional<Message> reply = statisticsFor(*work)) {
+      post(std::move(*reply));
     }
-    std::optional<Message> pose = poses_.pop(std::chrono::milliseconds(2));
-    if (!pose) continue;
-    std::optional<Message> reply = statisticsFor(*pose);
-    if (!reply) continue;
-    outbox_.push(std::move(*reply));
   }
   // The GL objects belong to this thread's context.
   renderer_.reset();
@@ -313,6 +316,11 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
   return partialImagesFor(*set, message.frame_id, views, pivot);
 }
 
+void CameraNode::post(Message message) {
+  outbox_.push(std::move(message));
+  outbox_ready_.notify();
+}
+
 bool CameraNode::send(Message message) {
   message.sender = name_;
   const bool silhouettes = std::holds_alternative<SilhouettesData>(message.body);
@@ -333,14 +341,17 @@ void CameraNode::run(const std::atomic<bool>& stop) {
   auto last_heartbeat = std::chrono::steady_clock::now() - options_.heartbeat;
   auto last_from_studio = std::chrono::steady_clock::now();
   while (!stop && !source_finished_) {
+    outbox_ready_.clear();
     while (std::optional<Message> out = outbox_.pop(std::chrono::milliseconds(0)))
       send(std::move(*out));
-    if (std::optional<DecodeResult> received = endpoint_.receive(std::chrono::milliseconds(2))) {
+    // Woken by a message from the studio or one to send, else at least every 10 ms (heartbeats,
+    // the stop flag).
+    if (std::optional<DecodeResult> received =
+            endpoint_.receive(std::chrono::milliseconds(10), outbox_ready_.fd())) {
       if (received->ok()) last_from_studio = std::chrono::steady_clock::now();
-      if (received->ok() && std::holds_alternative<PoseData>(received->message->body)) {
-        poses_.push(std::move(*received->message));
-      } else if (received->ok() && std::holds_alternative<OffsetsData>(received->message->body)) {
-        offsets_.push(std::move(*received->message));
+      if (received->ok() && (std::holds_alternative<PoseData>(received->message->body) ||
+                             std::holds_alternative<OffsetsData>(received->message->body))) {
+        from_studio_.push(std::move(*received->message));
       } else if (received->ok() && std::holds_alternative<ViewData>(received->message->body)) {
         std::lock_guard lock(view_mutex_);
         const ViewData& view = std::get<ViewData>(received->message->body);

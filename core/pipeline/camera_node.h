@@ -18,6 +18,7 @@
 #include "core/pipeline/bounded_queue.h"
 #include "core/pipeline/silhouettes.h"
 #include "core/pipeline/take_recorder.h"
+#include "core/pipeline/wakeup.h"
 #include "core/refine/refinement_sampler.h"
 #include "core/refine/refinement_statistics.h"
 #include "core/render/egl_context.h"
@@ -108,6 +109,8 @@ class CameraNode {
                                         const std::vector<ViewData>& views,
                                         const Eigen::Vector3d& pivot);
   bool send(Message message);
+  // Queues a message for the main thread to send, and wakes it.
+  void post(Message message);
 
   Rig rig_;
   std::string name_;
@@ -134,9 +137,11 @@ class CameraNode {
   int screen_sets_learnt_ = 0;  // sets learnt from so far; kScreenWarmupSets once fixed
   const GreenScreenKeyer silhouette_keyer_;
   BoundedQueue<std::shared_ptr<const Set>> sets_{2};
-  BoundedQueue<Message> poses_{4};
-  BoundedQueue<Message> offsets_{4};
+  // The studio's poses and offsets, for the statistics thread (offsets first: they finish
+  // frames).
+  BoundedQueue<Message> from_studio_{8};
   BoundedQueue<Message> outbox_{32};
+  Wakeup outbox_ready_;  // wakes the main thread, which sends the outbox, from its poll
   std::mutex view_mutex_;
   std::map<int, ViewData> views_;  // the latest of each desired view from the studio
   // The statistics thread's alone: its OpenGL context and renderer (none when no context).

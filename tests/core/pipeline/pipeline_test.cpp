@@ -1,8 +1,12 @@
 #include "core/pipeline/pipeline.h"
 
 #include <gtest/gtest.h>
+#include <poll.h>
 
 #include <condition_variable>
+#include <thread>
+
+#include "core/pipeline/wakeup.h"
 
 namespace lumistage {
 namespace {
@@ -24,6 +28,28 @@ TEST(BoundedQueue, DropsTheOldestWhenFullAndDrainsAfterClose) {
   EXPECT_EQ(queue.push(4), 4);  // refused after close
   EXPECT_EQ(queue.pop(std::chrono::milliseconds(10)), 3);
   EXPECT_FALSE(queue.pop(std::chrono::milliseconds(10)));
+}
+
+TEST(BoundedQueue, APreferredItemGoesFirstElseTheOldest) {
+  BoundedQueue<int> queue(4);
+  for (int i : {1, 2, 3, 4}) queue.push(i);
+  const auto even = [](int i) { return i % 2 == 0; };
+  EXPECT_EQ(queue.popPreferring(std::chrono::milliseconds(10), even), 2);
+  EXPECT_EQ(queue.popPreferring(std::chrono::milliseconds(10), even), 4);
+  EXPECT_EQ(queue.popPreferring(std::chrono::milliseconds(10), even), 1);
+  EXPECT_EQ(queue.size(), 1u);
+}
+
+TEST(Wakeup, APollOnItsDescriptorEndsWhenNotifiedAndNotAfterClear) {
+  Wakeup wakeup;
+  pollfd item{wakeup.fd(), POLLIN, 0};
+  EXPECT_EQ(poll(&item, 1, 0), 0);
+  std::thread other([&] { wakeup.notify(); });
+  EXPECT_EQ(poll(&item, 1, 5000), 1);  // woken by the other thread, long before 5 s
+  other.join();
+  wakeup.notify();  // twice before one clear: one clear is enough
+  wakeup.clear();
+  EXPECT_EQ(poll(&item, 1, 0), 0);
 }
 
 // Four stages that each wait until all four are busy at once: it passes only if four frames are
