@@ -34,25 +34,15 @@ void PipelineWorker::killNode(const QString& name) {
 void PipelineWorker::startRecording(const QString& file) {
   QMutexLocker lock(&mutex_);
   commands_.push_back([this, file](LocalPipelineRun& run) {
-    run.studio().setBlendedSink({});
-    recorder_.reset();
     try {
-      recorder_ = std::make_unique<ViewRecorder>(file.toStdString(), run.frameRate());
+      run.recordView(file.toStdString(), [this](const std::string& error) {
+        emit message(tr("Recording stopped: %1").arg(QString::fromStdString(error)));
+      });
     } catch (const std::exception& e) {
       emit message(tr("Cannot record the view: %1").arg(QString::fromStdString(e.what())));
       emit recordingEnded();
       return;
     }
-    run.studio().setBlendedSink([this](int view, const BlendedImage& image) {
-      if (view != 0 || recorder_failed_) return;
-      try {
-        recorder_->add(image.frame_id, image.width, image.height, image.rgba);
-      } catch (const std::exception& e) {  // a full disk: the recording stops, not the pipeline
-        recorder_failed_ = true;
-        emit message(tr("Recording stopped: %1").arg(QString::fromStdString(e.what())));
-      }
-    });
-    recorder_failed_ = false;
     emit message(tr("Recording the view to %1").arg(file));
   });
 }
@@ -60,13 +50,11 @@ void PipelineWorker::startRecording(const QString& file) {
 void PipelineWorker::stopRecording() {
   QMutexLocker lock(&mutex_);
   commands_.push_back([this](LocalPipelineRun& run) {
-    run.studio().setBlendedSink({});
-    if (!recorder_) return;
-    recorder_->close();
+    const std::unique_ptr<ViewRecorder> recorder = run.stopRecordingView();
+    if (!recorder) return;
     emit message(tr("Recorded %1 frames of the view to %2")
-                     .arg(recorder_->framesWritten())
-                     .arg(QString::fromStdString(recorder_->file().string())));
-    recorder_.reset();
+                     .arg(recorder->framesWritten())
+                     .arg(QString::fromStdString(recorder->file().string())));
     emit recordingEnded();
   });
 }
@@ -146,14 +134,13 @@ void PipelineWorker::run() {
         posedBodyMesh(human, pose_data, transforms, mesh->positions, mesh->normals);
         mesh->triangles = human.rest.triangles;
       }
-      if (recorder_ && recorder_failed_) {
-        pipeline.studio().setBlendedSink({});
-        recorder_.reset();
+      if (pipeline.viewRecordingFailed()) {
+        pipeline.stopRecordingView();
         emit recordingEnded();
       }
-      if (recorder_) {
-        s.recording = QString::fromStdString(recorder_->file().string());
-        s.recorded_frames = recorder_->framesWritten();
+      if (const ViewRecorder* recorder = pipeline.viewRecording()) {
+        s.recording = QString::fromStdString(recorder->file().string());
+        s.recorded_frames = recorder->framesWritten();
       }
       s.take = pipeline.studio().take();
       s.take_recording = pipeline.studio().recordingTake();
@@ -164,12 +151,9 @@ void PipelineWorker::run() {
       s.mesh = mesh;
       emit snapshot(s);
     }
+    // A recording under way is finished with the pipeline; the panel ends it with this worker.
   } catch (const std::exception& e) {
     emit message(tr("Pipeline stopped: %1").arg(QString::fromStdString(e.what())));
-  }
-  if (recorder_) {
-    recorder_.reset();  // finishes the recording (its sink went with the pipeline)
-    emit recordingEnded();
   }
   emit finished();
 }

@@ -81,8 +81,6 @@ class PipelineWorker : public QObject {
   std::atomic<bool> stop_{false};
   QMutex mutex_;
   std::vector<std::function<void(LocalPipelineRun&)>> commands_;  // guarded by mutex_
-  std::unique_ptr<ViewRecorder> recorder_;                        // the worker thread's own
-  bool recorder_failed_ = false;
 };
 
 // The pipeline for technicians: frames a second, latency, per-stage times, frames in flight,

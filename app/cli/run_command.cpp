@@ -206,11 +206,9 @@ void addRunCommand(CLI::App& app) {
       view.height = height;
       studio.setView(view);
     }
-    std::unique_ptr<ViewRecorder> recorder;
     if (!a->record_view.empty()) {
-      recorder = std::make_unique<ViewRecorder>(a->record_view, pipeline.frameRate());
-      studio.setBlendedSink([&recorder](int view, const BlendedImage& image) {
-        if (view == 0) recorder->add(image.frame_id, image.width, image.height, image.rgba);
+      pipeline.recordView(a->record_view, [](const std::string& error) {
+        fmt::print(stderr, "lumistage run: recording stopped: {}\n", error);
       });
     }
     // CPU use is measured from the first frame done: the nodes' start-up (loading a session into
@@ -247,12 +245,10 @@ void addRunCommand(CLI::App& app) {
       }
     }
     if (!take.empty() && !studio.take().take.empty()) finishTake(pipeline, a->record_take);
-    if (recorder) {
-      studio.setBlendedSink({});
-      recorder->close();
+    if (std::unique_ptr<ViewRecorder> recorder = pipeline.stopRecordingView()) {
       fmt::print("recorded the view to {}: {} frames of {}x{} at {:g} fps\n",
                  recorder->file().string(), recorder->framesWritten(), recorder->width(),
-                 recorder->height(), pipeline.frameRate());
+                 recorder->height(), recorder->fps());
     }
     const RunReport r = studio.report();
     const double wall_s =

@@ -132,17 +132,53 @@ void LocalPipelineRun::runFor(std::chrono::milliseconds duration) {
 }
 
 double LocalPipelineRun::frameRate() const {
+  return reportedFrameRate().value_or(frame_rate_);
+}
+
+std::optional<double> LocalPipelineRun::reportedFrameRate() const {
   if (!options_.session.empty()) return frame_rate_;
   double sum = 0;
   int cameras = 0;
   for (const NodeReport& node : studio_->report().nodes) {
     for (const CameraHealth& camera : node.cameras) {
-      if (node.lost || !(camera.frame_rate_hz > 0)) continue;
+      // A rate measured over less than two seconds of frames is still settling: a node
+      // replaying a 20 fps session on a loaded machine said 22 or 23 fps after its first second.
+      if (node.lost || !(camera.frame_rate_hz > 0) || camera.frames < 2 * camera.frame_rate_hz)
+        continue;
       sum += camera.frame_rate_hz;
       ++cameras;
     }
   }
-  return cameras > 0 ? std::round(100 * sum / cameras) / 100 : frame_rate_;
+  if (cameras == 0) return std::nullopt;
+  return std::round(100 * sum / cameras) / 100;
+}
+
+void LocalPipelineRun::recordView(const std::filesystem::path& file,
+                                  std::function<void(const std::string&)> stopped) {
+  stopRecordingView();
+  view_recorder_ = std::make_unique<ViewRecorder>(file, frameRate());
+  view_recorder_failed_ = false;
+  studio_->setBlendedSink([this, file, stopped](int view, const BlendedImage& image) {
+    if (view != 0 || view_recorder_failed_) return;
+    try {
+      if (view_recorder_->framesWritten() == 0) {
+        const std::optional<double> fps = reportedFrameRate();
+        if (!fps) return;  // no camera has measured its rate yet
+        if (*fps != view_recorder_->fps())
+          view_recorder_ = std::make_unique<ViewRecorder>(file, *fps);
+      }
+      view_recorder_->add(image.frame_id, image.width, image.height, image.rgba);
+    } catch (const std::exception& e) {
+      view_recorder_failed_ = true;
+      if (stopped) stopped(e.what());
+    }
+  });
+}
+
+std::unique_ptr<ViewRecorder> LocalPipelineRun::stopRecordingView() {
+  studio_->setBlendedSink({});
+  if (view_recorder_) view_recorder_->close();
+  return std::move(view_recorder_);
 }
 
 std::vector<std::string> LocalPipelineRun::takeExits() {

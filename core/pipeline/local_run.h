@@ -4,11 +4,14 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/pipeline/studio_coordinator.h"
+#include "core/render/view_recorder.h"
 
 namespace lumistage {
 
@@ -60,14 +63,36 @@ class LocalPipelineRun {
   bool nodesElsewhere() const { return !options_.listen.empty(); }
 
   // The cameras' frame rate: the session's; for live cameras, the mean of the rates the nodes
-  // report (rounded to a hundredth), or 30 before any has reported one.
+  // report (rounded to a hundredth) once measured over two seconds of frames, or 30 before.
   double frameRate() const;
+  // The same, none while live cameras have not measured theirs yet.
+  std::optional<double> reportedFrameRate() const;
+
+  // Records the director's view (view 0), every blended image as it is made, to `file`
+  // (ViewRecorder), at the cameras' rate; replaces a recording under way. The recorder is made
+  // now, so that a file that cannot be written throws Error here, and made again at the first
+  // image when the rate is another by then: live cameras measure theirs after the run starts
+  // (images before are left out). A failure while recording (a full disk) stops the recording,
+  // not the pipeline, and is given to `stopped`.
+  void recordView(const std::filesystem::path& file,
+                  std::function<void(const std::string&)> stopped = {});
+  // Ends the recording and hands back its closed recorder (file, frames, size, rate); none when
+  // none was made.
+  std::unique_ptr<ViewRecorder> stopRecordingView();
+  // The recording under way (none when none is, or after it failed).
+  const ViewRecorder* viewRecording() const {
+    return view_recorder_failed_ ? nullptr : view_recorder_.get();
+  }
+  // Whether a recording stopped on a failure and was not ended yet.
+  bool viewRecordingFailed() const { return view_recorder_ && view_recorder_failed_; }
   StudioCoordinator& studio() { return *studio_; }
   const Rig& rig() const { return rig_; }
   const std::vector<std::string>& nodeNames() const { return names_; }
 
  private:
   LocalRunOptions options_;
+  std::unique_ptr<ViewRecorder> view_recorder_;
+  bool view_recorder_failed_ = false;
   Rig rig_;
   std::vector<std::string> names_;
   std::filesystem::path keys_;

@@ -88,6 +88,9 @@ const std::filesystem::path& ViewRecorder::file() const {
 int64_t ViewRecorder::framesWritten() const {
   return impl_->written;
 }
+double ViewRecorder::fps() const {
+  return impl_->fps;
+}
 int ViewRecorder::width() const {
   return impl_->width;
 }

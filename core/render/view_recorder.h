@@ -30,7 +30,8 @@ class ViewRecorder {
 
   const std::filesystem::path& file() const;
   int64_t framesWritten() const;  // repeats included
-  int width() const;              // of the video (the first image's); 0 before it
+  double fps() const;
+  int width() const;  // of the video (the first image's); 0 before it
   int height() const;
 
  private:

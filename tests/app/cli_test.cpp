@@ -12,6 +12,7 @@
 #include <assimp/Importer.hpp>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -358,10 +359,25 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
 
 // A real stage: the nodes run on their own PCs (here: processes started apart, as systemd would)
 // and connect to a studio that listens for them, with the key store they were given.
+// The frame rate an AVI's first stream header states (dwRate / dwScale); 0 when it has none.
+double aviFrameRate(const std::string& avi) {
+  const size_t at = avi.find("strh");
+  if (at == std::string::npos || at + 36 > avi.size()) return 0;
+  auto word = [&](size_t offset) {
+    uint32_t v = 0;
+    std::memcpy(&v, avi.data() + at + 8 + offset, 4);
+    return v;
+  };
+  return word(20) > 0 ? double(word(24)) / word(20) : 0;
+}
+
+// The studio of a stage whose nodes run on other PCs, here processes started apart, cameras at
+// 20 fps: it records the director's view at the rate they report, not at 30.
 TEST(Cli, RunListensForNodesStartedOnTheStagesPCs) {
   const fs::path folder = tempPath("listen");
   ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
-                               "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
+                               "actor:\n  vertices: 2000\nmotion:\n  clip: walk\n  fps: 20\n",
+                               "--frames 6 --bayer"));
   const fs::path keys = folder / "keys";
   ASSERT_EQ(run(kCli + " keys init --dir " + keys.string() + " --nodes node1,node2").exit_code, 0);
   const std::string studio = "tcp://127.0.0.1:" + std::to_string(freePort());
@@ -372,15 +388,16 @@ TEST(Cli, RunListensForNodesStartedOnTheStagesPCs) {
              "=$!; ";
     pids += std::string(" $") + node;
   }
-  const Result r =
-      run("(" + nodes + kCli + " run --rig " + (folder / "session/rig.yaml").string() +
-          " --listen " + studio + " --keys " + keys.string() +
-          " --frames 15 --seconds 40; status=$?; kill" + pids + "; wait; exit $status)");
+  const Result r = run(
+      "(" + nodes + kCli + " run --rig " + (folder / "session/rig.yaml").string() + " --listen " +
+      studio + " --keys " + keys.string() + " --record-view " + (folder / "view.avi").string() +
+      " --frames 70 --seconds 40; status=$?; kill" + pids + "; wait; exit $status)");
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NEAR(aviFrameRate(readFile(folder / "view.avi")), 20, 1.5) << r.output;
   EXPECT_NE(r.output.find("studio at " + studio + " (CURVE), waiting for the rig's 2 nodes"),
             std::string::npos)
       << r.output;
-  EXPECT_NE(r.output.find("15 frames in all"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("70 frames in all"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("node node2    streaming"), std::string::npos) << r.output;
   // Without the key store the nodes have, nobody could join: said before listening.
   const Result no_keys = run(kCli + " run --rig " + (folder / "session/rig.yaml").string() +
