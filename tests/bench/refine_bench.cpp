@@ -85,18 +85,26 @@ void refineNodeSide(benchmark::State& state) {
 BENCHMARK(refineNodeSide)->Unit(benchmark::kMillisecond);
 
 // The depth maps alone (3 cameras, 1/8 resolution).
+// Depth maps of the posed generic human: the refinement's (a node's 3 cameras at its step) or
+// the lumigraph's visibility maps on the CPU (all 12 cameras at a quarter of their size).
 void refineDepthMaps(benchmark::State& state) {
   const Scene& s = scene();
+  const bool lumigraph = state.range(0) == 1;
+  std::vector<int> cameras = s.config.rig.nodes()[0].cameras;
+  if (lumigraph) {
+    cameras.clear();
+    for (int c = 0; c < s.config.rig.cameraCount(); ++c) cameras.push_back(c);
+  }
   DepthMap map;
   for (auto _ : state) {
-    for (int c : s.config.rig.nodes()[0].cameras) {
+    for (int c : cameras) {
       map.render(s.config.rig.camera(c), s.positions, s.generic.rest.triangles,
-                 s.config.refine.depth_map_step);
+                 lumigraph ? 4 : s.config.refine.depth_map_step);
       benchmark::DoNotOptimize(map.depths().data());
     }
   }
 }
-BENCHMARK(refineDepthMaps)->Unit(benchmark::kMillisecond);
+BENCHMARK(refineDepthMaps)->ArgName("lumigraph")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // The module: decompress the 4 nodes' statistics, combine, choose every vertex's offset.
 void refineModuleSide(benchmark::State& state) {
