@@ -12,15 +12,16 @@
 // triangles between vertices cut inside a curved surface's silhouette (LumigraphParams).
 // The weights are computed in the captured actor's frame: a clone's desired camera is brought
 // into it (desired_centre), and only the clone's placement moves the vertex on screen.
-// kOwnCameras (the renderer's own cameras, whose images it has) is defined when compiling.
+// Defined when compiling: kCameras (the rig's), kOwnCameras (the renderer's own cameras, whose
+// images it has) and kOwnCameraList (their rig indices).
 const int kMaxCameras = 16;
+const int kOwn[kOwnCameras] = int[kOwnCameras](kOwnCameraList);
 const int kMaxK = 4;
 
 layout(location = 0) in vec3 position;  // captured actor frame (= capture world), metres
 layout(location = 1) in vec3 normal;
 layout(location = 2) in float dilation;  // metres out along the normal, for the desired view only
 
-uniform int camera_count;
 uniform mat3 rotations[kMaxCameras];
 uniform vec3 translations[kMaxCameras];
 uniform vec4 focal_centres[kMaxCameras];
@@ -51,8 +52,6 @@ uniform vec3 view_radial;
 uniform vec2 view_tangential;
 uniform vec2 view_size;
 
-uniform int own_camera[kOwnCameras];  // rig index of each own camera
-
 out float v_weight[kOwnCameras];  // of the own cameras
 out vec2 v_texel[kOwnCameras];    // pixel coordinates + 0.5 (texel space of the camera's image)
 out float v_total;                // the weight of every camera of the rig
@@ -80,11 +79,11 @@ void main() {
   vec2 texel[kMaxCameras];
   vec4 smallest = vec4(kNone);  // sorted: the 4 smallest angles
   float fifth = kNone;
-  for (int i = 0; i < kMaxCameras; ++i) {
+  for (int i = 0; i < kCameras; ++i) {
     angle[i] = kNone;
     facing[i] = 0.0;
     texel[i] = vec2(-1.0);
-    if (i >= camera_count || camera_active[i] == 0) continue;
+    if (camera_active[i] == 0) continue;
     vec3 c = rotations[i] * p + translations[i];
     if (c.z <= 0.05) continue;
     vec2 pixel = projectPixel(c, focal_centres[i], skews[i], radials[i], tangentials[i]);
@@ -112,7 +111,7 @@ void main() {
   float next = k == 1 ? smallest.y : k == 2 ? smallest.z : k == 3 ? smallest.w : fifth;
   float threshold = next < kNone ? next : max_angle;
   float sum = 0.0;
-  for (int i = 0; i < kMaxCameras; ++i) {
+  for (int i = 0; i < kCameras; ++i) {
     float a = angle[i];
     float w = 0.0;
     if (a <= kth && a < kNone) {
@@ -124,19 +123,13 @@ void main() {
   }
   // The k-th and (k+1)-th tie: every kept weight is 0; the nearest camera alone.
   if (sum <= 0.0 && smallest.x < kNone) {
-    for (int i = 0; i < kMaxCameras; ++i) weight[i] = angle[i] == smallest.x ? 1.0 : 0.0;
+    for (int i = 0; i < kCameras; ++i) weight[i] = angle[i] == smallest.x ? 1.0 : 0.0;
     sum = 1.0;
   }
   v_total = sum;
   for (int j = 0; j < kOwnCameras; ++j) {
-    v_weight[j] = 0.0;
-    v_texel[j] = vec2(-1.0);
-    for (int i = 0; i < kMaxCameras; ++i) {
-      if (own_camera[j] == i) {
-        v_weight[j] = weight[i];
-        v_texel[j] = texel[i];
-      }
-    }
+    v_weight[j] = weight[kOwn[j]];
+    v_texel[j] = texel[kOwn[j]];
   }
 
   vec3 world = (clone * vec4(p + dilation * n, 1.0)).xyz;

@@ -14,12 +14,26 @@ namespace {
 constexpr int kVertexFloats = 7;  // position, normal, rim dilation
 }  // namespace
 
+namespace {
+
+// The blend shaders' constants: the rig's camera count and the own cameras' rig indices, so that
+// every loop over cameras has a fixed count and every own camera a fixed index (llvmpipe runs
+// the vertex shader on one thread; unrolled, it does a third less work).
+std::string blendDefines(int cameras, const std::vector<int>& own) {
+  std::string list;
+  for (int c : own) list += (list.empty() ? "" : ", ") + std::to_string(c);
+  if (own.empty()) list = "0";
+  return "#define kCameras " + std::to_string(cameras) + "\n#define kOwnCameras " +
+         std::to_string(std::max<size_t>(own.size(), 1)) + "\n#define kOwnCameraList " + list;
+}
+
+}  // namespace
+
 struct LumigraphRenderer::Programs {
-  explicit Programs(int own)
-      : blend("lumigraph.vert", "lumigraph.frag",
-              "#define kOwnCameras " + std::to_string(std::max(own, 1))) {}
+  Programs(int cameras, const std::vector<int>& own)
+      : blend("lumigraph.vert", "lumigraph.frag", blendDefines(cameras, own)) {}
   ShaderProgram depth{"lumigraph_depth.vert", "lumigraph_depth.frag"};
-  ShaderProgram blend;  // compiled for the renderer's number of own cameras
+  ShaderProgram blend;  // compiled for the renderer's rig and own cameras
 };
 
 namespace {
@@ -84,7 +98,7 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
   }
   if (own_.empty() || own_.size() > size_t(kMaxCameras))
     throw Error("LumigraphRenderer: 1 to " + std::to_string(kMaxCameras) + " own cameras needed");
-  programs_ = std::make_unique<Programs>(static_cast<int>(own_.size()));
+  programs_ = std::make_unique<Programs>(rig_.cameraCount(), own_);
   params_.k = std::clamp(params_.k, 1, 4);
   params_.depth_map_divisor = std::max(1, params_.depth_map_divisor);
   params_.cpu_depth_map_divisor = std::max(1, params_.cpu_depth_map_divisor);
@@ -152,9 +166,9 @@ LumigraphRenderer::~LumigraphRenderer() {
   glDeleteTextures(1, &depth_maps_);
   glDeleteTextures(1, &images_);
   glDeleteTextures(1, &masks_);
+  glDeleteBuffers(1, &upload_buffer_);
   glDeleteBuffers(1, &vertex_buffer_);
   glDeleteBuffers(1, &index_buffer_);
-  glDeleteBuffers(1, &upload_buffer_);
   glDeleteVertexArrays(1, &vao_);
 }
 
@@ -380,7 +394,6 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
     sizes.col(c) = Eigen::Vector2f(u.size[0], u.size[1]);
     skews[c] = u.skew;
   }
-  glUniform1i(p.uniform("camera_count"), n);
   glUniformMatrix3fv(p.uniform("rotations"), n, GL_FALSE, rotations.data());
   glUniform3fv(p.uniform("translations"), n, translations.data());
   glUniform4fv(p.uniform("focal_centres"), n, focal_centres.data());
@@ -390,7 +403,6 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform2fv(p.uniform("image_sizes"), n, sizes.data());
   glUniform3fv(p.uniform("centres"), n, centres.data());
   glUniform1iv(p.uniform("camera_active"), n, active_.data());
-  glUniform1iv(p.uniform("own_camera"), static_cast<GLsizei>(own_.size()), own_.data());
   glUniform1f(p.uniform("depth_scale"), 1.0f / float(depth_divisor_));
   glUniform2f(p.uniform("depth_map_size"), float(depth_width_), float(depth_height_));
   glUniform1f(p.uniform("depth_tolerance"), params_.depth_tolerance_m);
