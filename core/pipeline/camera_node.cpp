@@ -152,11 +152,12 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     if (k >= static_cast<long>(cameras_.size())) continue;
     std::shared_ptr<Set>& set = assembling[frame.frame_id];
     if (!set) {
-      set = std::make_shared<Set>();
+      set = newSet();
       set->frame_id = frame.frame_id;
       set->frames.resize(cameras_.size());
     }
     std::swap(set->frames[k], frame);
+    frame_pool_->take(frame);  // buffers of a set let go, for the next frame
     int complete = 0;
     for (const CameraFrame& f : set->frames) complete += f.frame_id == set->frame_id;
     if (complete == static_cast<int>(cameras_.size())) {
@@ -170,6 +171,30 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     while (assembling.size() > 4) assembling.erase(assembling.begin());  // a camera fell behind
   }
   source_finished_ = true;
+}
+
+void CameraNode::FramePool::give(std::vector<CameraFrame>& frames) {
+  std::lock_guard lock(mutex_);
+  for (CameraFrame& frame : frames) {
+    // Enough for the sets in flight and kept; beyond that, buffers are freed.
+    if (frame.image.pixels.empty() || spare_.size() >= 32) continue;
+    spare_.push_back(std::move(frame));
+  }
+}
+
+void CameraNode::FramePool::take(CameraFrame& frame) {
+  if (!frame.image.pixels.empty()) return;
+  std::lock_guard lock(mutex_);
+  if (spare_.empty()) return;
+  frame = std::move(spare_.back());
+  spare_.pop_back();
+}
+
+std::shared_ptr<CameraNode::Set> CameraNode::newSet() {
+  return std::shared_ptr<Set>(new Set, [pool = frame_pool_](Set* set) {
+    pool->give(set->frames);
+    delete set;
+  });
 }
 
 void CameraNode::learnScreens(const Set& set) {

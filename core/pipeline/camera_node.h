@@ -92,6 +92,22 @@ class CameraNode {
   };
   // Learns the own cameras' green screens from a set (the capture thread's, during warm-up).
   void learnScreens(const Set& set);
+  // Camera frames whose image buffers wait for the next frames: a set's frames come back when
+  // the last holder of the set lets it go (the queues, kept_, posed_, the monitor), so that in the
+  // steady state the capture thread never allocates an image (a fresh 786 KB buffer a camera and
+  // frame is zero-filled and faulted in page by page).
+  class FramePool {
+   public:
+    void give(std::vector<CameraFrame>& frames);  // any thread
+    // A spare frame's buffers into `frame`, when it has none and there is one.
+    void take(CameraFrame& frame);
+
+   private:
+    std::mutex mutex_;
+    std::vector<CameraFrame> spare_;
+  };
+  // A new set whose frames go back to the pool when it is released.
+  std::shared_ptr<Set> newSet();
 
   void captureLoop(const std::atomic<bool>& stop);
   void silhouetteLoop(const std::atomic<bool>& stop);
@@ -136,6 +152,7 @@ class CameraNode {
   std::shared_ptr<const std::vector<GreenScreenKeyer>> published_keyers_;
   int screen_sets_learnt_ = 0;  // sets learnt from so far; kScreenWarmupSets once fixed
   const GreenScreenKeyer silhouette_keyer_;
+  std::shared_ptr<FramePool> frame_pool_ = std::make_shared<FramePool>();
   BoundedQueue<std::shared_ptr<const Set>> sets_{2};
   // The studio's poses and offsets, for the statistics thread (offsets first: they finish
   // frames).
