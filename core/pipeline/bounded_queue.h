@@ -36,13 +36,7 @@ class BoundedQueue {
 
   // The oldest item, waiting at most `timeout`; empty on timeout, or once closed and drained.
   std::optional<T> pop(std::chrono::milliseconds timeout) {
-    std::unique_lock lock(mutex_);
-    if (!ready_.wait_for(lock, timeout, [&] { return !items_.empty() || closed_; }))
-      return std::nullopt;
-    if (items_.empty()) return std::nullopt;
-    T item = std::move(items_.front());
-    items_.pop_front();
-    return item;
+    return popPreferring(timeout, [](const T&) { return true; });
   }
 
   // The oldest item for which `preferred` holds, else the oldest, waiting at most `timeout`.

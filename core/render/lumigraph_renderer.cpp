@@ -22,9 +22,8 @@ namespace {
 std::string blendDefines(int cameras, const std::vector<int>& own) {
   std::string list;
   for (int c : own) list += (list.empty() ? "" : ", ") + std::to_string(c);
-  if (own.empty()) list = "0";
   return "#define kCameras " + std::to_string(cameras) + "\n#define kOwnCameras " +
-         std::to_string(std::max<size_t>(own.size(), 1)) + "\n#define kOwnCameraList " + list;
+         std::to_string(own.size()) + "\n#define kOwnCameraList " + list;
 }
 
 }  // namespace

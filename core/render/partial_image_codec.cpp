@@ -50,53 +50,45 @@ void encodeAlphaRuns(std::span<const uint8_t> rgba, std::vector<uint8_t>& out) {
   }
 }
 
-bool decodeAlphaRuns(std::span<const uint8_t> data, size_t pixel_count,
-                     std::vector<uint8_t>& rgba) {
-  rgba.resize(pixel_count * 4);
+namespace {
+
+// The one walk over an encoding: checks it as it goes and calls run(first_pixel, rgba, count)
+// for every run of literal pixels. False as soon as it is not an encoding of exactly pixel_count
+// pixels (runs before that were called).
+template <typename Run>
+bool walkAlphaRuns(std::span<const uint8_t> data, size_t pixel_count, Run&& run) {
   size_t at = 0, i = 0;
   while (i < pixel_count) {
     uint64_t empty_run = 0, literal_run = 0;
     if (!getVarint(data, at, empty_run) || !getVarint(data, at, literal_run)) return false;
     if (empty_run > pixel_count - i || literal_run > pixel_count - i - empty_run) return false;
     if (empty_run + literal_run == 0) return false;  // no progress: not an encoding of ours
-    std::memset(rgba.data() + 4 * i, 0, 4 * empty_run);
     i += empty_run;
     if (literal_run * 4 > data.size() - at) return false;
-    std::memcpy(rgba.data() + 4 * i, data.data() + at, 4 * literal_run);
+    if (literal_run > 0) run(i, data.data() + at, size_t(literal_run));
     at += 4 * literal_run;
     i += literal_run;
   }
   return at == data.size();
 }
 
+}  // namespace
+
+bool decodeAlphaRuns(std::span<const uint8_t> data, size_t pixel_count,
+                     std::vector<uint8_t>& rgba) {
+  rgba.assign(pixel_count * 4, 0);
+  return walkAlphaRuns(data, pixel_count, [&](size_t first, const uint8_t* p, size_t count) {
+    std::memcpy(rgba.data() + 4 * first, p, 4 * count);
+  });
+}
+
 bool validAlphaRuns(std::span<const uint8_t> data, size_t pixel_count) {
-  size_t at = 0, i = 0;
-  while (i < pixel_count) {
-    uint64_t empty_run = 0, literal_run = 0;
-    if (!getVarint(data, at, empty_run) || !getVarint(data, at, literal_run)) return false;
-    if (empty_run > pixel_count - i || literal_run > pixel_count - i - empty_run) return false;
-    if (empty_run + literal_run == 0) return false;
-    if (literal_run * 4 > data.size() - at) return false;
-    at += 4 * literal_run;
-    i += empty_run + literal_run;
-  }
-  return at == data.size();
+  return walkAlphaRuns(data, pixel_count, [](size_t, const uint8_t*, size_t) {});
 }
 
 bool forEachLiteralRun(std::span<const uint8_t> data, size_t pixel_count,
                        const std::function<void(size_t, const uint8_t*, size_t)>& run) {
-  if (!validAlphaRuns(data, pixel_count)) return false;
-  size_t at = 0, i = 0;
-  while (i < pixel_count) {
-    uint64_t empty_run = 0, literal_run = 0;
-    getVarint(data, at, empty_run);
-    getVarint(data, at, literal_run);
-    i += empty_run;
-    if (literal_run > 0) run(i, data.data() + at, literal_run);
-    at += 4 * literal_run;
-    i += literal_run;
-  }
-  return true;
+  return validAlphaRuns(data, pixel_count) && walkAlphaRuns(data, pixel_count, run);
 }
 
 }  // namespace lumistage
