@@ -1,6 +1,5 @@
 #pragma once
 
-#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -36,20 +35,12 @@ class BoundedQueue {
 
   // The oldest item, waiting at most `timeout`; empty on timeout, or once closed and drained.
   std::optional<T> pop(std::chrono::milliseconds timeout) {
-    return popPreferring(timeout, [](const T&) { return true; });
-  }
-
-  // The oldest item for which `preferred` holds, else the oldest, waiting at most `timeout`.
-  template <typename Predicate>
-  std::optional<T> popPreferring(std::chrono::milliseconds timeout, Predicate preferred) {
     std::unique_lock lock(mutex_);
     if (!ready_.wait_for(lock, timeout, [&] { return !items_.empty() || closed_; }))
       return std::nullopt;
     if (items_.empty()) return std::nullopt;
-    auto it = std::find_if(items_.begin(), items_.end(), preferred);
-    if (it == items_.end()) it = items_.begin();
-    T item = std::move(*it);
-    items_.erase(it);
+    T item = std::move(items_.front());
+    items_.pop_front();
     return item;
   }
 

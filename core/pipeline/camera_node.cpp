@@ -280,17 +280,14 @@ void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {
   } catch (const Error& e) {
     spdlog::error("node {}: no lumigraph rendering: {}", name_, e.what());
   }
-  const auto is_offsets = [](const Message& m) {
-    return std::holds_alternative<OffsetsData>(m.body);
-  };
   while (!stop) {
-    std::optional<Message> work =
-        from_studio_.popPreferring(std::chrono::milliseconds(20), is_offsets);
-    if (!work) continue;
-    if (is_offsets(*work)) {
-      for (Message& image : partialImagesWithOffsets(*work)) post(std::move(image));
-    } else if (std::optional<Message> reply = statisticsFor(*work)) {
-      post(std::move(*reply));
+    studio_work_.clear();
+    if (std::optional<Message> offsets = offsets_.pop(std::chrono::milliseconds(0))) {
+      for (Message& image : partialImagesWithOffsets(*offsets)) post(std::move(image));
+    } else if (std::optional<Message> pose = poses_.pop(std::chrono::milliseconds(0))) {
+      if (std::optional<Message> reply = statisticsFor(*pose)) post(std::move(*reply));
+    } else {
+      studio_work_.wait(std::chrono::milliseconds(20));
     }
   }
   // The GL objects belong to this thread's context.
@@ -374,9 +371,12 @@ void CameraNode::run(const std::atomic<bool>& stop) {
     if (std::optional<DecodeResult> received =
             endpoint_.receive(std::chrono::milliseconds(10), outbox_ready_.fd())) {
       if (received->ok()) last_from_studio = std::chrono::steady_clock::now();
-      if (received->ok() && (std::holds_alternative<PoseData>(received->message->body) ||
-                             std::holds_alternative<OffsetsData>(received->message->body))) {
-        from_studio_.push(std::move(*received->message));
+      if (received->ok() && std::holds_alternative<PoseData>(received->message->body)) {
+        poses_.push(std::move(*received->message));
+        studio_work_.notify();
+      } else if (received->ok() && std::holds_alternative<OffsetsData>(received->message->body)) {
+        offsets_.push(std::move(*received->message));
+        studio_work_.notify();
       } else if (received->ok() && std::holds_alternative<ViewData>(received->message->body)) {
         std::lock_guard lock(view_mutex_);
         const ViewData& view = std::get<ViewData>(received->message->body);

@@ -155,8 +155,11 @@ class CameraNode {
   std::shared_ptr<FramePool> frame_pool_ = std::make_shared<FramePool>();
   BoundedQueue<std::shared_ptr<const Set>> sets_{2};
   // The studio's poses and offsets, for the statistics thread (offsets first: they finish
-  // frames).
-  BoundedQueue<Message> from_studio_{8};
+  // frames), each queue dropping its oldest when the node falls behind; studio_work_ wakes the
+  // thread when either gets one.
+  BoundedQueue<Message> poses_{4};
+  BoundedQueue<Message> offsets_{4};
+  Wakeup studio_work_;
   BoundedQueue<Message> outbox_{32};
   Wakeup outbox_ready_;  // wakes the main thread, which sends the outbox, from its poll
   std::mutex view_mutex_;

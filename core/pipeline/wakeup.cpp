@@ -1,5 +1,6 @@
 #include "core/pipeline/wakeup.h"
 
+#include <poll.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
@@ -29,6 +30,11 @@ void Wakeup::notify() {
 void Wakeup::clear() {
   uint64_t count = 0;
   [[maybe_unused]] const ssize_t n = read(fd_, &count, sizeof count);  // EAGAIN when not set
+}
+
+void Wakeup::wait(std::chrono::milliseconds timeout) const {
+  pollfd item{fd_, POLLIN, 0};
+  poll(&item, 1, static_cast<int>(timeout.count()));
 }
 
 }  // namespace lumistage

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <chrono>
+
 namespace lumistage {
 
 // A file descriptor that polls readable from notify() until clear(): a thread waiting in poll()
@@ -14,6 +16,9 @@ class Wakeup {
 
   void notify();  // any thread
   void clear();   // the waiting thread, before it looks for the work
+  // Waits until notified (since the last clear) or `timeout`; for a thread that has no sockets
+  // to poll beside it.
+  void wait(std::chrono::milliseconds timeout) const;
   int fd() const { return fd_; }
 
  private:

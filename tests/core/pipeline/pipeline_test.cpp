@@ -30,16 +30,6 @@ TEST(BoundedQueue, DropsTheOldestWhenFullAndDrainsAfterClose) {
   EXPECT_FALSE(queue.pop(std::chrono::milliseconds(10)));
 }
 
-TEST(BoundedQueue, APreferredItemGoesFirstElseTheOldest) {
-  BoundedQueue<int> queue(4);
-  for (int i : {1, 2, 3, 4}) queue.push(i);
-  const auto even = [](int i) { return i % 2 == 0; };
-  EXPECT_EQ(queue.popPreferring(std::chrono::milliseconds(10), even), 2);
-  EXPECT_EQ(queue.popPreferring(std::chrono::milliseconds(10), even), 4);
-  EXPECT_EQ(queue.popPreferring(std::chrono::milliseconds(10), even), 1);
-  EXPECT_EQ(queue.size(), 1u);
-}
-
 TEST(Wakeup, APollOnItsDescriptorEndsWhenNotifiedAndNotAfterClear) {
   Wakeup wakeup;
   pollfd item{wakeup.fd(), POLLIN, 0};
@@ -50,6 +40,12 @@ TEST(Wakeup, APollOnItsDescriptorEndsWhenNotifiedAndNotAfterClear) {
   wakeup.notify();  // twice before one clear: one clear is enough
   wakeup.clear();
   EXPECT_EQ(poll(&item, 1, 0), 0);
+  // Its own wait: ended by a notification from another thread, long before its 5 s.
+  const auto start = std::chrono::steady_clock::now();
+  std::thread again([&] { wakeup.notify(); });
+  wakeup.wait(std::chrono::seconds(5));
+  again.join();
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(4));
 }
 
 // Four stages that each wait until all four are busy at once: it passes only if four frames are
