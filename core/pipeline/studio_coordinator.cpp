@@ -382,8 +382,10 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     agreeing += sum.outside[s] == 0;
   }
   const int64_t combined = steadyNowNs();
+  bool shown = false;
   for (const auto& [view, blender] : frame.blends) {
     if (blender.added() == 0) continue;
+    shown = true;
     // Normalise the nodes' alphas per pixel and blend.
     BlendedImage& image = last_images_[view];
     image.frame_id = frame_id;
@@ -395,8 +397,12 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   }
 
   // A run asked for max_frames counts exactly those: frames that complete together (several are
-  // in flight) beyond it are still shown, not counted.
-  if (counting_ && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
+  // in flight) beyond it are still shown, not counted. A frame that no node's image reached (their
+  // statistics or images missed the deadlines, as while the nodes start or on an overloaded
+  // machine) shows nothing: it is dropped, not done, so that a run of N frames shows N.
+  if (counting_ && !shown && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
+    ++frames_dropped_;
+  } else if (counting_ && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
     combine_ms_.add((combined - start) / 1e6);
     blend_ms_.add((steadyNowNs() - combined) / 1e6);
     if (frame.pose_sent_ns > 0) statistics_wait_ms_.add((now - frame.pose_sent_ns) / 1e6);

@@ -80,7 +80,8 @@ struct RunReport {
   std::map<std::string, double> stage_ms;         // mean per stage
   double node_bytes_per_frame = 0;                // mean over nodes
   double raw_bytes_per_frame_per_node = 0;        // what the node's cameras deliver
-  int64_t frames = 0, frames_dropped = 0;
+  int64_t frames = 0;                             // done: blended and shown
+  int64_t frames_dropped = 0;  // never shown: refused, overtaken, or reached by no node's image
   int64_t frames_refused =
       0;  // of the dropped: at admission, before any work (max_frames_in_flight)
   int peak_frames_begun = 0;  // the most frames between motion capture and done at once

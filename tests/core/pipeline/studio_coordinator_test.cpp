@@ -1,0 +1,100 @@
+#include "core/pipeline/studio_coordinator.h"
+
+#include <gtest/gtest.h>
+
+#include "core/body/human_skeleton.h"
+#include "core/geometry/ring_rig.h"
+#include "core/refine/refinement_statistics.h"
+
+namespace lumistage {
+namespace {
+
+using std::chrono::milliseconds;
+
+// The studio's side of one frame, with a node played by the test over the real transport: the
+// node answers what it chooses, and the test sees what the studio makes of it.
+class ScriptedNode {
+ public:
+  explicit ScriptedNode(const std::string& studio)
+      : endpoint_([&] {
+          NodeEndpointConfig config;
+          config.connect = studio;
+          config.name = "node1";
+          config.security = TransportSecurity::kPlain;
+          return config;
+        }()) {}
+
+  bool send(int64_t frame_id, MessageBody body) {
+    Message m;
+    m.sender = "node1";
+    m.frame_id = frame_id;
+    m.sent_ns = steadyNowNs();
+    m.body = std::move(body);
+    return endpoint_.send(m, milliseconds(3000));
+  }
+  // The next message of the kind T from the studio, running it meanwhile.
+  template <typename T>
+  std::optional<Message> await(StudioCoordinator& studio) {
+    for (int slice = 0; slice < 300; ++slice) {
+      studio.runFor(milliseconds(10));
+      if (std::optional<DecodeResult> in = endpoint_.receive(milliseconds(0));
+          in && in->ok() && std::holds_alternative<T>(in->message->body)) {
+        return *in->message;
+      }
+    }
+    return std::nullopt;
+  }
+
+ private:
+  NodeEndpoint endpoint_;
+};
+
+// A frame that no node's image reaches shows nothing: it is dropped, not done, so that a run of N
+// frames shows N (while the nodes start, their first frames' statistics never come).
+TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
+  RingRigSpec spec;
+  spec.cameras = 2;
+  spec.cameras_per_node = 2;
+  spec.width = 160;
+  spec.height = 120;
+  StudioEndpointConfig config;
+  config.bind = "tcp://127.0.0.1:*";
+  config.security = TransportSecurity::kPlain;
+  StudioCoordinatorOptions options;
+  options.deadline = milliseconds(50);
+  StudioCoordinator studio(makeRingRig(spec), config, kHumanJointCount, options);
+  ScriptedNode node(studio.endpoint());
+
+  // Frame 1: silhouettes, a pose back, and then nothing from the node.
+  ASSERT_TRUE(node.send(1, SilhouettesData{}));
+  ASSERT_TRUE(node.await<PoseData>(studio));
+  studio.runFor(milliseconds(300));  // past the statistics' deadline
+  EXPECT_EQ(studio.framesDone(), 0);
+  EXPECT_EQ(studio.report().frames_dropped, 1);
+  EXPECT_TRUE(studio.lastImage(0).rgba.empty());
+
+  // Frame 2: the node answers every stage, and the frame is done with its image.
+  ASSERT_TRUE(node.send(2, SilhouettesData{}));
+  ASSERT_TRUE(node.await<PoseData>(studio));
+  const StudioCoordinatorOptions defaults;
+  RefinementStatistics stats;
+  stats.reset(10, defaults.refine.offset_count, defaults.refine.colour_bits);
+  VertexStatisticsData statistics{10, defaults.refine.offset_count, {}};
+  encodeRefinementStatistics(stats, statistics.packed);
+  ASSERT_TRUE(node.send(2, statistics));
+  ASSERT_TRUE(node.await<OffsetsData>(studio));
+  const ViewData& view = studio.view();
+  PartialImageData image{view.view, view.width, view.height, ImageEncoding::kRawRgba,
+                         std::vector<uint8_t>(size_t(view.width) * view.height * 4, 0)};
+  image.data[0] = 200, image.data[3] = 255;  // one red pixel, fully weighted
+  ASSERT_TRUE(node.send(2, image));
+  for (int slice = 0; slice < 300 && studio.framesDone() == 0; ++slice)
+    studio.runFor(milliseconds(10));
+  EXPECT_EQ(studio.framesDone(), 1);
+  EXPECT_EQ(studio.report().frames_dropped, 1);
+  ASSERT_FALSE(studio.lastImage(0).rgba.empty());
+  EXPECT_EQ(studio.lastImage(0).rgba[0], 200);
+}
+
+}  // namespace
+}  // namespace lumistage
