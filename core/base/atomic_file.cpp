@@ -34,6 +34,12 @@ bool isAtomicWriteLeftover(std::string_view file_name) {
 
 void writeFileAtomically(const std::filesystem::path& path, std::string_view contents,
                          const AtomicWriteOptions& options) {
+  writeFileAtomically(path, {contents}, options);
+}
+
+void writeFileAtomically(const std::filesystem::path& path,
+                         std::initializer_list<std::string_view> pieces,
+                         const AtomicWriteOptions& options) {
   const std::string target = path.string();
   std::string temp = target + ".tmp-XXXXXX";
   const int fd = ::mkstemp(temp.data());
@@ -46,14 +52,16 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view con
     throw Error(target + ": " + step + " failed: " + std::strerror(saved) +
                 (saved == ENOSPC || saved == EFBIG ? " (disk full?)" : ""));
   };
-  size_t written = 0;
-  while (written < contents.size()) {
-    const ssize_t n = ::write(fd, contents.data() + written, contents.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail("write");
+  for (const std::string_view contents : pieces) {
+    size_t written = 0;
+    while (written < contents.size()) {
+      const ssize_t n = ::write(fd, contents.data() + written, contents.size() - written);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        fail("write");
+      }
+      written += static_cast<size_t>(n);
     }
-    written += static_cast<size_t>(n);
   }
   if (::fchmod(fd, static_cast<mode_t>(options.mode)) != 0) fail("chmod");
   if (options.sync && ::fsync(fd) != 0) fail("fsync");

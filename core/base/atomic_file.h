@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <string_view>
 
@@ -22,6 +23,10 @@ struct AtomicWriteOptions {
       std::filesystem::perms::group_read | std::filesystem::perms::others_read;
 };
 void writeFileAtomically(const std::filesystem::path& path, std::string_view contents,
+                         const AtomicWriteOptions& options = {});
+// The same, the contents given in pieces (a header and the data it describes, not copied into one).
+void writeFileAtomically(const std::filesystem::path& path,
+                         std::initializer_list<std::string_view> pieces,
                          const AtomicWriteOptions& options = {});
 
 // Whether a file name is a temporary of writeFileAtomically left by an interrupted write.

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <cctype>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
@@ -98,6 +99,93 @@ std::string checkPng(const fs::path& path, int width, int height, int channels) 
   return {};
 }
 
+// A PNM camera image's header ("P5" or "P6", width, height, 255, each followed by one whitespace
+// character; no comments, as the writer writes it): its length, or 0 when it is not such a header
+// of the expected size and channels, with what is wrong in `problem`.
+size_t parsePnmHeader(std::string_view data, int width, int height, int channels,
+                      std::string& problem) {
+  const std::string_view magic = channels == 3 ? "P6" : "P5";
+  if (data.size() < 3 || (data.substr(0, 2) != "P5" && data.substr(0, 2) != "P6") ||
+      !std::isspace(static_cast<unsigned char>(data[2]))) {
+    problem = data.size() < 3 ? "is truncated (shorter than a PNM header)" : "is not a PNM file";
+    return 0;
+  }
+  if (data.substr(0, 2) != magic) {
+    problem = fmt::format("is a {} file, expected {} ({})", data.substr(0, 2), magic,
+                          channels == 3 ? "RGB" : "grey");
+    return 0;
+  }
+  size_t at = 3;
+  int fields[3] = {0, 0, 0};
+  for (int& field : fields) {
+    const size_t end = data.find_first_of(" \t\r\n", at);
+    if (end == std::string_view::npos || !parseNumber(data.substr(at, end - at), field)) {
+      problem = "has a malformed PNM header";
+      return 0;
+    }
+    at = end + 1;
+  }
+  if (fields[0] != width || fields[1] != height) {
+    problem = fmt::format("is a {}x{} image, expected {}x{}", fields[0], fields[1], width, height);
+    return 0;
+  }
+  if (fields[2] != 255) {
+    problem = fmt::format("has PNM maxval {}, expected 255 (8-bit)", fields[2]);
+    return 0;
+  }
+  return at;
+}
+
+// Cheap check of a frame's PNM: its header, and a file as long as the header and every pixel (a
+// file cut short by a crash or a full disk is not).
+std::string checkPnm(const fs::path& path, int width, int height, int channels) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (!file) {
+    return errno == ENOENT ? "is missing"
+                           : fmt::format("cannot be opened: {}", std::strerror(errno));
+  }
+  std::array<char, 64> header{};
+  const size_t read = std::fread(header.data(), 1, header.size(), file);
+  const bool sized = std::fseek(file, 0, SEEK_END) == 0;
+  const long size = sized ? std::ftell(file) : -1;
+  std::fclose(file);
+  std::string problem;
+  const size_t length =
+      parsePnmHeader(std::string_view(header.data(), read), width, height, channels, problem);
+  if (length == 0) return problem;
+  const long expected = long(length) + long(width) * height * channels;
+  if (size != expected)
+    return fmt::format("is {} bytes, expected {} (its header and {}x{} pixels){}", size, expected,
+                       width, height, size < expected ? ": truncated" : "");
+  return {};
+}
+
+// Reads a PNM camera image into `image` (the pixels straight into its buffer): empty, or what is
+// wrong, naming the file.
+std::string readPnm(const fs::path& path, int64_t frame_id, const Camera& camera,
+                    PixelFormat format, Image& image) {
+  const int channels = bytesPerPixel(format);
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (!file) return fmt::format("{}: cannot be opened: {}", path.string(), std::strerror(errno));
+  std::array<char, 64> header{};
+  const size_t read = std::fread(header.data(), 1, header.size(), file);
+  std::string problem;
+  const size_t length = parsePnmHeader(std::string_view(header.data(), read), camera.width(),
+                                       camera.height(), channels, problem);
+  image.resize(format, camera.width(), camera.height());
+  const bool whole =
+      length > 0 && std::fseek(file, long(length), SEEK_SET) == 0 &&
+      std::fread(image.pixels.data(), 1, image.pixels.size(), file) == image.pixels.size() &&
+      std::fgetc(file) == EOF;
+  std::fclose(file);
+  if (whole) return {};
+  return fmt::format(
+      "{}: frame {}: {} (damaged since the session was opened?)", path.string(), frame_id,
+      length == 0 ? problem
+                  : fmt::format("is not a {}x{} {} image's header and pixels", camera.width(),
+                                camera.height(), pixelFormatName(format)));
+}
+
 }  // namespace
 
 SessionReader::SessionReader(const fs::path& folder) : folder_(folder) {
@@ -137,9 +225,13 @@ void SessionReader::readSessionYaml() {
               "expected one of " + pixelFormatNames() + ", got '" + pixel_format.Scalar() + "'");
   }
   format_ = *parsed;
-  const YAML::Node image_files = yaml.required(root, "", "image_files", "png");
-  if (yaml.string(image_files, "image_files") != "png")
-    yaml.fail(image_files, "image_files", "expected png, got '" + image_files.Scalar() + "'");
+  const YAML::Node image_files = yaml.required(root, "", "image_files", "png or pnm");
+  const std::optional<ImageFiles> files = parseImageFiles(yaml.string(image_files, "image_files"));
+  if (!files) {
+    yaml.fail(image_files, "image_files",
+              "expected png or pnm, got '" + image_files.Scalar() + "'");
+  }
+  files_ = *files;
   const YAML::Node truth = yaml.required(root, "", "truth", "true or false");
   if (!truth.IsScalar() || !YAML::convert<bool>::decode(truth, truth_))
     yaml.fail(truth, "truth", "expected true or false, got '" + truth.Scalar() + "'");
@@ -219,7 +311,9 @@ void SessionReader::checkImages() {
     for (int c = 0; c < rig_.cameraCount(); ++c) {
       const Camera& camera = rig_.camera(c);
       const fs::path path = imagePath(c, int(i));
-      const std::string problem = checkPng(path, camera.width(), camera.height(), channels);
+      const std::string problem = files_ == ImageFiles::kPnm
+                                      ? checkPnm(path, camera.width(), camera.height(), channels)
+                                      : checkPng(path, camera.width(), camera.height(), channels);
       if (problem.empty()) continue;
       warnings_.push_back(fmt::format(
           "{}: frame {} is listed in index.csv but its image {}; the session ends {}{}",
@@ -249,7 +343,8 @@ void SessionReader::checkImages() {
 }
 
 fs::path SessionReader::imagePath(int camera, int i) const {
-  return folder_ / rig_.camera(camera).name() / fmt::format("{:06}.png", frameId(i));
+  return folder_ / rig_.camera(camera).name() /
+         fmt::format("{:06}.{}", frameId(i), imageFileExtension(files_, format_));
 }
 
 fs::path SessionReader::truthMaskPath(int camera, int i) const {
@@ -278,6 +373,14 @@ void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
       const int c = cameras.empty() ? k : cameras[k];
       const Camera& camera = rig_.camera(c);
       const fs::path path = imagePath(c, i);
+      CameraFrame& frame = out[c];
+      if (files_ == ImageFiles::kPnm) {
+        errors[k] = readPnm(path, id, camera, format_, frame.image);
+        frame.camera = c;
+        frame.frame_id = id;
+        frame.timestamp_ns = timestamp;
+        continue;
+      }
       cv::Mat decoded;
       try {
         decoded = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
@@ -294,7 +397,6 @@ void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
             path.string(), id, camera.width(), camera.height(), pixelFormatName(format_));
         continue;
       }
-      CameraFrame& frame = out[c];
       frame.camera = c;
       frame.frame_id = id;
       frame.timestamp_ns = timestamp;

@@ -8,15 +8,17 @@
 
 #include "core/capture/frame_source.h"
 #include "core/capture/image.h"
+#include "core/capture/image_files.h"
 #include "core/geometry/rig.h"
 
 namespace lumistage {
 
 // Reads a recorded session (docs/session-format.md). Opening checks session.yaml, rig.yaml and
-// index.csv strictly and every listed frame's image files cheaply (present, PNG header of the
-// right size and channels, complete to its last chunk). A crash or a full disk only ever cuts a
-// session short: the readable session ends before the first frame that is torn or incomplete,
-// and warnings() says which and why. Anything else malformed is an Error naming file:line.
+// index.csv strictly and every listed frame's image files cheaply (present; a PNG's header of the
+// right size and channels, complete to its last chunk; a PNM's header, and every pixel there). A
+// crash or a full disk only ever cuts a session short: the readable session ends before the first
+// frame that is torn or incomplete, and warnings() says which and why. Anything else malformed is
+// an Error naming file:line.
 class SessionReader {
  public:
   explicit SessionReader(const std::filesystem::path& folder);
@@ -24,6 +26,7 @@ class SessionReader {
   const std::filesystem::path& folder() const { return folder_; }
   const Rig& rig() const { return rig_; }
   PixelFormat pixelFormat() const { return format_; }
+  ImageFiles imageFiles() const { return files_; }
   double fps() const { return fps_; }
   const std::string& source() const { return source_; }
   bool hasTruth() const { return truth_; }
@@ -65,6 +68,7 @@ class SessionReader {
   std::filesystem::path folder_;
   Rig rig_;
   PixelFormat format_ = PixelFormat::kMono8;
+  ImageFiles files_ = ImageFiles::kPng;
   double fps_ = 0;
   std::string source_;
   bool truth_ = false;

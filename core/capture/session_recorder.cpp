@@ -8,12 +8,13 @@ namespace lumistage {
 
 SessionRecorder::SessionRecorder(const std::filesystem::path& folder, const Rig& rig,
                                  PixelFormat format, double fps, const std::string& source,
-                                 int queue_capacity)
+                                 int queue_capacity, ImageFiles files)
     : folder_(folder),
       rig_(rig),
       format_(format),
       capacity_(size_t(std::max(queue_capacity, 1))),
-      writer_(std::make_unique<SessionWriter>(folder, rig, format, fps, source)) {
+      writer_(std::make_unique<SessionWriter>(folder, rig, format, fps, source,
+                                              std::vector<std::string>{}, files)) {
   thread_ = std::thread([this] { run(); });
 }
 

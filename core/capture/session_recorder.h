@@ -34,7 +34,8 @@ class SessionRecorder {
  public:
   // Creates the session as SessionWriter does (throws its Error) and starts the writer thread.
   SessionRecorder(const std::filesystem::path& folder, const Rig& rig, PixelFormat format,
-                  double fps, const std::string& source, int queue_capacity = 8);
+                  double fps, const std::string& source, int queue_capacity = 8,
+                  ImageFiles files = ImageFiles::kPng);
   ~SessionRecorder();  // stop()
   SessionRecorder(const SessionRecorder&) = delete;
   SessionRecorder& operator=(const SessionRecorder&) = delete;

@@ -45,11 +45,21 @@ size_t writeImageAtomically(const fs::path& path, const cv::Mat& image) {
   return encoded.size();
 }
 
+// A PNM file (binary PGM or PPM, maxval 255): the header, then the rows as they are.
+size_t writePnmAtomically(const fs::path& path, const ImageView& view) {
+  const std::string header = fmt::format(
+      "{}\n{} {}\n255\n", view.format == PixelFormat::kRgb8 ? "P6" : "P5", view.width, view.height);
+  const std::string_view pixels(reinterpret_cast<const char*>(view.data), view.bytes());
+  writeFileAtomically(path, {header, pixels}, {.sync = false});
+  return header.size() + pixels.size();
+}
+
 }  // namespace
 
 SessionWriter::SessionWriter(const fs::path& folder, const Rig& rig, PixelFormat format, double fps,
-                             const std::string& source, const std::vector<std::string>& joint_names)
-    : folder_(folder), rig_(rig), format_(format), joint_names_(joint_names) {
+                             const std::string& source, const std::vector<std::string>& joint_names,
+                             ImageFiles files)
+    : folder_(folder), rig_(rig), format_(format), files_(files), joint_names_(joint_names) {
   std::error_code ec;
   if (fs::exists(folder_, ec) && !fs::is_empty(folder_, ec)) {
     throw Error(folder_.string() +
@@ -71,9 +81,10 @@ SessionWriter::SessionWriter(const fs::path& folder, const Rig& rig, PixelFormat
       folder_ / "session.yaml",
       fmt::format("# Lumistage recorded session: see docs/session-format.md.\n"
                   "format: lumistage-session\nversion: 1\nsource: {}\nrig: rig.yaml\n"
-                  "fps: {}\npixel_format: {}\nimage_files: png\ncameras: [{}]\n"
+                  "fps: {}\npixel_format: {}\nimage_files: {}\ncameras: [{}]\n"
                   "truth: {}\n",
-                  source, fps, pixelFormatName(format_), cameras, truth ? "true" : "false"));
+                  source, fps, pixelFormatName(format_), imageFilesName(files_), cameras,
+                  truth ? "true" : "false"));
   index_.open(folder_ / "index.csv");
   index_ << "frame,timestamp_ns\n";
   if (truth) {
@@ -106,7 +117,8 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
           pixelFormatName(view.format), camera.width(), camera.height(), pixelFormatName(format_)));
     }
   }
-  const std::string name = fmt::format("{:06}.png", frame_id);
+  const std::string name = fmt::format("{:06}.{}", frame_id, imageFileExtension(files_, format_));
+  const std::string mask_name = fmt::format("{:06}.png", frame_id);
   // PNG encoding dominates a frame's writing: cameras in parallel, errors carried out.
   std::vector<std::string> errors(rig_.cameraCount());
   std::atomic<int64_t> bytes = 0;
@@ -115,17 +127,21 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
       try {
         const Camera& camera = rig_.camera(c);
         const ImageView& view = images[c];
-        const cv::Mat source(view.height, view.width,
-                             view.format == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1,
-                             const_cast<uint8_t*>(view.data));
-        cv::Mat image = source;
-        if (view.format == PixelFormat::kRgb8)
-          cv::cvtColor(source, image, cv::COLOR_RGB2BGR);  // imwrite takes BGR
-        bytes += int64_t(writeImageAtomically(folder_ / camera.name() / name, image));
+        if (files_ == ImageFiles::kPnm) {
+          bytes += int64_t(writePnmAtomically(folder_ / camera.name() / name, view));
+        } else {
+          const cv::Mat source(view.height, view.width,
+                               view.format == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1,
+                               const_cast<uint8_t*>(view.data));
+          cv::Mat image = source;
+          if (view.format == PixelFormat::kRgb8)
+            cv::cvtColor(source, image, cv::COLOR_RGB2BGR);  // imwrite takes BGR
+          bytes += int64_t(writeImageAtomically(folder_ / camera.name() / name, image));
+        }
         if (truth && truth->masks) {
           const cv::Mat mask(camera.height(), camera.width(), CV_8UC1,
                              const_cast<uint8_t*>((*truth->masks)[c].data()));
-          writeImageAtomically(folder_ / "truth" / "masks" / camera.name() / name, mask);
+          writeImageAtomically(folder_ / "truth" / "masks" / camera.name() / mask_name, mask);
         }
       } catch (const std::exception& e) {
         errors[c] = e.what();
@@ -152,17 +168,17 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
 }
 
 void SessionWriter::copyFrame(int64_t frame_id, int64_t timestamp_ns,
-                              const std::vector<fs::path>& pngs) {
-  if (pngs.size() != static_cast<size_t>(rig_.cameraCount())) {
+                              const std::vector<fs::path>& files) {
+  if (files.size() != static_cast<size_t>(rig_.cameraCount())) {
     throw Error(fmt::format("{}: frame {} has {} images for {} cameras", folder_.string(), frame_id,
-                            pngs.size(), rig_.cameraCount()));
+                            files.size(), rig_.cameraCount()));
   }
-  const std::string name = fmt::format("{:06}.png", frame_id);
+  const std::string name = fmt::format("{:06}.{}", frame_id, imageFileExtension(files_, format_));
   int64_t bytes = 0;
   for (int c = 0; c < rig_.cameraCount(); ++c) {
-    const std::string png = readFile(pngs[c]);
-    writeFileAtomically(folder_ / rig_.camera(c).name() / name, png, {.sync = false});
-    bytes += static_cast<int64_t>(png.size());
+    const std::string contents = readFile(files[c]);
+    writeFileAtomically(folder_ / rig_.camera(c).name() / name, contents, {.sync = false});
+    bytes += static_cast<int64_t>(contents.size());
   }
   appendIndex(frame_id, timestamp_ns, bytes);
 }

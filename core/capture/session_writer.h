@@ -9,6 +9,7 @@
 
 #include "core/body/skinned_mesh.h"
 #include "core/capture/image.h"
+#include "core/capture/image_files.h"
 #include "core/geometry/rig.h"
 
 namespace lumistage {
@@ -28,7 +29,8 @@ class SessionWriter {
   // Creates `folder` (which must not exist, or be empty) and writes session.yaml and rig.yaml.
   // Throws Error naming the folder and the reason.
   SessionWriter(const std::filesystem::path& folder, const Rig& rig, PixelFormat format, double fps,
-                const std::string& source, const std::vector<std::string>& joint_names = {});
+                const std::string& source, const std::vector<std::string>& joint_names = {},
+                ImageFiles files = ImageFiles::kPng);
   ~SessionWriter();
 
   // One frame: per camera an image of the camera's size in the session's pixel format. Throws
@@ -36,14 +38,16 @@ class SessionWriter {
   // frame is then not in the index and the session stays valid.
   void writeFrame(int64_t frame_id, int64_t timestamp_ns, const std::vector<ImageView>& images,
                   const FrameTruth* truth = nullptr);
-  // One frame from PNG files of another session in this one's pixel format, one per camera of the
-  // camera's size (as its SessionReader checked them on opening): copied byte for byte, written
-  // as writeFrame writes (beside their place, renamed in, then the index line). Joins sessions
-  // without decoding and encoding again. Throws Error naming the file as writeFrame does.
+  // One frame from image files of another session in this one's pixel format and image files, one
+  // per camera of the camera's size (as its SessionReader checked them on opening): copied byte
+  // for byte, written as writeFrame writes (beside their place, renamed in, then the index line).
+  // Joins sessions without decoding and encoding again. Throws Error naming the file as
+  // writeFrame does.
   void copyFrame(int64_t frame_id, int64_t timestamp_ns,
-                 const std::vector<std::filesystem::path>& pngs);
+                 const std::vector<std::filesystem::path>& files);
   int framesWritten() const { return frames_; }
-  int64_t bytesWritten() const { return bytes_; }  // camera images' PNG bytes of indexed frames
+  int64_t bytesWritten() const { return bytes_; }  // camera images' file bytes of indexed frames
+  ImageFiles imageFiles() const { return files_; }
   const std::filesystem::path& folder() const { return folder_; }
 
  private:
@@ -53,6 +57,7 @@ class SessionWriter {
   std::filesystem::path folder_;
   Rig rig_;
   PixelFormat format_;
+  ImageFiles files_;
   std::vector<std::string> joint_names_;
   std::ofstream index_;
   std::ofstream joints_;

@@ -65,10 +65,13 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
   std::vector<RigNode> nodes;
   for (size_t p = 0; p < readers.size(); ++p) {
     const SessionReader& r = *readers[p];
-    if (r.pixelFormat() != first.pixelFormat() || r.fps() != first.fps()) {
-      throw Error(fmt::format("take: {}: {} at {} fps, but {} is {} at {} fps", parts[p].string(),
-                              pixelFormatName(r.pixelFormat()), r.fps(), parts[0].string(),
-                              pixelFormatName(first.pixelFormat()), first.fps()));
+    if (r.pixelFormat() != first.pixelFormat() || r.fps() != first.fps() ||
+        r.imageFiles() != first.imageFiles()) {
+      throw Error(fmt::format(
+          "take: {}: {} at {} fps in {} files, but {} is {} at {} fps in {} files",
+          parts[p].string(), pixelFormatName(r.pixelFormat()), r.fps(),
+          imageFilesName(r.imageFiles()), parts[0].string(), pixelFormatName(first.pixelFormat()),
+          first.fps(), imageFilesName(first.imageFiles())));
     }
     const std::vector<std::string> names = cameraNames(r.rig());
     size_t g = 0;
@@ -155,8 +158,9 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
     }
   }
 
+  // The files copied as they are: the take keeps its parts' image files.
   SessionWriter writer(out, merged_rig, first.pixelFormat(), first.fps(),
-                       fmt::format("take of {} parts", parts.size()));
+                       fmt::format("take of {} parts", parts.size()), {}, first.imageFiles());
   std::vector<fs::path> files(merged_rig.cameraCount());
   std::vector<std::pair<size_t, int>> source(merged_rig.cameraCount());  // (group, camera in it)
   for (int c = 0; c < merged_rig.cameraCount(); ++c)

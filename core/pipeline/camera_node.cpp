@@ -26,7 +26,7 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
       endpoint_(std::move(endpoint)),
       body_(std::move(body)),
       options_(options),
-      takes_(options.takes, rig, name, options.fps),
+      takes_(options.takes, rig, name, options.fps, options.take_files),
       sampler_(options.refine) {
   const std::optional<int> node = rig_.findNode(name_);
   if (!node) throw Error("camera node: no node '" + name_ + "' in the rig");

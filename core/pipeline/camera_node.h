@@ -34,7 +34,8 @@ struct CameraNodeOptions {
   // Where the node records the takes the studio asks for (<takes>/<take>/<node>/); empty: it
   // records none and says so when asked.
   std::filesystem::path takes;
-  double fps = 25;  // the cameras' frame rate, written with every take
+  ImageFiles take_files = ImageFiles::kPnm;  // how takes store the images
+  double fps = 25;                           // the cameras' frame rate, written with every take
   // An open take goes on while the studio is silent (a restart, a network outage) for at most
   // this long; then the node closes it, so that a studio that crashed for good does not fill the
   // node's disk.

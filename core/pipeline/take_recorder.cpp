@@ -12,8 +12,12 @@
 namespace lumistage {
 
 TakeRecorder::TakeRecorder(std::filesystem::path folder, const Rig& rig, std::string node,
-                           double fps)
-    : folder_(std::move(folder)), rig_(nodeRig(rig, node)), node_(std::move(node)), fps_(fps) {}
+                           double fps, ImageFiles files)
+    : folder_(std::move(folder)),
+      rig_(nodeRig(rig, node)),
+      node_(std::move(node)),
+      fps_(fps),
+      files_(files) {}
 
 TakeRecorder::~TakeRecorder() {
   {
@@ -72,7 +76,7 @@ void TakeRecorder::open(int64_t frame_id, const std::vector<CameraFrame>& frames
     // A second of sets queued: a disk's hiccup loses nothing (the reference node: 70 MB).
     const int queue = std::max(8, static_cast<int>(std::ceil(fps_)));
     recorder_ = std::make_unique<SessionRecorder>(part, rig_, frames.front().image.format, fps_,
-                                                  "lumistage-node " + node_, queue);
+                                                  "lumistage-node " + node_, queue, files_);
     counted_ = recorder_.get();
     first_timestamp_ns_ = frames.front().timestamp_ns;
     spdlog::info("node {}: recording take {} from frame {} into {}", node_, wanted_.take, frame_id,

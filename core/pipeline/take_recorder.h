@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/capture/frame_source.h"
+#include "core/capture/image_files.h"
 #include "core/geometry/rig.h"
 #include "core/net/message_codec.h"
 
@@ -31,8 +32,10 @@ class SessionRecorder;
 class TakeRecorder {
  public:
   // `folder` empty: the node records nothing, and a take asked of it says so in its status.
-  // `fps`: the cameras' frame rate, written in each part's session.yaml.
-  TakeRecorder(std::filesystem::path folder, const Rig& rig, std::string node, double fps);
+  // `fps`: the cameras' frame rate, written in each part's session.yaml. `files`: how the images
+  // are stored; PNM keeps up with the cameras where PNG's encoding may not (image_files.h).
+  TakeRecorder(std::filesystem::path folder, const Rig& rig, std::string node, double fps,
+               ImageFiles files = ImageFiles::kPnm);
   ~TakeRecorder();  // writes what is queued of the open take, then closes it
   TakeRecorder(const TakeRecorder&) = delete;
   TakeRecorder& operator=(const TakeRecorder&) = delete;
@@ -57,6 +60,7 @@ class TakeRecorder {
   const Rig rig_;  // the node's cameras only, and the node
   const std::string node_;
   const double fps_;
+  const ImageFiles files_;
 
   mutable std::mutex mutex_;
   RecordData wanted_;      // the studio's latest command

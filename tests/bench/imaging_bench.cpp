@@ -73,9 +73,10 @@ BENCHMARK(locateActor)->Unit(benchmark::kMillisecond);
 
 namespace {
 
-// A node's part of a take: its three 1024x768 Bayer cameras' set written as PNGs (encoded in
-// parallel, written to files) by SessionWriter, as TakeRecorder's writer thread does. The frames
-// carry sensor-like noise (+-8 levels), which is what the encoder spends its time on.
+// A node's part of a take: its three 1024x768 Bayer cameras' set written by SessionWriter, as
+// TakeRecorder's writer thread does: as PNGs (arg 0: encoded in parallel, written to files) or
+// as PNM (arg 1: the pixels as they are, what takes use). The frames carry sensor-like noise
+// (+-8 levels), which is what the PNG encoder spends its time on.
 void recordNodeSet(benchmark::State& state) {
   lumistage::RingRigSpec spec;
   spec.cameras = 3;
@@ -93,7 +94,9 @@ void recordNodeSet(benchmark::State& state) {
   std::filesystem::remove_all(folder);
   int64_t frame = 0;
   {
-    lumistage::SessionWriter writer(folder, rig, lumistage::PixelFormat::kBayerRggb8, 25, "bench");
+    lumistage::SessionWriter writer(
+        folder, rig, lumistage::PixelFormat::kBayerRggb8, 25, "bench", {},
+        state.range(0) == 1 ? lumistage::ImageFiles::kPnm : lumistage::ImageFiles::kPng);
     for (auto _ : state) {
       writer.writeFrame(frame, frame * 40'000'000, views);
       ++frame;
@@ -103,6 +106,6 @@ void recordNodeSet(benchmark::State& state) {
   }
   std::filesystem::remove_all(folder);
 }
-BENCHMARK(recordNodeSet)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(recordNodeSet)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

@@ -60,8 +60,8 @@ inline int64_t timestampOf(int64_t frame_id) {
 
 // Frames 0..count-1 written with SessionWriter.
 inline void writeSession(const fs::path& folder, const Rig& rig, PixelFormat format, int count,
-                         uint32_t seed = 1) {
-  SessionWriter writer(folder, rig, format, 30.0, "test");
+                         uint32_t seed = 1, ImageFiles files = ImageFiles::kPng) {
+  SessionWriter writer(folder, rig, format, 30.0, "test", {}, files);
   for (int f = 0; f < count; ++f)
     writer.writeFrame(f, timestampOf(f), views(frameImages(rig, format, f, seed)));
 }

@@ -59,6 +59,86 @@ TEST(SessionReader, ReadsBackWhatWasWrittenBitExactInEveryPixelFormat) {
   }
 }
 
+// PNM files (live recording's): the pixels as they are, behind a short header.
+TEST(SessionReader, ReadsBackPnmFilesBitExactInEveryPixelFormat) {
+  const Rig rig = smallRig();
+  for (PixelFormat format : {PixelFormat::kMono8, PixelFormat::kBayerGrbg8, PixelFormat::kRgb8}) {
+    const fs::path folder = freshFolder(std::string("pnm_") + pixelFormatName(format));
+    writeSession(folder, rig, format, 3, 7, ImageFiles::kPnm);
+    EXPECT_TRUE(contains(readFile(folder / "session.yaml"), "\nimage_files: pnm\n"));
+    const bool rgb = format == PixelFormat::kRgb8;
+    const std::string file = readFile(folder / "cam02" / (rgb ? "000001.ppm" : "000001.pgm"));
+    const std::string header = rgb ? "P6\n64 48\n255\n" : "P5\n64 48\n255\n";
+    ASSERT_EQ(file.size(), header.size() + 64 * 48 * bytesPerPixel(format));
+    EXPECT_EQ(file.substr(0, header.size()), header);
+    const SessionReader reader(folder);
+    EXPECT_EQ(reader.imageFiles(), ImageFiles::kPnm);
+    EXPECT_EQ(reader.imagePath(1, 1).filename(), rgb ? "000001.ppm" : "000001.pgm");
+    EXPECT_TRUE(reader.warnings().empty()) << allWarnings(reader);
+    ASSERT_EQ(reader.frameCount(), 3);
+    std::vector<CameraFrame> frames;
+    for (int i = 0; i < 3; ++i) {
+      reader.readFrame(i, frames);
+      const std::vector<Image> expected = frameImages(rig, format, i, 7);
+      for (size_t c = 0; c < frames.size(); ++c) {
+        EXPECT_EQ(frames[c].frame_id, i);
+        EXPECT_TRUE(frames[c].image.pixels == expected[c].pixels) << "frame " << i << " cam " << c;
+      }
+    }
+    fs::remove_all(folder);
+  }
+}
+
+// A PNM cut short, or of another size or kind, ends the session before its frame; one damaged
+// after opening is an error naming it.
+TEST(SessionReader, APnmCutShortOrWrongEndsTheSessionThere) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("pnm_torn");
+  writeSession(folder, rig, PixelFormat::kBayerRggb8, 4, 1, ImageFiles::kPnm);
+  const fs::path pgm = folder / "cam03" / "000002.pgm";
+  const std::string whole = readFile(pgm);
+  auto firstWarning = [&] {
+    const SessionReader reader(folder);
+    EXPECT_EQ(reader.frameCount(), 2) << allWarnings(reader);
+    return reader.warnings().empty() ? std::string() : reader.warnings()[0];
+  };
+  truncateFile(pgm, whole.size() - 1);
+  std::string w = firstWarning();
+  EXPECT_TRUE(contains(w, pgm.string() + ": frame 2 is listed in index.csv but its image is " +
+                              std::to_string(whole.size() - 1) + " bytes, expected " +
+                              std::to_string(whole.size()) +
+                              " (its header and 64x48 pixels): "
+                              "truncated; the session ends at frame 1, 1 later frames ignored"))
+      << w;
+  std::ofstream(pgm, std::ios::binary | std::ios::trunc) << "P5\n32 48\n255\n"
+                                                         << std::string(32 * 48, 'x');
+  EXPECT_TRUE(contains(firstWarning(), "its image is a 32x48 image, expected 64x48"));
+  std::ofstream(pgm, std::ios::binary | std::ios::trunc) << "P6\n64 48\n255\n"
+                                                         << std::string(64 * 48 * 3, 'x');
+  EXPECT_TRUE(contains(firstWarning(), "its image is a P6 file, expected P5 (grey)"));
+  std::ofstream(pgm, std::ios::binary | std::ios::trunc) << "P5\n64 48\n65535\n"
+                                                         << std::string(64 * 48 * 2, 'x');
+  EXPECT_TRUE(contains(firstWarning(), "has PNM maxval 65535, expected 255"));
+  std::ofstream(pgm, std::ios::binary | std::ios::trunc) << "\x89PNG";
+  EXPECT_TRUE(contains(firstWarning(), "its image is not a PNM file"));
+
+  // Whole when opened, cut afterwards: the frame's read says so.
+  std::ofstream(pgm, std::ios::binary | std::ios::trunc) << whole;
+  const SessionReader reader(folder);
+  ASSERT_EQ(reader.frameCount(), 4);
+  truncateFile(pgm, whole.size() / 2);
+  std::vector<CameraFrame> frames;
+  try {
+    reader.readFrame(2, frames);
+    ADD_FAILURE() << "a cut image was read";
+  } catch (const Error& e) {
+    EXPECT_TRUE(contains(e.what(), pgm.string() + ": frame 2: is not a 64x48 bayer_rggb8 "
+                                                  "image's header and pixels"))
+        << e.what();
+  }
+  fs::remove_all(folder);
+}
+
 TEST(SessionReader, TornLastIndexLineIsSkippedWithAWarning) {
   const Rig rig = smallRig();
   const fs::path folder = freshFolder("torn_index");

@@ -88,6 +88,7 @@ TEST(Take, NodesRecordTheAskedFramesAndTheirPartsMergeBitExact) {
     const int camera = rig.nodes()[node].cameras[0];
     ASSERT_EQ(part.rig().cameraCount(), 1);
     EXPECT_EQ(part.rig().camera(0).name(), rig.camera(camera).name());
+    EXPECT_EQ(part.imageFiles(), ImageFiles::kPnm);  // raw pixels: no encoding to keep up with
     EXPECT_EQ(part.rig().nodes()[0].name, rig.nodes()[node].name);
     ASSERT_EQ(part.frameCount(), static_cast<int>(ids.size())) << name;
     std::vector<CameraFrame> frames;
@@ -111,6 +112,7 @@ TEST(Take, NodesRecordTheAskedFramesAndTheirPartsMergeBitExact) {
       << report.notes[0];
   const SessionReader merged(folder / "merged");
   EXPECT_EQ(merged.rig(), rig);
+  EXPECT_EQ(merged.imageFiles(), ImageFiles::kPnm);  // the parts' files copied as they are
   ASSERT_EQ(merged.frameCount(), 7);
   std::vector<CameraFrame> frames;
   for (int i = 0; i < merged.frameCount(); ++i) {
@@ -167,9 +169,11 @@ TEST(Take, PartsThatDoNotBelongTogetherAreRefusedByName) {
   const Rig rig = takeRig();
   const fs::path folder = testing::testFolder("take");
   // Each part a session of one node's camera.
-  auto part = [&](const std::string& name, int node, PixelFormat format, int64_t first, int count) {
+  auto part = [&](const std::string& name, int node, PixelFormat format, int64_t first, int count,
+                  ImageFiles files = ImageFiles::kPng) {
     const int camera = rig.nodes()[node].cameras[0];
-    SessionWriter writer(folder / name, nodeRig(rig, rig.nodes()[node].name), format, 30.0, "test");
+    SessionWriter writer(folder / name, nodeRig(rig, rig.nodes()[node].name), format, 30.0, "test",
+                         {}, files);
     for (int64_t f = first; f < first + count; ++f)
       writer.writeFrame(f, timestampOf(f), {frameImages(rig, format, f)[camera].view()});
     return folder / name;
@@ -178,6 +182,7 @@ TEST(Take, PartsThatDoNotBelongTogetherAreRefusedByName) {
   const fs::path b = part("b", 1, PixelFormat::kMono8, 2, 3);
   const fs::path rgb = part("rgb", 2, PixelFormat::kRgb8, 0, 3);
   const fs::path late = part("late", 2, PixelFormat::kMono8, 5, 3);
+  const fs::path pnm = part("pnm", 1, PixelFormat::kMono8, 0, 3, ImageFiles::kPnm);
   // A part of the first two cameras (another rig's node): cam01 would be in two nodes.
   const fs::path pair = folder / "pair";
   {
@@ -187,11 +192,16 @@ TEST(Take, PartsThatDoNotBelongTogetherAreRefusedByName) {
     writer.writeFrame(0, 0, {images[0].view(), images[1].view()});
   }
 
-  EXPECT_EQ(
-      testing::errorOf([&] {
-        mergeTake({a, rgb}, folder / "out1");
-      }),
-      "take: " + rgb.string() + ": rgb8 at 30 fps, but " + a.string() + " is mono8 at 30 fps");
+  EXPECT_EQ(testing::errorOf([&] {
+              mergeTake({a, rgb}, folder / "out1");
+            }),
+            "take: " + rgb.string() + ": rgb8 at 30 fps in png files, but " + a.string() +
+                " is mono8 at 30 fps in png files");
+  EXPECT_EQ(testing::errorOf([&] {
+              mergeTake({a, pnm}, folder / "out0");
+            }),
+            "take: " + pnm.string() + ": mono8 at 30 fps in pnm files, but " + a.string() +
+                " is mono8 at 30 fps in png files");
   EXPECT_EQ(testing::errorOf([&] {
               mergeTake({a, pair}, folder / "out2");
             }),
