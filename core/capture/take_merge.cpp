@@ -50,7 +50,7 @@ std::vector<std::string> cameraNames(const Rig& rig) {
 }  // namespace
 
 TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& out,
-                          const std::optional<Rig>& rig,
+                          const std::optional<Rig>& rig, std::optional<ImageFiles> files,
                           const std::function<void(int, int)>& progress) {
   if (parts.empty()) throw Error("take: no parts to merge");
   std::vector<std::unique_ptr<SessionReader>> readers;
@@ -158,10 +158,13 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
     }
   }
 
-  // The files copied as they are: the take keeps its parts' image files.
+  const ImageFiles out_files = files.value_or(first.imageFiles());
+  const bool copy = out_files == first.imageFiles();
   SessionWriter writer(out, merged_rig, first.pixelFormat(), first.fps(),
-                       fmt::format("take of {} parts", parts.size()), {}, first.imageFiles());
-  std::vector<fs::path> files(merged_rig.cameraCount());
+                       fmt::format("take of {} parts", parts.size()), {}, out_files);
+  std::vector<fs::path> paths(merged_rig.cameraCount());
+  std::vector<std::vector<CameraFrame>> decoded(groups.size());  // per group, when not copying
+  std::vector<ImageView> views(merged_rig.cameraCount());
   std::vector<std::pair<size_t, int>> source(merged_rig.cameraCount());  // (group, camera in it)
   for (int c = 0; c < merged_rig.cameraCount(); ++c)
     source[c] = owner.at(merged_rig.camera(c).name());
@@ -172,13 +175,23 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
   };
   const int64_t start_ns = timestamp(common.front());
   for (size_t f = 0; f < common.size(); ++f) {
-    // The parts' PNGs as they are (checked when their readers opened them): no decoding.
-    for (int c = 0; c < merged_rig.cameraCount(); ++c) {
-      const auto [g, k] = source[c];
-      const auto [p, i] = index[g].at(common[f]);
-      files[c] = readers[p]->imagePath(k, i);
+    if (copy) {
+      // The parts' files as they are (checked when their readers opened them): no decoding.
+      for (int c = 0; c < merged_rig.cameraCount(); ++c) {
+        const auto [g, k] = source[c];
+        const auto [p, i] = index[g].at(common[f]);
+        paths[c] = readers[p]->imagePath(k, i);
+      }
+      writer.copyFrame(common[f], timestamp(common[f]) - start_ns, paths);
+    } else {
+      for (size_t g = 0; g < groups.size(); ++g) {
+        const auto [p, i] = index[g].at(common[f]);
+        readers[p]->readFrame(i, decoded[g]);
+      }
+      for (int c = 0; c < merged_rig.cameraCount(); ++c)
+        views[c] = decoded[source[c].first][source[c].second].image.view();
+      writer.writeFrame(common[f], timestamp(common[f]) - start_ns, views);
     }
-    writer.copyFrame(common[f], timestamp(common[f]) - start_ns, files);
     if (progress) progress(static_cast<int>(f) + 1, static_cast<int>(common.size()));
   }
   report.frames = writer.framesWritten();

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/capture/image_files.h"
 #include "core/geometry/rig.h"
 
 namespace lumistage {
@@ -28,11 +29,14 @@ struct TakeMergeReport {
 // first node's. Parts of the same cameras are one node's (<node>, then <node>-2... after a
 // restart during the take): their frames are joined, a continuation's timestamps moved to follow
 // on at the session's rate. Cameras and nodes in the order of `rig` when given (its cameras must be
-// exactly the parts'), else part after part. `progress(done, total)` after each frame. Throws Error
+// exactly the parts'), else part after part. The images are copied as they are, or, with `files`
+// other than the parts' (a take recorded as PNM, kept as PNG), decoded and written in those.
+// `progress(done, total)` after each frame. Throws Error
 // naming the part and the reason: parts of different pixel formats or rates, a camera in two parts,
 // no frame in common, `out` not empty.
 TakeMergeReport mergeTake(const std::vector<std::filesystem::path>& parts,
                           const std::filesystem::path& out, const std::optional<Rig>& rig = {},
+                          std::optional<ImageFiles> files = {},
                           const std::function<void(int, int)>& progress = {});
 
 }  // namespace lumistage

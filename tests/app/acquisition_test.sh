@@ -27,11 +27,14 @@ cat "$work/stream.log"
 sets=$(($(wc -l < "$work/recorded/index.csv") - 1))
 [ "$sets" -ge 20 ] || fail "only $sets frame sets recorded in 3 s at 20 fps"
 
-# Every recorded image is bit for bit one of the served ones (PNG encoding is deterministic).
+# Every recorded image (raw PNM, as live recordings are stored) is bit for bit one of the served
+# ones, made PNM by the merge that converts a take's files.
+grep -q "^image_files: pnm$" "$work/recorded/session.yaml" || fail "the recording is not PNM"
+"$cli" session merge "$work/served" --out "$work/served-pnm" --image-files pnm > /dev/null || fail "merge to PNM"
 for camera in cam01 cam02 cam03; do
-  for recorded in "$work/recorded/$camera"/*.png; do
+  for recorded in "$work/recorded/$camera"/*.pgm; do
     match=no
-    for served in "$work/served/$camera"/*.png; do
+    for served in "$work/served-pnm/$camera"/*.pgm; do
       if cmp -s "$recorded" "$served"; then match=yes; break; fi
     done
     [ $match = yes ] || fail "$recorded is none of the served frames"

@@ -110,19 +110,25 @@ TEST(Take, NodesRecordTheAskedFramesAndTheirPartsMergeBitExact) {
   EXPECT_NE(report.notes[0].find("node1: 1 of its 8 frames are not in every part"),
             std::string::npos)
       << report.notes[0];
-  const SessionReader merged(folder / "merged");
-  EXPECT_EQ(merged.rig(), rig);
-  EXPECT_EQ(merged.imageFiles(), ImageFiles::kPnm);  // the parts' files copied as they are
-  ASSERT_EQ(merged.frameCount(), 7);
-  std::vector<CameraFrame> frames;
-  for (int i = 0; i < merged.frameCount(); ++i) {
-    const int64_t f = merged.frameId(i);
-    EXPECT_EQ(f, common[i]);
-    // Across node1's restart too, within a nanosecond of rounding.
-    EXPECT_NEAR(double(merged.timestampNs(i)), double(timestampOf(f) - timestampOf(5)), 1.0) << f;
-    merged.readFrame(i, frames);
-    const std::vector<Image> truth = frameImages(rig, PixelFormat::kMono8, f);
-    for (int c = 0; c < 3; ++c) EXPECT_EQ(frames[c].image.pixels, truth[c].pixels) << f << c;
+  // The parts' files copied as they are, or kept as PNG (decoded and encoded): the same frames.
+  EXPECT_EQ(mergeTake(parts, folder / "merged-png", rig, ImageFiles::kPng).frames, 7);
+  for (const char* out : {"merged", "merged-png"}) {
+    const SessionReader merged(folder / out);
+    EXPECT_EQ(merged.rig(), rig);
+    EXPECT_EQ(merged.imageFiles(),
+              out == std::string("merged") ? ImageFiles::kPnm : ImageFiles::kPng);
+    ASSERT_EQ(merged.frameCount(), 7);
+    std::vector<CameraFrame> frames;
+    for (int i = 0; i < merged.frameCount(); ++i) {
+      const int64_t f = merged.frameId(i);
+      EXPECT_EQ(f, common[i]);
+      // Across node1's restart too, within a nanosecond of rounding.
+      EXPECT_NEAR(double(merged.timestampNs(i)), double(timestampOf(f) - timestampOf(5)), 1.0) << f;
+      merged.readFrame(i, frames);
+      const std::vector<Image> truth = frameImages(rig, PixelFormat::kMono8, f);
+      for (int c = 0; c < 3; ++c)
+        EXPECT_EQ(frames[c].image.pixels, truth[c].pixels) << out << " " << f << " " << c;
+    }
   }
 }
 
