@@ -452,21 +452,26 @@ void StudioCoordinator::checkDeadlines(int64_t now_ns) {
   }
 }
 
+void StudioCoordinator::pump() {
+  // Everything waiting is read before the deadlines are looked at: after a long stage here (the
+  // tracker's first frame takes a second) a node whose messages wait in the socket is not lost.
+  std::chrono::milliseconds wait(10);
+  for (int n = 0; n < 256; ++n, wait = std::chrono::milliseconds(0)) {
+    std::optional<ReceivedMessage> received = endpoint_.receive(wait);
+    if (!received) break;
+    onMessage(*received);
+  }
+  checkDeadlines(steadyNowNs());
+}
+
 void StudioCoordinator::runFor(std::chrono::milliseconds duration) {
   const int64_t end = steadyNowNs() + std::chrono::nanoseconds(duration).count();
-  while (steadyNowNs() < end && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
-    if (std::optional<ReceivedMessage> received = endpoint_.receive(std::chrono::milliseconds(10)))
-      onMessage(*received);
-    checkDeadlines(steadyNowNs());
-  }
+  while (steadyNowNs() < end && (options_.max_frames == 0 || frames_done_ < options_.max_frames))
+    pump();
 }
 
 void StudioCoordinator::run(const std::atomic<bool>& stop) {
-  while (!stop && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
-    if (std::optional<ReceivedMessage> received = endpoint_.receive(std::chrono::milliseconds(10)))
-      onMessage(*received);
-    checkDeadlines(steadyNowNs());
-  }
+  while (!stop && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) pump();
 }
 
 RunReport StudioCoordinator::report() const {

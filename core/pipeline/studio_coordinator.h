@@ -190,6 +190,8 @@ class StudioCoordinator {
   void runRefinement(int64_t frame_id, FrameState& frame);
   void finishFrame(int64_t frame_id, FrameState& frame);
   void checkDeadlines(int64_t now_ns);
+  // Reads what the nodes sent (waiting up to 10 ms for the first message), then checks deadlines.
+  void pump();
   void maybeFinish(int64_t frame_id, FrameState& frame);
   void sendTake(NodeState& node);
 

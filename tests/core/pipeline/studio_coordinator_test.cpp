@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <thread>
+
 #include "core/body/human_skeleton.h"
 #include "core/geometry/ring_rig.h"
 #include "core/refine/refinement_statistics.h"
@@ -15,18 +17,18 @@ using std::chrono::milliseconds;
 // node answers what it chooses, and the test sees what the studio makes of it.
 class ScriptedNode {
  public:
-  explicit ScriptedNode(const std::string& studio)
-      : endpoint_([&] {
+  explicit ScriptedNode(const std::string& studio, const std::string& name = "node1")
+      : name_(name), endpoint_([&] {
           NodeEndpointConfig config;
           config.connect = studio;
-          config.name = "node1";
+          config.name = name;
           config.security = TransportSecurity::kPlain;
           return config;
         }()) {}
 
   bool send(int64_t frame_id, MessageBody body) {
     Message m;
-    m.sender = "node1";
+    m.sender = name_;
     m.frame_id = frame_id;
     m.sent_ns = steadyNowNs();
     m.body = std::move(body);
@@ -46,6 +48,7 @@ class ScriptedNode {
   }
 
  private:
+  std::string name_;
   NodeEndpoint endpoint_;
 };
 
@@ -94,6 +97,46 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
   EXPECT_EQ(studio.report().frames_dropped, 1);
   ASSERT_FALSE(studio.lastImage(0).rgba.empty());
   EXPECT_EQ(studio.lastImage(0).rgba[0], 200);
+}
+
+// The studio busy for longer than a node may stay silent (the tracker's first frame takes a
+// second) while both nodes keep talking: what waits in the socket shows them alive, and neither is
+// taken for lost.
+TEST(StudioCoordinator, NodesWhoseMessagesWaitWhileTheStudioWorksAreNotLost) {
+  RingRigSpec spec;
+  spec.cameras = 2;
+  spec.cameras_per_node = 1;
+  spec.width = 160;
+  spec.height = 120;
+  StudioEndpointConfig config;
+  config.bind = "tcp://127.0.0.1:*";
+  config.security = TransportSecurity::kPlain;
+  StudioCoordinatorOptions options;
+  options.lost_after = milliseconds(200);
+  StudioCoordinator studio(makeRingRig(spec), config, kHumanJointCount, options);
+  ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
+  for (int round = 0; round < 3; ++round) {
+    ASSERT_TRUE(node1.send(0, HeartbeatData{}));
+    ASSERT_TRUE(node2.send(0, HeartbeatData{}));
+    std::this_thread::sleep_for(milliseconds(150));  // both messages arrive
+    studio.runFor(milliseconds(1));
+    std::this_thread::sleep_for(milliseconds(250));  // the studio at work, beyond lost_after
+  }
+  ASSERT_TRUE(node1.send(0, HeartbeatData{}));
+  ASSERT_TRUE(node2.send(0, HeartbeatData{}));
+  std::this_thread::sleep_for(milliseconds(150));
+  studio.runFor(milliseconds(1));
+  for (const NodeReport& node : studio.report().nodes) {
+    EXPECT_EQ(node.times_lost, 0) << node.name;
+    EXPECT_EQ(studio.nodeState(node.name), "streaming") << node.name;
+  }
+  // A node that is silent is lost all the same.
+  for (int slice = 0; slice < 4; ++slice) {
+    ASSERT_TRUE(node1.send(0, HeartbeatData{}));
+    studio.runFor(milliseconds(80));
+  }
+  EXPECT_EQ(studio.nodeState("node1"), "streaming");
+  EXPECT_EQ(studio.nodeState("node2"), "lost");
 }
 
 }  // namespace
