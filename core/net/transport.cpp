@@ -173,10 +173,11 @@ std::string StudioEndpoint::endpoint() const {
   return state_->router.get(zmq::sockopt::last_endpoint);
 }
 
-std::optional<ReceivedMessage> StudioEndpoint::receive(std::chrono::milliseconds timeout) {
+std::optional<ReceivedMessage> StudioEndpoint::receive(std::chrono::milliseconds timeout,
+                                                       int wake_fd) {
   State& s = *state_;
   try {
-    if (!waitReadable(s.router, timeout)) return std::nullopt;
+    if (!waitReadable(s.router, timeout, wake_fd)) return std::nullopt;
     std::vector<zmq::message_t> frames;
     if (!zmq::recv_multipart(s.router, std::back_inserter(frames), zmq::recv_flags::dontwait)) {
       return std::nullopt;

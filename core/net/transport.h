@@ -62,7 +62,8 @@ class StudioEndpoint {
   // The next message from any node, or nothing after `timeout`. A message that fails to decode
   // comes back with its reason (result.ok() false) after it is counted against its node and
   // logged.
-  std::optional<ReceivedMessage> receive(std::chrono::milliseconds timeout);
+  // Also ends the wait when `wake_fd` (>= 0) turns readable (a Wakeup), returning nothing.
+  std::optional<ReceivedMessage> receive(std::chrono::milliseconds timeout, int wake_fd = -1);
   // False when the peer is unknown or gone, or its queue stays full for `timeout`.
   bool send(const std::string& peer, std::span<const uint8_t> bytes,
             std::chrono::milliseconds timeout);

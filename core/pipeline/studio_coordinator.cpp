@@ -41,6 +41,16 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
   }
   view.translation = {-x.dot(centre), -y.dot(centre), -z.dot(centre)};
   views_.push_back(view);
+  mocap_thread_ = std::thread([this] { mocapLoop(); });
+}
+
+StudioCoordinator::~StudioCoordinator() {
+  {
+    std::lock_guard lock(mocap_mutex_);
+    mocap_stop_ = true;
+  }
+  mocap_work_.notify_all();
+  mocap_thread_.join();
 }
 
 void StudioCoordinator::setView(const ViewData& view) {
@@ -186,8 +196,8 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     frame.silhouette_nodes.insert(node.report.name);
     int live = 0;
     for (const auto& [name, n] : nodes_) live += !n.report.lost;
-    if (frame.pose_sent_ns == 0 && static_cast<int>(frame.silhouette_nodes.size()) >= live)
-      runMocap(message.frame_id, frame);
+    if (!frame.mocap_begun && static_cast<int>(frame.silhouette_nodes.size()) >= live)
+      beginMocap(message.frame_id, frame);
   } else if (const auto* stats = std::get_if<VertexStatisticsData>(&message.body)) {
     const auto it = frames_.find(message.frame_id);
     if (it == frames_.end() || it->second.pose_sent_ns == 0 || it->second.offsets_sent_ns > 0)
@@ -240,6 +250,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
 
 void StudioCoordinator::FrameState::clearForReuse() {
   first_ns = captured_ns = pose_sent_ns = offsets_sent_ns = 0;
+  mocap_begun = false;
   silhouettes.clear();
   silhouette_nodes.clear();
   pose_nodes.clear();
@@ -272,9 +283,9 @@ std::map<int64_t, StudioCoordinator::FrameState>::iterator StudioCoordinator::re
   return next;
 }
 
-void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
+void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
   int begun = 0;
-  for (const auto& [id, f] : frames_) begun += f.pose_sent_ns > 0;
+  for (const auto& [id, f] : frames_) begun += f.mocap_begun;
   if (options_.max_frames_in_flight > 0 && begun >= options_.max_frames_in_flight) {
     if (counting_) ++frames_dropped_, ++frames_refused_;
     retireFrame(frames_.find(frame_id));                     // the callers hold no iterator to it
@@ -282,27 +293,83 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
     return;
   }
   if (counting_) peak_frames_begun_ = std::max(peak_frames_begun_, begun + 1);
-  const int64_t start = steadyNowNs();
-  std::vector<const LowResSilhouette*> all;
-  all.reserve(frame.silhouettes.size());
-  for (const LowResSilhouette& s : frame.silhouettes) all.push_back(&s);
-  PoseData pose;
-  const TrackResult* tracked = tracker_ ? &tracker_->track(all) : nullptr;
-  if (tracked && tracked->valid()) {
-    // The tracked angles on the nodes' generic human, scaled to the actor (posed_body.h).
-    pose = poseMessageFor(generic_root_m_, tracker_->skeleton(), tracked->pose);
-  } else {
-    // Nobody tracked: the generic human standing where the hull is, in its rest pose.
-    const ActorLocation where = locator_.locate(all);
-    pose.root[0] = float(where.found ? where.centroid.x() : 0.0);
-    pose.root[1] = float(where.found ? where.centroid.y() : 0.0);
-    pose.root[2] = 0.0f;
-    pose.angles.assign(size_t(3) * joints_, 0.0f);
+  frame.mocap_begun = true;
+  MocapJob job;
+  if (!spare_jobs_.empty()) {
+    job = std::move(spare_jobs_.back());
+    spare_jobs_.pop_back();
   }
-  last_pose_ = pose;
-  frame.pose = pose;
-  last_pose_frame_ = frame_id;
-  if (counting_) mocap_ms_.add((steadyNowNs() - start) / 1e6);
+  job.frame_id = frame_id;
+  std::swap(job.silhouettes, frame.silhouettes);  // the frame keeps the job's buffers meanwhile
+  {
+    std::lock_guard lock(mocap_mutex_);
+    mocap_jobs_.push_back(std::move(job));
+  }
+  mocap_work_.notify_one();
+}
+
+void StudioCoordinator::mocapLoop() {
+  MocapJob job;
+  std::vector<const LowResSilhouette*> all;
+  while (true) {
+    {
+      std::unique_lock lock(mocap_mutex_);
+      mocap_work_.wait(lock, [&] { return mocap_stop_ || !mocap_jobs_.empty(); });
+      if (mocap_stop_) return;
+      job = std::move(mocap_jobs_.front());
+      mocap_jobs_.pop_front();
+    }
+    const int64_t start = steadyNowNs();
+    all.clear();
+    for (const LowResSilhouette& s : job.silhouettes) all.push_back(&s);
+    const TrackResult* tracked = tracker_ ? &tracker_->track(all) : nullptr;
+    if (tracked && tracked->valid()) {
+      // The tracked angles on the nodes' generic human, scaled to the actor (posed_body.h).
+      job.pose = poseMessageFor(generic_root_m_, tracker_->skeleton(), tracked->pose);
+    } else {
+      // Nobody tracked: the generic human standing where the hull is, in its rest pose.
+      const ActorLocation where = locator_.locate(all);
+      job.pose = PoseData();
+      job.pose.root[0] = float(where.found ? where.centroid.x() : 0.0);
+      job.pose.root[1] = float(where.found ? where.centroid.y() : 0.0);
+      job.pose.root[2] = 0.0f;
+      job.pose.angles.assign(size_t(3) * joints_, 0.0f);
+    }
+    job.ms = (steadyNowNs() - start) / 1e6;
+    {
+      std::lock_guard lock(mocap_mutex_);
+      mocap_done_.push_back(std::move(job));
+    }
+    mocap_ready_.notify();
+  }
+}
+
+void StudioCoordinator::takePoses() {
+  mocap_ready_.clear();
+  while (true) {
+    MocapJob job;
+    {
+      std::lock_guard lock(mocap_mutex_);
+      if (mocap_done_.empty()) return;
+      job = std::move(mocap_done_.front());
+      mocap_done_.pop_front();
+    }
+    last_pose_ = job.pose;
+    last_pose_frame_ = job.frame_id;
+    if (counting_) mocap_ms_.add(job.ms);
+    const auto it = frames_.find(job.frame_id);
+    if (it != frames_.end()) {
+      FrameState& frame = it->second;
+      std::swap(frame.silhouettes, job.silhouettes);
+      frame.pose = job.pose;
+      sendPose(job.frame_id, frame);
+    }
+    job.silhouettes.clear();
+    spare_jobs_.push_back(std::move(job));
+  }
+}
+
+void StudioCoordinator::sendPose(int64_t frame_id, FrameState& frame) {
   std::vector<std::vector<uint8_t>> view_bytes;  // before the pose: the views to render it for
   for (const ViewData& view : views_) {
     Message view_message;
@@ -316,7 +383,7 @@ void StudioCoordinator::runMocap(int64_t frame_id, FrameState& frame) {
   message.sender = "studio";
   message.frame_id = frame_id;
   message.sent_ns = steadyNowNs();
-  message.body = std::move(pose);
+  message.body = frame.pose;
   const std::span<const uint8_t> bytes = encoder_.encode(message);
   for (auto& [name, node] : nodes_) {
     if (node.report.lost || node.peer.empty()) continue;
@@ -439,8 +506,8 @@ void StudioCoordinator::checkDeadlines(int64_t now_ns) {
     const int64_t frame_id = it->first;
     FrameState& frame = it->second;
     ++it;  // finishFrame may erase this and earlier frames
-    if (frame.pose_sent_ns == 0 && now_ns - frame.first_ns > deadline) {
-      runMocap(frame_id, frame);  // with the nodes that made it
+    if (!frame.mocap_begun && now_ns - frame.first_ns > deadline) {
+      beginMocap(frame_id, frame);  // with the nodes that made it
     } else if (frame.pose_sent_ns > 0 && frame.offsets_sent_ns == 0 &&
                now_ns - frame.pose_sent_ns > deadline) {
       runRefinement(frame_id, frame);  // with the nodes' statistics that made it
@@ -457,10 +524,11 @@ void StudioCoordinator::pump() {
   // tracker's first frame takes a second) a node whose messages wait in the socket is not lost.
   std::chrono::milliseconds wait(10);
   for (int n = 0; n < 256; ++n, wait = std::chrono::milliseconds(0)) {
-    std::optional<ReceivedMessage> received = endpoint_.receive(wait);
+    std::optional<ReceivedMessage> received = endpoint_.receive(wait, mocap_ready_.fd());
     if (!received) break;
     onMessage(*received);
   }
+  takePoses();
   checkDeadlines(steadyNowNs());
 }
 

@@ -3,16 +3,21 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/net/transport.h"
 #include "core/pipeline/pipeline.h"
+#include "core/pipeline/wakeup.h"
 #include "core/refine/mesh_refiner.h"
 #include "core/refine/refinement_statistics.h"
 #include "core/render/partial_image_blender.h"
@@ -97,14 +102,19 @@ struct RunReport {
 // places the body -> pose(f) to the nodes -> their per-vertex statistics -> the module combines
 // them exactly -> the refinement's offsets to the nodes -> their partial lumigraph images of every
 // view -> blended. Motion capture is the PoseTracker (the visual-hull locator places the generic
-// human while nobody is tracked). At most max_frames_in_flight frames are past motion capture at
-// once: a newer frame is dropped on arrival, so that latency stays bounded. Never blocks
+// human while nobody is tracked), on a thread of its own: the other stages, the nodes' messages
+// and the deadlines go on while it fits a frame. At most max_frames_in_flight frames are in or
+// past motion capture at once: a newer frame is dropped on arrival, so that latency stays
+// bounded. Never blocks
 // on one node: each stage waits for the nodes at most `deadline`; a silent node is marked lost
 // and rejoins by itself when it speaks again.
 class StudioCoordinator {
  public:
   StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoint, int body_joint_count,
                     StudioCoordinatorOptions options = {});
+  ~StudioCoordinator();
+  StudioCoordinator(const StudioCoordinator&) = delete;
+  StudioCoordinator& operator=(const StudioCoordinator&) = delete;
 
   std::string endpoint() const { return endpoint_.endpoint(); }
   // Runs until `stop`, or `max_frames` frames are done.
@@ -162,6 +172,7 @@ class StudioCoordinator {
     int64_t captured_ns = 0;  // the earliest node capture time
     std::vector<LowResSilhouette> silhouettes;
     std::set<std::string> silhouette_nodes, pose_nodes, statistics_nodes;
+    bool mocap_begun = false;  // handed to the motion capture thread
     int64_t pose_sent_ns = 0;
     PoseData pose;                    // sent to the nodes
     RefinementStatistics refine_sum;  // the nodes' statistics, combined exactly
@@ -183,14 +194,30 @@ class StudioCoordinator {
   FrameState& frameState(int64_t frame_id);
   // Removes the frame, keeping its state for another; returns the next frame.
   std::map<int64_t, FrameState>::iterator retireFrame(std::map<int64_t, FrameState>::iterator it);
+  // A frame's motion capture, on the thread of its own (mocapLoop): its silhouettes in, its pose
+  // out.
+  struct MocapJob {
+    int64_t frame_id = 0;
+    std::vector<LowResSilhouette> silhouettes;
+    PoseData pose;
+    double ms = 0;  // how long the fit took
+  };
   void onMessage(const ReceivedMessage& received);
-  void runMocap(int64_t frame_id, FrameState& frame);
+  // Admits the frame (max_frames_in_flight) and hands its silhouettes to the motion capture
+  // thread.
+  void beginMocap(int64_t frame_id, FrameState& frame);
+  void mocapLoop();
+  // The poses the motion capture thread made: each to the nodes, if its frame is still open.
+  void takePoses();
+  // The views and the frame's pose to every node.
+  void sendPose(int64_t frame_id, FrameState& frame);
   // The refinement module: chooses every vertex's offset from the combined statistics and sends
   // the offsets to the nodes.
   void runRefinement(int64_t frame_id, FrameState& frame);
   void finishFrame(int64_t frame_id, FrameState& frame);
   void checkDeadlines(int64_t now_ns);
-  // Reads what the nodes sent (waiting up to 10 ms for the first message), then checks deadlines.
+  // Reads what the nodes sent (waiting up to 10 ms for the first message or a pose), sends the
+  // poses made meanwhile, then checks deadlines.
   void pump();
   void maybeFinish(int64_t frame_id, FrameState& frame);
   void sendTake(NodeState& node);
@@ -200,6 +227,16 @@ class StudioCoordinator {
   StudioCoordinatorOptions options_;
   VisualHullLocator locator_;             // places the generic human while nobody is tracked
   std::unique_ptr<PoseTracker> tracker_;  // the human skeleton's mocap (null for another body)
+  // The motion capture module runs on a thread of its own (it alone uses locator_ and tracker_):
+  // while it fits one frame (25 ms; a second for its first, which calibrates the body), this
+  // thread goes on reading the nodes and refining and blending the frames ahead of it.
+  std::mutex mocap_mutex_;
+  std::condition_variable mocap_work_;
+  std::deque<MocapJob> mocap_jobs_, mocap_done_;  // under mocap_mutex_
+  bool mocap_stop_ = false;                       // under mocap_mutex_
+  std::vector<MocapJob> spare_jobs_;              // this thread's, their buffers kept
+  Wakeup mocap_ready_;                            // a pose is done
+  std::thread mocap_thread_;  // started by the constructor's last line, joined by the destructor
   Eigen::Vector3d generic_root_m_ = Eigen::Vector3d::Zero();  // the nodes' skeleton's rest root
   std::unique_ptr<MeshRefiner> refiner_;  // made for the first statistics' vertex count
   std::vector<uint8_t> chosen_offsets_;
