@@ -114,12 +114,14 @@ LocalPipelineRun::~LocalPipelineRun() {
   for (size_t n = 0; n < children_.size(); ++n) {
     if (running_[n]) waitpid(children_[n], nullptr, 0);
   }
+  for (pid_t pid : killed_) waitpid(pid, nullptr, 0);
   std::error_code ec;
   if (temporary_keys_) fs::remove_all(keys_, ec);
 }
 
 void LocalPipelineRun::runFor(std::chrono::milliseconds duration) {
   studio_->runFor(duration);
+  std::erase_if(killed_, [](pid_t pid) { return waitpid(pid, nullptr, WNOHANG) == pid; });
   for (size_t n = 0; n < children_.size(); ++n) {
     int status = 0;
     if (running_[n] && waitpid(children_[n], &status, WNOHANG) == children_[n]) {
@@ -229,8 +231,9 @@ bool LocalPipelineRun::killNode(const std::string& name) {
   for (size_t n = 0; n < names_.size(); ++n) {
     if (names_[n] != name || !running_[n]) continue;
     kill(children_[n], SIGKILL);
-    int status = 0;
-    waitpid(children_[n], &status, 0);
+    // Reaped later (runFor, the destructor): a node's teardown (its OpenGL context, a session in
+    // memory) takes a while on a loaded machine, and the studio's thread has frames to finish.
+    killed_.push_back(children_[n]);
     running_[n] = false;
     exits_.push_back(fmt::format("node {} was stopped (killed)", name));
     return true;

@@ -100,6 +100,7 @@ class LocalPipelineRun {
   std::unique_ptr<StudioCoordinator> studio_;
   std::vector<pid_t> children_;
   std::vector<bool> running_;
+  std::vector<pid_t> killed_;  // by killNode, not yet reaped
   std::vector<std::string> exits_;
   double frame_rate_ = 30;
 };
