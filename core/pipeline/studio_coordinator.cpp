@@ -303,6 +303,19 @@ void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
   std::swap(job.silhouettes, frame.silhouettes);  // the frame keeps the job's buffers meanwhile
   {
     std::lock_guard lock(mocap_mutex_);
+    // A frame still waiting for the tracker when a newer one comes is dropped: the stage fell
+    // behind, and a queue would only add latency.
+    while (!mocap_jobs_.empty()) {
+      MocapJob& stale = mocap_jobs_.front();
+      if (const auto it = frames_.find(stale.frame_id); it != frames_.end()) {
+        if (counting_) ++frames_dropped_;
+        retireFrame(it);
+        refused_[next_refused_++ % refused_.size()] = stale.frame_id;  // late silhouettes too
+      }
+      stale.silhouettes.clear();
+      spare_jobs_.push_back(std::move(stale));
+      mocap_jobs_.pop_front();
+    }
     mocap_jobs_.push_back(std::move(job));
   }
   mocap_work_.notify_one();

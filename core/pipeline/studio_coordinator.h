@@ -250,8 +250,10 @@ class StudioCoordinator {
   int64_t newest_done_ = -1;
   int64_t newest_seen_ = -1;  // the newest frame any node sent silhouettes of
   RecordData take_;
-  std::array<int64_t, 8> refused_{-1, -1, -1, -1, -1, -1, -1, -1};  // the latest frames dropped
-  size_t next_refused_ = 0;                                         // at admission (a ring)
+  // The latest frames dropped before motion capture (at admission, or overtaken waiting for it),
+  // a ring: their late silhouettes are ignored.
+  std::array<int64_t, 8> refused_{-1, -1, -1, -1, -1, -1, -1, -1};
+  size_t next_refused_ = 0;
   int64_t start_ns_ = 0, last_done_ns_ = 0;
   static constexpr size_t kTimelineFrames = 1 << 16;
   std::vector<std::pair<int64_t, float>> timeline_;  // done (steady ns), latency (ms)
