@@ -518,9 +518,10 @@ void StudioCoordinator::checkDeadlines(int64_t now_ns) {
   for (auto it = frames_.begin(); it != frames_.end();) {
     const int64_t frame_id = it->first;
     FrameState& frame = it->second;
-    ++it;  // finishFrame may erase this and earlier frames
+    ++it;  // finishFrame may erase this and earlier frames, beginMocap this and another
     if (!frame.mocap_begun && now_ns - frame.first_ns > deadline) {
       beginMocap(frame_id, frame);  // with the nodes that made it
+      it = frames_.upper_bound(frame_id);
     } else if (frame.pose_sent_ns > 0 && frame.offsets_sent_ns == 0 &&
                now_ns - frame.pose_sent_ns > deadline) {
       runRefinement(frame_id, frame);  // with the nodes' statistics that made it
