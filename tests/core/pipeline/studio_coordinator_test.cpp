@@ -52,20 +52,27 @@ class ScriptedNode {
   NodeEndpoint endpoint_;
 };
 
-// A frame that no node's image reaches shows nothing: it is dropped, not done, so that a run of N
-// frames shows N (while the nodes start, their first frames' statistics never come).
-TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
+// A studio (plain transport, a free port) for a ring of two 160x120 cameras.
+std::unique_ptr<StudioCoordinator> twoCameraStudio(int cameras_per_node,
+                                                   const StudioCoordinatorOptions& options) {
   RingRigSpec spec;
   spec.cameras = 2;
-  spec.cameras_per_node = 2;
+  spec.cameras_per_node = cameras_per_node;
   spec.width = 160;
   spec.height = 120;
   StudioEndpointConfig config;
   config.bind = "tcp://127.0.0.1:*";
   config.security = TransportSecurity::kPlain;
+  return std::make_unique<StudioCoordinator>(makeRingRig(spec), config, kHumanJointCount, options);
+}
+
+// A frame that no node's image reaches shows nothing: it is dropped, not done, so that a run of N
+// frames shows N (while the nodes start, their first frames' statistics never come).
+TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
   StudioCoordinatorOptions options;
   options.deadline = milliseconds(50);
-  StudioCoordinator studio(makeRingRig(spec), config, kHumanJointCount, options);
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(2, options);
+  StudioCoordinator& studio = *made;
   ScriptedNode node(studio.endpoint());
 
   // Frame 1: silhouettes, a pose back, and then nothing from the node.
@@ -103,17 +110,10 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
 // second) while both nodes keep talking: what waits in the socket shows them alive, and neither is
 // taken for lost.
 TEST(StudioCoordinator, NodesWhoseMessagesWaitWhileTheStudioWorksAreNotLost) {
-  RingRigSpec spec;
-  spec.cameras = 2;
-  spec.cameras_per_node = 1;
-  spec.width = 160;
-  spec.height = 120;
-  StudioEndpointConfig config;
-  config.bind = "tcp://127.0.0.1:*";
-  config.security = TransportSecurity::kPlain;
   StudioCoordinatorOptions options;
   options.lost_after = milliseconds(200);
-  StudioCoordinator studio(makeRingRig(spec), config, kHumanJointCount, options);
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
+  StudioCoordinator& studio = *made;
   ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
   for (int round = 0; round < 3; ++round) {
     ASSERT_TRUE(node1.send(0, HeartbeatData{}));
