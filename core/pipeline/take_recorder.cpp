@@ -119,7 +119,8 @@ TakeStatusData TakeRecorder::status() const {
     status.bytes = stats.bytes;
     if (stats.failed) status.error = stats.last_error;
   }
-  status.finished = closed_ && (counted_ == nullptr || closing_done_);
+  // Finished once nothing is left to write, this take's sets or a closed one's still draining.
+  status.finished = closed_ && closing_done_;
   return status;
 }
 

@@ -156,20 +156,18 @@ TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
   EXPECT_TRUE(status.finished);
   EXPECT_EQ(readFile(old / "keep.txt"), "an earlier take");
 
-  // A new take closes the open one, complete; no take (an empty name) closes it too. (The parts
-  // are read once the recorder is gone: a closed take finishes writing on a thread of its own.)
-  {
-    TakeRecorder recorder(folder / "takes", rig, "node2", 30.0);
-    recorder.command({"a", 0});
-    for (int64_t f = 0; f < 4; ++f) recorder.offer(f, nodeSet(rig, 1, f));
-    recorder.command({"b", 0});
-    EXPECT_EQ(recorder.status().take, "b");
-    EXPECT_EQ(recorder.status().written, 0);
-    for (int64_t f = 4; f < 6; ++f) recorder.offer(f, nodeSet(rig, 1, f));
-    recorder.command({});
-    EXPECT_TRUE(finished(recorder).finished);
-    recorder.offer(6, nodeSet(rig, 1, 6));
-  }
+  // A new take closes the open one, complete; no take (an empty name) closes it too, and says
+  // so only once what was queued is on the disk.
+  TakeRecorder recorder(folder / "takes", rig, "node2", 30.0);
+  recorder.command({"a", 0});
+  for (int64_t f = 0; f < 4; ++f) recorder.offer(f, nodeSet(rig, 1, f));
+  recorder.command({"b", 0});
+  EXPECT_EQ(recorder.status().take, "b");
+  EXPECT_EQ(recorder.status().written, 0);
+  for (int64_t f = 4; f < 6; ++f) recorder.offer(f, nodeSet(rig, 1, f));
+  recorder.command({});
+  EXPECT_TRUE(finished(recorder).finished);
+  recorder.offer(6, nodeSet(rig, 1, 6));
   EXPECT_EQ(SessionReader(folder / "takes" / "a" / "node2").frameCount(), 4);
   EXPECT_EQ(SessionReader(folder / "takes" / "b" / "node2").frameCount(), 2);
 }
