@@ -136,6 +136,18 @@ size_t parsePnmHeader(std::string_view data, int width, int height, int channels
   return at;
 }
 
+// Reads an open PNM file's header (parsePnmHeader) and leaves the file just after it.
+size_t readPnmHeader(std::FILE* file, int width, int height, int channels, std::string& problem) {
+  std::array<char, 64> header{};
+  const size_t read = std::fread(header.data(), 1, header.size(), file);
+  const size_t length =
+      parsePnmHeader(std::string_view(header.data(), read), width, height, channels, problem);
+  if (length == 0) return 0;
+  if (std::fseek(file, long(length), SEEK_SET) == 0) return length;
+  problem = fmt::format("cannot be read past its header: {}", std::strerror(errno));
+  return 0;
+}
+
 // Cheap check of a frame's PNM: its header, and a file as long as the header and every pixel (a
 // file cut short by a crash or a full disk is not).
 std::string checkPnm(const fs::path& path, int width, int height, int channels) {
@@ -144,14 +156,10 @@ std::string checkPnm(const fs::path& path, int width, int height, int channels) 
     return errno == ENOENT ? "is missing"
                            : fmt::format("cannot be opened: {}", std::strerror(errno));
   }
-  std::array<char, 64> header{};
-  const size_t read = std::fread(header.data(), 1, header.size(), file);
-  const bool sized = std::fseek(file, 0, SEEK_END) == 0;
-  const long size = sized ? std::ftell(file) : -1;
-  std::fclose(file);
   std::string problem;
-  const size_t length =
-      parsePnmHeader(std::string_view(header.data(), read), width, height, channels, problem);
+  const size_t length = readPnmHeader(file, width, height, channels, problem);
+  const long size = std::fseek(file, 0, SEEK_END) == 0 ? std::ftell(file) : -1;
+  std::fclose(file);
   if (length == 0) return problem;
   const long expected = long(length) + long(width) * height * channels;
   if (size != expected)
@@ -167,14 +175,11 @@ std::string readPnm(const fs::path& path, int64_t frame_id, const Camera& camera
   const int channels = bytesPerPixel(format);
   std::FILE* file = std::fopen(path.c_str(), "rb");
   if (!file) return fmt::format("{}: cannot be opened: {}", path.string(), std::strerror(errno));
-  std::array<char, 64> header{};
-  const size_t read = std::fread(header.data(), 1, header.size(), file);
   std::string problem;
-  const size_t length = parsePnmHeader(std::string_view(header.data(), read), camera.width(),
-                                       camera.height(), channels, problem);
+  const size_t length = readPnmHeader(file, camera.width(), camera.height(), channels, problem);
   image.resize(format, camera.width(), camera.height());
   const bool whole =
-      length > 0 && std::fseek(file, long(length), SEEK_SET) == 0 &&
+      length > 0 &&
       std::fread(image.pixels.data(), 1, image.pixels.size(), file) == image.pixels.size() &&
       std::fgetc(file) == EOF;
   std::fclose(file);
@@ -374,11 +379,11 @@ void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
       const Camera& camera = rig_.camera(c);
       const fs::path path = imagePath(c, i);
       CameraFrame& frame = out[c];
+      frame.camera = c;
+      frame.frame_id = id;
+      frame.timestamp_ns = timestamp;
       if (files_ == ImageFiles::kPnm) {
         errors[k] = readPnm(path, id, camera, format_, frame.image);
-        frame.camera = c;
-        frame.frame_id = id;
-        frame.timestamp_ns = timestamp;
         continue;
       }
       cv::Mat decoded;
@@ -397,9 +402,6 @@ void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
             path.string(), id, camera.width(), camera.height(), pixelFormatName(format_));
         continue;
       }
-      frame.camera = c;
-      frame.frame_id = id;
-      frame.timestamp_ns = timestamp;
       frame.image.resize(format_, camera.width(), camera.height());
       cv::Mat target(camera.height(), camera.width(), type, frame.image.pixels.data());
       if (format_ == PixelFormat::kRgb8)

@@ -45,11 +45,7 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
 }
 
 StudioCoordinator::~StudioCoordinator() {
-  {
-    std::lock_guard lock(mocap_mutex_);
-    mocap_stop_ = true;
-  }
-  mocap_work_.notify_all();
+  mocap_jobs_.close();
   mocap_thread_.join();
 }
 
@@ -301,37 +297,24 @@ void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
   }
   job.frame_id = frame_id;
   std::swap(job.silhouettes, frame.silhouettes);  // the frame keeps the job's buffers meanwhile
-  {
-    std::lock_guard lock(mocap_mutex_);
-    // A frame still waiting for the tracker when a newer one comes is dropped: the stage fell
-    // behind, and a queue would only add latency.
-    while (!mocap_jobs_.empty()) {
-      MocapJob& stale = mocap_jobs_.front();
-      if (const auto it = frames_.find(stale.frame_id); it != frames_.end()) {
-        if (counting_) ++frames_dropped_;
-        retireFrame(it);
-        refused_[next_refused_++ % refused_.size()] = stale.frame_id;  // late silhouettes too
-      }
-      stale.silhouettes.clear();
-      spare_jobs_.push_back(std::move(stale));
-      mocap_jobs_.pop_front();
+  // A frame still waiting for the tracker is pushed out by this one, and dropped.
+  if (std::optional<MocapJob> stale = mocap_jobs_.push(std::move(job))) {
+    if (const auto it = frames_.find(stale->frame_id); it != frames_.end()) {
+      if (counting_) ++frames_dropped_;
+      retireFrame(it);
+      refused_[next_refused_++ % refused_.size()] = stale->frame_id;  // late silhouettes too
     }
-    mocap_jobs_.push_back(std::move(job));
+    stale->silhouettes.clear();
+    spare_jobs_.push_back(std::move(*stale));
   }
-  mocap_work_.notify_one();
 }
 
 void StudioCoordinator::mocapLoop() {
-  MocapJob job;
   std::vector<const LowResSilhouette*> all;
-  while (true) {
-    {
-      std::unique_lock lock(mocap_mutex_);
-      mocap_work_.wait(lock, [&] { return mocap_stop_ || !mocap_jobs_.empty(); });
-      if (mocap_stop_) return;
-      job = std::move(mocap_jobs_.front());
-      mocap_jobs_.pop_front();
-    }
+  while (!mocap_jobs_.closed()) {
+    std::optional<MocapJob> next = mocap_jobs_.pop(std::chrono::milliseconds(100));
+    if (!next || mocap_jobs_.closed()) continue;
+    MocapJob& job = *next;
     const int64_t start = steadyNowNs();
     all.clear();
     for (const LowResSilhouette& s : job.silhouettes) all.push_back(&s);
@@ -349,24 +332,15 @@ void StudioCoordinator::mocapLoop() {
       job.pose.angles.assign(size_t(3) * joints_, 0.0f);
     }
     job.ms = (steadyNowNs() - start) / 1e6;
-    {
-      std::lock_guard lock(mocap_mutex_);
-      mocap_done_.push_back(std::move(job));
-    }
+    mocap_done_.push(std::move(job));
     mocap_ready_.notify();
   }
 }
 
 void StudioCoordinator::takePoses() {
   mocap_ready_.clear();
-  while (true) {
-    MocapJob job;
-    {
-      std::lock_guard lock(mocap_mutex_);
-      if (mocap_done_.empty()) return;
-      job = std::move(mocap_done_.front());
-      mocap_done_.pop_front();
-    }
+  while (std::optional<MocapJob> done = mocap_done_.pop(std::chrono::milliseconds(0))) {
+    MocapJob& job = *done;
     last_pose_ = job.pose;
     last_pose_frame_ = job.frame_id;
     if (counting_) mocap_ms_.add(job.ms);

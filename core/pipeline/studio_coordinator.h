@@ -3,19 +3,17 @@
 #include <array>
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <set>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/net/transport.h"
+#include "core/pipeline/bounded_queue.h"
 #include "core/pipeline/pipeline.h"
 #include "core/pipeline/wakeup.h"
 #include "core/refine/mesh_refiner.h"
@@ -230,12 +228,12 @@ class StudioCoordinator {
   // The motion capture module runs on a thread of its own (it alone uses locator_ and tracker_):
   // while it fits one frame (25 ms; a second for its first, which calibrates the body), this
   // thread goes on reading the nodes and refining and blending the frames ahead of it.
-  std::mutex mocap_mutex_;
-  std::condition_variable mocap_work_;
-  std::deque<MocapJob> mocap_jobs_, mocap_done_;  // under mocap_mutex_
-  bool mocap_stop_ = false;                       // under mocap_mutex_
-  std::vector<MocapJob> spare_jobs_;              // this thread's, their buffers kept
-  Wakeup mocap_ready_;                            // a pose is done
+  // One frame waits for the tracker at most: a newer one pushes it out (the stage fell behind,
+  // and a queue would only add latency). Closed to stop the thread.
+  BoundedQueue<MocapJob> mocap_jobs_{1};
+  BoundedQueue<MocapJob> mocap_done_{4};  // poses made; this thread takes them at every pump
+  std::vector<MocapJob> spare_jobs_;      // this thread's, their buffers kept
+  Wakeup mocap_ready_;                    // a pose is done
   std::thread mocap_thread_;  // started by the constructor's last line, joined by the destructor
   Eigen::Vector3d generic_root_m_ = Eigen::Vector3d::Zero();  // the nodes' skeleton's rest root
   std::unique_ptr<MeshRefiner> refiner_;  // made for the first statistics' vertex count

@@ -12,9 +12,6 @@ namespace lumistage {
 
 namespace {
 constexpr int kVertexFloats = 7;  // position, normal, rim dilation
-}  // namespace
-
-namespace {
 
 // The blend shaders' constants: the rig's camera count and the own cameras' rig indices, so that
 // every loop over cameras has a fixed count and every own camera a fixed index (llvmpipe runs
@@ -165,9 +162,9 @@ LumigraphRenderer::~LumigraphRenderer() {
   glDeleteTextures(1, &depth_maps_);
   glDeleteTextures(1, &images_);
   glDeleteTextures(1, &masks_);
-  glDeleteBuffers(1, &upload_buffer_);
   glDeleteBuffers(1, &vertex_buffer_);
   glDeleteBuffers(1, &index_buffer_);
+  glDeleteBuffers(1, &upload_buffer_);
   glDeleteVertexArrays(1, &vao_);
 }
 
