@@ -3,8 +3,8 @@
 // vertex: for every input camera of the rig the texture coordinate (projection with OpenCV lens
 // distortion) and the blending weight (docs/lumigraph.md):
 //   angle_i  = angle between the rays p->desired and p->c_i, facing_i = cos(n, p->c_i)
-//   candidates: cameras that are active, see p on their image, face it (facing_i > min_facing)
-//               and are not occluded (camera depth <= depth map + tolerance)
+//   candidates: cameras that are active, see p (in front, on their image, not occluded: the
+//               vertex's visibility mask, VertexVisibility) and face it (facing_i > min_facing)
 //   t        = (k+1)-th smallest candidate angle, or max_angle with at most k candidates
 //   w_i      = max(0, 1 - angle_i / t) / max(angle_i, epsilon) * smoothstep(min_facing, 1, facing_i)
 //              for the k candidates of smallest angle, 0 for every other camera.
@@ -21,6 +21,7 @@ const int kMaxK = 4;
 layout(location = 0) in vec3 position;  // captured actor frame (= capture world), metres
 layout(location = 1) in vec3 normal;
 layout(location = 2) in float dilation;  // metres out along the normal, for the desired view only
+layout(location = 3) in uint visible;    // bit i: rig camera i sees the vertex
 
 uniform mat3 rotations[kMaxCameras];
 uniform vec3 translations[kMaxCameras];
@@ -31,11 +32,6 @@ uniform vec2 tangentials[kMaxCameras];
 uniform vec2 image_sizes[kMaxCameras];
 uniform vec3 centres[kMaxCameras];
 uniform int camera_active[kMaxCameras];  // 0: left out of the blend (leave-one-out)
-
-uniform sampler2DArray depth_maps;  // camera-space depth, one layer per rig camera
-uniform float depth_scale;          // depth-map texels per camera pixel
-uniform vec2 depth_map_size;
-uniform float depth_tolerance;
 
 uniform int k_nearest;
 uniform float min_facing;
@@ -76,25 +72,15 @@ void main() {
   // at a time).
   const float kNone = 1e9;
   float angle[kMaxCameras], facing[kMaxCameras], weight[kMaxCameras];
-  vec2 texel[kMaxCameras];
   vec4 smallest = vec4(kNone);  // sorted: the 4 smallest angles
   float fifth = kNone;
   for (int i = 0; i < kCameras; ++i) {
     angle[i] = kNone;
     facing[i] = 0.0;
-    texel[i] = vec2(-1.0);
-    if (camera_active[i] == 0) continue;
-    vec3 c = rotations[i] * p + translations[i];
-    if (c.z <= 0.05) continue;
-    vec2 pixel = projectPixel(c, focal_centres[i], skews[i], radials[i], tangentials[i]);
-    if (any(lessThan(pixel, vec2(-0.5))) || any(greaterThan(pixel, image_sizes[i] - 0.5)))
-      continue;
-    texel[i] = pixel + 0.5;
+    if (camera_active[i] == 0 || (visible & (1u << i)) == 0u) continue;
     vec3 to_camera = centres[i] - p;
     float f = dot(n, normalize(to_camera));
     if (f <= min_facing) continue;
-    float d = texture(depth_maps, vec3(texel[i] * depth_scale / depth_map_size, float(i))).r;
-    if (c.z > d + depth_tolerance) continue;  // occluded
     float a = angleBetween(to_desired, to_camera);
     angle[i] = a;
     facing[i] = f;
@@ -127,11 +113,18 @@ void main() {
     sum = 1.0;
   }
   v_total = sum;
+  // Texture coordinates of the own cameras, where the vertex is on their image (occluded or not:
+  // across a triangle whose other corners they see, the coordinates stay those of the surface).
   for (int j = 0; j < kOwnCameras; ++j) {
-    v_weight[j] = weight[kOwn[j]];
-    v_texel[j] = texel[kOwn[j]];
+    int i = kOwn[j];
+    v_weight[j] = weight[i];
+    v_texel[j] = vec2(-1.0);
+    vec3 c = rotations[i] * p + translations[i];
+    if (c.z <= 0.05) continue;
+    vec2 pixel = projectPixel(c, focal_centres[i], skews[i], radials[i], tangentials[i]);
+    if (all(greaterThanEqual(pixel, vec2(-0.5))) && all(lessThanEqual(pixel, image_sizes[i] - 0.5)))
+      v_texel[j] = pixel + 0.5;
   }
-
   vec3 world = (clone * vec4(p + dilation * n, 1.0)).xyz;
   vec3 c = view_rotation * world + view_translation;
   vec2 pixel = projectPixel(c, view_focal_centre, view_skew, view_radial, view_tangential);

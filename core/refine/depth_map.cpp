@@ -6,7 +6,7 @@
 namespace lumistage {
 
 void DepthMap::render(const Camera& camera, const Eigen::Matrix3Xf& positions,
-                      const std::vector<Eigen::Vector3i>& triangles, int step) {
+                      std::span<const Eigen::Vector3i> triangles, int step) {
   step_ = std::max(step, 1);
   width_ = (camera.width() + step_ - 1) / step_;
   height_ = (camera.height() + step_ - 1) / step_;

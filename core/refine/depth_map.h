@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <span>
 #include <vector>
 
 #include "core/geometry/camera.h"
@@ -19,7 +20,7 @@ class DepthMap {
   // camera are left out, and so are back faces: the mesh is closed and wound counter-clockwise
   // seen from outside (as every mesh here), so the nearest surface is always a front face.
   void render(const Camera& camera, const Eigen::Matrix3Xf& positions,
-              const std::vector<Eigen::Vector3i>& triangles, int step);
+              std::span<const Eigen::Vector3i> triangles, int step);
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -37,6 +38,9 @@ class DepthMap {
     return depth <= depthAt(pixel_x, pixel_y) + tolerance_m;
   }
   const std::vector<float>& depths() const { return depth_; }
+  // What the last render() projected: every vertex's pixel and its depth along the optical axis.
+  const Eigen::Matrix2Xf& vertexPixels() const { return pixels_; }
+  const Eigen::VectorXf& vertexDepths() const { return depths_; }
 
   static constexpr float kFar = 1e30f;
 

@@ -5,7 +5,6 @@
 #include <string>
 
 #include "core/base/error.h"
-#include "core/render/egl_context.h"
 #include "core/render/shader_program.h"
 
 namespace lumistage {
@@ -28,7 +27,6 @@ std::string blendDefines(int cameras, const std::vector<int>& own) {
 struct LumigraphRenderer::Programs {
   Programs(int cameras, const std::vector<int>& own)
       : blend("lumigraph.vert", "lumigraph.frag", blendDefines(cameras, own)) {}
-  ShaderProgram depth{"lumigraph_depth.vert", "lumigraph_depth.frag"};
   ShaderProgram blend;  // compiled for the renderer's rig and own cameras
 };
 
@@ -59,25 +57,15 @@ CameraUniforms uniformsOf(const Camera& camera) {
   return u;
 }
 
-// One camera's uniforms in a shader, under these names.
-struct CameraUniformNames {
-  const char *rotation, *translation, *focal_centre, *skew, *radial, *tangential, *size;
-};
-constexpr CameraUniformNames kDepthMapCamera{"rotation", "translation", "focal_centre", "skew",
-                                             "radial",   "tangential",  "image_size"};
-constexpr CameraUniformNames kDesiredCamera{
-    "view_rotation", "view_translation", "view_focal_centre", "view_skew",
-    "view_radial",   "view_tangential",  "view_size"};
-
-void setCameraUniforms(const ShaderProgram& p, const CameraUniformNames& names,
-                       const CameraUniforms& u) {
-  glUniformMatrix3fv(p.uniform(names.rotation), 1, GL_FALSE, u.rotation.data());
-  glUniform3fv(p.uniform(names.translation), 1, u.translation.data());
-  glUniform4fv(p.uniform(names.focal_centre), 1, u.focal_centre);
-  glUniform1f(p.uniform(names.skew), u.skew);
-  glUniform3fv(p.uniform(names.radial), 1, u.radial.data());
-  glUniform2fv(p.uniform(names.tangential), 1, u.tangential);
-  glUniform2fv(p.uniform(names.size), 1, u.size);
+// The desired camera's uniforms.
+void setDesiredCamera(const ShaderProgram& p, const CameraUniforms& u) {
+  glUniformMatrix3fv(p.uniform("view_rotation"), 1, GL_FALSE, u.rotation.data());
+  glUniform3fv(p.uniform("view_translation"), 1, u.translation.data());
+  glUniform4fv(p.uniform("view_focal_centre"), 1, u.focal_centre);
+  glUniform1f(p.uniform("view_skew"), u.skew);
+  glUniform3fv(p.uniform("view_radial"), 1, u.radial.data());
+  glUniform2fv(p.uniform("view_tangential"), 1, u.tangential);
+  glUniform2fv(p.uniform("view_size"), 1, u.size);
 }
 
 }  // namespace
@@ -97,25 +85,16 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
   programs_ = std::make_unique<Programs>(rig_.cameraCount(), own_);
   params_.k = std::clamp(params_.k, 1, 4);
   params_.depth_map_divisor = std::max(1, params_.depth_map_divisor);
-  params_.cpu_depth_map_divisor = std::max(1, params_.cpu_depth_map_divisor);
-  if (params_.depth_maps == LumigraphParams::DepthMaps::kAuto) {
-    params_.depth_maps = currentRendererIsSoftware() ? LumigraphParams::DepthMaps::kCpu
-                                                     : LumigraphParams::DepthMaps::kGpu;
-  }
-  cpu_depth_maps_ = params_.depth_maps == LumigraphParams::DepthMaps::kCpu;
-  depth_divisor_ = cpu_depth_maps_ ? params_.cpu_depth_map_divisor : params_.depth_map_divisor;
-  if (cpu_depth_maps_) cpu_maps_.resize(rig_.cameraCount());
   for (const Camera& c : rig_.cameras()) {
     images_width_ = std::max(images_width_, c.width());
     images_height_ = std::max(images_height_, c.height());
   }
-  depth_width_ = (images_width_ + depth_divisor_ - 1) / depth_divisor_;
-  depth_height_ = (images_height_ + depth_divisor_ - 1) / depth_divisor_;
 
   glGenVertexArrays(1, &vao_);
   glGenBuffers(1, &vertex_buffer_);
   glGenBuffers(1, &index_buffer_);
   glGenBuffers(1, &upload_buffer_);
+  glGenBuffers(1, &visibility_buffer_);
   glBindVertexArray(vao_);
   glBindBuffer(GL_ARRAY_BUFFER, vertex_buffer_);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, kVertexFloats * sizeof(float), nullptr);
@@ -126,52 +105,38 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
   glEnableVertexAttribArray(0);
   glEnableVertexAttribArray(1);
   glEnableVertexAttribArray(2);
+  glBindBuffer(GL_ARRAY_BUFFER, visibility_buffer_);
+  glVertexAttribIPointer(3, 1, GL_UNSIGNED_SHORT, sizeof(uint16_t), nullptr);
+  glEnableVertexAttribArray(3);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
   glBindVertexArray(0);
-
-  // Visibility maps: camera-space depth per rig camera.
-  glGenTextures(1, &depth_maps_);
-  glBindTexture(GL_TEXTURE_2D_ARRAY, depth_maps_);
-  glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R32F, depth_width_, depth_height_, rig_.cameraCount());
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  glGenFramebuffers(1, &depth_framebuffer_);
-  glGenRenderbuffers(1, &depth_renderbuffer_);
-  glBindRenderbuffer(GL_RENDERBUFFER, depth_renderbuffer_);
-  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, depth_width_, depth_height_);
-  glBindFramebuffer(GL_FRAMEBUFFER, depth_framebuffer_);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
-                            depth_renderbuffer_);
-  glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, depth_maps_, 0, 0);
-  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-    throw Error("LumigraphRenderer: the depth-map framebuffer is incomplete");
-  // Every texel far: a smaller camera's CPU map leaves the rest of its layer as it is.
-  const float far[4] = {DepthMap::kFar, DepthMap::kFar, DepthMap::kFar, DepthMap::kFar};
-  for (int c = 0; c < rig_.cameraCount(); ++c) {
-    glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, depth_maps_, 0, c);
-    glClearBufferfv(GL_COLOR, 0, far);
-  }
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
 LumigraphRenderer::~LumigraphRenderer() {
-  glDeleteFramebuffers(1, &depth_framebuffer_);
-  glDeleteRenderbuffers(1, &depth_renderbuffer_);
-  glDeleteTextures(1, &depth_maps_);
   glDeleteTextures(1, &images_);
   glDeleteTextures(1, &masks_);
   glDeleteBuffers(1, &vertex_buffer_);
   glDeleteBuffers(1, &index_buffer_);
   glDeleteBuffers(1, &upload_buffer_);
+  glDeleteBuffers(1, &visibility_buffer_);
   glDeleteVertexArrays(1, &vao_);
 }
 
 void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                                 std::span<const Eigen::Vector3i> triangles) {
+  visibility_.compute(rig_, positions, triangles, params_.depth_map_divisor,
+                      params_.depth_tolerance_m);
+  setMesh(positions, normals, triangles, visibility_.masks());
+}
+
+void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
+                                std::span<const Eigen::Vector3i> triangles,
+                                std::span<const uint16_t> visibility) {
   const int n = static_cast<int>(positions.cols());
   if (normals.cols() != n) throw Error("LumigraphRenderer::setMesh: one normal per vertex needed");
+  if (visibility.size() != size_t(n))
+    throw Error("LumigraphRenderer::setMesh: " + std::to_string(visibility.size()) +
+                " visibility masks for " + std::to_string(n) + " vertices");
   // Rim dilation: the mean sagitta of each vertex's edges, (-n_v . (p_u - p_v)) / 4 for an edge
   // v-u where the surface bends away (convex), 0 where it bends toward the normal.
   rim_sum_.assign(n, 0.0f);
@@ -214,12 +179,15 @@ void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::
   }
   if (index_bytes > 0) glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, index_bytes, triangles.data());
   index_count_ = static_cast<GLsizei>(triangles.size() * 3);
-  glBindVertexArray(0);
-  if (cpu_depth_maps_) {
-    mesh_positions_ = positions;
-    mesh_triangles_.assign(triangles.begin(), triangles.end());
+  glBindBuffer(GL_ARRAY_BUFFER, visibility_buffer_);
+  const GLsizeiptr visibility_bytes = GLsizeiptr(visibility.size() * sizeof(uint16_t));
+  if (visibility_bytes > visibility_capacity_) {
+    glBufferData(GL_ARRAY_BUFFER, visibility_bytes, nullptr, GL_STREAM_DRAW);
+    visibility_capacity_ = visibility_bytes;
   }
-  depth_dirty_ = true;
+  if (visibility_bytes > 0)
+    glBufferSubData(GL_ARRAY_BUFFER, 0, visibility_bytes, visibility.data());
+  glBindVertexArray(0);
 }
 
 void LumigraphRenderer::setImage(int own_index, const ImageView& image) {
@@ -314,42 +282,6 @@ void LumigraphRenderer::setActive(const std::vector<bool>& active) {
     active_[c] = c < static_cast<int>(active.size()) ? int(active[c]) : 1;
 }
 
-void LumigraphRenderer::renderDepthMaps() {
-  if (cpu_depth_maps_) {
-    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, depth_maps_);
-    for (int c = 0; c < rig_.cameraCount(); ++c) {
-      DepthMap& map = cpu_maps_[c];
-      map.render(rig_.camera(c), mesh_positions_, mesh_triangles_, depth_divisor_);
-      glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, c, map.width(), map.height(), 1, GL_RED,
-                      GL_FLOAT, map.depths().data());
-    }
-    depth_dirty_ = false;
-    return;
-  }
-  glBindFramebuffer(GL_FRAMEBUFFER, depth_framebuffer_);
-  glViewport(0, 0, depth_width_, depth_height_);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDisable(GL_BLEND);
-  const ShaderProgram& p = programs_->depth;
-  p.use();
-  glUniform1f(p.uniform("map_scale"), 1.0f / float(depth_divisor_));
-  glUniform2f(p.uniform("map_size"), float(depth_width_), float(depth_height_));
-  glBindVertexArray(vao_);
-  const float far[4] = {DepthMap::kFar, DepthMap::kFar, DepthMap::kFar, DepthMap::kFar};
-  for (int c = 0; c < rig_.cameraCount(); ++c) {
-    glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, depth_maps_, 0, c);
-    glClearBufferfv(GL_COLOR, 0, far);
-    glClear(GL_DEPTH_BUFFER_BIT);
-    setCameraUniforms(p, kDepthMapCamera, uniformsOf(rig_.camera(c)));
-    glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
-  }
-  glBindVertexArray(0);
-  depth_dirty_ = false;
-}
-
 void LumigraphRenderer::render(const Camera& desired, std::vector<uint8_t>& rgba) {
   const Eigen::Affine3f identity = Eigen::Affine3f::Identity();
   render(desired, std::span<const Eigen::Affine3f>(&identity, 1), rgba);
@@ -357,7 +289,6 @@ void LumigraphRenderer::render(const Camera& desired, std::vector<uint8_t>& rgba
 
 void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Affine3f> clones,
                                std::vector<uint8_t>& rgba) {
-  if (depth_dirty_) renderDepthMaps();
   target_.bind(desired.width(), desired.height(), "LumigraphRenderer");
   glClearColor(0, 0, 0, 0);
   glClearDepth(1.0);
@@ -399,9 +330,6 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform2fv(p.uniform("image_sizes"), n, sizes.data());
   glUniform3fv(p.uniform("centres"), n, centres.data());
   glUniform1iv(p.uniform("camera_active"), n, active_.data());
-  glUniform1f(p.uniform("depth_scale"), 1.0f / float(depth_divisor_));
-  glUniform2f(p.uniform("depth_map_size"), float(depth_width_), float(depth_height_));
-  glUniform1f(p.uniform("depth_tolerance"), params_.depth_tolerance_m);
   glUniform1i(p.uniform("k_nearest"), params_.k);
   glUniform1f(p.uniform("min_facing"), params_.min_facing);
   glUniform1f(p.uniform("max_angle"), params_.max_angle_rad);
@@ -417,19 +345,16 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
                 1.0f / float(images_height_));
   }
   glUniform1i(p.uniform("images"), 0);
-  glUniform1i(p.uniform("depth_maps"), 1);
-  glUniform1i(p.uniform("masks"), 2);
+  glUniform1i(p.uniform("masks"), 1);
   glUniform1i(p.uniform("use_masks"), masks_ ? 1 : 0);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
   glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_2D_ARRAY, depth_maps_);
-  glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_2D_ARRAY, masks_);
   glActiveTexture(GL_TEXTURE0);
 
   const CameraUniforms v = uniformsOf(desired);
-  setCameraUniforms(p, kDesiredCamera, v);
+  setDesiredCamera(p, v);
   glBindVertexArray(vao_);
   if (images_ && !own_.empty()) {
     for (const Eigen::Affine3f& clone : clones) {

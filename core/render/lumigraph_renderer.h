@@ -8,9 +8,9 @@
 
 #include "core/capture/image.h"
 #include "core/geometry/rig.h"
-#include "core/refine/depth_map.h"
 #include "core/render/gl.h"
 #include "core/render/render_target.h"
+#include "core/render/vertex_visibility.h"
 
 namespace lumistage {
 
@@ -20,12 +20,10 @@ struct LumigraphParams {
   float min_facing = 0.1f;      // cos of 84 degrees: grazing views are left out
   float max_angle_rad = 1.57f;  // the threshold when at most k cameras qualify
   float epsilon_rad = 1e-4f;    // angles below this count as this
-  int depth_map_divisor = 2;    // visibility maps are the camera's size / this (GPU)
-  // Who rasterises the visibility maps. kAuto: the CPU under a software OpenGL (Mesa llvmpipe
-  // shades vertices on one thread: the 12 maps' draws cost about 9 ms of CPU a frame there, a CPU
-  // z-buffer at 1/cpu_depth_map_divisor about 2 ms), the GPU otherwise.
-  enum class DepthMaps { kAuto, kGpu, kCpu } depth_maps = DepthMaps::kAuto;
-  int cpu_depth_map_divisor = 4;
+  // Visibility (VertexVisibility) from depth maps of the mesh rasterised by the CPU at the
+  // cameras' size / this: 12 maps of 256x192 for the reference rig, about 2 ms. Not used when the
+  // caller gives the masks (the studio computes them once a frame for every node).
+  int depth_map_divisor = 4;
   float depth_tolerance_m = 0.03f;  // a vertex this far behind the map's surface is occluded
   // The flat triangles between vertices on a curved surface cut inside it: by the sagitta of an
   // edge at its middle, (its length)² x curvature / 8, about 3 mm for 3.5 cm edges on a 5 cm limb,
@@ -43,14 +41,15 @@ struct LumigraphParams {
 // mesh with per-vertex normals (the truth surface, the posed generic human, the refined mesh),
 // the rig, and the images of `own` cameras (a node's; all of them for the single-process
 // renderer). Weights are computed per vertex over *every* active camera of the rig, with
-// visibility from small depth maps of the mesh rendered from each camera, so that renderers that
-// own different cameras agree on them. A render writes RGBA8 (rows top first): colour = weighted
-// mean of the own cameras' images, alpha = the own cameras' share of the total weight (255 when
-// the renderer owns every contributing camera, 0 where no camera sees the surface). Blending the
-// partial images of all nodes (PartialImageBlender) gives the single-process image.
+// visibility per vertex and camera (VertexVisibility, from small depth maps of the mesh), so that
+// renderers that own different cameras agree on them. A render writes RGBA8 (rows top first):
+// colour = weighted mean of the own cameras' images, alpha = the own cameras' share of the total
+// weight (255 when the renderer owns every contributing camera, 0 where no camera sees the
+// surface). Blending the partial images of all nodes (PartialImageBlender) gives the single-process
+// image.
 class LumigraphRenderer {
  public:
-  static constexpr int kMaxCameras = 16;
+  static constexpr int kMaxCameras = VertexVisibility::kMaxCameras;
 
   // Throws Error for more than kMaxCameras cameras, an own index out of the rig, or GL failures.
   LumigraphRenderer(const Rig& rig, std::vector<int> own, LumigraphParams params = {});
@@ -61,10 +60,15 @@ class LumigraphRenderer {
   const std::vector<int>& ownCameras() const { return own_; }
   const LumigraphParams& params() const { return params_; }
 
-  // The surface for the next renders (in the capture's frame); its depth maps are rendered
-  // lazily by the next render(). `normals` unit, outward. Allocates only when the mesh grows.
+  // The surface for the next renders (in the capture's frame), with which cameras see each
+  // vertex computed here (VertexVisibility at params().depth_map_divisor), or given: one mask a
+  // vertex, bit c for rig camera c, as VertexVisibility computes them (the studio sends the
+  // nodes these). `normals` unit, outward. Allocates only when the mesh grows. Throws Error for
+  // masks of another vertex count.
   void setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                std::span<const Eigen::Vector3i> triangles);
+  void setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
+               std::span<const Eigen::Vector3i> triangles, std::span<const uint16_t> visibility);
   // The image of own camera `own_index` (index into ownCameras()). Bayer and mono8 upload their
   // 2x2 cells' colours (R, the mean of the two G, B; as many bytes as the Bayer image), which the
   // shader samples bilinearly: one filtered texture read a camera and fragment instead of four
@@ -98,7 +102,6 @@ class LumigraphRenderer {
   void useImageFormat(bool cells);
   // width x height RGBA texels into the array's layer `own_index`, through the pixel-buffer object.
   void uploadImage(int own_index, int width, int height, const uint8_t* rgba);
-  void renderDepthMaps();
 
   struct Programs;
   std::unique_ptr<Programs> programs_;
@@ -113,15 +116,10 @@ class LumigraphRenderer {
   GLuint masks_ = 0;   // 2D array texture of the own cameras' foreground masks, once given
   int mask_width_ = 0, mask_height_ = 0;
   int images_width_ = 0, images_height_ = 0;
-  bool cells_ = false;  // the array holds Bayer cells' colours
-  GLuint depth_maps_ = 0, depth_framebuffer_ = 0, depth_renderbuffer_ = 0;
-  bool cpu_depth_maps_ = false;
-  int depth_divisor_ = 1;
-  std::vector<DepthMap> cpu_maps_;   // one per rig camera, reused
-  Eigen::Matrix3Xf mesh_positions_;  // the mesh, for the CPU maps
-  std::vector<Eigen::Vector3i> mesh_triangles_;
-  int depth_width_ = 0, depth_height_ = 0;
-  bool depth_dirty_ = true;
+  bool cells_ = false;            // the array holds Bayer cells' colours
+  GLuint visibility_buffer_ = 0;  // one 16-bit camera mask a vertex (vertex attribute 3)
+  GLsizeiptr visibility_capacity_ = 0;
+  VertexVisibility visibility_;
   RenderTarget target_;
   GLuint upload_buffer_ = 0;      // pixel-buffer object for image uploads
   std::vector<float> vertices_;   // interleaved positions, normals and rim dilations, reused

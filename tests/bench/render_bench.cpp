@@ -86,13 +86,10 @@ void uploadNodeImages(LumigraphRenderer& r, bool bayer) {
 }
 
 // A node's renderer: mesh 0 the truth surface, 1 the generic human.
-std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int divisor = 2) {
+std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int divisor = 4) {
   Scene& s = scene();
   LumigraphParams params;
-  // The GPU's maps at 1/divisor, or (divisor < 0) the CPU's at 1/-divisor.
-  params.depth_maps =
-      divisor > 0 ? LumigraphParams::DepthMaps::kGpu : LumigraphParams::DepthMaps::kCpu;
-  params.depth_map_divisor = params.cpu_depth_map_divisor = std::abs(divisor);
+  params.depth_map_divisor = divisor;  // the visibility maps at the cameras' size / divisor
   auto r = std::make_unique<LumigraphRenderer>(s.studio->rig(), s.node, params);
   const TriangleMesh& m = mesh == 0 ? s.frame.surface : s.generic;
   r->setMesh(m.positions, m.normals, m.triangles);
@@ -100,7 +97,7 @@ std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int di
   return r;
 }
 
-// The node's frame after upload: the view rendered and read back (depth maps kept).
+// The node's frame after upload: the view rendered and read back (same mesh).
 void nodePartialImage(benchmark::State& state) {
   auto r = nodeRenderer(state.range(2) != 0, int(state.range(3)));
   const Camera view = viewOf(int(state.range(0)), int(state.range(1)));
@@ -125,17 +122,25 @@ BENCHMARK(nodePartialImage)
     ->Args({1920, 1080, 1, 1})
     ->Unit(benchmark::kMillisecond);
 
-// A new mesh: the 12 visibility maps (the camera's size / divisor; negative: by the CPU) rendered
-// again before the view.
+// A new mesh before the view: with its visibility computed by the renderer (the rig's 12 maps at
+// the cameras' size / divisor, as the single-process renderer does), or (divisor 0) given, as the
+// studio sends it to the nodes.
 void nodeMeshAndPartialImage(benchmark::State& state) {
   Scene& s = scene();
   const TriangleMesh& m = state.range(0) ? s.generic : s.frame.surface;
-  auto r = nodeRenderer(false, int(state.range(0)), int(state.range(1)));
+  const int divisor = int(state.range(1));
+  auto r = nodeRenderer(false, int(state.range(0)), divisor > 0 ? divisor : 4);
+  VertexVisibility given;
+  given.compute(s.studio->rig(), m.positions, m.triangles, 4, r->params().depth_tolerance_m);
   const Camera view = viewOf(640, 480);
   std::vector<uint8_t> rgba;
   const double cpu = processCpuMs();
   for (auto _ : state) {
-    r->setMesh(m.positions, m.normals, m.triangles);
+    if (divisor > 0) {
+      r->setMesh(m.positions, m.normals, m.triangles);
+    } else {
+      r->setMesh(m.positions, m.normals, m.triangles, given.masks());
+    }
     r->render(view, rgba);
     benchmark::DoNotOptimize(rgba.data());
   }
@@ -143,8 +148,20 @@ void nodeMeshAndPartialImage(benchmark::State& state) {
 }
 BENCHMARK(nodeMeshAndPartialImage)
     ->ArgNames({"generic", "divisor"})
-    ->ArgsProduct({{0, 1}, {2, 4, 8, -2, -4, -8}})
+    ->ArgsProduct({{0, 1}, {0, 2, 4, 8}})
     ->Unit(benchmark::kMillisecond);
+
+// The studio's share: which of the 12 cameras see each vertex of the refined mesh, once a frame.
+void vertexVisibility(benchmark::State& state) {
+  Scene& s = scene();
+  const TriangleMesh& m = state.range(0) ? s.generic : s.frame.surface;
+  VertexVisibility visibility;
+  for (auto _ : state) {
+    visibility.compute(s.studio->rig(), m.positions, m.triangles, 4, 0.03f);
+    benchmark::DoNotOptimize(visibility.masks().data());
+  }
+}
+BENCHMARK(vertexVisibility)->ArgName("generic")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Uploading the node's 3 images of 1024x768: Bayer (1 byte a pixel) or RGBA (4).
 void uploadImages(benchmark::State& state) {
