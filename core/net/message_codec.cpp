@@ -84,8 +84,10 @@ struct BodyEncoder {
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const OffsetsData& m) const {
     const auto offsets = b.CreateVector(m.offsets);
-    return {fb::Body::Offsets,
-            fb::CreateOffsets(b, static_cast<uint8_t>(m.offset_count), offsets).Union()};
+    const auto visibility = m.visibility.empty() ? 0 : b.CreateVector(m.visibility);
+    return {
+        fb::Body::Offsets,
+        fb::CreateOffsets(b, static_cast<uint8_t>(m.offset_count), offsets, visibility).Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const PartialImageData& m) const {
     const auto data = b.CreateVector(m.data);
@@ -153,7 +155,8 @@ std::vector<T> copyVector(const flatbuffers::Vector<T>* v) {
   if (v == nullptr) return {};
   std::vector<T> out(v->size());
   // Scalars are little-endian on the wire, as on every machine we build for.
-  static_assert(flatbuffers::is_same<T, uint8_t>::value || flatbuffers::is_same<T, float>::value);
+  static_assert(flatbuffers::is_same<T, uint8_t>::value ||
+                flatbuffers::is_same<T, uint16_t>::value || flatbuffers::is_same<T, float>::value);
   if (!out.empty()) std::memcpy(out.data(), v->Data(), out.size() * sizeof(T));
   return out;
 }
@@ -375,8 +378,14 @@ Check decodeOffsets(const fb::Offsets& in, const MessageLimits& limits, OffsetsD
              num(in.offset_count());
     }
   }
+  const size_t masks = sizeOf(in.visibility());
+  if (masks != 0 && masks != vertices) {
+    return "offsets: " + num(masks) + " visibility masks for " + num(vertices) +
+           " vertices, expected none or one a vertex";
+  }
   out.offset_count = in.offset_count();
   out.offsets = copyVector(in.offsets());
+  out.visibility = copyVector(in.visibility());
   return {};
 }
 

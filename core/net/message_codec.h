@@ -98,6 +98,8 @@ struct VertexStatisticsData {
 struct OffsetsData {
   int offset_count = 0;
   std::vector<uint8_t> offsets;  // one a vertex, each < offset_count
+  // Which rig cameras see each vertex (bit c: camera c; VertexVisibility): empty, or one a vertex.
+  std::vector<uint16_t> visibility;
   bool operator==(const OffsetsData&) const = default;
 };
 

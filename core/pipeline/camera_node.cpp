@@ -90,10 +90,17 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
 
 std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_id,
                                                   const std::vector<ViewData>& views,
-                                                  const Eigen::Vector3d& pivot) {
+                                                  const Eigen::Vector3d& pivot,
+                                                  std::span<const uint16_t> visibility) {
   std::vector<Message> messages;
   if (!renderer_ || views.empty()) return messages;
-  renderer_->setMesh(positions_, normals_, body_.rest.triangles);
+  // Which cameras see each vertex: the studio's, computed once for every node, or (from an older
+  // studio) this node's own (the rig's depth maps, about 2 ms).
+  if (visibility.size() == size_t(positions_.cols())) {
+    renderer_->setMesh(positions_, normals_, body_.rest.triangles, visibility);
+  } else {
+    renderer_->setMesh(positions_, normals_, body_.rest.triangles);
+  }
   for (size_t k = 0; k < cameras_.size(); ++k) {
     const ImageView image = set.frames[k].image.view();
     renderer_->setImage(static_cast<int>(k), image);
@@ -335,7 +342,7 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
     std::lock_guard lock(view_mutex_);
     for (const auto& [id, view] : views_) views.push_back(view);
   }
-  return partialImagesFor(*set, message.frame_id, views, pivot);
+  return partialImagesFor(*set, message.frame_id, views, pivot, offsets.visibility);
 }
 
 void CameraNode::post(Message message) {

@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -121,10 +122,12 @@ class CameraNode {
   // rendered with OpenGL (LumigraphRenderer, its own cameras' images): colour = the weighted
   // mean of its cameras, alpha = their share of the weight of all the rig's cameras (so the
   // studio's normalisation is exact); alpha-run encoded. Empty when no OpenGL context could be
-  // had (said once in the log).
+  // had (said once in the log). `visibility`: the studio's masks of which cameras see each
+  // vertex (VertexVisibility), or empty: the renderer computes them.
   std::vector<Message> partialImagesFor(const Set& set, int64_t frame_id,
                                         const std::vector<ViewData>& views,
-                                        const Eigen::Vector3d& pivot);
+                                        const Eigen::Vector3d& pivot,
+                                        std::span<const uint16_t> visibility);
   bool send(Message message);
   // Queues a message for the main thread to send, and wakes it.
   void post(Message message);

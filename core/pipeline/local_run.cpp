@@ -62,9 +62,10 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
     endpoint.studio_key = store.studioKey();
     endpoint.authorized = store.authorizedNodes();
   }
-  // The nodes pose the generic human: the refinement's smoothness needs its triangles.
-  if (options_.coordinator.body_triangles.empty())
-    options_.coordinator.body_triangles = loadGenericHuman().rest.triangles;
+  // The nodes pose the generic human: the refinement's smoothness needs its triangles, the
+  // visibility the studio sends them its posed and refined vertices.
+  if (!options_.coordinator.body)
+    options_.coordinator.body = std::make_shared<const SkinnedMesh>(loadGenericHuman());
   studio_ =
       std::make_unique<StudioCoordinator>(rig_, endpoint, kHumanJointCount, options_.coordinator);
 

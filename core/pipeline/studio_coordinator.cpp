@@ -8,6 +8,7 @@
 
 #include "core/body/human_model.h"
 #include "core/pipeline/posed_body.h"
+#include "core/render/lumigraph_renderer.h"
 #include "core/render/partial_image_codec.h"
 
 namespace lumistage {
@@ -395,24 +396,38 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
   sum.dropColourOutside();
   if (!refiner_ || refiner_->config().offset_count != sum.offset_count ||
       refiner_->dataErrors().size() != size_t(sum.sampleCount())) {
-    bool fits = true;
-    for (const Eigen::Vector3i& t : options_.body_triangles)
-      fits = fits && t.maxCoeff() < sum.vertex_count;
-    refiner_ = std::make_unique<MeshRefiner>(
-        options_.refine, sum.vertex_count,
-        fits ? options_.body_triangles : std::vector<Eigen::Vector3i>{});
+    refiner_ =
+        std::make_unique<MeshRefiner>(options_.refine, sum.vertex_count,
+                                      bodyFits(sum.vertex_count) ? options_.body->rest.triangles
+                                                                 : std::vector<Eigen::Vector3i>{});
   }
   if (!refiner_->refine(sum, chosen_offsets_)) {
     finishFrame(frame_id, frame);
     return;
   }
+  const int64_t refined = steadyNowNs();
+  OffsetsData offsets{refiner_->config().offsetLevels(), chosen_offsets_, {}};
+  // Which cameras see each vertex of the mesh the nodes will render: posed and refined as they
+  // will, from the same pose message and offsets.
+  if (bodyFits(sum.vertex_count)) {
+    posedBodyMesh(*options_.body, frame.pose, body_transforms_, posed_positions_, posed_normals_);
+    applyOffsets(options_.refine, chosen_offsets_, posed_positions_, posed_normals_,
+                 refined_positions_);
+    const LumigraphParams lumigraph;  // the nodes' renderers'
+    visibility_.compute(rig_, refined_positions_, options_.body->rest.triangles,
+                        lumigraph.depth_map_divisor, lumigraph.depth_tolerance_m);
+    offsets.visibility.assign(visibility_.masks().begin(), visibility_.masks().end());
+  }
   Message message;
   message.sender = "studio";
   message.frame_id = frame_id;
   message.sent_ns = steadyNowNs();
-  message.body = OffsetsData{refiner_->config().offsetLevels(), chosen_offsets_};
+  message.body = std::move(offsets);
   const std::span<const uint8_t> bytes = encoder_.encode(message);
-  if (counting_) refine_ms_.add((steadyNowNs() - start) / 1e6);
+  if (counting_) {
+    refine_ms_.add((refined - start) / 1e6);
+    visibility_ms_.add((steadyNowNs() - refined) / 1e6);
+  }
   int sent = 0;
   for (const std::string& name : frame.statistics_nodes) {
     NodeState& node = nodes_.at(name);
@@ -553,6 +568,7 @@ RunReport StudioCoordinator::report() const {
   r.stage_ms["mocap"] = mean(mocap_ms_);
   r.stage_ms["nodes_statistics_and_render"] = mean(statistics_wait_ms_);
   r.stage_ms["refine"] = mean(refine_ms_);
+  r.stage_ms["visibility"] = mean(visibility_ms_);
   r.stage_ms["combine"] = mean(combine_ms_);
   r.stage_ms["blend"] = mean(blend_ms_);
   r.hull_agreement = frames_done_ > 0 ? hull_agreement_sum_ / frames_done_ : 0;

@@ -19,6 +19,7 @@
 #include "core/refine/mesh_refiner.h"
 #include "core/refine/refinement_statistics.h"
 #include "core/render/partial_image_blender.h"
+#include "core/render/vertex_visibility.h"
 #include "core/tracking/pose_tracker.h"
 #include "core/tracking/visual_hull_locator.h"
 
@@ -37,9 +38,11 @@ struct StudioCoordinatorOptions {
   int max_frames_in_flight = 3;
   int raw_bytes_per_pixel = 1;  // of the cameras' images (Bayer, mono: 1; RGB: 3)
   RefineConfig refine;          // the refinement module's parameters
-  // The nodes' body mesh's triangles, for the refinement's smoothness between neighbours (empty:
-  // no smoothness).
-  std::vector<Eigen::Vector3i> body_triangles;
+  // The body mesh the nodes pose (the generic human). Its triangles give the refinement's
+  // smoothness between neighbours; posed and refined here too, it gives which cameras see each
+  // vertex (VertexVisibility, as the nodes' renderers compute it), sent with the offsets so that
+  // no node renders the rig's depth maps: once a frame instead of once a node. Null: neither.
+  std::shared_ptr<const SkinnedMesh> body;
 };
 
 // A camera's health as its node reports it in heartbeats.
@@ -129,6 +132,7 @@ class StudioCoordinator {
   void removeView(int view);
   const std::vector<ViewData>& views() const { return views_; }
   const ViewData& view() const { return views_.front(); }
+  const Rig& rig() const { return rig_; }
   // The newest blended image of a view (empty before its first frame).
   const BlendedImage& lastImage(int view = 0) const;
   // Called with every blended image of every view as it is made (a ViewRecorder records them);
@@ -209,8 +213,12 @@ class StudioCoordinator {
   void takePoses();
   // The views and the frame's pose to every node.
   void sendPose(int64_t frame_id, FrameState& frame);
+  // Whether the statistics are of the body's vertices (the nodes pose that body).
+  bool bodyFits(int vertex_count) const {
+    return options_.body && options_.body->rest.vertexCount() == vertex_count;
+  }
   // The refinement module: chooses every vertex's offset from the combined statistics and sends
-  // the offsets to the nodes.
+  // the offsets to the nodes, with which cameras see each vertex of the refined body.
   void runRefinement(int64_t frame_id, FrameState& frame);
   void finishFrame(int64_t frame_id, FrameState& frame);
   void checkDeadlines(int64_t now_ns);
@@ -238,6 +246,10 @@ class StudioCoordinator {
   Eigen::Vector3d generic_root_m_ = Eigen::Vector3d::Zero();  // the nodes' skeleton's rest root
   std::unique_ptr<MeshRefiner> refiner_;  // made for the first statistics' vertex count
   std::vector<uint8_t> chosen_offsets_;
+  // The refined mesh of the frame being sent, and which cameras see its vertices (reused).
+  std::vector<Eigen::Affine3f> body_transforms_;
+  Eigen::Matrix3Xf posed_positions_, posed_normals_, refined_positions_;
+  VertexVisibility visibility_;
   RefinementStatisticsCodec statistics_codec_;  // the nodes' statistics, decompressed here
   int joints_;
   std::map<int64_t, FrameState> frames_;
@@ -255,7 +267,8 @@ class StudioCoordinator {
   int64_t start_ns_ = 0, last_done_ns_ = 0;
   static constexpr size_t kTimelineFrames = 1 << 16;
   std::vector<std::pair<int64_t, float>> timeline_;  // done (steady ns), latency (ms)
-  RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_, refine_ms_;
+  RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_, refine_ms_,
+      visibility_ms_;
   std::vector<ViewData> views_;
   std::map<int, BlendedImage> last_images_;
   std::function<void(int, const BlendedImage&)> blended_sink_;

@@ -39,7 +39,7 @@ void writeSeeds(const std::string& dir) {
   stats.offset_count = 4;
   RefinementStatisticsCodec().encode(small, stats.packed);
   bodies.push_back(stats);
-  bodies.push_back(OffsetsData{21, {0, 5, 20}});
+  bodies.push_back(OffsetsData{21, {0, 5, 20}, {7, 0, 0xffff}});
   bodies.push_back(
       ViewData{0, 320, 240, 300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 3}});
   const std::vector<uint8_t> rgba(4 * 3 * 4, 9);

@@ -41,7 +41,7 @@ std::vector<Message> oneOfEach() {
   stats.offset_count = 3;
   stats.packed = {5, 0, 0, 0, 3, 6, 1, 2};  // the header, then a byte a sample (no colour)
   for (int i = 0; i < 15; ++i) stats.packed.push_back(uint8_t(i % 3));
-  OffsetsData offsets{21, {0, 10, 20, 5, 7}};
+  OffsetsData offsets{21, {0, 10, 20, 5, 7}, {0x0fff, 0, 0x8001, 3, 0xffff}};
   ViewData view{1,
                 320,
                 240,
@@ -180,7 +180,7 @@ TEST(MessageCodec, CountsOverTheLimitsAreRefused) {
             "silhouettes: mask 0 (camera 7): camera index out of range, the rig has 2");
 
   limits.max_vertices = 1000;
-  OffsetsData offsets{21, std::vector<uint8_t>(1001, 0)};
+  OffsetsData offsets{21, std::vector<uint8_t>(1001, 0), {}};
   EXPECT_EQ(decodeError(envelope(offsets), limits), "offsets: 1001 vertices, at most 1000 allowed");
   VertexStatisticsData stats;
   stats.vertex_count = 1001;
@@ -230,8 +230,11 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
   pose.scale = 5.0f;  // no actor is five times the generic human
   EXPECT_EQ(decodeError(envelope(pose)), "pose: scale 5.000000 outside 0.5..2");
 
-  OffsetsData offsets{21, {3, 21}};
+  OffsetsData offsets{21, {3, 21}, {}};
   EXPECT_EQ(decodeError(envelope(offsets)), "offsets: vertex 1 has offset 21, expected below 21");
+  OffsetsData masks{21, {3, 4}, {1, 2, 3}};
+  EXPECT_EQ(decodeError(envelope(masks)),
+            "offsets: 3 visibility masks for 2 vertices, expected none or one a vertex");
 
   PartialImageData raw{0, 4, 4, ImageEncoding::kRawRgba, std::vector<uint8_t>(63)};
   EXPECT_EQ(decodeError(envelope(raw)), "partial image 4x4: raw RGBA needs 64 bytes, got 63");

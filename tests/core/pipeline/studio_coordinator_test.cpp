@@ -4,9 +4,12 @@
 
 #include <thread>
 
+#include "core/body/human_model.h"
 #include "core/body/human_skeleton.h"
 #include "core/geometry/ring_rig.h"
+#include "core/pipeline/posed_body.h"
 #include "core/refine/refinement_statistics.h"
+#include "core/render/lumigraph_renderer.h"
 
 namespace lumistage {
 namespace {
@@ -104,6 +107,59 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
   EXPECT_EQ(studio.report().frames_dropped, 1);
   ASSERT_FALSE(studio.lastImage(0).rgba.empty());
   EXPECT_EQ(studio.lastImage(0).rgba[0], 200);
+}
+
+// With the offsets, the studio sends which cameras see each vertex of the body the nodes pose
+// and refine: what each node's renderer would compute from the same pose and offsets.
+TEST(StudioCoordinator, OffsetsComeWithTheRefinedBodysVisibility) {
+  StudioCoordinatorOptions options;
+  options.body = std::make_shared<const SkinnedMesh>(loadGenericHuman());
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(2, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint());
+  const int vertices = options.body->rest.vertexCount();
+  const RefineConfig& refine = options.refine;
+  for (const int frame : {1, 2}) {
+    ASSERT_TRUE(node.send(frame, SilhouettesData{}));
+    const std::optional<Message> pose = node.await<PoseData>(studio);
+    ASSERT_TRUE(pose);
+    // Frame 1: statistics of the body's vertices; frame 2: of another mesh (no visibility).
+    const int n = frame == 1 ? vertices : 10;
+    RefinementStatistics stats;
+    stats.reset(n, refine.offset_count, refine.colour_bits);
+    // Every vertex outside a silhouette from the posed surface out: the refinement moves it in.
+    for (int v = 0; v < n; ++v)
+      for (int t = refine.offset_count / 2; t < refine.offset_count; ++t)
+        stats.outside[size_t(v) * refine.offset_count + t] = 1;
+    VertexStatisticsData statistics{uint32_t(n), refine.offset_count, {}};
+    encodeRefinementStatistics(stats, statistics.packed);
+    ASSERT_TRUE(node.send(frame, statistics));
+    const std::optional<Message> offsets = node.await<OffsetsData>(studio);
+    ASSERT_TRUE(offsets);
+    const OffsetsData& sent = std::get<OffsetsData>(offsets->body);
+    if (frame == 2) {
+      EXPECT_TRUE(sent.visibility.empty());
+      continue;
+    }
+    const int unmoved = refine.offsetLevels() / 2;
+    ASSERT_TRUE(std::all_of(sent.offsets.begin(), sent.offsets.end(),
+                            [&](uint8_t level) { return level < unmoved; }));
+    std::vector<Eigen::Affine3f> transforms;
+    Eigen::Matrix3Xf positions, normals, refined;
+    posedBodyMesh(*options.body, std::get<PoseData>(pose->body), transforms, positions, normals);
+    applyOffsets(refine, sent.offsets, positions, normals, refined);
+    VertexVisibility expected;
+    const LumigraphParams lumigraph;
+    expected.compute(studio.rig(), refined, options.body->rest.triangles,
+                     lumigraph.depth_map_divisor, lumigraph.depth_tolerance_m);
+    ASSERT_EQ(sent.visibility.size(), size_t(vertices));
+    EXPECT_TRUE(
+        std::equal(sent.visibility.begin(), sent.visibility.end(), expected.masks().begin()));
+    const auto seen = std::count_if(sent.visibility.begin(), sent.visibility.end(),
+                                    [](uint16_t m) { return m != 0; });
+    EXPECT_GT(seen, vertices / 4) << "the body stands in the cameras' view";
+    EXPECT_LT(seen, vertices) << "and hides its far side";
+  }
 }
 
 // The studio busy for longer than a node may stay silent (the tracker's first frame takes a
