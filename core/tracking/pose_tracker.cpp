@@ -126,6 +126,18 @@ struct PoseTracker::Impl {
   std::vector<Eigen::Isometry3d> global;
   std::vector<Eigen::Vector3d> dof_axis, dof_centre;
   std::vector<Eigen::Vector3d> cap_a, cap_b;
+  // The capsules that can be nearest to each hull sample (ascending, in candidates from
+  // candidate_begin[i]): those within kCandidateMargin of the nearest when the lists were made,
+  // with the capsules then at candidate_a, candidate_b. While no capsule end has moved more than
+  // half the margin since, no other capsule can be nearest (a segment whose ends move by at most
+  // m moves at most m from any point): the fit's iterations look at 2 to 4 capsules a sample
+  // instead of all of them, and find the same nearest one.
+  static constexpr double kCandidateMargin = 0.10;
+  std::vector<uint8_t> candidates;
+  std::vector<int> candidate_begin;
+  std::vector<double> capsule_distance;  // of one sample to every capsule, while making them
+  std::vector<Eigen::Vector3d> candidate_a, candidate_b;
+  bool candidates_valid = false;
   Eigen::MatrixXd H, H_new;
   Eigen::VectorXd g, g_new, delta;
   Eigen::MatrixXd damped;
@@ -149,6 +161,12 @@ struct PoseTracker::Impl {
   // Carves voxels [lo, hi] (inclusive) and samples the hull's surface; returns the volume.
   double carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid, double* top_z);
   double evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h, Eigen::VectorXd& grad);
+  // Places the capsules for the pose in `global` (cap_a, cap_b) and remakes the hull samples'
+  // candidate capsules when they no longer hold.
+  void placeCapsules();
+  // The nearest capsule to hull sample i (its index, the signed distance to its surface, the
+  // closest point on its axis).
+  int nearestCapsule(size_t i, double& distance, Eigen::Vector3d& closest) const;
   double fit(Pose& p, int iterations);
   double fitRms(const Pose& p);
   void apply(Pose& p, const Eigen::VectorXd& delta) const;
@@ -349,6 +367,7 @@ void PoseTracker::Impl::buildModel(const SkinnedMesh& mesh) {
 }
 
 void PoseTracker::Impl::setShape(const BodyShape& s) {
+  candidates_valid = false;  // the capsules' radii change
   shape = s;
   skeleton = makeHumanSkeleton(s);
   const double scale = skeleton.restPositions()[kHead].z() / generic_head_z;
@@ -406,6 +425,7 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
   hi = hi.cwiseMin(dims - Eigen::Vector3i::Ones());
   surface_all.clear();
   hull.clear();
+  candidates_valid = false;
   if ((hi.array() < lo.array()).any()) return 0;
   const size_t sx = 1, sy = size_t(dims.x()), sz = size_t(dims.x()) * dims.y();
   int count = 0;
@@ -527,23 +547,15 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
       for (int j = i; j < k; ++j) h(ch[i], ch[j]) += wi * row[j];
     }
   };
-  for (size_t c = 0; c < capsules.size(); ++c) {
-    const Eigen::Isometry3d& t = global[capsules[c].joint];
-    cap_a[c] = t * capsules[c].a;
-    cap_b[c] = t * capsules[c].b;
-  }
+  placeCapsules();
   double cost = 0;
   // Hull surface samples on the model's surface.
   const double delta_out = opt.huber_m, delta_in = 4 * opt.huber_m;
-  for (const Eigen::Vector3d& v : hull) {
-    double best = 1e9;
-    int best_c = -1;
-    Eigen::Vector3d best_closest = Eigen::Vector3d::Zero();
-    for (size_t c = 0; c < capsules.size(); ++c) {
-      Eigen::Vector3d closest;
-      const double d = segmentDistance(v, cap_a[c], cap_b[c], closest) - capsules[c].radius_m;
-      if (d < best) best = d, best_c = int(c), best_closest = closest;
-    }
+  for (size_t i = 0; i < hull.size(); ++i) {
+    const Eigen::Vector3d& v = hull[i];
+    double best;
+    Eigen::Vector3d best_closest;
+    const int best_c = nearestCapsule(i, best, best_closest);
     // The hull holds the body: a model surface beyond the hull (r < 0) is wrong, a hull beyond
     // the model (r > 0) may be a phantom of the carving (between the legs, under the arms).
     const double r = best, ar = std::abs(r);
@@ -676,19 +688,63 @@ double PoseTracker::Impl::fit(Pose& p, int iterations) {
   return cost;
 }
 
+void PoseTracker::Impl::placeCapsules() {
+  const size_t n = capsules.size();
+  for (size_t c = 0; c < n; ++c) {
+    const Eigen::Isometry3d& t = global[capsules[c].joint];
+    cap_a[c] = t * capsules[c].a;
+    cap_b[c] = t * capsules[c].b;
+  }
+  double moved = 0;
+  if (candidates_valid) {
+    for (size_t c = 0; c < n; ++c) {
+      moved = std::max(moved, (cap_a[c] - candidate_a[c]).squaredNorm());
+      moved = std::max(moved, (cap_b[c] - candidate_b[c]).squaredNorm());
+    }
+  }
+  if (candidates_valid && std::sqrt(moved) <= 0.5 * kCandidateMargin) return;
+  candidate_a = cap_a;
+  candidate_b = cap_b;
+  candidates.clear();
+  candidate_begin.resize(hull.size() + 1);
+  for (size_t i = 0; i < hull.size(); ++i) {
+    candidate_begin[i] = int(candidates.size());
+    double best = 1e9;
+    Eigen::Vector3d closest;
+    capsule_distance.resize(n);
+    for (size_t c = 0; c < n; ++c) {
+      capsule_distance[c] =
+          segmentDistance(hull[i], cap_a[c], cap_b[c], closest) - capsules[c].radius_m;
+      best = std::min(best, capsule_distance[c]);
+    }
+    for (size_t c = 0; c < n; ++c)
+      if (capsule_distance[c] <= best + kCandidateMargin) candidates.push_back(uint8_t(c));
+  }
+  candidate_begin[hull.size()] = int(candidates.size());
+  candidates_valid = true;
+}
+
+int PoseTracker::Impl::nearestCapsule(size_t i, double& distance, Eigen::Vector3d& closest) const {
+  distance = 1e9;
+  closest = Eigen::Vector3d::Zero();
+  int best = -1;
+  for (int k = candidate_begin[i]; k < candidate_begin[i + 1]; ++k) {
+    const int c = candidates[k];
+    Eigen::Vector3d point;
+    const double d = segmentDistance(hull[i], cap_a[c], cap_b[c], point) - capsules[c].radius_m;
+    if (d < distance) distance = d, best = c, closest = point;
+  }
+  return best;
+}
+
 double PoseTracker::Impl::fitRms(const Pose& p) {
   skeleton.forwardKinematics(p, global);
-  for (size_t c = 0; c < capsules.size(); ++c) {
-    cap_a[c] = global[capsules[c].joint] * capsules[c].a;
-    cap_b[c] = global[capsules[c].joint] * capsules[c].b;
-  }
+  placeCapsules();
   double sum = 0;
-  for (const Eigen::Vector3d& v : hull) {
-    double best = 1e9;
-    for (size_t c = 0; c < capsules.size(); ++c) {
-      Eigen::Vector3d closest;
-      best = std::min(best, segmentDistance(v, cap_a[c], cap_b[c], closest) - capsules[c].radius_m);
-    }
+  for (size_t i = 0; i < hull.size(); ++i) {
+    double best;
+    Eigen::Vector3d closest;
+    nearestCapsule(i, best, closest);
     best = std::min(std::abs(best), 0.2);
     sum += best * best;
   }
