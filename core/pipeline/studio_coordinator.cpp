@@ -406,7 +406,13 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
     return;
   }
   const int64_t refined = steadyNowNs();
-  OffsetsData offsets{refiner_->config().offsetLevels(), chosen_offsets_, {}};
+  // The message is kept from frame to frame: its vectors keep their memory.
+  Message& message = offsets_message_;
+  if (!std::holds_alternative<OffsetsData>(message.body)) message.body = OffsetsData{};
+  OffsetsData& offsets = std::get<OffsetsData>(message.body);
+  offsets.offset_count = refiner_->config().offsetLevels();
+  offsets.offsets.assign(chosen_offsets_.begin(), chosen_offsets_.end());
+  offsets.visibility.clear();
   // Which cameras see each vertex of the mesh the nodes will render: posed and refined as they
   // will, from the same pose message and offsets.
   if (bodyFits(sum.vertex_count)) {
@@ -418,11 +424,9 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
                         lumigraph.depth_map_divisor, lumigraph.depth_tolerance_m);
     offsets.visibility.assign(visibility_.masks().begin(), visibility_.masks().end());
   }
-  Message message;
   message.sender = "studio";
   message.frame_id = frame_id;
   message.sent_ns = steadyNowNs();
-  message.body = std::move(offsets);
   const std::span<const uint8_t> bytes = encoder_.encode(message);
   if (counting_) {
     refine_ms_.add((refined - start) / 1e6);

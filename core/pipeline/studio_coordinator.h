@@ -250,6 +250,7 @@ class StudioCoordinator {
   std::vector<Eigen::Affine3f> body_transforms_;
   Eigen::Matrix3Xf posed_positions_, posed_normals_, refined_positions_;
   VertexVisibility visibility_;
+  Message offsets_message_;                     // reused: its vectors keep their memory
   RefinementStatisticsCodec statistics_codec_;  // the nodes' statistics, decompressed here
   int joints_;
   std::map<int64_t, FrameState> frames_;
