@@ -82,6 +82,8 @@ MainWindow::MainWindow(QWidget* parent)
   connect(viewport_panel_, &ViewportPanel::viewChanged, pipeline_panel_, &PipelinePanel::setView);
   connect(pipeline_panel_, &PipelinePanel::snapshot, viewport_panel_->viewport(),
           &ViewportWidget::showSnapshot);
+  connect(pipeline_panel_, &PipelinePanel::view, viewport_panel_->viewport(),
+          &ViewportWidget::showView);
   connect(pipeline_panel_, &PipelinePanel::snapshot, health_panel_, &HealthPanel::showSnapshot);
   connect(pipeline_panel_, &PipelinePanel::snapshot, overlay_panel_, &OverlayPanel::showSnapshot);
   connect(pipeline_panel_, &PipelinePanel::demoSessionWanted, this, &MainWindow::startDemo);

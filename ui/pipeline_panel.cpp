@@ -87,9 +87,22 @@ void PipelineWorker::run() {
     std::vector<Eigen::Affine3f> transforms;
     const auto start = std::chrono::steady_clock::now();
     auto last = start;
-    int64_t posed_frame = -1;
-    std::vector<Eigen::Vector3d> joints;
-    std::shared_ptr<TriangleMesh> mesh;
+    PipelineView shown;  // the newest view, with the body placed for its frame
+    shown.parents = parents;
+    // Places the body for a pose (of frame `pose_frame`) unless it is there already.
+    auto placeBody = [&](const PoseData& pose_data, int64_t pose_frame) {
+      if (pose_frame == shown.pose_frame ||
+          pose_data.angles.size() != size_t(3) * human.skeleton.jointCount())
+        return;
+      shown.pose_frame = pose_frame;
+      human.skeleton.jointPositions(poseFromMessage(pose_data, human.skeleton.jointCount()),
+                                    shown.joints);
+      for (Eigen::Vector3d& joint : shown.joints) joint *= pose_data.scale;
+      auto mesh = std::make_shared<TriangleMesh>();
+      posedBodyMesh(human, pose_data, transforms, mesh->positions, mesh->normals);
+      mesh->triangles = human.rest.triangles;
+      shown.mesh = std::move(mesh);
+    };
     while (!stop_) {
       bool acted = false;
       {
@@ -101,38 +114,34 @@ void PipelineWorker::run() {
         for (auto& command : commands) command(pipeline);
         acted = !commands.empty();
       }
-      if (!acted) pipeline.runFor(std::chrono::milliseconds(50));
+      // Short slices: a blended frame goes to the viewport within 10 ms.
+      if (!acted) pipeline.runFor(std::chrono::milliseconds(10));
       for (const std::string& exit : pipeline.takeExits())
         emit message(QString::fromStdString(exit));
+      // Every new blended frame to the viewport, with the skeleton and mesh of its own frame (the
+      // newest pose runs a few frames ahead of the newest image).
+      const BlendedImage& blended = pipeline.studio().lastImage();
+      if (!blended.rgba.empty() && blended.frame_id != shown.view_frame) {
+        shown.view =
+            QImage(blended.rgba.data(), blended.width, blended.height, QImage::Format_RGBA8888)
+                .copy();
+        shown.view_frame = blended.frame_id;
+        placeBody(blended.pose, blended.frame_id);
+        emit view(shown);
+      }
       const auto now = std::chrono::steady_clock::now();
       // Five times a second, and at once after a command (a killed node shows at once).
       if (!acted && now - last < std::chrono::milliseconds(200)) continue;
       last = now;
+      // Before the first image: the newest pose.
+      if (shown.view_frame < 0)
+        placeBody(pipeline.studio().lastPose(), pipeline.studio().lastPoseFrame());
       PipelineSnapshot s;
+      static_cast<PipelineView&>(s) = shown;
       s.report = pipeline.studio().report();
       s.time_s = std::chrono::duration<double>(now - start).count();
-      const BlendedImage& blended = pipeline.studio().lastImage();
-      if (!blended.rgba.empty()) {
-        s.view = QImage(blended.rgba.data(), blended.width, blended.height, QImage::Format_RGBA8888)
-                     .copy();
-      }
       for (const std::string& name : pipeline.nodeNames()) {
         if (!pipeline.nodeRunning(name)) s.exited << QString::fromStdString(name);
-      }
-      // The skeleton and mesh drawn over the view are those of the view's frame (the newest pose
-      // runs a few frames ahead of the newest image); the newest pose before the first image.
-      const bool shown = blended.frame_id >= 0;
-      const PoseData& pose_data = shown ? blended.pose : pipeline.studio().lastPose();
-      const int64_t pose_frame = shown ? blended.frame_id : pipeline.studio().lastPoseFrame();
-      if (pose_frame != posed_frame &&
-          pose_data.angles.size() == size_t(3) * human.skeleton.jointCount()) {
-        posed_frame = pose_frame;
-        human.skeleton.jointPositions(poseFromMessage(pose_data, human.skeleton.jointCount()),
-                                      joints);
-        for (Eigen::Vector3d& joint : joints) joint *= pose_data.scale;
-        mesh = std::make_shared<TriangleMesh>();
-        posedBodyMesh(human, pose_data, transforms, mesh->positions, mesh->normals);
-        mesh->triangles = human.rest.triangles;
       }
       if (pipeline.viewRecordingFailed()) {
         pipeline.stopRecordingView();
@@ -145,10 +154,6 @@ void PipelineWorker::run() {
       s.take = pipeline.studio().take();
       s.take_recording = pipeline.studio().recordingTake();
       s.takes_folder = QString::fromStdString(options_.takes.string());
-      s.pose_frame = posed_frame;
-      s.joints = joints;
-      s.parents = parents;
-      s.mesh = mesh;
       emit snapshot(s);
     }
     // A recording under way is finished with the pipeline; the panel ends it with this worker.
@@ -176,6 +181,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
       takes_folder_(QDir::homePath() + "/lumistage-takes") {
   qRegisterMetaType<lumistage::RunReport>();
   qRegisterMetaType<lumistage::PipelineSnapshot>();
+  qRegisterMetaType<lumistage::PipelineView>();
   summary_->setWordWrap(true);
   summary_->setObjectName("pipeline_summary");
   source_->addItems({tr("Virtual studio (demo session)"), tr("Recorded session..."),
@@ -306,6 +312,7 @@ void PipelinePanel::start(LocalRunOptions options) {
   connect(worker_, &PipelineWorker::finished, thread_, &QThread::quit);
   connect(thread_, &QThread::finished, worker_, &QObject::deleteLater);
   connect(worker_, &PipelineWorker::snapshot, this, &PipelinePanel::show);
+  connect(worker_, &PipelineWorker::view, this, &PipelinePanel::view);
   connect(worker_, &PipelineWorker::message, summary_, &QLabel::setText);
   connect(worker_, &PipelineWorker::recordingEnded, this, &PipelinePanel::recordingEnded);
   connect(worker_, &PipelineWorker::takeRefused, this, &PipelinePanel::refuseTake);

@@ -25,19 +25,24 @@ class QThread;
 
 namespace lumistage {
 
-// What the studio's panels see of the pipeline, five times a second: its figures, its output
-// (the blended view), the body it placed (the generic human posed, world coordinates) and the
-// node processes that are gone.
-struct PipelineSnapshot {
-  RunReport report;
-  QImage view;  // the blended image; null before the first frame
+// The director's view as the studio blended it, with the body placed for that frame (the generic
+// human posed, world coordinates): what the viewport draws, sent with every new blended frame.
+struct PipelineView {
+  QImage view;              // the blended image; null before the first frame
+  int64_t view_frame = -1;  // its frame id
   int64_t pose_frame = -1;
   std::vector<Eigen::Vector3d> joints;       // the placed body's joints
   std::vector<int> parents;                  // per joint, -1 for the root
   std::shared_ptr<const TriangleMesh> mesh;  // the placed body's surface
-  QStringList exited;                        // nodes whose process is no longer running
-  double time_s = 0;                         // since the pipeline started
-  QString recording;                         // the file the view is recorded to; empty: none
+};
+
+// What the studio's panels see of the pipeline, five times a second: its figures, the newest view
+// and the node processes that are gone.
+struct PipelineSnapshot : PipelineView {
+  RunReport report;
+  QStringList exited;  // nodes whose process is no longer running
+  double time_s = 0;   // since the pipeline started
+  QString recording;   // the file the view is recorded to; empty: none
   int64_t recorded_frames = 0;
   RecordData take;  // the take asked of the nodes (name empty: none yet); theirs in report.nodes
   bool take_recording = false;
@@ -45,8 +50,9 @@ struct PipelineSnapshot {
 };
 
 // Runs a LocalPipelineRun on its own thread (move to a QThread, call run()), reporting a snapshot
-// five times a second and the node processes that exit. Commands from other threads (the view,
-// killing a node) are queued and done between two slices of work.
+// five times a second, the view with every frame the studio blends (at the cameras' rate: a
+// director dragging the camera sees video, not slides), and the node processes that exit. Commands
+// from other threads (the view, killing a node) are queued and done between two slices of work.
 class PipelineWorker : public QObject {
   Q_OBJECT
 
@@ -71,6 +77,7 @@ class PipelineWorker : public QObject {
 
  signals:
   void snapshot(lumistage::PipelineSnapshot snapshot);
+  void view(lumistage::PipelineView view);
   void message(QString text);
   void recordingEnded();             // stopped, failed, or the pipeline stopped
   void takeRefused(QString reason);  // startTake(): why the take cannot start
@@ -119,6 +126,7 @@ class PipelinePanel : public QWidget {
 
  signals:
   void snapshot(const lumistage::PipelineSnapshot& snapshot);
+  void view(const lumistage::PipelineView& view);  // every frame the studio blends
   void started();
   // A recording of the view ended: asked to, a write failed, or the pipeline stopped.
   void recordingEnded();
@@ -154,3 +162,4 @@ class PipelinePanel : public QWidget {
 
 Q_DECLARE_METATYPE(lumistage::RunReport)
 Q_DECLARE_METATYPE(lumistage::PipelineSnapshot)
+Q_DECLARE_METATYPE(lumistage::PipelineView)

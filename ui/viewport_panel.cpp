@@ -160,8 +160,10 @@ void ViewportWidget::refresh() {
 }
 
 void ViewportWidget::paintTo(QPainter& painter, int w, int h) {
-  if (dirty_ || frame_.size() != QSize(w, h)) {
-    frame_ = QImage(std::max(1, w), std::max(1, h), QImage::Format_ARGB32_Premultiplied);
+  const QSize size(std::max(1, w), std::max(1, h));
+  if (dirty_ || frame_.size() != size) {
+    // Redrawn over the last picture: a new image only when the size changes.
+    if (frame_.size() != size) frame_ = QImage(size, QImage::Format_ARGB32_Premultiplied);
     QPainter raster(&frame_);
     paintScene(raster, w, h);
     dirty_ = false;
@@ -187,7 +189,15 @@ Eigen::Vector3d ViewportWidget::actorFloorPoint() const {
 }
 
 void ViewportWidget::showSnapshot(const PipelineSnapshot& snapshot) {
+  if (snapshot.view_frame != snapshot_.view_frame) ++views_shown_;
   snapshot_ = snapshot;
+  refresh();
+}
+
+void ViewportWidget::showView(const PipelineView& view) {
+  if (view.view_frame == snapshot_.view_frame) return;
+  ++views_shown_;
+  static_cast<PipelineView&>(snapshot_) = view;
   refresh();
 }
 

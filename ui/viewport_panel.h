@@ -57,6 +57,9 @@ class ViewportWidget : public QWidget {
     refresh();
   }
   void showSnapshot(const PipelineSnapshot& snapshot);
+  // A new blended frame and the body placed for it (every frame, between snapshots).
+  void showView(const PipelineView& view);
+  int64_t viewsShown() const { return views_shown_; }
   // The size the nodes render at: 320 wide, the widget's aspect.
   QSize renderSize() const;
   // The view for the nodes to render, with the clones (drawn by the lumigraph with the
@@ -89,6 +92,7 @@ class ViewportWidget : public QWidget {
   ViewportLayers layers_;
   Rig rig_;
   PipelineSnapshot snapshot_;
+  int64_t views_shown_ = 0;  // new blended frames drawn
   CloneSet* clones_;
   QPoint last_mouse_;
   Qt::MouseButton dragging_ = Qt::NoButton;

@@ -251,6 +251,17 @@ class MainWindowTest : public QObject {
     // The director's view to a file and to a recording, from the viewport's controls.
     lumistage::ViewportPanel* viewport = window.viewport();
     QTRY_VERIFY_WITH_TIMEOUT(!viewport->viewport()->snapshot().view.isNull(), 5000);
+    // The viewport shows the frames as the studio blends them, not the snapshots' five a second
+    // (the report's count comes with the snapshots: a few frames late at either end).
+    const int64_t views_before = viewport->viewport()->viewsShown();
+    const int64_t blended_before = window.pipeline()->lastReport().frames;
+    QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames >= blended_before + 40, 20000);
+    const int64_t views = viewport->viewport()->viewsShown() - views_before;
+    const int64_t blended = window.pipeline()->lastReport().frames - blended_before;
+    qInfo("viewport: %lld views shown of %lld frames blended", static_cast<long long>(views),
+          static_cast<long long>(blended));
+    QVERIFY2(views * 10 >= blended * 7,
+             qPrintable(QString("%1 views shown of %2 frames blended").arg(views).arg(blended)));
     QString error;
     QVERIFY2(viewport->saveImage(dir.filePath("view.png"), &error), qPrintable(error));
     const QImage saved(dir.filePath("view.png"));
