@@ -2,6 +2,7 @@
 
 #include <QAction>
 #include <QCloseEvent>
+#include <QComboBox>
 #include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
@@ -133,6 +134,9 @@ MainWindow::MainWindow(QWidget* parent)
   restoreGeometry(settings.value("window/geometry").toByteArray());
   restoreState(settings.value("window/state").toByteArray(), kLayoutVersion);
   if (!settings.contains("window/geometry")) resize(1600, 1000);
+  QComboBox* size = viewport_panel_->sizeChoice();
+  const int chosen = size->findData(settings.value("viewport/render_width", 640).toInt());
+  if (chosen >= 0) size->setCurrentIndex(chosen);
 }
 
 MainWindow::~MainWindow() {
@@ -304,6 +308,7 @@ void MainWindow::closeEvent(QCloseEvent* event) {
   QSettings settings("Lumistage", "Studio");
   settings.setValue("window/geometry", saveGeometry());
   settings.setValue("window/state", saveState(kLayoutVersion));
+  settings.setValue("viewport/render_width", viewport_panel_->viewport()->renderWidth());
   event->accept();
 }
 

@@ -142,8 +142,13 @@ void ViewportWidget::setView(const OrbitView& view) {
   emit viewChanged();
 }
 
+void ViewportWidget::setRenderWidth(int width) {
+  render_width_ = std::clamp(width, 160, 1920) / 2 * 2;
+  emit viewChanged();
+}
+
 QSize ViewportWidget::renderSize() const {
-  const int w = 320;
+  const int w = render_width_;
   const double aspect = width() > 0 && height() > 0 ? double(height()) / width() : 0.75;
   int h = static_cast<int>(std::lround(w * std::clamp(aspect, 0.4, 1.5) / 2) * 2);
   return {w, h};
@@ -356,6 +361,7 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
     : QWidget(parent),
       viewport_(new ViewportWidget(clones, this)),
       snap_(new QComboBox(this)),
+      size_(new QComboBox(this)),
       timeline_(new QSlider(Qt::Horizontal, this)),
       time_label_(new QLabel(this)),
       play_(new QPushButton(tr("Play path"), this)),
@@ -382,6 +388,17 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
   layers->addWidget(reset);
   layers->addWidget(snap_);
   snap_->addItem(tr("Snap to camera..."));
+  // How large the nodes render the view: sharper, or cheaper for them (and the recording's size).
+  for (int width : kRenderWidths) {
+    size_->addItem(tr("%1 wide").arg(width), width);
+    if (width == viewport_->renderWidth()) size_->setCurrentIndex(size_->count() - 1);
+  }
+  size_->setToolTip(
+      tr("The size the nodes render the view at (and a recording records): "
+         "larger is sharper and costs the nodes more"));
+  layers->addWidget(size_);
+  connect(size_, &QComboBox::currentIndexChanged, this,
+          [this](int index) { viewport_->setRenderWidth(size_->itemData(index).toInt()); });
   auto* save = new QPushButton(tr("Save image..."), this);
   save->setToolTip(tr("Write the pipeline's current view (without overlays) as PNG or JPEG"));
   record_->setCheckable(true);

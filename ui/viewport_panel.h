@@ -60,8 +60,11 @@ class ViewportWidget : public QWidget {
   // A new blended frame and the body placed for it (every frame, between snapshots).
   void showView(const PipelineView& view);
   int64_t viewsShown() const { return views_shown_; }
-  // The size the nodes render at: 320 wide, the widget's aspect.
+  // The size the nodes render (and a recording records) the view at: renderWidth() wide, the
+  // widget's aspect.
   QSize renderSize() const;
+  int renderWidth() const { return render_width_; }
+  void setRenderWidth(int width);  // 160 to 1920; the nodes render at it from the next frame
   // The view for the nodes to render, with the clones (drawn by the lumigraph with the
   // captured texture).
   ViewData viewData() const;
@@ -93,6 +96,7 @@ class ViewportWidget : public QWidget {
   Rig rig_;
   PipelineSnapshot snapshot_;
   int64_t views_shown_ = 0;  // new blended frames drawn
+  int render_width_ = 640;
   CloneSet* clones_;
   QPoint last_mouse_;
   Qt::MouseButton dragging_ = Qt::NoButton;
@@ -123,6 +127,9 @@ class ViewportPanel : public QWidget {
   // JPEG by its name), atomically. False with `error` set, nothing written, before the first
   // frame or when the file cannot be written.
   bool saveImage(const QString& file, QString* error = nullptr);
+  // The choices of the view's size (ViewportWidget::setRenderWidth), widths in pixels.
+  static constexpr int kRenderWidths[] = {320, 640, 960, 1280};
+  QComboBox* sizeChoice() const { return size_; }
   // As the Record button: on asks for recording to `file` (recordingRequested), off stops it.
   void record(bool on, const QString& file = {});
   bool recording() const;
@@ -139,6 +146,7 @@ class ViewportPanel : public QWidget {
 
   ViewportWidget* viewport_;
   QComboBox* snap_;
+  QComboBox* size_;  // the view's size
   QSlider* timeline_;
   QLabel* time_label_;
   QPushButton* play_;

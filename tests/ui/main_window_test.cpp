@@ -1,6 +1,7 @@
 // The studio's main window under Qt's offscreen platform.
 #include "ui/main_window.h"
 
+#include <QComboBox>
 #include <QDir>
 #include <QDockWidget>
 #include <QElapsedTimer>
@@ -262,6 +263,14 @@ class MainWindowTest : public QObject {
           static_cast<long long>(blended));
     QVERIFY2(views * 10 >= blended * 7,
              qPrintable(QString("%1 views shown of %2 frames blended").arg(views).arg(blended)));
+    // The view's size, as chosen beside it: the nodes render at it from the next frames.
+    QComboBox* size = viewport->sizeChoice();
+    for (const int width : {960, 320}) {
+      size->setCurrentIndex(size->findData(width));
+      QTRY_COMPARE_WITH_TIMEOUT(viewport->viewport()->snapshot().view.width(), width, 5000);
+      QCOMPARE(viewport->viewport()->snapshot().view.height(),
+               viewport->viewport()->renderSize().height());
+    }
     QString error;
     QVERIFY2(viewport->saveImage(dir.filePath("view.png"), &error), qPrintable(error));
     const QImage saved(dir.filePath("view.png"));
@@ -354,7 +363,7 @@ class MainWindowTest : public QObject {
     QVERIFY((before - target).head<2>().dot((after - target).head<2>()) < 0);  // other side
     QVERIFY(sent.count() >= 4);  // every move sends the view on for the nodes to render
     const lumistage::ViewData last = sent.last().at(0).value<lumistage::ViewData>();
-    QCOMPARE(last.width, 320);
+    QCOMPARE(last.width, viewport->renderWidth());  // the size chosen beside the view
     QVERIFY(last.rotation.size() == 9);
     // Right drag pans, the wheel zooms.
     const Eigen::Vector3d target_before = viewport->view().target();
