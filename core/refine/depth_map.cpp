@@ -20,6 +20,7 @@ void DepthMap::render(const Camera& camera, const Eigen::Matrix3Xf& positions,
     // negative area below. The nearest surface of a closed mesh is always a front face, so back
     // faces are skipped; a front face's second and third corners swap to make its area positive.
     const int a = t[0], b = t[2], c = t[1];
+    if (t.minCoeff() < 0 || t.maxCoeff() >= depths_.size()) continue;  // not of this mesh
     const float z0 = depths_[a], z1 = depths_[b], z2 = depths_[c];
     if (z0 <= 0 || z1 <= 0 || z2 <= 0) continue;
     const float x0 = (pixels_(0, a) + 0.5f) * inv - 0.5f, y0 = (pixels_(1, a) + 0.5f) * inv - 0.5f;

@@ -19,6 +19,7 @@ class DepthMap {
   // straight edges between them: fine at this resolution). Triangles with a vertex behind the
   // camera are left out, and so are back faces: the mesh is closed and wound counter-clockwise
   // seen from outside (as every mesh here), so the nearest surface is always a front face.
+  // Triangles with a vertex index outside `positions` are left out.
   void render(const Camera& camera, const Eigen::Matrix3Xf& positions,
               std::span<const Eigen::Vector3i> triangles, int step);
 

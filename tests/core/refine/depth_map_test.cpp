@@ -66,5 +66,21 @@ TEST(DepthMap, BackFacesAreNotDrawn) {
   EXPECT_NEAR(map.depthAt(float(pixel.x()), float(pixel.y())), to_centre + radius, 0.01);
 }
 
+// A triangle that names a vertex the mesh does not have (a malformed mesh) is left out, not read
+// beyond the vertices.
+TEST(DepthMap, TrianglesOfVerticesNotGivenAreLeftOut) {
+  const Rig rig = testing::smallRing(640, 480);
+  TriangleMesh sphere = testing::icosphere({0, 0, 1.0}, 0.3, 2);
+  const Camera& camera = rig.camera(0);
+  DepthMap whole, with_bad;
+  whole.render(camera, sphere.positions, sphere.triangles, 4);
+  const int n = sphere.vertexCount();
+  sphere.triangles.emplace_back(0, 1, n);
+  sphere.triangles.emplace_back(-1, 2, 3);
+  sphere.triangles.emplace_back(0, n + 1000000, 2);
+  with_bad.render(camera, sphere.positions, sphere.triangles, 4);
+  EXPECT_EQ(with_bad.depths(), whole.depths());
+}
+
 }  // namespace
 }  // namespace lumistage
