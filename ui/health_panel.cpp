@@ -27,7 +27,7 @@ QColor stateColour(HealthState state) {
   return QColor(0x88, 0x88, 0x88);
 }
 
-enum Column { kCamera, kState, kProblem, kFps, kDropped, kLatency, kBytes, kExposure };
+enum Column { kCamera, kState, kProblem, kFps, kDropped, kAnswer, kBytes, kExposure };
 
 }  // namespace
 
@@ -49,16 +49,17 @@ void HistoryPlot::paintEvent(QPaintEvent*) {
   painter.setPen(QColor(70, 74, 80));
   painter.drawRect(area);
   painter.setPen(QColor(200, 200, 200));
-  painter.drawText(QPointF(6, 12), camera_.isEmpty() ? tr("select a camera")
-                                                     : tr("%1: frame rate (green, fps) and "
-                                                          "latency (blue, ms), last minute")
-                                                           .arg(camera_));
+  painter.drawText(QPointF(6, 12), camera_.isEmpty()
+                                       ? tr("select a camera")
+                                       : tr("%1: frame rate (green, fps) and "
+                                            "its node's answer (blue, ms), last minute")
+                                             .arg(camera_));
   if (camera_.isEmpty()) return;
   const auto& fps = history_->samples(camera_.toStdString() + "/fps");
-  const auto& latency = history_->samples(camera_.toStdString() + "/latency");
+  const auto& answer = history_->samples(camera_.toStdString() + "/answer");
   double t_end = 0;
   if (!fps.empty()) t_end = fps.back().time_s;
-  if (!latency.empty()) t_end = std::max(t_end, latency.back().time_s);
+  if (!answer.empty()) t_end = std::max(t_end, answer.back().time_s);
   const double t_start = t_end - 60;
   auto curve = [&](const std::deque<HealthHistory::Sample>& s, double max, const QColor& c,
                    bool right_axis) {
@@ -85,7 +86,7 @@ void HistoryPlot::paintEvent(QPaintEvent*) {
         QString::number(top, 'f', 0));
   };
   curve(fps, 30, QColor(60, 200, 80), false);
-  curve(latency, 100, QColor(80, 150, 255), true);
+  curve(answer, 100, QColor(80, 150, 255), true);
 }
 
 HealthPanel::HealthPanel(QWidget* parent)
@@ -96,8 +97,11 @@ HealthPanel::HealthPanel(QWidget* parent)
   clock_.start();
   table_->setColumnCount(8);
   table_->setHorizontalHeaderLabels({tr("Camera"), tr("State"), tr("Problem"), tr("fps"),
-                                     tr("Drops"), tr("Latency"), tr("KB/fr"), tr("Exp/gain")});
-  table_->horizontalHeaderItem(kLatency)->setToolTip(tr("The pipeline's latency, ms (median)"));
+                                     tr("Drops"), tr("Node ms"), tr("KB/fr"), tr("Exp/gain")});
+  table_->horizontalHeaderItem(kAnswer)->setToolTip(
+      tr("How long its node takes to answer the studio, ms (median of recent frames): the pose to "
+         "its refinement statistics plus the offsets to its image. A node slower than the others "
+         "(an overloaded PC, a slow link) shows here before it misses frames"));
   table_->horizontalHeaderItem(kBytes)->setToolTip(tr("Bytes the node sends a frame, per camera"));
   table_->horizontalHeaderItem(kExposure)->setToolTip(
       tr("Exposure and gain, where the camera reports them"));
@@ -163,7 +167,10 @@ void HealthPanel::showSnapshot(const PipelineSnapshot& s) {
       row.since_report.restart();
       row.silent_ms_at_report = node.silent_ms;
       row.exited = exited;
-      row.latency_ms = s.report.latency_ms_p50;
+      // A node that is gone answers nothing: no figure rather than its last.
+      row.answer_ms = !exited && !node.lost && node.statistics_ms >= 0 && node.image_ms >= 0
+                          ? node.statistics_ms + node.image_ms
+                          : -1;
       row.bytes_per_frame = bytes / std::max<size_t>(1, node.cameras.size());
       for (const CameraHealth& c : node.cameras) {
         if (QString::fromStdString(c.camera) != row.camera) continue;
@@ -173,8 +180,8 @@ void HealthPanel::showSnapshot(const PipelineSnapshot& s) {
       }
       if (exited || node.lost) row.fps = 0;
       history_.add(row.camera.toStdString() + "/fps", t, row.fps);
-      if (!exited && !node.lost)
-        history_.add(row.camera.toStdString() + "/latency", t, s.report.latency_ms_p50);
+      if (!exited && !node.lost && row.answer_ms >= 0)
+        history_.add(row.camera.toStdString() + "/answer", t, row.answer_ms);
     }
   }
   refresh();
@@ -249,8 +256,8 @@ void HealthPanel::refresh() {
         ->setForeground(v.state == HealthState::kStreaming ? palette().text().color() : colour);
     table_->item(r, kFps)->setText(QString::number(row.fps, 'f', 1));
     table_->item(r, kDropped)->setText(QString::number(row.dropped));
-    table_->item(r, kLatency)
-        ->setText(row.latency_ms >= 0 ? QString::number(row.latency_ms, 'f', 1) : QString("-"));
+    table_->item(r, kAnswer)
+        ->setText(row.answer_ms >= 0 ? QString::number(row.answer_ms, 'f', 1) : QString("-"));
     table_->item(r, kBytes)->setText(row.bytes_per_frame >= 0
                                          ? QString::number(row.bytes_per_frame / 1000, 'f', 1)
                                          : QString("-"));

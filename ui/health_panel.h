@@ -16,7 +16,7 @@ class QLabel;
 
 namespace lumistage {
 
-// A plot of a camera's recent frame rate and the pipeline's latency.
+// A plot of a camera's recent frame rate and its node's answer time.
 class HistoryPlot : public QWidget {
   Q_OBJECT
 
@@ -33,11 +33,11 @@ class HistoryPlot : public QWidget {
 };
 
 // Camera health for technicians: every camera with its node, a live thumbnail, its state
-// (streaming / late / lost) in colour and its problem in words, frame rate, drops, latency, bytes
-// a frame, exposure and gain where the camera reports them; below, the history of the selected
-// camera's frame rate and the latency. States come from the pipeline's node reports (a node whose
-// process exits is lost at once; a silent one late after 500 ms, lost after a second) or, without
-// a pipeline, from the live source's frames.
+// (streaming / late / lost) in colour and its problem in words, frame rate, drops, how long its
+// node takes to answer the studio, bytes a frame, exposure and gain where the camera reports them;
+// below, the history of the selected camera's frame rate and its node's answer time. States come
+// from the pipeline's node reports (a node whose process exits is lost at once; a silent one late
+// after 500 ms, lost after a second) or, without a pipeline, from the live source's frames.
 class HealthPanel : public QWidget {
   Q_OBJECT
 
@@ -63,7 +63,7 @@ class HealthPanel : public QWidget {
     QElapsedTimer since_report;  // since the pipeline report or the source frame below
     double silent_ms_at_report = -1;
     bool exited = false;
-    double fps = 0, latency_ms = -1, bytes_per_frame = -1;
+    double fps = 0, answer_ms = -1, bytes_per_frame = -1;  // answer: its node's (NodeReport)
     int64_t dropped = 0, dropped_recently = 0;
     QElapsedTimer since_drop;  // valid once a frame was dropped
     QString last_error;

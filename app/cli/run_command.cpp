@@ -55,9 +55,10 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
     nodes += fmt::format(
         "{}\n    {{\"name\": \"{}\", \"lost\": {}, \"messages\": {}, \"bytes\": {}, "
         "\"frames_missed\": {}, "
-        "\"times_lost\": {}, \"bad_messages\": {}, \"cameras\": [{}]}}",
+        "\"times_lost\": {}, \"bad_messages\": {}, \"statistics_ms\": {:.2f}, "
+        "\"image_ms\": {:.2f}, \"cameras\": [{}]}}",
         nodes.empty() ? "" : ",", n.name, n.lost ? "true" : "false", n.messages, n.bytes,
-        n.frames_missed, n.times_lost, n.bad_messages, cameras);
+        n.frames_missed, n.times_lost, n.bad_messages, n.statistics_ms, n.image_ms, cameras);
   }
   return fmt::format(
       "{{\n  \"fps\": {:.3f},\n  \"latency_ms_p50\": {:.3f},\n  \"latency_ms_p95\": {:.3f},\n  "
@@ -270,9 +271,10 @@ void addRunCommand(CLI::App& app) {
                cpu.studio_cores, cpu.nodes_cores, wall_s);
     for (const NodeReport& n : r.nodes) {
       fmt::print(
-          "  node {:<8} {:<9} {} messages, missed {} frames, lost {} times, {} bad messages\n",
+          "  node {:<8} {:<9} {} messages, missed {} frames, lost {} times, {} bad messages; "
+          "answers in {:.1f} ms (statistics) and {:.1f} ms (image)\n",
           n.name, n.lost ? "lost" : "streaming", n.messages, n.frames_missed, n.times_lost,
-          n.bad_messages);
+          n.bad_messages, n.statistics_ms, n.image_ms);
       for (const CameraHealth& c : n.cameras) {
         fmt::print("      {:<8} {:6.1f} fps, {} frames, {} dropped{}\n", c.camera, c.frame_rate_hz,
                    c.frames, c.dropped, c.last_error.empty() ? "" : ", " + c.last_error);

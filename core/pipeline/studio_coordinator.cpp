@@ -215,6 +215,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       return;
     }
     frame.statistics_nodes.insert(node.report.name);
+    node.statistics_ms.add((steadyNowNs() - frame.pose_sent_ns) / 1e6);
     maybeFinish(message.frame_id, frame);
   } else if (const auto* image = std::get_if<PartialImageData>(&message.body)) {
     const auto it = frames_.find(message.frame_id);
@@ -240,13 +241,15 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       added = blender.add(image->data);
     }
     if (!added) return;
+    if (frame.offsets_out_ns > 0 && image->view == views_.front().view)
+      node.image_ms.add((steadyNowNs() - frame.offsets_out_ns) / 1e6);
     frame.image_nodes[image->view].insert(node.report.name);
     maybeFinish(message.frame_id, frame);
   }
 }
 
 void StudioCoordinator::FrameState::clearForReuse() {
-  first_ns = captured_ns = pose_sent_ns = offsets_sent_ns = 0;
+  first_ns = captured_ns = pose_sent_ns = offsets_sent_ns = offsets_out_ns = 0;
   mocap_begun = false;
   silhouettes.clear();
   silhouette_nodes.clear();
@@ -433,6 +436,7 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
     visibility_ms_.add((steadyNowNs() - refined) / 1e6);
   }
   int sent = 0;
+  frame.offsets_out_ns = steadyNowNs();
   for (const std::string& name : frame.statistics_nodes) {
     NodeState& node = nodes_.at(name);
     if (node.report.lost || node.peer.empty()) continue;
@@ -596,8 +600,14 @@ RunReport StudioCoordinator::report() const {
   r.frames_in_flight = static_cast<int>(frames_.size());
   const int64_t now = steadyNowNs();
   for (NodeReport& n : r.nodes) {
-    const int64_t last = nodes_.at(n.name).last_ns;
-    n.silent_ms = last > 0 ? (now - last) / 1e6 : -1;
+    const NodeState& state = nodes_.at(n.name);
+    n.silent_ms = state.last_ns > 0 ? (now - state.last_ns) / 1e6 : -1;
+    auto median = [](const RecentSamples& s) {
+      std::vector<double> v = s.values();
+      return v.empty() ? -1.0 : quantile(v, 0.5);
+    };
+    n.statistics_ms = median(state.statistics_ms);
+    n.image_ms = median(state.image_ms);
   }
   // Those the transport could not decode, and those decoded but refused here (statistics).
   const auto bad = endpoint_.badMessages();

@@ -62,7 +62,11 @@ struct NodeReport {
   int64_t times_lost = 0;     // how often it was marked lost (and came back, or not)
   int64_t bad_messages = 0;
   double silent_ms = -1;  // since its last message, when reported; < 0: never heard from
-  TakeStatusData take;    // its recording of the take, from the latest heartbeat
+  // How long it takes to answer, medians of recent frames on the studio's clock (< 0: none yet):
+  // the pose sent to its statistics here, the offsets sent to its image here. A node slower than
+  // the others (an overloaded PC, a slow link) shows here before it misses deadlines.
+  double statistics_ms = -1, image_ms = -1;
+  TakeStatusData take;  // its recording of the take, from the latest heartbeat
 };
 
 // The pipeline's output for a frame: the nodes' partial images normalised and blended.
@@ -178,7 +182,8 @@ class StudioCoordinator {
     int64_t pose_sent_ns = 0;
     PoseData pose;                    // sent to the nodes
     RefinementStatistics refine_sum;  // the nodes' statistics, combined exactly
-    int64_t offsets_sent_ns = 0;
+    int64_t offsets_sent_ns = 0;      // the refinement began (its deadline counts from here)
+    int64_t offsets_out_ns = 0;       // the offsets went out to the nodes
     std::map<int, std::set<std::string>> image_nodes;  // per view
     std::map<int, PartialImageBlender> blends;         // per view
 
@@ -190,6 +195,7 @@ class StudioCoordinator {
     std::string peer;
     int64_t last_ns = 0;
     NodeReport report;
+    RecentSamples statistics_ms{256}, image_ms{256};  // its answers' times
   };
 
   // The frame's state, a spare one when it is new.

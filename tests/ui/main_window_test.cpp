@@ -527,6 +527,17 @@ class MainWindowTest : public QObject {
     QTRY_COMPARE_WITH_TIMEOUT(health->verdict(killed).state, lumistage::HealthState::kStreaming,
                               3000);
     QVERIFY(!health->history().samples("cam01/fps").empty());
+    // How long each camera's node takes to answer the studio, in milliseconds, and its history.
+    QTableWidget* table = health->table();
+    int answer = -1;
+    for (int col = 0; col < table->columnCount(); ++col)
+      if (table->horizontalHeaderItem(col)->text() == "Node ms") answer = col;
+    QVERIFY(answer >= 0);
+    QTRY_VERIFY_WITH_TIMEOUT(table->item(kept, answer)->text().toDouble() > 0, 3000);
+    QVERIFY2(table->item(kept, answer)->text().toDouble() < 5000,
+             qPrintable(table->item(kept, answer)->text()));
+    const std::string kept_name = window.rig()->camera(kept).name();
+    QVERIFY(!health->history().samples(kept_name + "/answer").empty());
     window.pipeline()->killNode("node2");
     QElapsedTimer clock;
     clock.start();
@@ -534,6 +545,7 @@ class MainWindowTest : public QObject {
     QVERIFY(clock.elapsed() < 1000);
     QVERIFY2(QString::fromStdString(health->verdict(killed_too).words).contains("exited"),
              health->verdict(killed_too).words.c_str());
+    QCOMPARE(table->item(killed, answer)->text(), QString("-"));  // a gone node answers nothing
     // The other node never goes lost; on a loaded machine it may be late for a moment.
     QVERIFY(health->verdict(kept).state != lumistage::HealthState::kLost);
     QTRY_COMPARE_WITH_TIMEOUT(health->verdict(kept).state, lumistage::HealthState::kStreaming,

@@ -162,6 +162,41 @@ TEST(StudioCoordinator, OffsetsComeWithTheRefinedBodysVisibility) {
   }
 }
 
+// How long a node takes to answer is measured on the studio's clock: from the pose to its
+// statistics, from the offsets to its image.
+TEST(StudioCoordinator, ANodesAnswerTimesAreMeasured) {
+  StudioCoordinatorOptions options;
+  options.deadline = milliseconds(2000);  // the node's slowness is not a miss
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(2, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint());
+  ASSERT_EQ(studio.report().nodes.at(0).statistics_ms, -1);  // nothing answered yet
+  ASSERT_TRUE(node.send(1, SilhouettesData{}));
+  ASSERT_TRUE(node.await<PoseData>(studio));
+  std::this_thread::sleep_for(milliseconds(150));  // the node at work on its statistics
+  const RefineConfig& refine = options.refine;
+  RefinementStatistics stats;
+  stats.reset(10, refine.offset_count, refine.colour_bits);
+  VertexStatisticsData statistics{10, refine.offset_count, {}};
+  encodeRefinementStatistics(stats, statistics.packed);
+  ASSERT_TRUE(node.send(1, statistics));
+  ASSERT_TRUE(node.await<OffsetsData>(studio));
+  std::this_thread::sleep_for(milliseconds(80));  // rendering
+  const ViewData& view = studio.view();
+  PartialImageData image{view.view, view.width, view.height, ImageEncoding::kRawRgba,
+                         std::vector<uint8_t>(size_t(view.width) * view.height * 4, 0)};
+  image.data[3] = 255;
+  ASSERT_TRUE(node.send(1, image));
+  for (int slice = 0; slice < 300 && studio.framesDone() == 0; ++slice)
+    studio.runFor(milliseconds(10));
+  ASSERT_EQ(studio.framesDone(), 1);
+  const NodeReport report = studio.report().nodes.at(0);
+  EXPECT_GE(report.statistics_ms, 150);
+  EXPECT_LT(report.statistics_ms, 1500);
+  EXPECT_GE(report.image_ms, 80);
+  EXPECT_LT(report.image_ms, 1500);
+}
+
 // The studio busy for longer than a node may stay silent (the tracker's first frame takes a
 // second) while both nodes keep talking: what waits in the socket shows them alive, and neither is
 // taken for lost.
