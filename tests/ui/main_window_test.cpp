@@ -199,6 +199,15 @@ class MainWindowTest : public QObject {
     for (const auto& node : report.nodes) QVERIFY2(!node.lost, node.name.c_str());
     QCOMPARE(window.pipeline()->table()->rowCount(), 4);  // a row per camera
     QCOMPARE(window.pipeline()->table()->item(0, 1)->text(), QString("streaming"));
+    // The stages' times, named in words; the tooltip says what each covers and its report key.
+    QTableWidget* stages = window.pipeline()->stageTable();
+    QStringList names;
+    for (int r = 0; r < stages->rowCount(); ++r) names << stages->item(r, 0)->text();
+    QVERIFY2(names.contains("motion capture") && names.contains("visibility"),
+             qPrintable(names.join(", ")));
+    const int mocap = int(names.indexOf("motion capture"));
+    QVERIFY(stages->item(mocap, 0)->toolTip().contains("(mocap)"));
+    QVERIFY(stages->item(mocap, 1)->text().toDouble() > 0);
 
     // A take, from the panel's button: every node records its cameras into takes/take-001/<node>.
     auto* take_button = window.pipeline()->findChild<QPushButton*>("record_take");
