@@ -135,7 +135,8 @@ MainWindow::MainWindow(QWidget* parent)
   restoreState(settings.value("window/state").toByteArray(), kLayoutVersion);
   if (!settings.contains("window/geometry")) resize(1600, 1000);
   QComboBox* size = viewport_panel_->sizeChoice();
-  const int chosen = size->findData(settings.value("viewport/render_width", 640).toInt());
+  const int chosen = size->findData(
+      settings.value("viewport/render_width", viewport_panel_->viewport()->renderWidth()).toInt());
   if (chosen >= 0) size->setCurrentIndex(chosen);
 }
 

@@ -83,13 +83,11 @@ void PipelineWorker::run() {
                      .arg(QString::fromStdString(pipeline.studio().endpoint())));
     // The body the studio places, to draw over the views: the generic human (as the nodes use).
     const SkinnedMesh human = loadGenericHuman();
-    std::vector<int> parents;
-    for (const Joint& j : human.skeleton.joints()) parents.push_back(j.parent);
     std::vector<Eigen::Affine3f> transforms;
     const auto start = std::chrono::steady_clock::now();
     auto last = start;
     PipelineView shown;  // the newest view, with the body placed for its frame
-    shown.parents = parents;
+    for (const Joint& j : human.skeleton.joints()) shown.parents.push_back(j.parent);
     // Places the body for a pose (of frame `pose_frame`) unless it is there already.
     auto placeBody = [&](const PoseData& pose_data, int64_t pose_frame) {
       if (pose_frame == shown.pose_frame ||

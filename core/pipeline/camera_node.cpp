@@ -94,13 +94,9 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
                                                   std::span<const uint16_t> visibility) {
   std::vector<Message> messages;
   if (!renderer_ || views.empty()) return messages;
-  // Which cameras see each vertex: the studio's, computed once for every node, or (from an older
-  // studio) this node's own (the rig's depth maps, about 2 ms).
-  if (visibility.size() == size_t(positions_.cols())) {
-    renderer_->setMesh(positions_, normals_, body_.rest.triangles, visibility);
-  } else {
-    renderer_->setMesh(positions_, normals_, body_.rest.triangles);
-  }
+  // Which cameras see each vertex: the studio's, computed once for every node, or (none from an
+  // older studio) this node's own (the rig's depth maps, about 2 ms).
+  renderer_->setMesh(positions_, normals_, body_.rest.triangles, visibility);
   for (size_t k = 0; k < cameras_.size(); ++k) {
     const ImageView image = set.frames[k].image.view();
     renderer_->setImage(static_cast<int>(k), image);

@@ -404,23 +404,23 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
                                       bodyFits(sum.vertex_count) ? options_.body->rest.triangles
                                                                  : std::vector<Eigen::Vector3i>{});
   }
-  if (!refiner_->refine(sum, chosen_offsets_)) {
+  // The offsets go straight into the message, which is kept from frame to frame: its vectors
+  // keep their memory.
+  Message& message = offsets_message_;
+  if (!std::holds_alternative<OffsetsData>(message.body)) message.body = OffsetsData{};
+  OffsetsData& offsets = std::get<OffsetsData>(message.body);
+  if (!refiner_->refine(sum, offsets.offsets)) {
     finishFrame(frame_id, frame);
     return;
   }
   const int64_t refined = steadyNowNs();
-  // The message is kept from frame to frame: its vectors keep their memory.
-  Message& message = offsets_message_;
-  if (!std::holds_alternative<OffsetsData>(message.body)) message.body = OffsetsData{};
-  OffsetsData& offsets = std::get<OffsetsData>(message.body);
   offsets.offset_count = refiner_->config().offsetLevels();
-  offsets.offsets.assign(chosen_offsets_.begin(), chosen_offsets_.end());
   offsets.visibility.clear();
   // Which cameras see each vertex of the mesh the nodes will render: posed and refined as they
   // will, from the same pose message and offsets.
   if (bodyFits(sum.vertex_count)) {
     posedBodyMesh(*options_.body, frame.pose, body_transforms_, posed_positions_, posed_normals_);
-    applyOffsets(options_.refine, chosen_offsets_, posed_positions_, posed_normals_,
+    applyOffsets(options_.refine, offsets.offsets, posed_positions_, posed_normals_,
                  refined_positions_);
     const LumigraphParams lumigraph;  // the nodes' renderers'
     visibility_.compute(rig_, refined_positions_, options_.body->rest.triangles,

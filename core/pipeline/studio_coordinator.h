@@ -251,12 +251,11 @@ class StudioCoordinator {
   std::thread mocap_thread_;  // started by the constructor's last line, joined by the destructor
   Eigen::Vector3d generic_root_m_ = Eigen::Vector3d::Zero();  // the nodes' skeleton's rest root
   std::unique_ptr<MeshRefiner> refiner_;  // made for the first statistics' vertex count
-  std::vector<uint8_t> chosen_offsets_;
   // The refined mesh of the frame being sent, and which cameras see its vertices (reused).
   std::vector<Eigen::Affine3f> body_transforms_;
   Eigen::Matrix3Xf posed_positions_, posed_normals_, refined_positions_;
   VertexVisibility visibility_;
-  Message offsets_message_;                     // reused: its vectors keep their memory
+  Message offsets_message_;  // the offsets and masks of the frame being sent (reused)
   RefinementStatisticsCodec statistics_codec_;  // the nodes' statistics, decompressed here
   int joints_;
   std::map<int64_t, FrameState> frames_;

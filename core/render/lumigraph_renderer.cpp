@@ -123,17 +123,15 @@ LumigraphRenderer::~LumigraphRenderer() {
 }
 
 void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
-                                std::span<const Eigen::Vector3i> triangles) {
-  visibility_.compute(rig_, positions, triangles, params_.depth_map_divisor,
-                      params_.depth_tolerance_m);
-  setMesh(positions, normals, triangles, visibility_.masks());
-}
-
-void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                                 std::span<const Eigen::Vector3i> triangles,
                                 std::span<const uint16_t> visibility) {
   const int n = static_cast<int>(positions.cols());
   if (normals.cols() != n) throw Error("LumigraphRenderer::setMesh: one normal per vertex needed");
+  if (visibility.empty()) {
+    visibility_.compute(rig_, positions, triangles, params_.depth_map_divisor,
+                        params_.depth_tolerance_m);
+    visibility = visibility_.masks();
+  }
   if (visibility.size() != size_t(n))
     throw Error("LumigraphRenderer::setMesh: " + std::to_string(visibility.size()) +
                 " visibility masks for " + std::to_string(n) + " vertices");

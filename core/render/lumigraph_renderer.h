@@ -61,14 +61,13 @@ class LumigraphRenderer {
   const LumigraphParams& params() const { return params_; }
 
   // The surface for the next renders (in the capture's frame), with which cameras see each
-  // vertex computed here (VertexVisibility at params().depth_map_divisor), or given: one mask a
-  // vertex, bit c for rig camera c, as VertexVisibility computes them (the studio sends the
-  // nodes these). `normals` unit, outward. Allocates only when the mesh grows. Throws Error for
-  // masks of another vertex count.
+  // vertex: given, one mask a vertex, bit c for rig camera c, as VertexVisibility computes them
+  // (the studio sends the nodes these), or, when none are given, computed here (VertexVisibility
+  // at params().depth_map_divisor). `normals` unit, outward. Allocates only when the mesh grows.
+  // Throws Error for masks of another vertex count.
   void setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
-               std::span<const Eigen::Vector3i> triangles);
-  void setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
-               std::span<const Eigen::Vector3i> triangles, std::span<const uint16_t> visibility);
+               std::span<const Eigen::Vector3i> triangles,
+               std::span<const uint16_t> visibility = {});
   // The image of own camera `own_index` (index into ownCameras()). Bayer and mono8 upload their
   // 2x2 cells' colours (R, the mean of the two G, B; as many bytes as the Bayer image), which the
   // shader samples bilinearly: one filtered texture read a camera and fragment instead of four

@@ -707,11 +707,11 @@ void PoseTracker::Impl::placeCapsules() {
   candidate_b = cap_b;
   candidates.clear();
   candidate_begin.resize(hull.size() + 1);
+  capsule_distance.resize(n);
   for (size_t i = 0; i < hull.size(); ++i) {
     candidate_begin[i] = int(candidates.size());
     double best = 1e9;
     Eigen::Vector3d closest;
-    capsule_distance.resize(n);
     for (size_t c = 0; c < n; ++c) {
       capsule_distance[c] =
           segmentDistance(hull[i], cap_a[c], cap_b[c], closest) - capsules[c].radius_m;

@@ -69,6 +69,14 @@ std::unique_ptr<StudioCoordinator> twoCameraStudio(int cameras_per_node,
   return std::make_unique<StudioCoordinator>(makeRingRig(spec), config, kHumanJointCount, options);
 }
 
+// A node's statistics message for `stats` (made with `refine`'s offset count).
+VertexStatisticsData statisticsMessage(const RefinementStatistics& stats,
+                                       const RefineConfig& refine) {
+  VertexStatisticsData message{uint32_t(stats.vertex_count), refine.offset_count, {}};
+  encodeRefinementStatistics(stats, message.packed);
+  return message;
+}
+
 // A frame that no node's image reaches shows nothing: it is dropped, not done, so that a run of N
 // frames shows N (while the nodes start, their first frames' statistics never come).
 TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
@@ -92,9 +100,7 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
   const StudioCoordinatorOptions defaults;
   RefinementStatistics stats;
   stats.reset(10, defaults.refine.offset_count, defaults.refine.colour_bits);
-  VertexStatisticsData statistics{10, defaults.refine.offset_count, {}};
-  encodeRefinementStatistics(stats, statistics.packed);
-  ASSERT_TRUE(node.send(2, statistics));
+  ASSERT_TRUE(node.send(2, statisticsMessage(stats, defaults.refine)));
   ASSERT_TRUE(node.await<OffsetsData>(studio));
   const ViewData& view = studio.view();
   PartialImageData image{view.view, view.width, view.height, ImageEncoding::kRawRgba,
@@ -131,9 +137,7 @@ TEST(StudioCoordinator, OffsetsComeWithTheRefinedBodysVisibility) {
     for (int v = 0; v < n; ++v)
       for (int t = refine.offset_count / 2; t < refine.offset_count; ++t)
         stats.outside[size_t(v) * refine.offset_count + t] = 1;
-    VertexStatisticsData statistics{uint32_t(n), refine.offset_count, {}};
-    encodeRefinementStatistics(stats, statistics.packed);
-    ASSERT_TRUE(node.send(frame, statistics));
+    ASSERT_TRUE(node.send(frame, statisticsMessage(stats, refine)));
     const std::optional<Message> offsets = node.await<OffsetsData>(studio);
     ASSERT_TRUE(offsets);
     const OffsetsData& sent = std::get<OffsetsData>(offsets->body);
@@ -177,9 +181,7 @@ TEST(StudioCoordinator, ANodesAnswerTimesAreMeasured) {
   const RefineConfig& refine = options.refine;
   RefinementStatistics stats;
   stats.reset(10, refine.offset_count, refine.colour_bits);
-  VertexStatisticsData statistics{10, refine.offset_count, {}};
-  encodeRefinementStatistics(stats, statistics.packed);
-  ASSERT_TRUE(node.send(1, statistics));
+  ASSERT_TRUE(node.send(1, statisticsMessage(stats, refine)));
   ASSERT_TRUE(node.await<OffsetsData>(studio));
   std::this_thread::sleep_for(milliseconds(80));  // rendering
   const ViewData& view = studio.view();
