@@ -108,16 +108,20 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   const LeaveOneOutSummary strict =
       evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerLeftOutCamera);
   report.set("render", "loo_frames", double(frames.size()));
-  report.set("render", "loo_psnr_db", refined.psnr_db);
-  report.set("render", "loo_ssim", refined.ssim);
-  report.set("render", "loo_psnr_db_unrefined", unrefined.psnr_db);
-  report.set("render", "loo_ssim_unrefined", unrefined.ssim);
-  report.set("render", "loo_psnr_db_strict", strict.psnr_db);
-  report.set("render", "loo_ssim_strict", strict.ssim);
-  report.set("render", "loo_psnr_db_best_offsets", best_offsets.psnr_db);
-  report.set("render", "loo_ssim_best_offsets", best_offsets.ssim);
-  report.set("render", "loo_psnr_db_truth_surface", truth.psnr_db);
-  report.set("render", "loo_ssim_truth_surface", truth.ssim);
+  const std::pair<const char*, const LeaveOneOutSummary*> variants[] = {
+      {"", &refined},
+      {"_unrefined", &unrefined},
+      {"_strict", &strict},
+      {"_best_offsets", &best_offsets},
+      {"_truth_surface", &truth}};
+  for (const auto& [suffix, summary] : variants) {
+    const std::string s = suffix;
+    report.set("render", "loo_psnr_db" + s, summary->psnr_db);
+    report.set("render", "loo_ssim" + s, summary->ssim);
+    report.set("render", "loo_matte_psnr_db" + s, summary->matte_psnr_db);
+    report.set("render", "loo_missed_pct" + s, summary->missed_pct);
+    report.set("render", "loo_beyond_pct" + s, summary->beyond_pct);
+  }
   for (size_t c = 0; c < truth.per_camera.size(); ++c) {
     const std::string name = session.rig().camera(int(c)).name();
     report.set("render", "loo_psnr_db_" + name, refined.per_camera[c].psnr_db);

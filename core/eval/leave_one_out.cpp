@@ -48,12 +48,18 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
       summary.per_camera[c].psnr_db += scores[c].psnr_db / frames.size();
       summary.per_camera[c].ssim += scores[c].ssim / frames.size();
       summary.per_camera[c].pixels += scores[c].pixels;
+      summary.per_camera[c].matte_psnr_db += scores[c].matte_psnr_db / frames.size();
+      summary.per_camera[c].missed_pct += scores[c].missed_pct / frames.size();
+      summary.per_camera[c].beyond_pct += scores[c].beyond_pct / frames.size();
     }
     ++summary.frames;
   }
   for (const ViewScore& s : summary.per_camera) {
     summary.psnr_db += s.psnr_db / n;
     summary.ssim += s.ssim / n;
+    summary.matte_psnr_db += s.matte_psnr_db / n;
+    summary.missed_pct += s.missed_pct / n;
+    summary.beyond_pct += s.beyond_pct / n;
   }
   return summary;
 }

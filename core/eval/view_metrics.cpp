@@ -40,9 +40,23 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
     throw Error("compareOverMask: images of " + std::to_string(width) + "x" +
                 std::to_string(height) + " RGBA8 and a one-byte mask expected");
   ViewScore score;
-  double squared = 0;
+  double squared = 0, matte_squared = 0;
+  int64_t missed = 0, beyond = 0;
   std::vector<double> a(n), b(n);
   for (size_t i = 0; i < n; ++i) {
+    const int alpha = rendered[4 * i + 3];
+    if (mask[i] ? alpha == 0 : alpha != 0) {
+      ++(mask[i] ? missed : beyond);
+      for (int k = 0; k < 3; ++k) {
+        const double d = mask[i] ? truth[4 * i + k] : rendered[4 * i + k] * alpha / 255.0;
+        matte_squared += d * d;
+      }
+    } else if (mask[i]) {
+      for (int k = 0; k < 3; ++k) {
+        const double d = rendered[4 * i + k] * alpha / 255.0 - truth[4 * i + k];
+        matte_squared += d * d;
+      }
+    }
     // Luma for SSIM, the same black outside the mask in both: the windows at the silhouette
     // compare the actor, not the renderer's empty background with the camera's green screen.
     if (!mask[i]) {
@@ -58,8 +72,14 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
     }
   }
   if (score.pixels == 0) return score;
-  const double mse = squared / (3.0 * score.pixels);
-  score.psnr_db = mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : 100.0;
+  const auto psnr = [](double squared, int64_t pixels) {
+    const double mse = squared / (3.0 * pixels);
+    return mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : 100.0;
+  };
+  score.psnr_db = psnr(squared, score.pixels);
+  score.matte_psnr_db = psnr(matte_squared, score.pixels + beyond);
+  score.missed_pct = 100.0 * missed / score.pixels;
+  score.beyond_pct = 100.0 * beyond / score.pixels;
   // SSIM of luma with 7x7 box windows.
   std::vector<double> aa(n), bb(n), ab(n), ma, mb, maa, mbb, mab;
   for (size_t i = 0; i < n; ++i) aa[i] = a[i] * a[i], bb[i] = b[i] * b[i], ab[i] = a[i] * b[i];

@@ -14,10 +14,16 @@ struct ViewScore {
   double psnr_db = 0;  // over R, G, B of the mask's pixels (peak 255)
   double ssim = 0;     // mean SSIM of luma (7x7 box windows, the usual constants) over the mask
   int64_t pixels = 0;  // in the mask
+  // The view as it would be composited: both images over black (the rendered one through its
+  // alpha, the real one through the mask), compared over every pixel either covers, so that a
+  // pixel drawn beyond the actor costs as much as one of the actor left undrawn.
+  double matte_psnr_db = 0;
+  double missed_pct = 0;  // the mask's pixels left undrawn (alpha 0), % of the mask
+  double beyond_pct = 0;  // pixels drawn outside the mask, % of the mask
 };
 
-// `rendered` and `truth` RGBA8 (alpha ignored: a pixel the renderer left empty is black and
-// counts as an error), `mask` one byte a pixel (non-zero: compared), all width x height.
+// `rendered` and `truth` RGBA8 (psnr_db and ssim ignore alpha: a pixel the renderer left empty is
+// black and counts as an error), `mask` one byte a pixel (non-zero: the actor), all width x height.
 ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uint8_t> truth,
                           std::span<const uint8_t> mask, int width, int height);
 

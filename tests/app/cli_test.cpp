@@ -451,6 +451,14 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
             0.5 * reportNumber(text, "surface_mm_unrefined"))
       << text;
   EXPECT_FALSE(std::isnan(reportNumber(text, "loo_psnr_db_cam08"))) << text;
+  // The matte score also counts what is drawn beyond the actor; the true surface misses nothing.
+  EXPECT_GT(reportNumber(text, "loo_matte_psnr_db_truth_surface"),
+            reportNumber(text, "loo_matte_psnr_db") + 1.0)
+      << text;
+  EXPECT_LT(reportNumber(text, "loo_missed_pct_truth_surface"), 0.5) << text;
+  EXPECT_GT(reportNumber(text, "loo_missed_pct_unrefined"), reportNumber(text, "loo_missed_pct"))
+      << text;
+  EXPECT_GT(reportNumber(text, "loo_beyond_pct"), 0.0) << text;
   fs::remove_all(folder);
 }
 
