@@ -30,7 +30,7 @@ class YamlReader;
 // outside the hull, since the silhouette crosses between the two (on average halfway).
 struct RefineConfig {
   int offset_count = 21;
-  double t_max_m = 0.04;
+  double t_max_m = 0.05;
   double outside_weight = 1.0;
   double outward_weight = 1.0;
   double colour_weight = 1.0;
