@@ -21,9 +21,10 @@ class MeshRefiner {
   const RefineConfig& config() const { return config_; }
 
   // Chooses an offset per vertex and writes its level (RefineConfig::offsetLevels(): twice the
-  // offset index, one more or less where the silhouette crosses next to it) to `offsets`, resized
-  // when its size differs. Returns false (offsets untouched) when the statistics' sizes are not
-  // this mesh's.
+  // offset index, one more or less where the silhouette crosses next to it or where the error's
+  // parabola through its neighbours lies lowest more than a quarter step away) to `offsets`,
+  // resized when its size differs. Returns false (offsets untouched) when the statistics' sizes are
+  // not this mesh's.
   bool refine(const RefinementStatistics& combined, std::vector<uint8_t>& offsets);
   // Forgets the previous frame (a cut, a new actor): the next frame has no temporal term.
   void resetTemporal() { has_previous_ = false; }

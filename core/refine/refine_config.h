@@ -27,7 +27,8 @@ class YamlReader;
 // then the paper's fourth term: among the local minima within tie_margin of the lowest, the one
 // closest to t = 0. The chosen surface is sent as a *level* on a grid of half steps (offsetLevels()
 // of them): the offset of the chosen sample, or half a step further where the next sample lies
-// outside the hull, since the silhouette crosses between the two (on average halfway).
+// outside the hull, since the silhouette crosses between the two (on average halfway), or half a
+// step toward the lowest point of the error's parabola through the sample and its neighbours.
 struct RefineConfig {
   int offset_count = 21;
   double t_max_m = 0.05;

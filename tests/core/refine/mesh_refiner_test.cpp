@@ -63,6 +63,24 @@ TEST(MeshRefiner, OutwardTermAloneFavoursLargeOffsets) {
   EXPECT_NEAR(c.levelOffset(2 * 14 + 1), (c.offsetAt(14) + c.offsetAt(15)) / 2, 1e-12);
 }
 
+TEST(MeshRefiner, AColourMinimumBetweenTwoSamplesTakesTheHalfStep) {
+  RefineConfig c = noTerms();
+  c.colour_weight = 1;
+  // The cameras agree best at offset 13; how well at 12 and 14 says on which side of 13 the
+  // surface lies: much better at 14 than at 12, the parabola's lowest point is more than a
+  // quarter step outward, level 27 (half a step out); equally well, level 26.
+  const auto level = [&](int spread_12, int spread_14) {
+    OneVertex one(c);
+    for (int i = 0; i < c.offset_count; ++i)
+      one.colour(i, 4, 120, i == 13 ? 4 : (i == 12 ? spread_12 : (i == 14 ? spread_14 : 40)));
+    return refineOne(c, one.stats);
+  };
+  EXPECT_EQ(level(40, 8), 2 * 13 + 1);
+  EXPECT_EQ(level(8, 40), 2 * 13 - 1);
+  EXPECT_EQ(level(20, 20), 2 * 13);
+  EXPECT_EQ(level(20, 18), 2 * 13);  // a little better outward: within a quarter step of 13
+}
+
 TEST(MeshRefiner, ColourTermAloneFindsTheConsistentOffset) {
   RefineConfig c = noTerms();
   c.colour_weight = 1;
