@@ -410,6 +410,43 @@ QString takeCell(const TakeStatusData& t) {
 
 }  // namespace
 
+namespace {
+
+// A stage of the report (as `lumistage run` and its JSON name it) in words, with what its time
+// covers and its key as tooltip.
+QTableWidgetItem* stageItem(const std::string& stage) {
+  static const std::map<std::string, std::pair<const char*, const char*>> kStages = {
+      {"mocap",
+       {QT_TR_NOOP("motion capture"),
+        QT_TR_NOOP("the skeleton's fit to the silhouettes, on its own thread")}},
+      {"nodes_statistics_and_render",
+       {QT_TR_NOOP("nodes"),
+        QT_TR_NOOP("the pose sent to the frame done: the nodes' refinement statistics, the "
+                   "studio's refinement, the nodes' images")}},
+      {"refine",
+       {QT_TR_NOOP("refinement"),
+        QT_TR_NOOP("choosing every vertex's offset from the nodes' statistics")}},
+      {"visibility",
+       {QT_TR_NOOP("visibility"),
+        QT_TR_NOOP("which cameras see each vertex of the refined mesh, sent with the offsets")}},
+      {"combine",
+       {QT_TR_NOOP("combine"), QT_TR_NOOP("the hull's agreement, when a frame is done")}},
+      {"blend", {QT_TR_NOOP("blend"), QT_TR_NOOP("the nodes' images normalised and blended")}},
+  };
+  const QString key = QString::fromStdString(stage);
+  const auto known = kStages.find(stage);
+  if (known == kStages.end()) {
+    auto* item = new QTableWidgetItem(key);
+    item->setToolTip(key);
+    return item;
+  }
+  auto* item = new QTableWidgetItem(PipelinePanel::tr(known->second.first));
+  item->setToolTip(QString("%1 (%2)").arg(PipelinePanel::tr(known->second.second), key));
+  return item;
+}
+
+}  // namespace
+
 void PipelinePanel::show(const PipelineSnapshot& s) {
   const bool was_recording = last_.take_recording;
   last_ = s;
@@ -478,33 +515,7 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   stages_->setRowCount(static_cast<int>(r.stage_ms.size()));
   int stage_row = 0;
   for (const auto& [stage, ms] : r.stage_ms) {
-    // The report's stage names (those of `lumistage run` and its JSON) in words, and what each
-    // time covers.
-    static const std::map<std::string, std::pair<const char*, const char*>> kStages = {
-        {"mocap",
-         {QT_TR_NOOP("motion capture"),
-          QT_TR_NOOP("the skeleton's fit to the silhouettes, on its own thread")}},
-        {"nodes_statistics_and_render",
-         {QT_TR_NOOP("nodes"),
-          QT_TR_NOOP("the pose sent to the frame done: the nodes' refinement statistics, the "
-                     "studio's refinement, the nodes' images")}},
-        {"refine",
-         {QT_TR_NOOP("refinement"),
-          QT_TR_NOOP("choosing every vertex's offset from the nodes' statistics")}},
-        {"visibility",
-         {QT_TR_NOOP("visibility"),
-          QT_TR_NOOP("which cameras see each vertex of the refined mesh, sent with the offsets")}},
-        {"combine",
-         {QT_TR_NOOP("combine"), QT_TR_NOOP("the hull's agreement, when a frame is done")}},
-        {"blend", {QT_TR_NOOP("blend"), QT_TR_NOOP("the nodes' images normalised and blended")}},
-    };
-    const auto known = kStages.find(stage);
-    auto* name = new QTableWidgetItem(known != kStages.end() ? tr(known->second.first)
-                                                             : QString::fromStdString(stage));
-    name->setToolTip(known != kStages.end() ? QString("%1 (%2)").arg(tr(known->second.second),
-                                                                     QString::fromStdString(stage))
-                                            : QString::fromStdString(stage));
-    stages_->setItem(stage_row, 0, name);
+    stages_->setItem(stage_row, 0, stageItem(stage));
     stages_->setItem(stage_row, 1, new QTableWidgetItem(QString::number(ms, 'f', 2)));
     ++stage_row;
   }

@@ -108,19 +108,19 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   const LeaveOneOutSummary strict =
       evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerLeftOutCamera);
   report.set("render", "loo_frames", double(frames.size()));
-  const std::pair<const char*, const LeaveOneOutSummary*> variants[] = {
-      {"", &refined},
-      {"_unrefined", &unrefined},
-      {"_strict", &strict},
-      {"_best_offsets", &best_offsets},
-      {"_truth_surface", &truth}};
-  for (const auto& [suffix, summary] : variants) {
+  const std::pair<const char*, const ViewScore*> variants[] = {
+      {"", &refined.mean},
+      {"_unrefined", &unrefined.mean},
+      {"_strict", &strict.mean},
+      {"_best_offsets", &best_offsets.mean},
+      {"_truth_surface", &truth.mean}};
+  for (const auto& [suffix, mean] : variants) {
     const std::string s = suffix;
-    report.set("render", "loo_psnr_db" + s, summary->psnr_db);
-    report.set("render", "loo_ssim" + s, summary->ssim);
-    report.set("render", "loo_matte_psnr_db" + s, summary->matte_psnr_db);
-    report.set("render", "loo_missed_pct" + s, summary->missed_pct);
-    report.set("render", "loo_beyond_pct" + s, summary->beyond_pct);
+    report.set("render", "loo_psnr_db" + s, mean->psnr_db);
+    report.set("render", "loo_ssim" + s, mean->ssim);
+    report.set("render", "loo_matte_psnr_db" + s, mean->matte_psnr_db);
+    report.set("render", "loo_missed_pct" + s, mean->missed_pct);
+    report.set("render", "loo_beyond_pct" + s, mean->beyond_pct);
   }
   for (size_t c = 0; c < truth.per_camera.size(); ++c) {
     const std::string name = session.rig().camera(int(c)).name();

@@ -7,6 +7,20 @@
 
 namespace lumistage {
 
+namespace {
+
+// Adds `weight` x a score's figures to a mean, and its pixels to the sum.
+void addScore(ViewScore& mean, const ViewScore& s, double weight) {
+  mean.psnr_db += weight * s.psnr_db;
+  mean.ssim += weight * s.ssim;
+  mean.matte_psnr_db += weight * s.matte_psnr_db;
+  mean.missed_pct += weight * s.missed_pct;
+  mean.beyond_pct += weight * s.beyond_pct;
+  mean.pixels += s.pixels;
+}
+
+}  // namespace
+
 TriangleMesh truthSurface(const SessionReader& session, int i) {
   return readPlyMesh(session.folder() / "truth" / "surface" /
                      fmt::format("{:06}.ply", session.frameId(i)));
@@ -44,23 +58,10 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
         scores.push_back(leaveOneOut(renderer, rig, truth, masks, c));
       }
     }
-    for (int c = 0; c < n; ++c) {
-      summary.per_camera[c].psnr_db += scores[c].psnr_db / frames.size();
-      summary.per_camera[c].ssim += scores[c].ssim / frames.size();
-      summary.per_camera[c].pixels += scores[c].pixels;
-      summary.per_camera[c].matte_psnr_db += scores[c].matte_psnr_db / frames.size();
-      summary.per_camera[c].missed_pct += scores[c].missed_pct / frames.size();
-      summary.per_camera[c].beyond_pct += scores[c].beyond_pct / frames.size();
-    }
+    for (int c = 0; c < n; ++c) addScore(summary.per_camera[c], scores[c], 1.0 / frames.size());
     ++summary.frames;
   }
-  for (const ViewScore& s : summary.per_camera) {
-    summary.psnr_db += s.psnr_db / n;
-    summary.ssim += s.ssim / n;
-    summary.matte_psnr_db += s.matte_psnr_db / n;
-    summary.missed_pct += s.missed_pct / n;
-    summary.beyond_pct += s.beyond_pct / n;
-  }
+  for (const ViewScore& s : summary.per_camera) addScore(summary.mean, s, 1.0 / n);
   return summary;
 }
 

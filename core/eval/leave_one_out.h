@@ -11,9 +11,8 @@ namespace lumistage {
 
 // Leave-one-camera-out over frames of a recorded virtual-studio session (it needs truth masks).
 struct LeaveOneOutSummary {
-  std::vector<ViewScore> per_camera;                         // mean over the frames
-  double psnr_db = 0, ssim = 0;                              // mean over cameras and frames
-  double matte_psnr_db = 0, missed_pct = 0, beyond_pct = 0;  // the same
+  std::vector<ViewScore> per_camera;  // mean over the frames (pixels: their sum)
+  ViewScore mean;                     // over cameras and frames (pixels: their sum)
   int frames = 0;
 };
 

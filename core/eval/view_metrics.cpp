@@ -44,16 +44,13 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
   int64_t missed = 0, beyond = 0;
   std::vector<double> a(n), b(n);
   for (size_t i = 0; i < n; ++i) {
+    // The matte: the render over black through its alpha against the image through the mask.
     const int alpha = rendered[4 * i + 3];
-    if (mask[i] ? alpha == 0 : alpha != 0) {
-      ++(mask[i] ? missed : beyond);
+    if (mask[i] || alpha) {
+      missed += mask[i] && !alpha;
+      beyond += !mask[i] && alpha;
       for (int k = 0; k < 3; ++k) {
-        const double d = mask[i] ? truth[4 * i + k] : rendered[4 * i + k] * alpha / 255.0;
-        matte_squared += d * d;
-      }
-    } else if (mask[i]) {
-      for (int k = 0; k < 3; ++k) {
-        const double d = rendered[4 * i + k] * alpha / 255.0 - truth[4 * i + k];
+        const double d = rendered[4 * i + k] * alpha / 255.0 - (mask[i] ? truth[4 * i + k] : 0);
         matte_squared += d * d;
       }
     }
