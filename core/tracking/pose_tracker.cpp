@@ -106,8 +106,14 @@ struct PoseTracker::Impl {
   std::vector<uint16_t> cell;  // [voxel * cameras + camera]
   std::vector<uint8_t> occupied;
   std::vector<Eigen::Vector3d> surface_all, hull;
-  // Silhouette distance transforms (cells), per camera; present[c] when this frame has one.
+  // Silhouette distance transforms (cells), per camera; present[c] when this frame has one. Each
+  // is computed over the silhouette's bounding box grown by kDtMargin cells (dt_box: x0, y0, x1,
+  // y1, inclusive; empty when x1 < x0), where it is exact (no silhouette cell lies outside);
+  // every other cell holds kFarCells. About a quarter of the cells at step 4.
+  static constexpr int kDtMargin = 16;
+  static constexpr float kFarCells = 1000.0f;
   std::vector<std::vector<float>> dt;
+  std::vector<Eigen::Array4i> dt_box;
   std::vector<uint8_t> present;
   std::vector<float> dt_f, dt_d, dt_z, dt_col;
   std::vector<int> dt_v;
@@ -214,7 +220,8 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
     }
   }
   dt.resize(cameras);
-  for (int c = 0; c < cameras; ++c) dt[c].assign(size_t(cell_w[c]) * cell_h[c], 0.0f);
+  for (int c = 0; c < cameras; ++c) dt[c].assign(size_t(cell_w[c]) * cell_h[c], kFarCells);
+  dt_box.assign(cameras, Eigen::Array4i(0, 0, -1, -1));
   present.assign(cameras, 0);
   const int longest = std::max(*std::max_element(cell_w.begin(), cell_w.end()),
                                *std::max_element(cell_h.begin(), cell_h.end()));
@@ -404,17 +411,37 @@ void PoseTracker::Impl::prepareSilhouettes(
     const int c = s->camera, w = s->width, h = s->height;
     present[c] = 1;
     std::vector<float>& d = dt[c];
-    // Columns, then rows: squared distance to the nearest cell inside the silhouette.
-    for (int x = 0; x < w; ++x) {
-      for (int y = 0; y < h; ++y) dt_f[y] = s->at(x, y) ? 0.0f : inf;
-      edt1d(dt_f.data(), h, dt_d.data(), dt_v.data(), dt_z.data());
-      for (int y = 0; y < h; ++y) d[size_t(y) * w + x] = dt_d[y];
+    Eigen::Array4i& box = dt_box[c];
+    for (int y = box[1]; y <= box[3]; ++y)
+      std::fill_n(&d[size_t(y) * w + box[0]], box[2] - box[0] + 1, kFarCells);
+    // The silhouette's bounding box, a byte of cells at a time.
+    box = Eigen::Array4i(w, h, -1, -1);
+    const size_t cells = size_t(w) * h;
+    for (size_t b = 0; b * 8 < cells; ++b) {
+      if (!s->bits[b]) continue;
+      for (int k = 0; k < 8; ++k) {
+        const size_t i = b * 8 + k;
+        if (i >= cells || !((s->bits[b] >> k) & 1)) continue;
+        const int x = int(i % w), y = int(i / w);
+        box = box.min(Eigen::Array4i(x, y, w, h)).max(Eigen::Array4i(-1, -1, x, y));
+      }
     }
-    for (int y = 0; y < h; ++y) {
-      float* r = &d[size_t(y) * w];
-      std::copy(r, r + w, dt_f.begin());
-      edt1d(dt_f.data(), w, dt_d.data(), dt_v.data(), dt_z.data());
-      for (int x = 0; x < w; ++x) r[x] = std::sqrt(std::min(dt_d[x], 1e6f));
+    if (box[2] < box[0]) continue;  // nobody in view: every cell is far outside
+    box = (box + Eigen::Array4i(-kDtMargin, -kDtMargin, kDtMargin, kDtMargin))
+              .max(Eigen::Array4i::Zero())
+              .min(Eigen::Array4i(w - 1, h - 1, w - 1, h - 1));
+    const int bw = box[2] - box[0] + 1, bh = box[3] - box[1] + 1;
+    // Columns, then rows: squared distance to the nearest cell inside the silhouette.
+    for (int x = box[0]; x <= box[2]; ++x) {
+      for (int y = 0; y < bh; ++y) dt_f[y] = s->at(x, box[1] + y) ? 0.0f : inf;
+      edt1d(dt_f.data(), bh, dt_d.data(), dt_v.data(), dt_z.data());
+      for (int y = 0; y < bh; ++y) d[size_t(box[1] + y) * w + x] = dt_d[y];
+    }
+    for (int y = box[1]; y <= box[3]; ++y) {
+      float* r = &d[size_t(y) * w + box[0]];
+      std::copy(r, r + bw, dt_f.begin());
+      edt1d(dt_f.data(), bw, dt_d.data(), dt_v.data(), dt_z.data());
+      for (int x = 0; x < bw; ++x) r[x] = std::sqrt(std::min(dt_d[x], kFarCells * kFarCells));
     }
   }
 }
@@ -431,6 +458,9 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
   int count = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   double top = 0;
+  // The camera that carved the last voxel away is asked first: neighbouring voxels mostly fall
+  // outside the same silhouette.
+  int first = 0;
   for (int z = lo.z(); z <= hi.z(); ++z) {
     for (int y = lo.y(); y <= hi.y(); ++y) {
       size_t v = z * sz + y * sy + lo.x() * sx;
@@ -438,12 +468,14 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
         const uint16_t* cells = &cell[v * cameras];
         int seen = 0;
         bool inside = true;
-        for (int c = 0; c < cameras; ++c) {
+        for (int k = 0; k < cameras; ++k) {
+          const int c = k == 0 ? first : (k <= first ? k - 1 : k);
           if (!present[c] || cells[c] == kUnseen) continue;
           ++seen;
           const float d = dt[c][cells[c]];
           if (d > 0) {
             inside = false;
+            first = c;
             break;
           }
         }
@@ -586,17 +618,31 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
       if (cx < 0 || cy < 0 || cx > w - 1 || cy > hgt - 1) continue;
       const int x0 = std::min(int(cx), w - 2), y0 = std::min(int(cy), hgt - 2);
       const double fx = cx - x0, fy = cy - y0;
-      const float* d = &dt[c][size_t(y0) * w + x0];
-      const double d00 = d[0], d10 = d[1], d01 = d[w], d11 = d[w + 1];
-      const double value =
-          (1 - fy) * ((1 - fx) * d00 + fx * d10) + fy * ((1 - fx) * d01 + fx * d11);
+      const Eigen::Array4i& box = dt_box[c];
+      double value, gx, gy;
+      if (x0 >= box[0] && x0 + 1 <= box[2] && y0 >= box[1] && y0 + 1 <= box[3]) {
+        const float* d = &dt[c][size_t(y0) * w + x0];
+        const double d00 = d[0], d10 = d[1], d01 = d[w], d11 = d[w + 1];
+        value = (1 - fy) * ((1 - fx) * d00 + fx * d10) + fy * ((1 - fx) * d01 + fx * d11);
+        gx = (1 - fy) * (d10 - d00) + fy * (d11 - d01);
+        gy = (1 - fx) * (d01 - d00) + fx * (d11 - d10);
+      } else if (box[2] < box[0]) {
+        continue;  // no silhouette in this view: nothing to be drawn toward
+      } else {
+        // Beyond the transform's box: its nearest cell's distance plus the way to it (the
+        // silhouette is at least kDtMargin cells further).
+        const double px = std::clamp(cx, double(box[0]), double(box[2])),
+                     py = std::clamp(cy, double(box[1]), double(box[3]));
+        const double ex = cx - px, ey = cy - py, e = std::hypot(ex, ey);
+        value = dt[c][size_t(std::lround(py)) * w + size_t(std::lround(px))] + e;
+        gx = e > 0 ? ex / e : 0;
+        gy = e > 0 ? ey / e : 0;
+      }
       if (value <= 0) continue;
       const double m_per_cell = step * x.z() / cam.intrinsics().fx;
       const double r = value * m_per_cell;
       cost += 0.5 * ws * r * r;
       if (!jacobian) continue;
-      const double gx = (1 - fy) * (d10 - d00) + fy * (d11 - d01);
-      const double gy = (1 - fx) * (d01 - d00) + fx * (d11 - d10);
       const Intrinsics& k = cam.intrinsics();
       const double iz = 1.0 / x.z();
       // d(cell)/d(camera coordinates), pinhole (the lens distortion is left out of the slope).
