@@ -11,7 +11,7 @@
 namespace lumistage {
 
 struct MocapEvalOptions {
-  int silhouette_step = 8;  // as the nodes send
+  int silhouette_step = 4;  // as the nodes send
   int camera_count = 0;     // use this many of the rig's cameras, evenly spread; 0: all
   int max_frames = 0;       // 0: every readable frame
   PoseTrackerOptions tracker;

@@ -28,7 +28,7 @@
 namespace lumistage {
 
 struct CameraNodeOptions {
-  int silhouette_step = 8;
+  int silhouette_step = 4;
   std::chrono::milliseconds heartbeat{250};
   int frames_kept = 8;  // frame sets kept for the statistics (poses arrive a few frames later)
   RefineConfig refine;  // the mesh refinement's parameters (offsets, depth maps, colour bits)

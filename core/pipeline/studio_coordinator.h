@@ -26,7 +26,7 @@
 namespace lumistage {
 
 struct StudioCoordinatorOptions {
-  int silhouette_step = 8;
+  int silhouette_step = 4;
   // A node that has not answered a frame's stage this long after the first node did is left out
   // of that frame (fewer cameras, not a stall).
   std::chrono::milliseconds deadline{120};

@@ -12,31 +12,37 @@
 namespace lumistage {
 
 struct PoseTrackerOptions {
-  int silhouette_step = 8;  // the nodes' LowResSilhouette step
-  double voxel_m = 0.03;    // the hull's grid
+  // The nodes' LowResSilhouette step and the hull's grid. Step 4 and 2 cm against step 8 and 3 cm:
+  // MPJPE 19.0 / 27.1 / 19.4 / 24.1 -> 18.9 / 25.7 / 20.6 / 20.9 mm (walk / arm wave / turn /
+  // crouch), the worst frame of each 26 / 32 / 26 / 26 mm against 24 / 37 / 26 / 52, for 14 ms a
+  // tracked frame against 6 (tracking_bench; docs/lumigraph.md). 2.5 cm and 2.25 cm: lower means
+  // on some clips, but a lost frame on the turn and the arm wave's arm lost for good.
+  int silhouette_step = 4;
+  double voxel_m = 0.02;
   Eigen::Vector3d stage_lower{-1.5, -1.5, 0.0}, stage_upper{1.5, 1.5, 2.2};
-  int iterations = 10;             // Levenberg-Marquardt iterations per tracked frame
-  double velocity_gain = 0.8;      // of the constant-velocity prediction (0: the previous pose)
-  int init_iterations = 20;        // per initialisation hypothesis
+  int iterations = 10;         // Levenberg-Marquardt iterations per tracked frame
+  double velocity_gain = 0.8;  // of the constant-velocity prediction (0: the previous pose)
+  int init_iterations = 20;    // per initialisation hypothesis
   // Hull surface samples per frame, evenly thinned beyond: one actor's hull has about 2000 surface
-  // voxels at 3 cm, all of them kept. Thinned to 1200, a raised arm kept too few samples to hold
-  // it: MPJPE 36 -> 28 mm on the arm wave, for about 2.5 ms more a frame.
+  // voxels at 3 cm, all of them kept (at 2 cm, 2.25 times as many by area: thinned to this; to
+  // 2500, with 8 iterations, the arm wave lost the arm). Thinned to 1200, a raised arm kept too few
+  // samples to hold it: MPJPE 36 -> 28 mm on the arm wave, for about 2.5 ms more a frame.
   int max_hull_points = 4000;
   // Of a sample's silhouette residual (metres) per camera. 1.0 against 0.5: MPJPE lower on all four
   // reference clips, with 12 and with 6 cameras (20.7 against 21.3 mm on average with 12); from
   // 1.5 on, the arm wave loses the arm (38 mm).
   double silhouette_weight = 1.0;
-  double prior_weight = 0.2;       // temporal prior, per radian² (per m² for the root)
-  double huber_m = 0.02;           // robust loss of hull samples outside the model (4x inside)
-  double min_volume_m3 = 0.02;     // less hull than this: nobody on stage
+  double prior_weight = 0.2;    // temporal prior, per radian² (per m² for the root)
+  double huber_m = 0.02;        // robust loss of hull samples outside the model (4x inside)
+  double min_volume_m3 = 0.02;  // less hull than this: nobody on stage
   // More hull than this is not a person (a keyer that takes the screen for the actor, the lights
   // gone): nobody is tracked, and no time goes into fitting a body to it. One actor's hull is
   // about 0.1 m³ with 12 cameras.
   double max_volume_m3 = 1.0;
-  double lost_rms_m = 0.05;        // hull fit error above this...
-  int lost_frames = 3;             // ...for this many frames in a row: lost, re-initialise
-  bool calibrate_shape = true;     // scale the generic skeleton to the actor at initialisation
-  bool track_clavicles = false;    // fit the clavicles' angles too (else they stay at rest)
+  double lost_rms_m = 0.05;      // hull fit error above this...
+  int lost_frames = 3;           // ...for this many frames in a row: lost, re-initialise
+  bool calibrate_shape = true;   // scale the generic skeleton to the actor at initialisation
+  bool track_clavicles = false;  // fit the clavicles' angles too (else they stay at rest)
 };
 
 enum class TrackState { kNoActor, kInitialised, kTracking, kLost };

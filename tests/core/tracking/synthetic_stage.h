@@ -10,6 +10,7 @@
 #include "core/body/human_model.h"
 #include "core/sim/studio_config.h"
 #include "core/tracking/mesh_silhouette.h"
+#include "core/tracking/pose_tracker.h"
 
 namespace lumistage::testing {
 
@@ -37,9 +38,10 @@ struct SyntheticStage {
       for (int k : cameras) use = use || k == c;
       if (!use) continue;
       if (absent) {
-        rasterizeSilhouette(Eigen::Matrix3Xf(3, 0), {}, config.rig.camera(c), c, 8, silhouettes[c]);
+        rasterizeSilhouette(Eigen::Matrix3Xf(3, 0), {}, config.rig.camera(c), c, step,
+                            silhouettes[c]);
       } else {
-        rasterizeSilhouette(positions, actor.rest.triangles, config.rig.camera(c), c, 8,
+        rasterizeSilhouette(positions, actor.rest.triangles, config.rig.camera(c), c, step,
                             silhouettes[c]);
       }
       pointers.push_back(&silhouettes[c]);
@@ -47,6 +49,7 @@ struct SyntheticStage {
     return pointers;
   }
 
+  int step = PoseTrackerOptions{}.silhouette_step;  // as the nodes send them
   StudioConfig config;
   SkinnedMesh actor;
   std::vector<LowResSilhouette> silhouettes;
