@@ -57,7 +57,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   const auto posed = [&](int i) {
     posedBodyMesh(
         generic,
-        poseMessageFor(generic.skeleton.restPositions()[0], tracked.skeleton, tracked.poses[i]),
+        poseMessageFor(generic.skeleton, tracked.skeleton, tracked.poses[i], tracked.joints[i]),
         transforms, positions, normals);
   };
   const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(session, frames, [&](int i, int) {

@@ -69,11 +69,13 @@ void addExportCommand(CLI::App& app) {
     MotionClip clip;
     clip.name = fs::path(args->session).filename().string();
     clip.fps = session.fps();
+    std::vector<std::vector<Eigen::Vector3d>> joints;  // the tracked joints of clip.frames
     int held = 0;
     for (size_t f = first; f < mocap.poses.size(); ++f) {
       const bool tracked = mocap.valid[f];
       held += !tracked;
       clip.frames.push_back(tracked ? mocap.poses[f] : clip.frames.back());
+      joints.push_back(tracked ? mocap.joints[f] : joints.back());
     }
     if (args->bvh) {
       saveBvh(clip, mocap.skeleton, out / "skeleton.bvh");
@@ -91,10 +93,9 @@ void addExportCommand(CLI::App& app) {
     for (size_t i = 0; surfaces && i < clip.frames.size(); ++i) {
       TriangleMesh mesh;
       mesh.triangles = generic.rest.triangles;
-      posedBodyMesh(
-          generic,
-          poseMessageFor(generic.skeleton.restPositions()[0], mocap.skeleton, clip.frames[i]),
-          transforms, positions, normals);
+      posedBodyMesh(generic,
+                    poseMessageFor(generic.skeleton, mocap.skeleton, clip.frames[i], joints[i]),
+                    transforms, positions, normals);
       if (args->unrefined) {
         mesh.positions = positions;
         mesh.normals = normals;

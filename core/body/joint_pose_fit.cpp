@@ -76,28 +76,36 @@ JointPoseFit fitPoseToJoints(const Skeleton& skeleton, const std::vector<Eigen::
   const int joints = skeleton.jointCount();
   if (static_cast<int>(targets.size()) != joints)
     throw std::invalid_argument("joint pose fit: expected one target a joint");
+  // The matrices stay with the thread, for a studio that fits every frame.
+  thread_local struct Workspace {
+    std::vector<Eigen::Vector3d> positions;
+    Eigen::VectorXd x, x0, r, r_try, x_try, g;
+    Eigen::MatrixXd J, JtJ, A;
+    Eigen::LDLT<Eigen::MatrixXd> ldlt;
+  } w;
   const Parameterisation param(skeleton);
   const int n = param.size();
   const int m = 3 * joints + static_cast<int>(param.angles.size());
   JointPoseFit fit = initial;
   if (static_cast<int>(fit.pose.angles_rad.size()) != joints) fit.pose = Pose::rest(joints);
-  Eigen::VectorXd x = param.pack(fit);
+  Eigen::VectorXd& x = w.x;
+  x = param.pack(fit);
   param.clamp(x);
-  const Eigen::VectorXd x0 = x;
+  w.x0 = x;
+  if (options.prior_at_rest) w.x0.tail(param.angles.size()).setZero();
 
-  std::vector<Eigen::Vector3d> positions;
   JointPoseFit work = fit;
   auto residuals = [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
     param.unpack(p, work);
-    skeleton.jointPositions(work.pose, positions);
+    skeleton.jointPositions(work.pose, w.positions);
     r.resize(m);
-    for (int j = 0; j < joints; ++j) r.segment<3>(3 * j) = p[0] * positions[j] - targets[j];
+    for (int j = 0; j < joints; ++j) r.segment<3>(3 * j) = p[0] * w.positions[j] - targets[j];
     for (size_t i = 0; i < param.angles.size(); ++i)
-      r[3 * joints + i] = options.angle_prior * (p[7 + i] - x0[7 + i]);
+      r[3 * joints + i] = options.angle_prior * (p[7 + i] - w.x0[7 + i]);
   };
 
-  Eigen::VectorXd r, r_try, x_try;
-  Eigen::MatrixXd J(m, n);
+  Eigen::VectorXd &r = w.r, &r_try = w.r_try, &x_try = w.x_try;
+  w.J.resize(m, n);
   residuals(x, r);
   double cost = r.squaredNorm(), lambda = 1e-3;
   int it = 0;
@@ -105,22 +113,23 @@ JointPoseFit fitPoseToJoints(const Skeleton& skeleton, const std::vector<Eigen::
     // Forward differences: the problem is small (about 70 parameters, 24 joints).
     for (int k = 0; k < n; ++k) {
       if (k == 0 && !options.fit_scale) {
-        J.col(0).setZero();
+        w.J.col(0).setZero();
         continue;
       }
       const double h = 1e-6;
       x_try = x;
       x_try[k] += h;
       residuals(x_try, r_try);
-      J.col(k) = (r_try - r) / h;
+      w.J.col(k) = (r_try - r) / h;
     }
-    const Eigen::MatrixXd JtJ = J.transpose() * J;
-    const Eigen::VectorXd g = J.transpose() * r;
+    w.JtJ.noalias() = w.J.transpose() * w.J;
+    w.g.noalias() = w.J.transpose() * r;
     bool improved = false;
     for (int tries = 0; tries < 10 && !improved; ++tries) {
-      Eigen::MatrixXd A = JtJ;
-      A.diagonal() += lambda * (JtJ.diagonal().array() + 1e-9).matrix();
-      x_try = x - A.ldlt().solve(g);
+      w.A = w.JtJ;
+      w.A.diagonal() += lambda * (w.JtJ.diagonal().array() + 1e-9).matrix();
+      w.ldlt.compute(w.A);
+      x_try = x - w.ldlt.solve(w.g);
       param.clamp(x_try);
       if (!options.fit_scale) x_try[0] = x[0];
       residuals(x_try, r_try);
@@ -128,7 +137,9 @@ JointPoseFit fitPoseToJoints(const Skeleton& skeleton, const std::vector<Eigen::
       if (c < cost) {
         improved = true;
         const double gain = cost - c;
-        x = x_try, r = r_try, cost = c;
+        x.swap(x_try);
+        r.swap(r_try);
+        cost = c;
         lambda = std::max(lambda / 3, 1e-9);
         if (gain < 1e-12) it = options.max_iterations;
       } else {
@@ -138,9 +149,9 @@ JointPoseFit fitPoseToJoints(const Skeleton& skeleton, const std::vector<Eigen::
     if (!improved) break;
   }
   param.unpack(x, fit);
-  skeleton.jointPositions(fit.pose, positions);
+  skeleton.jointPositions(fit.pose, w.positions);
   double sum = 0;
-  for (int j = 0; j < joints; ++j) sum += (fit.scale * positions[j] - targets[j]).squaredNorm();
+  for (int j = 0; j < joints; ++j) sum += (fit.scale * w.positions[j] - targets[j]).squaredNorm();
   fit.rms_m = std::sqrt(sum / joints);
   fit.iterations = it;
   return fit;

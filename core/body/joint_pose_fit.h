@@ -23,6 +23,8 @@ struct JointPoseFitOptions {
   // Pull of every joint angle toward the initial pose (metres of residual per radian): joint
   // positions leave the twist about a bone unobserved; this keeps it where it was.
   double angle_prior = 0.02;
+  // Draw the angles toward the rest pose (0) instead of toward the initial pose's.
+  bool prior_at_rest = false;
 };
 
 // Levenberg-Marquardt over the root translation and rotation, every joint's Euler angles (kept

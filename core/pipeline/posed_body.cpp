@@ -1,5 +1,7 @@
 #include "core/pipeline/posed_body.h"
 
+#include "core/body/joint_pose_fit.h"
+
 namespace lumistage {
 
 Pose poseFromMessage(const PoseData& data, int joint_count) {
@@ -12,16 +14,33 @@ Pose poseFromMessage(const PoseData& data, int joint_count) {
   return pose;
 }
 
-PoseData poseMessageFor(const Eigen::Vector3d& generic_root_m, const Skeleton& calibrated,
-                        const Pose& tracked) {
-  const Eigen::Vector3d actor_root = calibrated.restPositions()[0];
-  const double scale = actor_root.z() / generic_root_m.z();
-  const Eigen::Vector3d root = (actor_root + tracked.root_translation_m) / scale - generic_root_m;
+PoseData poseMessageFor(const Skeleton& generic, const Skeleton& calibrated, const Pose& tracked,
+                        const std::vector<Eigen::Vector3d>& joints) {
+  // The uniform scale that brings the generic rest skeleton nearest the calibrated one (both stand
+  // on the floor at the origin).
+  const std::vector<Eigen::Vector3d>& g = generic.restPositions();
+  const std::vector<Eigen::Vector3d>& c = calibrated.restPositions();
+  double gc = 0, gg = 0;
+  for (size_t j = 0; j < g.size() && j < c.size(); ++j)
+    gc += g[j].dot(c[j]), gg += g[j].squaredNorm();
+  JointPoseFit fit;
+  fit.scale = gg > 0 ? gc / gg : 1.0;
+  fit.pose = tracked;
+  fit.pose.root_translation_m = (c[0] + tracked.root_translation_m) / fit.scale - g[0];
+  JointPoseFitOptions options;
+  options.fit_scale = false;
+  // The tracker's capsules are round: it cannot see a twist about a bone, and its angles carry
+  // whatever twist the fit drifted to. Drawn toward the rest pose's, leave-one-camera-out rose on
+  // the arm wave (23.57 -> 23.70 dB matte); toward the tracked angles it fell below the old
+  // scaling.
+  options.prior_at_rest = true;
+  options.max_iterations = 8;  // from the tracked angles: 1.2 ms
+  fit = fitPoseToJoints(generic, joints, fit, options);
   PoseData data;
-  data.scale = float(scale);
-  for (int k = 0; k < 3; ++k) data.root[k] = float(root[k]);
-  data.angles.reserve(tracked.angles_rad.size() * 3);
-  for (const Eigen::Vector3d& a : tracked.angles_rad)
+  data.scale = float(fit.scale);
+  for (int k = 0; k < 3; ++k) data.root[k] = float(fit.pose.root_translation_m[k]);
+  data.angles.reserve(fit.pose.angles_rad.size() * 3);
+  for (const Eigen::Vector3d& a : fit.pose.angles_rad)
     data.angles.insert(data.angles.end(), {float(a.x()), float(a.y()), float(a.z())});
   return data;
 }

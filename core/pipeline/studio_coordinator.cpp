@@ -26,7 +26,7 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
     PoseTrackerOptions tracking;
     tracking.silhouette_step = options.silhouette_step;
     tracker_ = std::make_unique<PoseTracker>(rig, generic, tracking);
-    generic_root_m_ = generic.skeleton.restPositions()[0];
+    generic_skeleton_ = generic.skeleton;
   }
   for (const RigNode& node : rig_.nodes()) nodes_[node.name].report.name = node.name;
   timeline_.reserve(4096);
@@ -325,7 +325,8 @@ void StudioCoordinator::mocapLoop() {
     const TrackResult* tracked = tracker_ ? &tracker_->track(all) : nullptr;
     if (tracked && tracked->valid()) {
       // The tracked angles on the nodes' generic human, scaled to the actor (posed_body.h).
-      job.pose = poseMessageFor(generic_root_m_, tracker_->skeleton(), tracked->pose);
+      job.pose =
+          poseMessageFor(*generic_skeleton_, tracker_->skeleton(), tracked->pose, tracked->joints);
     } else {
       // Nobody tracked: the generic human standing where the hull is, in its rest pose.
       const ActorLocation where = locator_.locate(all);

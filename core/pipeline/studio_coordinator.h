@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
@@ -249,8 +250,8 @@ class StudioCoordinator {
   std::vector<MocapJob> spare_jobs_;      // this thread's, their buffers kept
   Wakeup mocap_ready_;                    // a pose is done
   std::thread mocap_thread_;  // started by the constructor's last line, joined by the destructor
-  Eigen::Vector3d generic_root_m_ = Eigen::Vector3d::Zero();  // the nodes' skeleton's rest root
-  std::unique_ptr<MeshRefiner> refiner_;  // made for the first statistics' vertex count
+  std::optional<Skeleton> generic_skeleton_;  // the nodes' generic human's (with tracker_)
+  std::unique_ptr<MeshRefiner> refiner_;      // made for the first statistics' vertex count
   // The refined mesh of the frame being sent, and which cameras see its vertices (reused).
   std::vector<Eigen::Affine3f> body_transforms_;
   Eigen::Matrix3Xf posed_positions_, posed_normals_, refined_positions_;
