@@ -176,10 +176,21 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     frame.captured_ns = std::min(frame.captured_ns, message.sent_ns);
     for (const SilhouetteMaskData& mask : silhouettes->masks) {
       if (mask.camera < 0 || mask.camera >= rig_.cameraCount()) continue;
-      // The locator indexes cells by the camera's size: a mask of another size is not used.
+      // The tracker indexes cells by the camera's size: a mask of another size (a node of an
+      // older version, at another step) is not used, and said once.
       const Camera& camera = rig_.camera(mask.camera);
       if (mask.width != camera.width() / options_.silhouette_step ||
           mask.height != camera.height() / options_.silhouette_step) {
+        ++node.report.bad_messages;
+        if (!node.told_silhouette_size) {
+          node.told_silhouette_size = true;
+          spdlog::warn(
+              "node {}: camera {}: silhouette of {}x{} cells, the studio tracks from {}x{} (cells "
+              "of {} pixels): not used; is the node of another version?",
+              node.report.name, camera.name(), mask.width, mask.height,
+              camera.width() / options_.silhouette_step, camera.height() / options_.silhouette_step,
+              options_.silhouette_step);
+        }
         continue;
       }
       LowResSilhouette s;

@@ -197,6 +197,7 @@ class StudioCoordinator {
     int64_t last_ns = 0;
     NodeReport report;
     RecentSamples statistics_ms{256}, image_ms{256};  // its answers' times
+    bool told_silhouette_size = false;  // warned once that its silhouettes are of another step
   };
 
   // The frame's state, a spare one when it is new.

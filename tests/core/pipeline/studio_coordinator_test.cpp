@@ -115,6 +115,29 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
   EXPECT_EQ(studio.lastImage(0).rgba[0], 200);
 }
 
+// A node that sends silhouettes at another step (an older version: step 8) is counted as sending
+// bad messages, its frames still get a pose, and silhouettes of the right size count as before.
+TEST(StudioCoordinator, SilhouettesOfAnotherStepAreRefusedAndCounted) {
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(2, {});
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint());
+  const auto mask = [](int step) {
+    const int w = 160 / step, h = 120 / step;
+    return SilhouetteMaskData{0, w, h, std::vector<uint8_t>(size_t(w * h + 7) / 8, 0)};
+  };
+  const auto badMessages = [&] {
+    for (const NodeReport& n : studio.report().nodes)
+      if (n.name == "node1") return n.bad_messages;
+    return int64_t(-1);
+  };
+  ASSERT_TRUE(node.send(1, SilhouettesData{{mask(8)}}));
+  ASSERT_TRUE(node.await<PoseData>(studio));
+  EXPECT_EQ(badMessages(), 1);
+  ASSERT_TRUE(node.send(2, SilhouettesData{{mask(StudioCoordinatorOptions{}.silhouette_step)}}));
+  ASSERT_TRUE(node.await<PoseData>(studio));
+  EXPECT_EQ(badMessages(), 1);
+}
+
 // With the offsets, the studio sends which cameras see each vertex of the body the nodes pose
 // and refine: what each node's renderer would compute from the same pose and offsets.
 TEST(StudioCoordinator, OffsetsComeWithTheRefinedBodysVisibility) {
