@@ -408,10 +408,6 @@ QString takeCell(const TakeStatusData& t) {
   return text;
 }
 
-}  // namespace
-
-namespace {
-
 // A stage of the report (as `lumistage run` and its JSON name it) in words, with what its time
 // covers and its key as tooltip.
 QTableWidgetItem* stageItem(const std::string& stage) {

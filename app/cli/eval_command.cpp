@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <optional>
+
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/body/human_model.h"
@@ -54,11 +56,13 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
       evaluateLeaveOneOut(session, frames, [&](int i, int) { return truthSurface(session, i); });
   std::vector<Eigen::Affine3f> transforms;
   Eigen::Matrix3Xf positions, normals;
+  // Each frame's pose message once: the meshes below pose the same frames many times over.
+  std::vector<std::optional<PoseData>> messages(tracked.poses.size());
   const auto posed = [&](int i) {
-    posedBodyMesh(
-        generic,
-        poseMessageFor(generic.skeleton, tracked.skeleton, tracked.poses[i], tracked.joints[i]),
-        transforms, positions, normals);
+    if (!messages[i])
+      messages[i] =
+          poseMessageFor(generic.skeleton, tracked.skeleton, tracked.poses[i], tracked.joints[i]);
+    posedBodyMesh(generic, *messages[i], transforms, positions, normals);
   };
   const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(session, frames, [&](int i, int) {
     posed(i);
