@@ -52,8 +52,11 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   for (int i : spreadFrames(total, frame_count))
     if (i < static_cast<int>(tracked.valid.size()) && tracked.valid[i]) frames.push_back(i);
   EglContext gl;
-  const LeaveOneOutSummary truth =
-      evaluateLeaveOneOut(session, frames, [&](int i, int) { return truthSurface(session, i); });
+  LumigraphParams fine;  // the true surface is finely tessellated: rendered as it is
+  fine.phong_subdivision = false;
+  const LeaveOneOutSummary truth = evaluateLeaveOneOut(
+      session, frames, [&](int i, int) { return truthSurface(session, i); },
+      LeaveOneOutMeshes::kOnePerFrame, fine);
   std::vector<Eigen::Affine3f> transforms;
   Eigen::Matrix3Xf positions, normals;
   // Each frame's pose message once: the meshes below pose the same frames many times over.

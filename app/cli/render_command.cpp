@@ -79,7 +79,9 @@ void addRenderCommand(CLI::App& app) {
     EglContext gl;
     std::vector<int> all(rig.cameraCount());
     for (int c = 0; c < rig.cameraCount(); ++c) all[c] = c;
-    LumigraphRenderer renderer(rig, all);
+    LumigraphParams params;
+    params.phong_subdivision = a->mesh != "truth";  // the true surface is finely tessellated
+    LumigraphRenderer renderer(rig, all, params);
     std::vector<Eigen::Affine3f> clones;
     for (int i = 0; i < std::max(1, a->clones); ++i) {
       Eigen::Affine3f t = Eigen::Affine3f::Identity();

@@ -135,6 +135,19 @@ void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::
   if (visibility.size() != size_t(n))
     throw Error("LumigraphRenderer::setMesh: " + std::to_string(visibility.size()) +
                 " visibility masks for " + std::to_string(n) + " vertices");
+  if (params_.phong_subdivision) {
+    subdivision_.subdivide(positions, normals, triangles, visibility);
+    upload(subdivision_.positions(), subdivision_.normals(), subdivision_.triangles(),
+           subdivision_.masks());
+  } else {
+    upload(positions, normals, triangles, visibility);
+  }
+}
+
+void LumigraphRenderer::upload(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
+                               std::span<const Eigen::Vector3i> triangles,
+                               std::span<const uint16_t> visibility) {
+  const int n = static_cast<int>(positions.cols());
   // Rim dilation: the mean sagitta of each vertex's edges, (-n_v . (p_u - p_v)) / 4 for an edge
   // v-u where the surface bends away (convex), 0 where it bends toward the normal.
   rim_sum_.assign(n, 0.0f);

@@ -85,11 +85,15 @@ void uploadNodeImages(LumigraphRenderer& r, bool bayer) {
   }
 }
 
-// A node's renderer: mesh 0 the truth surface, 1 the generic human.
-std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int divisor = 4) {
+// A node's renderer: mesh 0 the truth surface, 1 the generic human; the generic human Phong-
+// subdivided as the pipeline renders it (phong < 0), the finely tessellated truth as it is, unless
+// `phong` says otherwise.
+std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int divisor = 4,
+                                                int phong = -1) {
   Scene& s = scene();
   LumigraphParams params;
   params.depth_map_divisor = divisor;  // the visibility maps at the cameras' size / divisor
+  params.phong_subdivision = phong < 0 ? mesh != 0 : phong != 0;
   auto r = std::make_unique<LumigraphRenderer>(s.studio->rig(), s.node, params);
   const TriangleMesh& m = mesh == 0 ? s.frame.surface : s.generic;
   r->setMesh(m.positions, m.normals, m.triangles);
@@ -129,7 +133,7 @@ void nodeMeshAndPartialImage(benchmark::State& state) {
   Scene& s = scene();
   const TriangleMesh& m = state.range(0) ? s.generic : s.frame.surface;
   const int divisor = int(state.range(1));
-  auto r = nodeRenderer(false, int(state.range(0)), divisor > 0 ? divisor : 4);
+  auto r = nodeRenderer(false, int(state.range(0)), divisor > 0 ? divisor : 4, int(state.range(2)));
   VertexVisibility given;
   given.compute(s.studio->rig(), m.positions, m.triangles, 4, r->params().depth_tolerance_m);
   const Camera view = viewOf(640, 480);
@@ -147,8 +151,10 @@ void nodeMeshAndPartialImage(benchmark::State& state) {
   state.counters["process_cpu_ms"] = (processCpuMs() - cpu) / double(state.iterations());
 }
 BENCHMARK(nodeMeshAndPartialImage)
-    ->ArgNames({"generic", "divisor"})
-    ->ArgsProduct({{0, 1}, {0, 2, 4, 8}})
+    ->ArgNames({"generic", "divisor", "phong"})
+    ->Args({0, 0, 0})
+    ->Args({0, 4, 0})
+    ->ArgsProduct({{1}, {0, 2, 4, 8}, {0, 1}})
     ->Unit(benchmark::kMillisecond);
 
 // The studio's share: which of the 12 cameras see each vertex of the refined mesh, once a frame.

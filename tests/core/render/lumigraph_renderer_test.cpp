@@ -163,7 +163,7 @@ TEST_F(LumigraphRendererTest, NodeWeightsSumToOneAndVanishForCamerasThatDoNotCon
   std::vector<uint8_t> local;
   makeRenderer()->render(desired, local);
   ASSERT_GT(covered(local), 5000);
-  int64_t off = 0, inside = 0;
+  int64_t off = 0, inside = 0, rounded_down = 0;
   for (size_t i = 0; i < local.size() / 4; ++i) {
     int sum = 0;
     for (const auto& p : partials) sum += p[4 * i + 3];
@@ -171,11 +171,15 @@ TEST_F(LumigraphRendererTest, NodeWeightsSumToOneAndVanishForCamerasThatDoNotCon
       EXPECT_EQ(sum, 0) << "pixel " << i;  // no surface, or no camera sees it: no weight
       continue;
     }
-    EXPECT_EQ(local[4 * i + 3], 255);
+    // Own share / total of the same interpolated weights: 1, but where the total falls toward 0
+    // (a vertex no camera sees, on the rim) their float ratio may round one level down.
+    EXPECT_GE(local[4 * i + 3], 254) << "pixel " << i;
+    rounded_down += local[4 * i + 3] != 255;
     ++inside;
     off += std::abs(sum - 255) > 2;  // shares of 255, each rounded
   }
   EXPECT_EQ(off, 0) << "of " << inside;
+  EXPECT_LT(rounded_down * 1000, inside);
   // Cameras 6 and 7 face the desired view from the other side of the stage: never among the
   // three nearest in angle, their weight is zero everywhere.
   std::vector<uint8_t> behind;
@@ -350,8 +354,9 @@ TEST_F(LumigraphRendererTest, LeaveOneOutOnTheTrueSurfaceReachesTheTarget) {
   EXPECT_GT(ssim, 0.8);
 }
 
-// The flat triangles of a coarse mesh cut inside a curved surface's silhouette; rim dilation
-// brings the rendered silhouette back out to it, without drawing much beyond it.
+// The flat triangles of a coarse mesh cut inside a curved surface's silhouette; rim dilation, or
+// the Phong subdivision, brings the rendered silhouette back out to it, without drawing much
+// beyond it.
 TEST_F(LumigraphRendererTest, RimDilationKeepsTheSilhouetteOfACoarseSphere) {
   const Eigen::Vector3d centre(0, 0, 1.0);
   const double radius = 0.3;
@@ -370,9 +375,10 @@ TEST_F(LumigraphRendererTest, RimDilationKeepsTheSilhouetteOfACoarseSphere) {
     }
   }
   const std::vector<uint8_t> grey(size_t(camera.width()) * camera.height() * 4, 128);
-  auto silhouetteErrors = [&](float rim_dilation) {
+  auto silhouetteErrors = [&](float rim_dilation, bool phong) {
     LumigraphParams params;
     params.rim_dilation = rim_dilation;
+    params.phong_subdivision = phong;
     std::vector<int> all;
     for (int c = 0; c < rig().cameraCount(); ++c) all.push_back(c);
     LumigraphRenderer renderer(rig(), all, params);
@@ -390,10 +396,16 @@ TEST_F(LumigraphRendererTest, RimDilationKeepsTheSilhouetteOfACoarseSphere) {
     }
     return std::array<double, 2>{double(missed) / inside, double(beyond) / inside};
   };
-  const auto [missed_flat, beyond_flat] = silhouetteErrors(0.0f);
-  const auto [missed, beyond] = silhouetteErrors(LumigraphParams{}.rim_dilation);
+  const auto [missed_flat, beyond_flat] = silhouetteErrors(0.0f, false);
+  const auto [missed, beyond] = silhouetteErrors(LumigraphParams{}.rim_dilation, false);
   std::printf("  sphere silhouette: missed %.2f%% -> %.2f%%, beyond %.2f%% -> %.2f%%\n",
               100 * missed_flat, 100 * missed, 100 * beyond_flat, 100 * beyond);
+  // Subdivided as the curved surface (the default), with the rim dilation of the finer edges.
+  const auto [missed_phong, beyond_phong] = silhouetteErrors(LumigraphParams{}.rim_dilation, true);
+  std::printf("  Phong-subdivided: missed %.2f%%, beyond %.2f%%\n", 100 * missed_phong,
+              100 * beyond_phong);
+  EXPECT_LT(missed_phong, missed_flat / 3);
+  EXPECT_LT(beyond_phong, missed_flat / 2);
   EXPECT_GT(missed_flat, 0.02);  // the flat triangles fall short by several per cent
   EXPECT_LT(beyond_flat, 0.002);
   EXPECT_LT(missed, missed_flat / 3);
