@@ -70,7 +70,7 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   }
   sampler_.sample(sampler_cameras_, positions_, normals_, body_.rest.triangles, refine_stats_);
   VertexStatisticsData stats;
-  stats.vertex_count = static_cast<uint32_t>(positions_.cols());
+  stats.vertex_count = static_cast<uint32_t>(refine_stats_.vertex_count);  // with window points
   stats.offset_count = options_.refine.offset_count;
   statistics_codec_.encode(refine_stats_, stats.packed);
   // Kept until the studio's offsets for the frame arrive.

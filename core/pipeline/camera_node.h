@@ -46,8 +46,9 @@ struct CameraNodeOptions {
 // The node's part of every frame, on the PC that owns the cameras (see DESIGN.md §1):
 // capture a set of its cameras' frames; key them at low resolution and send the silhouettes;
 // when the studio's pose for that frame arrives, pose the generic human (linear blend skinning)
-// and send, per vertex and offset along its normal, the refinement statistics of its cameras
-// (RefinementSampler: outside-silhouette counts, colour counts, sums and squares, compact) —
+// and send, per vertex (and its window points) and offset along its normal, the refinement
+// statistics of its cameras (RefinementSampler: outside-silhouette counts, colour counts, sums and
+// squares, compact) —
 // what the studio's refinement module combines exactly across nodes; when the studio's chosen
 // offsets arrive, move the vertices and render the partial image of the refined mesh.
 // Heartbeats carry every camera's counters. Takes the studio asks for are recorded on the node's

@@ -409,12 +409,13 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
     return;
   }
   sum.dropColourOutside();
+  // The statistics are of the body's vertices, or of them and their window points (3n).
+  const int vertices = refinedVertices(sum.vertex_count);
   if (!refiner_ || refiner_->config().offset_count != sum.offset_count ||
-      refiner_->dataErrors().size() != size_t(sum.sampleCount())) {
-    refiner_ =
-        std::make_unique<MeshRefiner>(options_.refine, sum.vertex_count,
-                                      bodyFits(sum.vertex_count) ? options_.body->rest.triangles
-                                                                 : std::vector<Eigen::Vector3i>{});
+      refiner_->dataErrors().size() != size_t(vertices) * sum.offset_count) {
+    refiner_ = std::make_unique<MeshRefiner>(
+        options_.refine, vertices,
+        bodyFits(vertices) ? options_.body->rest.triangles : std::vector<Eigen::Vector3i>{});
   }
   // The offsets go straight into the message, which is kept from frame to frame: its vectors
   // keep their memory.
@@ -430,7 +431,7 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
   offsets.visibility.clear();
   // Which cameras see each vertex of the mesh the nodes will render: posed and refined as they
   // will, from the same pose message and offsets.
-  if (bodyFits(sum.vertex_count)) {
+  if (bodyFits(vertices)) {
     posedBodyMesh(*options_.body, frame.pose, body_transforms_, posed_positions_, posed_normals_);
     applyOffsets(options_.refine, offsets.offsets, posed_positions_, posed_normals_,
                  refined_positions_);
@@ -464,7 +465,8 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   // none of their silhouettes.
   int agreeing = 0, seen_vertices = 0;
   const RefinementStatistics& sum = frame.refine_sum;
-  for (int v = 0; v < sum.vertex_count; ++v) {
+  const int vertices = refinedVertices(sum.vertex_count);  // the vertices, not window points
+  for (int v = 0; v < vertices; ++v) {
     const size_t s = size_t(v) * sum.offset_count + sum.offset_count / 2;
     if (sum.colour_count[s] == 0 && sum.outside[s] == 0) continue;
     ++seen_vertices;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -224,6 +225,15 @@ class StudioCoordinator {
   // Whether the statistics are of the body's vertices (the nodes pose that body).
   bool bodyFits(int vertex_count) const {
     return options_.body && options_.body->rest.vertexCount() == vertex_count;
+  }
+  // The vertices that statistics of `vertex_count` points refine: the body's, when they hold its
+  // vertices alone or with their window points (RefineConfig::window_points); without a body to
+  // tell, the points of the window this studio's refinement is configured with.
+  int refinedVertices(int vertex_count) const {
+    if (bodyFits(vertex_count)) return vertex_count;
+    if (vertex_count % 3 == 0 && bodyFits(vertex_count / 3)) return vertex_count / 3;
+    const int points = std::max(1, options_.refine.window_points);
+    return vertex_count % points == 0 ? vertex_count / points : vertex_count;
   }
   // The refinement module: chooses every vertex's offset from the combined statistics and sends
   // the offsets to the nodes, with which cameras see each vertex of the refined body.

@@ -34,27 +34,53 @@ MeshRefiner::MeshRefiner(const RefineConfig& config, int vertex_count,
   current_.assign(vertex_count, uint8_t(config_.zeroOffsetIndex()));
 }
 
+namespace {
+
+// The colour term of one point's sample: its variance over the cameras (n - 1: two cameras
+// agreeing by chance is weaker evidence than four), averaged over the channels, in units of the
+// statistics' colour bits², through v / (v + sigma²). The caller checks that two cameras or more
+// see it inside the hull.
+inline float pointColour(const RefinementStatistics& stats, size_t s, float sigma2) {
+  const int n = stats.colour_count[s];
+  const float r = stats.sums[3 * s], g = stats.sums[3 * s + 1], b = stats.sums[3 * s + 2];
+  const float variance = std::max(
+      0.0f, (float(stats.squares[s]) - (r * r + g * g + b * b) / float(n)) / (3.0f * float(n - 1)));
+  return variance / (variance + sigma2);
+}
+
+}  // namespace
+
+float MeshRefiner::windowColour(const RefinementStatistics& stats, size_t s, int points,
+                                size_t window, float sigma2) {
+  float sum = pointColour(stats, s, sigma2), count = 1;
+  for (int p = 1; p < points; ++p) {
+    const size_t q = s + size_t(p) * window;
+    if (stats.outside[q] > 0 || stats.colour_count[q] < 2) continue;
+    sum += pointColour(stats, q, sigma2);
+    count += 1;
+  }
+  return sum / count;
+}
+
+int MeshRefiner::windowPoints(const RefinementStatistics& stats) const {
+  if (stats.offset_count != config_.offset_count) return 0;
+  if (stats.vertex_count == vertex_count_) return 1;
+  if (vertex_count_ > 0 && stats.vertex_count == 3 * vertex_count_) return 3;
+  return 0;
+}
+
 float MeshRefiner::dataError(const RefinementStatistics& stats, size_t s, int i) const {
   const float t_rel = config_.t_max_m > 0 ? offsets_m_[i] / float(config_.t_max_m) : 0.0f;
   float colour;
-  const int n = stats.colour_count[s];
   if (stats.outside[s] > 0) {
     colour = 1.0f;
-  } else if (n < 2) {
+  } else if (stats.colour_count[s] < 2) {
     colour = float(config_.unseen_colour);
   } else {
-    // The sample variance over the cameras (n - 1: two cameras agreeing by chance is weaker
-    // evidence than four), averaged over the channels, in 8-bit levels².
-    double sum2 = 0;
-    for (int c = 0; c < 3; ++c) {
-      const double m = stats.sums[3 * s + c];
-      sum2 += m * m;
-    }
-    const double unit = double(1 << (8 - stats.colour_bits));
-    const double variance =
-        std::max(0.0, (double(stats.squares[s]) - sum2 / n) / (3.0 * (n - 1))) * unit * unit;
-    const double sigma2 = config_.colour_sigma * config_.colour_sigma;
-    colour = float(variance / (variance + sigma2));
+    const float unit = float(1 << (8 - stats.colour_bits));
+    const float sigma2 = float(config_.colour_sigma * config_.colour_sigma) / (unit * unit);
+    const size_t window = size_t(vertex_count_) * config_.offset_count;
+    colour = windowColour(stats, s, windowPoints(stats), window, sigma2);
   }
   return float(config_.outside_weight) * float(stats.outside[s]) -
          float(config_.outward_weight) * t_rel + float(config_.colour_weight) * colour;
@@ -80,7 +106,8 @@ int MeshRefiner::choose(const float* e) const {
 
 bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>& offsets) {
   const int m = config_.offset_count;
-  if (stats.vertex_count != vertex_count_ || stats.offset_count != m) return false;
+  const int points = windowPoints(stats);
+  if (points == 0) return false;
   // The data terms (as dataError(), inlined for speed: every sample every frame).
   const float outside_w = float(config_.outside_weight), colour_w = float(config_.colour_weight);
   const float unseen = colour_w * float(config_.unseen_colour);
@@ -94,17 +121,12 @@ bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>
   const size_t samples = size_t(vertex_count_) * m;
   for (size_t s = 0, i = 0; s < samples; ++s, i = (i + 1 == size_t(m) ? 0 : i + 1)) {
     float e = total_[i];
-    const int n = stats.colour_count[s];
     if (stats.outside[s] > 0) {
       e += outside_w * float(stats.outside[s]) + colour_w;
-    } else if (n < 2) {
+    } else if (stats.colour_count[s] < 2) {
       e += unseen;
     } else {
-      const float r = stats.sums[3 * s], g = stats.sums[3 * s + 1], b = stats.sums[3 * s + 2];
-      const float variance =
-          std::max(0.0f, (float(stats.squares[s]) - (r * r + g * g + b * b) / float(n)) /
-                             (3.0f * float(n - 1)));
-      e += colour_w * variance / (variance + sigma2);
+      e += colour_w * windowColour(stats, s, points, samples, sigma2);
     }
     data_[s] = e;
   }

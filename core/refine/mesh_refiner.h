@@ -23,19 +23,27 @@ class MeshRefiner {
   // Chooses an offset per vertex and writes its level (RefineConfig::offsetLevels(): twice the
   // offset index, one more or less where the silhouette crosses next to it or where the error's
   // parabola through its neighbours lies lowest more than a quarter step away) to `offsets`,
-  // resized when its size differs. Returns false (offsets untouched) when the statistics' sizes are
-  // not this mesh's.
+  // resized when its size differs. The statistics are of this mesh's vertices, or of them and
+  // their window points (3 x the vertices, RefinementSampler): a sample's colour term is then the
+  // mean over its points inside the hull and seen by two cameras or more. Returns false (offsets
+  // untouched) when the statistics' sizes are neither.
   bool refine(const RefinementStatistics& combined, std::vector<uint8_t>& offsets);
   // Forgets the previous frame (a cut, a new actor): the next frame has no temporal term.
   void resetTemporal() { has_previous_ = false; }
 
   // The data error of the last refine() (terms 1 to 3), per sample v·offset_count + t.
   const std::vector<float>& dataErrors() const { return data_; }
-  // The data terms of one sample, for tests and tools.
+  // The data terms of one sample (of a vertex, not of a window point), for tests and tools.
   float dataError(const RefinementStatistics& stats, size_t sample, int offset_index) const;
 
  private:
   int choose(const float* error) const;
+  // 1 or 3 (the statistics' points a vertex), 0 when they are not of this mesh.
+  int windowPoints(const RefinementStatistics& stats) const;
+  // The colour term of vertex sample s averaged over its window's points (`window`: samples from
+  // one point of a vertex to the next).
+  static float windowColour(const RefinementStatistics& stats, size_t s, int points, size_t window,
+                            float sigma2);
 
   RefineConfig config_;
   int vertex_count_;

@@ -13,7 +13,7 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
                {"offset_count", "t_max_m", "outside_weight", "outward_weight", "colour_weight",
                 "colour_sigma", "unseen_colour", "smooth_weight", "temporal_weight", "tie_margin",
                 "smooth_iterations", "depth_map_step", "depth_tolerance_m", "min_facing_cos",
-                "colour_bits"});
+                "colour_bits", "window_points", "window_m"});
   auto number = [&](const char* name, double& value, double lo, double hi, const char* expected) {
     if (!node[name]) return;
     const std::string path = YamlReader::child(key, name);
@@ -41,6 +41,11 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
   number("depth_tolerance_m", config.depth_tolerance_m, 0, 1, "expected metres in [0, 1]");
   number("min_facing_cos", config.min_facing_cos, -1, 1, "expected a cosine in [-1, 1]");
   integer("colour_bits", config.colour_bits, 1, 8, "expected 1 to 8 bits");
+  integer("window_points", config.window_points, 1, 3, "expected 1 or 3 points");
+  if (config.window_points == 2)
+    in.fail(node["window_points"], YamlReader::child(key, "window_points"),
+            "expected 1 or 3 points");
+  number("window_m", config.window_m, 0, 0.05, "expected metres in [0, 0.05]");
   return config;
 }
 

@@ -48,6 +48,15 @@ struct RefineConfig {
   double depth_tolerance_m = 0.03;
   double min_facing_cos = 0.1;
   int colour_bits = 6;  // colours are summed at this many bits a channel (<= 8)
+  // Colour consistency over a small window of the surface (beyond the paper): with 3 points, each
+  // vertex is also sampled at two points window_m to either side of it on its tangent plane,
+  // along the tangent nearest the world's vertical (windowDirection()), at every offset, and a
+  // sample's colour term is the mean over the three points inside the hull and seen by two
+  // cameras or more. A single point matches the cameras on one pixel each, which uniform cloth and
+  // the horizontal stripes of a shirt leave ambiguous along the normal (a ring of cameras moves
+  // its projection sideways). 1 or 3; three times the nodes' samples and statistics.
+  int window_points = 3;
+  double window_m = 0.01;
 
   double offsetAt(int index) const {
     return offset_count > 1 ? -t_max_m + 2 * t_max_m * index / (offset_count - 1) : 0.0;

@@ -1,15 +1,44 @@
 #include "core/refine/refinement_sampler.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace lumistage {
+
+Eigen::Vector3f windowDirection(const Eigen::Vector3f& normal) {
+  const Eigen::Vector3f axis =
+      std::abs(normal.z()) < 0.9f ? Eigen::Vector3f::UnitZ() : Eigen::Vector3f::UnitX();
+  // The tangent nearest `axis`: the axis less its component along the normal.
+  const Eigen::Vector3f t = axis - axis.dot(normal) * normal;
+  const float length = t.norm();
+  return length > 1e-6f ? Eigen::Vector3f(t / length) : Eigen::Vector3f::UnitX();
+}
 
 void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
                                const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                                const std::vector<Eigen::Vector3i>& triangles,
                                RefinementStatistics& out) {
   const int n = static_cast<int>(positions.cols());
-  out.reset(n, config_.offset_count, config_.colour_bits);
+  const Eigen::Matrix3Xf* points = &positions;
+  const Eigen::Matrix3Xf* point_normals = &normals;
+  if (config_.window_points == 3) {
+    if (window_positions_.cols() != 3 * n) {
+      window_positions_.resize(3, 3 * n);
+      window_normals_.resize(3, 3 * n);
+    }
+    const float w = float(config_.window_m);
+    for (int v = 0; v < n; ++v) {
+      const Eigen::Vector3f p = positions.col(v), nrm = normals.col(v);
+      const Eigen::Vector3f along = w * windowDirection(nrm);
+      window_positions_.col(v) = p;
+      window_positions_.col(n + v) = p + along;
+      window_positions_.col(2 * n + v) = p - along;
+      for (int k = 0; k < 3; ++k) window_normals_.col(k * n + v) = nrm;
+    }
+    points = &window_positions_;
+    point_normals = &window_normals_;
+  }
+  out.reset(int(points->cols()), config_.offset_count, config_.colour_bits);
   offsets_m_.resize(config_.offset_count);
   for (int i = 0; i < config_.offset_count; ++i) offsets_m_[i] = float(config_.offsetAt(i));
   if (depth_maps_.size() < cameras.size()) depth_maps_.resize(cameras.size());
@@ -17,11 +46,11 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
     const SamplerCamera& c = cameras[k];
     depth_maps_[k].render(*c.camera, positions, triangles, config_.depth_map_step);
     if (c.background) {
-      sampleCamera(c, *c.background, depth_maps_[k], positions, normals, out);
+      sampleCamera(c, *c.background, depth_maps_[k], *points, *point_normals, out);
     } else {
       static const GreenScreenKeyer kDefaultKeyer;
-      sampleCamera(c, c.green_screen ? *c.green_screen : kDefaultKeyer, depth_maps_[k], positions,
-                   normals, out);
+      sampleCamera(c, c.green_screen ? *c.green_screen : kDefaultKeyer, depth_maps_[k], *points,
+                   *point_normals, out);
     }
   }
   out.dropColourOutside();
@@ -48,6 +77,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
   const float tolerance = float(config_.depth_tolerance_m);
   const float min_cos = float(config_.min_facing_cos);
   const int n = static_cast<int>(positions.cols());
+  const int first_window = config_.window_points == 3 ? n / 3 : n;  // the points after the vertices
   for (int v = 0; v < n; ++v) {
     const Eigen::Vector3f x = positions.col(v), nrm = normals.col(v);
     // A line in the world is a line in camera coordinates: c(t) = c0 + t·d.
@@ -59,6 +89,9 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
       if (distorted) dist.apply(px, py, px, py);
       visible = depth.visible(fx * px + skew * py + cx, fy * py + cy, c0.z(), tolerance);
     }
+    // A window point serves the colour term only: the cameras that do not see it say nothing
+    // about it (a quarter less of a node's work, and leave-one-out as good).
+    if (!visible && v >= first_window) continue;
     const size_t base = size_t(v) * offsets;
     for (int i = 0; i < offsets; ++i) {
       const Eigen::Vector3f c = c0 + offsets_m_[i] * d;

@@ -22,8 +22,18 @@ struct SamplerCamera {
   const BackgroundModel* background = nullptr;
 };
 
+// The tangent along which a vertex's window points lie (RefineConfig::window_points): the unit
+// tangent of the plane normal to `normal` nearest the world's vertical (z), or, for a normal within
+// 26 degrees of vertical, the one nearest x.
+Eigen::Vector3f windowDirection(const Eigen::Vector3f& normal);
+
 // The node's side of the refinement: for its own cameras, samples the images at every vertex's
-// offsets along its normal and accumulates RefinementStatistics. Segmentation is evaluated only at
+// offsets along its normal and accumulates RefinementStatistics. With window points
+// (RefineConfig::window_points = 3), the statistics hold 3n vertices: the n vertices, then the n
+// points window_m along windowDirection() from them, then the n points window_m the other way,
+// each sampled at the same offsets along its vertex's normal (with its vertex's normal and its own
+// depth-map lookup) by the cameras that see it (the others count nothing for it, not even outside
+// their silhouettes: a window point serves the colour term only). Segmentation is evaluated only at
 // the sampled pixels; visibility comes from a low-resolution depth map of the posed mesh per
 // camera (a vertex's visibility holds for all its offsets, as in the paper). After the first
 // frame of a size, sample() does not allocate.
@@ -47,6 +57,7 @@ class RefinementSampler {
 
   RefineConfig config_;
   std::vector<DepthMap> depth_maps_;
+  Eigen::Matrix3Xf window_positions_, window_normals_;  // the vertices and their window points
   std::vector<float> offsets_m_;
 };
 

@@ -1,7 +1,7 @@
 // Micro-benchmarks of the mesh refinement (the paper's §IV) on a frame of the virtual studio: the
 // generic human posed to the actor's true joints, the reference rig's 1024x768 images.
-//   node side:   depth maps + samples of 2000 vertices x 21 offsets x its 3 cameras, compressed
-//                for the wire (target < 5 ms)
+//   node side:   depth maps + samples of 2000 vertices (and their window points: /window:3, the
+//                default) x 21 offsets x its 3 cameras, compressed for the wire (target < 5 ms)
 //   module side: decompress and combine 4 nodes' statistics, choose the offsets (target < 2 ms)
 // Run: ./studio bench, or build/tests/bench/refine_bench
 #include <benchmark/benchmark.h>
@@ -24,7 +24,8 @@ struct Scene {
   std::vector<Image> images;
   std::vector<GreenScreenKeyer> keyers;
   Eigen::Matrix3Xf positions, normals;
-  std::vector<std::vector<uint8_t>> wire;  // per node, compressed as nodes send it
+  // Per window points (1, 3) and node, compressed as nodes send it.
+  std::vector<std::vector<uint8_t>> wire[4];
 
   Scene() {
     config = loadStudioConfig(resourcePath("studio/reference.yaml"));
@@ -42,14 +43,21 @@ struct Scene {
     const JointPoseFit fit = fitPoseToJoints(generic.skeleton, frame.joints,
                                              initialJointPoseFit(generic.skeleton, frame.joints));
     posedScaledMesh(generic, fit, positions, normals);
-    RefinementSampler sampler(config.refine);
     RefinementStatistics stats;
     RefinementStatisticsCodec codec;
-    for (int n = 0; n < rig.nodeCount(); ++n) {
-      sampler.sample(camerasOf(n), positions, normals, generic.rest.triangles, stats);
-      wire.emplace_back();
-      codec.encode(stats, wire.back());
+    for (int points : {1, 3}) {
+      RefinementSampler sampler(refineConfig(points));
+      for (int n = 0; n < rig.nodeCount(); ++n) {
+        sampler.sample(camerasOf(n), positions, normals, generic.rest.triangles, stats);
+        wire[points].emplace_back();
+        codec.encode(stats, wire[points].back());
+      }
     }
+  }
+  RefineConfig refineConfig(int window_points) const {
+    RefineConfig c = config.refine;
+    c.window_points = window_points;
+    return c;
   }
   std::vector<SamplerCamera> camerasOf(int node) const {
     std::vector<SamplerCamera> out;
@@ -67,7 +75,7 @@ const Scene& scene() {
 // One node's whole share: depth maps of its 3 cameras, samples, the compressed wire form.
 void refineNodeSide(benchmark::State& state) {
   const Scene& s = scene();
-  RefinementSampler sampler(s.config.refine);
+  RefinementSampler sampler(s.refineConfig(int(state.range(0))));
   RefinementStatistics stats;
   RefinementStatisticsCodec codec;
   std::vector<uint8_t> wire, packed;
@@ -82,7 +90,7 @@ void refineNodeSide(benchmark::State& state) {
   state.counters["packed_bytes"] = double(packed.size());
   state.counters["vertices"] = double(s.positions.cols());
 }
-BENCHMARK(refineNodeSide)->Unit(benchmark::kMillisecond);
+BENCHMARK(refineNodeSide)->ArgName("window")->Arg(1)->Arg(3)->Unit(benchmark::kMillisecond);
 
 // The depth maps alone (3 cameras, 1/8 resolution).
 // Depth maps of the posed generic human: the refinement's (a node's 3 cameras at its step) or
@@ -109,20 +117,21 @@ BENCHMARK(refineDepthMaps)->ArgName("lumigraph")->Arg(0)->Arg(1)->Unit(benchmark
 // The module: decompress the 4 nodes' statistics, combine, choose every vertex's offset.
 void refineModuleSide(benchmark::State& state) {
   const Scene& s = scene();
+  const int points = int(state.range(0));
   MeshRefiner refiner(s.config.refine, s.generic.rest.vertexCount(), s.generic.rest.triangles);
   RefinementStatistics combined;
   RefinementStatisticsCodec codec;
   std::vector<uint8_t> offsets;
   for (auto _ : state) {
-    combined.reset(s.generic.rest.vertexCount(), s.config.refine.offset_count,
+    combined.reset(points * s.generic.rest.vertexCount(), s.config.refine.offset_count,
                    s.config.refine.colour_bits);
-    for (const auto& w : s.wire) codec.add(w, combined);
+    for (const auto& w : s.wire[points]) codec.add(w, combined);
     combined.dropColourOutside();
     refiner.refine(combined, offsets);
     benchmark::DoNotOptimize(offsets.data());
   }
 }
-BENCHMARK(refineModuleSide)->Unit(benchmark::kMillisecond);
+BENCHMARK(refineModuleSide)->ArgName("window")->Arg(1)->Arg(3)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
@@ -131,11 +140,12 @@ namespace {
 // The module's choice alone (statistics already combined): data terms, smoothness, temporal.
 void refineModuleChooseOnly(benchmark::State& state) {
   const Scene& s = scene();
+  const int points = int(state.range(0));
   MeshRefiner refiner(s.config.refine, s.generic.rest.vertexCount(), s.generic.rest.triangles);
   RefinementStatistics combined, decoded;
-  combined.reset(s.generic.rest.vertexCount(), s.config.refine.offset_count,
+  combined.reset(points * s.generic.rest.vertexCount(), s.config.refine.offset_count,
                  s.config.refine.colour_bits);
-  for (const auto& w : s.wire) {
+  for (const auto& w : s.wire[points]) {
     decodeRefinementStatistics(w, decoded);
     combined.add(decoded);
   }
@@ -145,6 +155,6 @@ void refineModuleChooseOnly(benchmark::State& state) {
     benchmark::DoNotOptimize(offsets.data());
   }
 }
-BENCHMARK(refineModuleChooseOnly)->Unit(benchmark::kMillisecond);
+BENCHMARK(refineModuleChooseOnly)->ArgName("window")->Arg(1)->Arg(3)->Unit(benchmark::kMillisecond);
 
 }  // namespace

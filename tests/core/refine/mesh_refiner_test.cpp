@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "core/refine/refinement_sampler.h"
 #include "tests/core/refine/refine_test_scene.h"
 
@@ -98,6 +100,61 @@ TEST(MeshRefiner, ColourTermAloneFindsTheConsistentOffset) {
   one.stats.outside[13] = 1;
   one.stats.dropColourOutside();
   EXPECT_NE(refineOne(c, one.stats) / 2, 13);
+}
+
+// With window points (the vertex, then its two neighbours on the tangent plane, as the sampler
+// lays them out), a sample's colour term is the mean over the points: where the vertex's own pixel
+// agrees at two offsets equally, the window picks the one where its neighbours agree too; a point
+// outside the hull or seen by fewer than two cameras has no say; statistics of another layout
+// are refused.
+TEST(MeshRefiner, WindowPointsDecideWhereTheVertexAloneIsAmbiguous) {
+  RefineConfig c = noTerms();
+  c.colour_weight = 1;
+  const int m = c.offset_count;
+  RefinementStatistics window;
+  window.reset(3, m, c.colour_bits);
+  // Point p's sample i is sample p * m + i (one vertex: a point's block is m samples long).
+  const auto colour = [&](int point, int i, int spread) {
+    OneVertex one(c);
+    one.colour(i, 4, 120, spread);
+    const size_t s = size_t(point) * m + i;
+    window.colour_count[s] = one.stats.colour_count[i];
+    for (int ch = 0; ch < 3; ++ch) window.sums[3 * s + ch] = one.stats.sums[3 * i + ch];
+    window.squares[s] = one.stats.squares[i];
+  };
+  for (int i = 0; i < m; ++i) {
+    colour(0, i, (i == 6 || i == 14) ? 1 : 40);  // the vertex: two offsets agree, 4 from zero each
+    colour(1, i, i == 14 ? 1 : 40);              // its neighbours agree at 14 only
+    colour(2, i, i == 14 ? 1 : 40);
+  }
+  RefinementStatistics alone;
+  alone.reset(1, m, c.colour_bits);
+  std::copy_n(window.colour_count.begin(), m, alone.colour_count.begin());
+  std::copy_n(window.sums.begin(), 3 * m, alone.sums.begin());
+  std::copy_n(window.squares.begin(), m, alone.squares.begin());
+  EXPECT_EQ(refineOne(c, alone), 2 * 6);    // a tie: the first of the two
+  EXPECT_EQ(refineOne(c, window), 2 * 14);  // the window's
+  {  // The fast path computes what dataError() says, window included.
+    MeshRefiner refiner(c, 1, {});
+    std::vector<uint8_t> offsets;
+    ASSERT_TRUE(refiner.refine(window, offsets));
+    for (int i = 0; i < m; ++i)
+      EXPECT_NEAR(refiner.dataErrors()[i], refiner.dataError(window, i, i), 1e-5) << i;
+  }
+  // The neighbours outside the hull (or unseen) at 14 and agreeing at 6: the vertex's own
+  // agreement at 14 is then the whole mean there, and 6 is as good: the tie again.
+  for (const int point : {1, 2}) {
+    window.outside[size_t(point) * m + 14] = point == 1 ? 1 : 0;
+    window.colour_count[size_t(point) * m + 14] = point == 2 ? 1 : window.colour_count[14];
+    colour(point, 6, 1);
+  }
+  window.dropColourOutside();
+  EXPECT_EQ(refineOne(c, window), 2 * 6);
+  RefinementStatistics two;
+  two.reset(2, m, c.colour_bits);
+  MeshRefiner refiner(c, 1, {});
+  std::vector<uint8_t> offsets;
+  EXPECT_FALSE(refiner.refine(two, offsets));
 }
 
 TEST(MeshRefiner, TieBreakTakesTheMinimumClosestToZero) {
@@ -252,6 +309,41 @@ TEST_F(EllipsoidScene, AnInnerSphereConvergesOntoTheShape) {
   EXPECT_LT(after_worst, 0.035);
 }
 
+// Window points: a vertex's two neighbours lie window_m along the tangent nearest the vertical
+// (unit, on the tangent plane); the statistics hold the vertices first, sampled exactly as without
+// a window, then each side's points.
+TEST_F(EllipsoidScene, WindowPointsAreSampledAfterTheVertices) {
+  const Eigen::Vector3f level(0.6f, 0.8f, 0.0f), tilted = Eigen::Vector3f(1, 0, 2).normalized();
+  EXPECT_TRUE(windowDirection(level).cwiseAbs().isApprox(Eigen::Vector3f::UnitZ()));
+  for (const Eigen::Vector3f& n : {level, tilted, Eigen::Vector3f(0, 0, 1)}) {
+    const Eigen::Vector3f d = windowDirection(n);
+    EXPECT_NEAR(d.norm(), 1.0f, 1e-6f);
+    EXPECT_NEAR(d.dot(n), 0.0f, 1e-6f);
+  }
+  EXPECT_GT(std::abs(windowDirection(tilted).z()), 0.4f);  // toward the vertical
+
+  const TriangleMesh sphere = testing::icosphere(shape_.centre, 0.27, 2);
+  std::vector<int> all;
+  for (int c = 0; c < rig_->cameraCount(); ++c) all.push_back(c);
+  RefineConfig single_point;
+  single_point.window_points = 1;
+  RefinementStatistics alone, window;
+  RefinementSampler(single_point)
+      .sample(cameras(all), sphere.positions, sphere.normals, sphere.triangles, alone);
+  RefinementSampler(RefineConfig{})
+      .sample(cameras(all), sphere.positions, sphere.normals, sphere.triangles, window);
+  const int n = sphere.vertexCount(), m = RefineConfig{}.offset_count;
+  ASSERT_EQ(alone.vertex_count, n);
+  ASSERT_EQ(window.vertex_count, 3 * n);
+  const size_t samples = size_t(n) * m;
+  EXPECT_TRUE(std::equal(alone.outside.begin(), alone.outside.end(), window.outside.begin()));
+  EXPECT_TRUE(std::equal(alone.squares.begin(), alone.squares.end(), window.squares.begin()));
+  EXPECT_TRUE(std::equal(alone.sums.begin(), alone.sums.end(), window.sums.begin()));
+  // The sides' points see other pixels: their colours differ from the vertices'.
+  EXPECT_FALSE(std::equal(alone.sums.begin(), alone.sums.end(), window.sums.begin() + 3 * samples));
+  EXPECT_FALSE(std::equal(alone.sums.begin(), alone.sums.end(), window.sums.begin() + 6 * samples));
+}
+
 TEST_F(EllipsoidScene, DistributedCombinationEqualsOneProcess) {
   const TriangleMesh sphere = testing::icosphere(shape_.centre, 0.27, 2);
   RefineConfig config;
@@ -275,7 +367,7 @@ TEST_F(EllipsoidScene, DistributedCombinationEqualsOneProcess) {
   }
   for (const std::vector<int>& order : {std::vector<int>{0, 1, 2, 3}, {3, 1, 0, 2}}) {
     RefinementStatistics combined, decoded;
-    combined.reset(sphere.vertexCount(), config.offset_count, config.colour_bits);
+    combined.reset(single.vertex_count, config.offset_count, config.colour_bits);
     for (int n : order) {
       std::string error;
       ASSERT_TRUE(decodeRefinementStatistics(wire[n], decoded, &error)) << error;
@@ -284,7 +376,7 @@ TEST_F(EllipsoidScene, DistributedCombinationEqualsOneProcess) {
     EXPECT_TRUE(combined == single);
     // The module's fast path, straight from the wire.
     RefinementStatistics fast;
-    fast.reset(sphere.vertexCount(), config.offset_count, config.colour_bits);
+    fast.reset(single.vertex_count, config.offset_count, config.colour_bits);
     for (int n : order) ASSERT_TRUE(module_codec.add(wire[n], fast));
     fast.dropColourOutside();
     EXPECT_TRUE(fast == single);

@@ -37,6 +37,22 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
               loadStudioConfig(folder / "c.yaml");
             }).find("c.yaml:5: refine.colour_bits: expected 1 to 8 bits"),
             std::string::npos);
+  // The colour window: 1 or 3 points, at most 5 cm to either side.
+  std::ofstream(folder / "d.yaml") << head << "refine:\n  window_points: 1\n  window_m: 0.02\n";
+  const StudioConfig d = loadStudioConfig(folder / "d.yaml");
+  EXPECT_EQ(d.refine.window_points, 1);
+  EXPECT_DOUBLE_EQ(d.refine.window_m, 0.02);
+  EXPECT_EQ(RefineConfig{}.window_points, 3);
+  std::ofstream(folder / "e.yaml") << head << "refine:\n  window_points: 2\n";
+  EXPECT_NE(testing::errorOf([&] {
+              loadStudioConfig(folder / "e.yaml");
+            }).find("e.yaml:5: refine.window_points: expected 1 or 3 points"),
+            std::string::npos);
+  std::ofstream(folder / "f.yaml") << head << "refine:\n  window_m: 0.1\n";
+  EXPECT_NE(testing::errorOf([&] {
+              loadStudioConfig(folder / "f.yaml");
+            }).find("f.yaml:5: refine.window_m: expected metres in [0, 0.05]"),
+            std::string::npos);
 }
 
 }  // namespace

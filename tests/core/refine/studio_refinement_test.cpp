@@ -37,8 +37,9 @@ TEST(StudioRefinement, RefinedWalkerIsMuchCloserToTheTrueSurface) {
     fit = fitPoseToJoints(generic.skeleton, frame.joints,
                           f == 20 ? initialJointPoseFit(generic.skeleton, frame.joints) : fit);
     posedScaledMesh(generic, fit, positions, normals);
-    combined.reset(generic.rest.vertexCount(), config.refine.offset_count,
-                   config.refine.colour_bits);
+    // The vertices and their window points (RefineConfig::window_points).
+    combined.reset(config.refine.window_points * generic.rest.vertexCount(),
+                   config.refine.offset_count, config.refine.colour_bits);
     for (const RigNode& node : rig.nodes()) {
       std::vector<SamplerCamera> cameras;
       for (int c : node.cameras)
