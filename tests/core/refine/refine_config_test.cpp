@@ -32,10 +32,13 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
   std::ofstream(folder / "b.yaml") << head << "refine:\n  t_max: 0.05\n";
   EXPECT_NE(testing::errorOf([&] { loadStudioConfig(folder / "b.yaml"); }).find("refine"),
             std::string::npos);
-  std::ofstream(folder / "c.yaml") << head << "refine:\n  colour_bits: 9\n";
-  EXPECT_NE(testing::errorOf([&] {
-              loadStudioConfig(folder / "c.yaml");
-            }).find("c.yaml:5: refine.colour_bits: expected 1 to 8 bits"),
+  // A file holding `refine`, and the error loading it gives.
+  const auto errorFor = [&](const char* name, const std::string& refine) {
+    std::ofstream(folder / name) << head << "refine:\n" << refine;
+    return testing::errorOf([&] { loadStudioConfig(folder / name); });
+  };
+  EXPECT_NE(errorFor("c.yaml", "  colour_bits: 9\n")
+                .find("c.yaml:5: refine.colour_bits: expected 1 to 8 bits"),
             std::string::npos);
   // The colour window: 1 or 3 points, at most 5 cm to either side.
   std::ofstream(folder / "d.yaml") << head << "refine:\n  window_points: 1\n  window_m: 0.02\n";
@@ -43,15 +46,11 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
   EXPECT_EQ(d.refine.window_points, 1);
   EXPECT_DOUBLE_EQ(d.refine.window_m, 0.02);
   EXPECT_EQ(RefineConfig{}.window_points, 3);
-  std::ofstream(folder / "e.yaml") << head << "refine:\n  window_points: 2\n";
-  EXPECT_NE(testing::errorOf([&] {
-              loadStudioConfig(folder / "e.yaml");
-            }).find("e.yaml:5: refine.window_points: expected 1 or 3 points"),
+  EXPECT_NE(errorFor("e.yaml", "  window_points: 2\n")
+                .find("e.yaml:5: refine.window_points: expected 1 or 3 points"),
             std::string::npos);
-  std::ofstream(folder / "f.yaml") << head << "refine:\n  window_m: 0.1\n";
-  EXPECT_NE(testing::errorOf([&] {
-              loadStudioConfig(folder / "f.yaml");
-            }).find("f.yaml:5: refine.window_m: expected metres in [0, 0.05]"),
+  EXPECT_NE(errorFor("f.yaml", "  window_m: 0.1\n")
+                .find("f.yaml:5: refine.window_m: expected metres in [0, 0.05]"),
             std::string::npos);
 }
 
