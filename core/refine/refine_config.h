@@ -33,7 +33,9 @@ struct RefineConfig {
   int offset_count = 21;
   double t_max_m = 0.05;
   double outside_weight = 1.0;
-  double outward_weight = 1.0;
+  // 0.75 since the colour window: with a colour term that can be trusted further inside the hull,
+  // a weaker pull toward it (docs/lumigraph.md).
+  double outward_weight = 0.75;
   double colour_weight = 1.0;
   double colour_sigma = 20.0;  // 8-bit levels
   double unseen_colour = 0.6;
