@@ -48,9 +48,9 @@ struct CameraNodeOptions {
 // when the studio's pose for that frame arrives, pose the generic human (linear blend skinning)
 // and send, per vertex (and its window points) and offset along its normal, the refinement
 // statistics of its cameras (RefinementSampler: outside-silhouette counts, colour counts, sums and
-// squares, compact) —
-// what the studio's refinement module combines exactly across nodes; when the studio's chosen
-// offsets arrive, move the vertices and render the partial image of the refined mesh.
+// squares, compact) — what the studio's refinement module combines exactly across nodes; when the
+// studio's chosen offsets arrive, move the vertices and render the partial image of the refined
+// mesh.
 // Heartbeats carry every camera's counters. Takes the studio asks for are recorded on the node's
 // own disk (TakeRecorder), from the capture thread's complete sets.
 //

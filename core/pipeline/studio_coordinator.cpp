@@ -409,7 +409,7 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
     return;
   }
   sum.dropColourOutside();
-  // The statistics are of the body's vertices, or of them and their window points (3n).
+  // The statistics are of the body's vertices, or of them and their window points.
   const int vertices = refinedVertices(sum.vertex_count);
   if (!refiner_ || refiner_->config().offset_count != sum.offset_count ||
       refiner_->dataErrors().size() != size_t(vertices) * sum.offset_count) {

@@ -1,6 +1,5 @@
 #pragma once
 
-#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -230,9 +229,11 @@ class StudioCoordinator {
   // vertices alone or with their window points (RefineConfig::window_points); without a body to
   // tell, the points of the window this studio's refinement is configured with.
   int refinedVertices(int vertex_count) const {
+    constexpr int kWindow = RefineConfig::kWindowPoints;
     if (bodyFits(vertex_count)) return vertex_count;
-    if (vertex_count % 3 == 0 && bodyFits(vertex_count / 3)) return vertex_count / 3;
-    const int points = std::max(1, options_.refine.window_points);
+    if (vertex_count % kWindow == 0 && bodyFits(vertex_count / kWindow))
+      return vertex_count / kWindow;
+    const int points = options_.refine.pointsPerVertex();
     return vertex_count % points == 0 ? vertex_count / points : vertex_count;
   }
   // The refinement module: chooses every vertex's offset from the combined statistics and sends

@@ -22,8 +22,8 @@ void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::M
     for (int c = 0; c < rig_.cameraCount(); ++c) keyers_[c].learnScreen(frames[c].image.view());
     keyers_learnt_ = true;
   }
-  const int points = config_.window_points == 3 ? 3 : 1;  // as the sampler's statistics hold
-  combined_.reset(points * int(positions.cols()), config_.offset_count, config_.colour_bits);
+  combined_.reset(config_.pointsPerVertex() * int(positions.cols()), config_.offset_count,
+                  config_.colour_bits);
   wire_bytes_ = 0;
   for (const RigNode& node : rig_.nodes()) {
     inputs_.clear();

@@ -65,7 +65,8 @@ float MeshRefiner::windowColour(const RefinementStatistics& stats, size_t s, int
 int MeshRefiner::windowPoints(const RefinementStatistics& stats) const {
   if (stats.offset_count != config_.offset_count) return 0;
   if (stats.vertex_count == vertex_count_) return 1;
-  if (vertex_count_ > 0 && stats.vertex_count == 3 * vertex_count_) return 3;
+  if (vertex_count_ > 0 && stats.vertex_count == RefineConfig::kWindowPoints * vertex_count_)
+    return RefineConfig::kWindowPoints;
   return 0;
 }
 

@@ -24,9 +24,9 @@ class MeshRefiner {
   // offset index, one more or less where the silhouette crosses next to it or where the error's
   // parabola through its neighbours lies lowest more than a quarter step away) to `offsets`,
   // resized when its size differs. The statistics are of this mesh's vertices, or of them and
-  // their window points (3 x the vertices, RefinementSampler): a sample's colour term is then the
-  // mean over its points inside the hull and seen by two cameras or more. Returns false (offsets
-  // untouched) when the statistics' sizes are neither.
+  // their window points (RefineConfig::kWindowPoints x the vertices, RefinementSampler): a sample's
+  // colour term is then the mean over its points inside the hull and seen by two cameras or more.
+  // Returns false (offsets untouched) when the statistics' sizes are neither.
   bool refine(const RefinementStatistics& combined, std::vector<uint8_t>& offsets);
   // Forgets the previous frame (a cut, a new actor): the next frame has no temporal term.
   void resetTemporal() { has_previous_ = false; }
@@ -38,7 +38,8 @@ class MeshRefiner {
 
  private:
   int choose(const float* error) const;
-  // 1 or 3 (the statistics' points a vertex), 0 when they are not of this mesh.
+  // 1 or RefineConfig::kWindowPoints (the statistics' points a vertex), 0 when they are not of
+  // this mesh.
   int windowPoints(const RefinementStatistics& stats) const;
   // The colour term of vertex sample s averaged over its window's points (`window`: samples from
   // one point of a vertex to the next).

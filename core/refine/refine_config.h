@@ -59,6 +59,10 @@ struct RefineConfig {
   // its projection sideways). 1 or 3; three times the nodes' samples and statistics.
   int window_points = 3;
   double window_m = 0.01;
+  static constexpr int kWindowPoints = 3;  // a vertex and its two window points
+  // The points sampled for each vertex: 1, or kWindowPoints with the window (the statistics hold
+  // this many times the vertices).
+  int pointsPerVertex() const { return window_points == kWindowPoints ? kWindowPoints : 1; }
 
   double offsetAt(int index) const {
     return offset_count > 1 ? -t_max_m + 2 * t_max_m * index / (offset_count - 1) : 0.0;

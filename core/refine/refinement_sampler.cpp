@@ -21,7 +21,7 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
   const int n = static_cast<int>(positions.cols());
   const Eigen::Matrix3Xf* points = &positions;
   const Eigen::Matrix3Xf* point_normals = &normals;
-  if (config_.window_points == 3) {
+  if (config_.pointsPerVertex() == RefineConfig::kWindowPoints) {
     if (window_positions_.cols() != 3 * n) {
       window_positions_.resize(3, 3 * n);
       window_normals_.resize(3, 3 * n);
@@ -77,7 +77,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
   const float tolerance = float(config_.depth_tolerance_m);
   const float min_cos = float(config_.min_facing_cos);
   const int n = static_cast<int>(positions.cols());
-  const int first_window = config_.window_points == 3 ? n / 3 : n;  // the points after the vertices
+  const int first_window = n / config_.pointsPerVertex();  // the points after the vertices
   for (int v = 0; v < n; ++v) {
     const Eigen::Vector3f x = positions.col(v), nrm = normals.col(v);
     // A line in the world is a line in camera coordinates: c(t) = c0 + t·d.
