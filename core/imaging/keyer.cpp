@@ -79,4 +79,11 @@ bool BackgroundModel::isForeground(const ImageView& image, int x, int y) const {
   return dr * dr + dg * dg + db * db > limit2_[b];
 }
 
+float BackgroundModel::backgroundLevel(const ImageView& image, int x, int y) const {
+  const Rgb c = colourAt(image, x, y);
+  const size_t b = size_t(y / block_) * columns_ + x / block_;
+  const float dr = c.r - mean_[3 * b], dg = c.g - mean_[3 * b + 1], db = c.b - mean_[3 * b + 2];
+  return -std::sqrt(dr * dr + dg * dg + db * db);
+}
+
 }  // namespace lumistage

@@ -55,8 +55,14 @@ class GreenScreenKeyer {
   explicit GreenScreenKeyer(int threshold = 30) : threshold_(threshold) {}
 
   bool isForeground(const ImageView& image, int x, int y) const {
+    return backgroundLevel(image, x, y) < threshold_;
+  }
+  // How much the pixel looks like the screen: its green excess. A pixel that the actor covers in
+  // part mixes the two colours, so this is nearly linear in the screen's share of the pixel, and a
+  // silhouette's edge lies where it is halfway between the actor's and the screen's.
+  int backgroundLevel(const ImageView& image, int x, int y) const {
     const Rgb c = colourAt(image, x, y);
-    return c.g - (c.r > c.b ? c.r : c.b) < threshold_;
+    return c.g - (c.r > c.b ? c.r : c.b);
   }
   // Learns from a frame of the empty stage, or of the stage with the actor (a person rarely fills
   // the view): sets the threshold at three quarters of the 1st percentile of the screen's green
@@ -91,6 +97,9 @@ class BackgroundModel {
   void add(const ImageView& empty);
   void learn();
   bool isForeground(const ImageView& image, int x, int y) const;
+  // How much the pixel looks like the empty stage: minus its colour's distance from its block's
+  // mean, which is linear in the actor's share of the pixel (GreenScreenKeyer::backgroundLevel).
+  float backgroundLevel(const ImageView& image, int x, int y) const;
   int frames() const { return frames_; }
 
  private:

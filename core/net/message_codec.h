@@ -26,8 +26,10 @@ namespace lumistage {
 // Raised whenever a table changes in a way an older peer would misread.
 // 2: compact refinement statistics; 3: compressed refinement statistics (a version 2 studio would
 // count every node's statistics as a bad message); 4: takes recorded on the nodes (a version 3
-// node would refuse the studio's record command).
-inline constexpr uint16_t kProtocolVersion = 4;
+// node would refuse the studio's record command); 5: refinement statistics carry the hull's edges
+// and offsets eighths of a step (a version 4 studio would refuse the statistics and misplace every
+// vertex).
+inline constexpr uint16_t kProtocolVersion = 5;
 
 struct HelloData {
   std::string node_name;

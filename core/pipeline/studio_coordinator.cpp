@@ -408,7 +408,7 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
     finishFrame(frame_id, frame);
     return;
   }
-  sum.dropColourOutside();
+  sum.dropOutside();
   // The statistics are of the body's vertices, or of them and their window points.
   const int vertices = refinedVertices(sum.vertex_count);
   if (!refiner_ || refiner_->config().offset_count != sum.offset_count ||

@@ -37,7 +37,7 @@ void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::M
     if (!codec_.add(wire_, combined_, &error))
       throw Error("refinement: node " + node.name + ": " + error);
   }
-  combined_.dropColourOutside();
+  combined_.dropOutside();
   refiner_.refine(combined_, offsets_);
   applyOffsets(config_, offsets_, positions, normals, refined);
 }

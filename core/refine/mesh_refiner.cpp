@@ -173,28 +173,35 @@ bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>
     }
     if (!changed) break;
   }
-  // Levels: where the chosen sample is inside the hull and its neighbour outward (or inward) is
-  // outside, the silhouette crosses between them: halfway is the unbiased guess, half a step
-  // (2.5 mm by default, nearly a pixel at 3 m) that the coverage of the silhouette would otherwise
-  // miss. Elsewhere the vertex's data error around its minimum is taken for a parabola through the
-  // chosen sample and its two neighbours: half a step toward the side where the parabola's lowest
-  // point lies more than a quarter step away (a colour minimum between two samples).
+  // Levels: where the chosen sample is inside the hull and its neighbour outward is outside, the
+  // hull's surface lies between them, where the nodes located it below a pixel (the edges), or,
+  // where none did, halfway (the unbiased guess: half a step, 2.5 mm by default, nearly a pixel at
+  // 3 m, that the coverage of the silhouette would otherwise miss); halfway too where the inward
+  // neighbour is outside (rare: between the legs). Elsewhere the vertex's data error around its
+  // minimum is taken for a parabola through the chosen sample and its two neighbours: half a step
+  // toward the side where the parabola's lowest point lies more than a quarter step away (a colour
+  // minimum between two samples).
+  constexpr int kPerStep = RefineConfig::kLevelsPerStep, kHalf = kPerStep / 2;
   if (offsets.size() != size_t(vertex_count_)) offsets.resize(vertex_count_);
   for (int v = 0; v < vertex_count_; ++v) {
     const int i = current_[v];
+    const size_t s = size_t(v) * m + i;
     const uint8_t* outside = &stats.outside[size_t(v) * m];
-    int level = 2 * i;
+    int level = kPerStep * i;
     if (outside[i] == 0) {
       if (i + 1 < m && outside[i + 1] > 0) {
-        ++level;
+        const int edge = stats.edges[s];
+        level += edge == 0 ? kHalf
+                           : (kPerStep * (edge - 1) + RefinementStatistics::kEdgeLevels / 2) /
+                                 RefinementStatistics::kEdgeLevels;
       } else if (i > 0 && outside[i - 1] > 0) {
-        --level;
+        level -= kHalf;
       } else if (i > 0 && i + 1 < m) {
-        const float* d = &data_[size_t(v) * m + i];
+        const float* d = &data_[s];
         const float curvature = d[-1] - 2 * d[0] + d[1];
         if (curvature > 0) {
           const float lowest = 0.5f * (d[-1] - d[1]) / curvature;  // in steps from sample i
-          level += lowest > 0.25f ? 1 : (lowest < -0.25f ? -1 : 0);
+          level += lowest > 0.25f ? kHalf : (lowest < -0.25f ? -kHalf : 0);
         }
       }
     }

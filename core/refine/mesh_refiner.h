@@ -20,13 +20,14 @@ class MeshRefiner {
               const std::vector<Eigen::Vector3i>& triangles);
   const RefineConfig& config() const { return config_; }
 
-  // Chooses an offset per vertex and writes its level (RefineConfig::offsetLevels(): twice the
-  // offset index, one more or less where the silhouette crosses next to it or where the error's
-  // parabola through its neighbours lies lowest more than a quarter step away) to `offsets`,
-  // resized when its size differs. The statistics are of this mesh's vertices, or of them and
-  // their window points (RefineConfig::kWindowPoints x the vertices, RefinementSampler): a sample's
-  // colour term is then the mean over its points inside the hull and seen by two cameras or more.
-  // Returns false (offsets untouched) when the statistics' sizes are neither.
+  // Chooses an offset per vertex and writes its level (RefineConfig::offsetLevels():
+  // kLevelsPerStep x the offset index, moved to the hull's edge where the silhouette crosses next
+  // to it, or half a step where the error's parabola through its neighbours lies lowest more than
+  // a quarter step away) to `offsets`, resized when its size differs. The statistics are of this
+  // mesh's vertices, or of them and their window points (RefineConfig::kWindowPoints x the
+  // vertices, RefinementSampler): a sample's colour term is then the mean over its points inside
+  // the hull and seen by two cameras or more. Returns false (offsets untouched) when the
+  // statistics' sizes are neither.
   bool refine(const RefinementStatistics& combined, std::vector<uint8_t>& offsets);
   // Forgets the previous frame (a cut, a new actor): the next frame has no temporal term.
   void resetTemporal() { has_previous_ = false; }

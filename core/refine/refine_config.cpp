@@ -26,7 +26,9 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
     value = in.integer(node[name], path);
     if (value < lo || value > hi) in.fail(node[name], path, expected);
   };
-  integer("offset_count", config.offset_count, 1, 128, "expected 1 to 128 offsets");
+  static_assert(RefineConfig::kMaxOffsetCount == 32, "the message below says 32");
+  integer("offset_count", config.offset_count, 1, RefineConfig::kMaxOffsetCount,
+          "expected 1 to 32 offsets");
   number("t_max_m", config.t_max_m, 0.0, 0.5, "expected metres in [0, 0.5]");
   number("outside_weight", config.outside_weight, 0, 1e6, "expected a weight >= 0");
   number("outward_weight", config.outward_weight, 0, 1e6, "expected a weight >= 0");

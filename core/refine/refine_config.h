@@ -25,10 +25,11 @@ class YamlReader;
 //   temporal_weight x ((t - t_previous_frame) / t_max)²: beyond the paper, against ragged
 //                     surfaces and shimmer on a still actor;
 // then the paper's fourth term: among the local minima within tie_margin of the lowest, the one
-// closest to t = 0. The chosen surface is sent as a *level* on a grid of half steps (offsetLevels()
-// of them): the offset of the chosen sample, or half a step further where the next sample lies
-// outside the hull, since the silhouette crosses between the two (on average halfway), or half a
-// step toward the lowest point of the error's parabola through the sample and its neighbours.
+// closest to t = 0. The chosen surface is sent as a *level* on a grid of kLevelsPerStep levels a
+// step (offsetLevels() of them): the offset of the chosen sample; where the next sample lies
+// outside the hull, the silhouettes' edge between the two, located below a pixel by the nodes
+// (RefinementStatistics::edges; halfway when none was located); or half a step toward the lowest
+// point of the error's parabola through the sample and its neighbours.
 struct RefineConfig {
   int offset_count = 21;
   double t_max_m = 0.05;
@@ -68,12 +69,16 @@ struct RefineConfig {
     return offset_count > 1 ? -t_max_m + 2 * t_max_m * index / (offset_count - 1) : 0.0;
   }
   int zeroOffsetIndex() const { return offset_count / 2; }
-  // Levels: half steps, level 2i is offset index i (at most 255 levels in a byte).
-  int offsetLevels() const { return 2 * (offset_count - 1) + 1; }
+  // Levels: eighths of a step (0.625 mm by default), level kLevelsPerStep·i is offset index i; at
+  // most 255 levels in a byte, hence at most kMaxOffsetCount offsets.
+  static constexpr int kLevelsPerStep = 8;
+  static constexpr int kMaxOffsetCount = 254 / kLevelsPerStep + 1;
+  int offsetLevels() const { return kLevelsPerStep * (offset_count - 1) + 1; }
   double levelOffset(int level) const {
-    return offset_count > 1 ? -t_max_m + t_max_m * level / (offset_count - 1) : 0.0;
+    return offset_count > 1 ? -t_max_m + 2 * t_max_m * level / (kLevelsPerStep * (offset_count - 1))
+                            : 0.0;
   }
-  int zeroLevel() const { return 2 * zeroOffsetIndex(); }
+  int zeroLevel() const { return kLevelsPerStep * zeroOffsetIndex(); }
 };
 
 // Reads a `refine:` map over the defaults; every key optional, unknown keys and out-of-range values

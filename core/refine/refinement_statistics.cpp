@@ -2,7 +2,12 @@
 
 #include <zstd.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
+#include <bit>
 #include <string_view>
 
 namespace lumistage {
@@ -16,6 +21,7 @@ void RefinementStatistics::reset(int vertices, int offsets, int bits) {
   colour_count.assign(n, 0);
   sums.assign(3 * n, 0);
   squares.assign(n, 0);
+  edges.assign(n, 0);
 }
 
 bool RefinementStatistics::add(const RefinementStatistics& other) {
@@ -28,15 +34,17 @@ bool RefinementStatistics::add(const RefinementStatistics& other) {
     outside[s] = uint8_t(std::min(255, outside[s] + other.outside[s]));
     colour_count[s] = uint8_t(std::min(255, colour_count[s] + other.colour_count[s]));
     squares[s] += other.squares[s];
+    edges[s] = RefinementStatistics::innerEdge(edges[s], other.edges[s]);
   }
   for (size_t i = 0; i < 3 * n; ++i) sums[i] = uint16_t(sums[i] + other.sums[i]);
-  dropColourOutside();
+  dropOutside();
   return true;
 }
 
-void RefinementStatistics::dropColourOutside() {
+void RefinementStatistics::dropOutside() {
   const size_t n = outside.size();
   for (size_t s = 0; s < n; ++s) {
+    if (edges[s] != 0 && !leavesHull(s)) edges[s] = 0;
     if (outside[s] == 0) continue;
     colour_count[s] = 0;
     squares[s] = 0;
@@ -65,13 +73,51 @@ uint32_t get(const uint8_t* p, int bytes) {
   return v;
 }
 
+// Bit i set where byte i of the 64 from `bytes` has a bit of `mask` set.
+inline uint64_t nonZeroBytes64(const uint8_t* bytes, uint8_t mask) {
+  uint64_t bits = 0;
+#if defined(__SSE2__)
+  const __m128i m = _mm_set1_epi8(char(mask)), zero = _mm_setzero_si128();
+  for (int k = 0; k < 4; ++k) {
+    const __m128i x =
+        _mm_and_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(bytes + 16 * k)), m);
+    const uint32_t none = uint32_t(_mm_movemask_epi8(_mm_cmpeq_epi8(x, zero)));
+    bits |= uint64_t(~none & 0xffffu) << (16 * k);
+  }
+#else
+  for (int i = 0; i < 64; ++i) bits |= uint64_t((bytes[i] & mask) != 0) << i;
+#endif
+  return bits;
+}
+
+// Calls f(s), in order, for every sample s of the n where the hull leaves (RefinementStatistics::
+// leavesHull()): sample s is outside where outside[s] & mask is not 0. Sixty-four samples at a
+// time as the bits of a word: the module runs this over every node's samples, and a pass a sample
+// at a time cost it more than half a millisecond a frame.
+template <typename F>
+void forEachLeaving(const uint8_t* outside, uint8_t mask, size_t n, int offsets, const F& f) {
+  if (offsets < 2) return;
+  const size_t m = size_t(offsets);
+  size_t s = 0, phase = 0;  // phase: s % m, the sample's place in its vertex
+  for (; s + 64 < n; s += 64, phase = (phase + 64) % m) {
+    const uint64_t out = nonZeroBytes64(outside + s, mask);
+    const uint64_t after = (outside[s + 64] & mask) != 0;
+    // Bit i: sample s + i inside, the next outside; not where s + i is its vertex's last.
+    uint64_t leaving = ~out & ((out >> 1) | (after << 63));
+    for (size_t last = m - 1 - phase; last < 64; last += m) leaving &= ~(uint64_t(1) << last);
+    for (; leaving != 0; leaving &= leaving - 1) f(s + size_t(std::countr_zero(leaving)));
+  }
+  for (; s + 1 < n; ++s, phase = phase + 1 == m ? 0 : phase + 1)
+    if (phase != m - 1 && !(outside[s] & mask) && (outside[s + 1] & mask)) f(s);
+}
+
 }  // namespace
 
 void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<uint8_t>& out) {
   const size_t n = stats.outside.size();
   uint32_t max_sum = 0, max_square = 0;
-  size_t coloured = 0;
-  size_t squared = 0;
+  size_t coloured = 0, squared = 0, leaving = 0;
+  forEachLeaving(stats.outside.data(), 0xff, n, stats.offset_count, [&](size_t) { ++leaving; });
   for (size_t s = 0; s < n; ++s) {
     if (stats.colour_count[s] == 0) continue;
     ++coloured;
@@ -81,7 +127,7 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
     max_square = std::max(max_square, stats.squares[s]);
   }
   const int sum_bytes = std::min(2, bytesFor(max_sum)), square_bytes = bytesFor(max_square);
-  out.resize(kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes);
+  out.resize(kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes + leaving);
   size_t at = 0;
   put(out, at, uint32_t(stats.vertex_count), 4);
   out[at++] = uint8_t(stats.offset_count);
@@ -97,6 +143,8 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
     for (int c = 0; c < 3; ++c) put(out, at, stats.sums[3 * s + c], sum_bytes);
     if (stats.colour_count[s] > 1) put(out, at, stats.squares[s], square_bytes);
   }
+  forEachLeaving(stats.outside.data(), 0xff, n, stats.offset_count,
+                 [&](size_t s) { out[at++] = stats.edges[s]; });
 }
 
 namespace {
@@ -111,9 +159,12 @@ bool validWidths(int sum_bytes, int square_bytes) {
   return sum_bytes >= 1 && sum_bytes <= 2 && square_bytes >= 1 && square_bytes <= 4;
 }
 
+constexpr uint8_t kPackedOutside = 15;  // a packed count's outside count
+
 // Whether the packed form after its header holds exactly the n samples' counts and the values
 // they announce; the reason when not.
-const char* checkBody(std::span<const uint8_t> data, size_t n, int sum_bytes, int square_bytes) {
+const char* checkBody(std::span<const uint8_t> data, size_t n, int offsets, int sum_bytes,
+                      int square_bytes) {
   if (data.size() < kHeaderBytes + n) return "truncated counts";
   const uint8_t* counts = data.data() + kHeaderBytes;
   size_t coloured = 0, squared = 0;
@@ -121,7 +172,9 @@ const char* checkBody(std::span<const uint8_t> data, size_t n, int sum_bytes, in
     const int c = counts[s] >> 4;
     coloured += c != 0, squared += c > 1;
   }
-  if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes)
+  size_t leaving = 0;
+  forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t) { ++leaving; });
+  if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes + leaving)
     return "size does not match its counts";
   return nullptr;
 }
@@ -136,7 +189,7 @@ bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std:
   if (!validWidths(sum_bytes, square_bytes)) return fail("bad value widths");
   if (uint64_t(vertices) * offsets > uint64_t(max_samples)) return fail("too many samples");
   const size_t n = size_t(vertices) * offsets;
-  if (const char* why = checkBody(data, n, sum_bytes, square_bytes)) return fail(why);
+  if (const char* why = checkBody(data, n, offsets, sum_bytes, square_bytes)) return fail(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
   out.reset(int(vertices), offsets, bits);
   const uint8_t* p = counts + n;
@@ -154,6 +207,7 @@ bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std:
     out.squares[s] = get(p, square_bytes);
     p += square_bytes;
   }
+  forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t s) { out.edges[s] = *p++; });
   return true;
 }
 
@@ -166,7 +220,7 @@ bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::st
     return fail("sizes differ from the mesh's");
   if (!validWidths(sum_bytes, square_bytes)) return fail("bad value widths");
   const size_t n = size_t(vertices) * offsets;
-  if (const char* why = checkBody(data, n, sum_bytes, square_bytes)) return fail(why);
+  if (const char* why = checkBody(data, n, offsets, sum_bytes, square_bytes)) return fail(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
   const uint8_t* p = counts + n;
   for (size_t s = 0; s < n; ++s) {
@@ -186,6 +240,9 @@ bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::st
     }
     sum.squares[s] += q;
   }
+  forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t s) {
+    sum.edges[s] = RefinementStatistics::innerEdge(sum.edges[s], *p++);
+  });
   return true;
 }
 

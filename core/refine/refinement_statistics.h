@@ -20,6 +20,12 @@ namespace lumistage {
 // the combination of nodes exact and independent of order. A sample that any camera sees outside
 // the hull keeps no colour (the error does not use it there), so that combining nodes gives
 // bit for bit the statistics of one process holding every camera.
+//
+// And where the hull's surface lies between two samples, finer than their spacing: where sample s
+// is inside the set's hull and s + 1 (of the same vertex) outside it, edges[s] in 1..255 puts the
+// edge at (edges[s] - 1) / 254 of the step from s to s + 1 — the innermost of the silhouette edges
+// that the set's cameras cross there, each located below a pixel (RefinementSampler); 0 when none
+// was located. Sets combine by the innermost edge, which is the hull's: exact too.
 struct RefinementStatistics {
   int vertex_count = 0;
   int offset_count = 0;
@@ -28,15 +34,27 @@ struct RefinementStatistics {
   std::vector<uint8_t> colour_count;  // per sample
   std::vector<uint16_t> sums;         // per sample: R, G, B
   std::vector<uint32_t> squares;      // per sample: Σ over cameras and channels of c²
+  std::vector<uint8_t> edges;         // per sample: 0, or the hull's edge toward s + 1
+
+  static constexpr int kEdgeLevels = 254;  // an edge's fraction of a step: (edges[s] - 1) / 254
+  // The innermost of two edges, either possibly absent (0).
+  static uint8_t innerEdge(uint8_t a, uint8_t b) {
+    return a == 0 ? b : (b == 0 ? a : (a < b ? a : b));
+  }
 
   int sampleCount() const { return vertex_count * offset_count; }
+  // Whether the hull leaves between sample s and the next of its vertex: s inside, s + 1 outside.
+  bool leavesHull(size_t s) const {
+    return outside[s] == 0 && (s + 1) % size_t(offset_count) != 0 && outside[s + 1] > 0;
+  }
   // Sizes and zeroes everything; allocates only when the size grows.
   void reset(int vertices, int offsets, int bits);
-  // Adds another set's counts and sums (same sizes), then drops the colour of samples now seen
-  // outside. Exact. Returns false (and changes nothing) when the sizes differ.
+  // Adds another set's counts and sums (same sizes), keeps the innermost edges, then drops the
+  // colour of samples now seen outside and the edges where the hull no longer leaves. Exact.
+  // Returns false (and changes nothing) when the sizes differ.
   bool add(const RefinementStatistics& other);
-  // Drops the colour of every sample seen outside.
-  void dropColourOutside();
+  // Drops the colour of every sample seen outside and every edge where the hull does not leave.
+  void dropOutside();
   bool operator==(const RefinementStatistics&) const = default;
 };
 
@@ -47,7 +65,8 @@ struct RefinementStatistics {
 // widths of sums and squares), then one byte a sample (outside count in the low nibble, colour
 // count in the high one, each at most 15), then the sums of the samples with colour and the
 // squares of those seen by two cameras or more (one camera's square follows from its sum), little
-// endian, in the narrowest widths their largest values need.
+// endian, in the narrowest widths their largest values need, then one byte for every sample where
+// the hull leaves (leavesHull()): its edge.
 //
 // Compressed (RefinementStatisticsCodec::encode, what nodes send): the packed form's vertex count,
 // offset count and colour bits in the same places, then 0 where the packed form has its sums'
@@ -56,9 +75,10 @@ struct RefinementStatistics {
 // whole packed form.
 inline constexpr size_t kPackedStatisticsHeaderBytes = 8;
 inline constexpr size_t kCompressedStatisticsHeaderBytes = 12;
-// The largest packed form of `samples` samples: 2-byte sums and 4-byte squares.
+// The largest packed form of `samples` samples: a count, 2-byte sums, a 4-byte square and an edge
+// each.
 inline constexpr uint64_t maxPackedStatisticsBytes(uint64_t samples) {
-  return kPackedStatisticsHeaderBytes + samples * 11;
+  return kPackedStatisticsHeaderBytes + samples * 12;
 }
 // The largest compressed form of `samples` samples: the header and zstd's bound for the largest
 // packed form (ZSTD_COMPRESSBOUND).
@@ -79,7 +99,7 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
 bool decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& out,
                                 std::string* error = nullptr, int max_samples = 1 << 22);
 // The module's fast path: adds a node's wire form (either kind) to `sum` (of the same sizes)
-// without unpacking it into statistics first; call sum.dropColourOutside() after the last node.
+// without unpacking it into statistics first; call sum.dropOutside() after the last node.
 // The result is what decoding and add() give. False (`sum` unchanged) for a malformed buffer or
 // other sizes.
 bool addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& sum,

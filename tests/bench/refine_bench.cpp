@@ -126,7 +126,7 @@ void refineModuleSide(benchmark::State& state) {
     combined.reset(points * s.generic.rest.vertexCount(), s.config.refine.offset_count,
                    s.config.refine.colour_bits);
     for (const auto& w : s.wire[points]) codec.add(w, combined);
-    combined.dropColourOutside();
+    combined.dropOutside();
     refiner.refine(combined, offsets);
     benchmark::DoNotOptimize(offsets.data());
   }

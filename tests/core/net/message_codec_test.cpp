@@ -205,13 +205,13 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
   stats.offset_count = 21;
   stats.packed.assign(12, 1);
   EXPECT_EQ(decodeError(envelope(stats)),
-            "vertex statistics: 41000 vertices x 21 offsets needs 861008 to 9471008 packed bytes, "
+            "vertex statistics: 41000 vertices x 21 offsets needs 861008 to 10332008 packed bytes, "
             "got 12");
   stats.vertex_count = 2;
   stats.offset_count = 3;
-  stats.packed.assign(150, 0);  // 0 where the packed form has its sums' width: compressed
+  stats.packed.assign(156, 0);  // 0 where the packed form has its sums' width: compressed
   EXPECT_EQ(decodeError(envelope(stats)),
-            "vertex statistics: 2 vertices x 3 offsets needs 12 to 149 compressed bytes, got 150");
+            "vertex statistics: 2 vertices x 3 offsets needs 12 to 155 compressed bytes, got 156");
 
   stats = std::get<VertexStatisticsData>(oneOfEach()[4].body);
   stats.packed[0] = 4;

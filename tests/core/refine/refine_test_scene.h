@@ -53,20 +53,30 @@ inline Rig smallRing(int width = 320, int height = 240) {
   return makeRingRig(spec);
 }
 
-// Every camera's RGB image of the ellipsoid over a green screen (one ray a pixel).
-inline std::vector<Image> renderEllipsoid(const Rig& rig, const Ellipsoid& shape) {
+// Every camera's RGB image of the ellipsoid over a green screen: one ray a pixel, or the mean of
+// samples x samples rays spread over it (a sensor's pixel, whose edges mix the two colours).
+inline std::vector<Image> renderEllipsoid(const Rig& rig, const Ellipsoid& shape, int samples = 1) {
   std::vector<Image> images(rig.cameraCount());
   for (int c = 0; c < rig.cameraCount(); ++c) {
     const Camera& cam = rig.camera(c);
     images[c].resize(PixelFormat::kRgb8, cam.width(), cam.height());
     for (int y = 0; y < cam.height(); ++y) {
       for (int x = 0; x < cam.width(); ++x) {
+        int sum[3] = {0, 0, 0};
+        for (int k = 0; k < samples * samples; ++k) {
+          uint8_t rgb[3] = {40, 150, 60};
+          const Eigen::Vector2d at = samples == 1
+                                         ? Eigen::Vector2d(x, y)
+                                         : Eigen::Vector2d(x - 0.5 + (k % samples + 0.5) / samples,
+                                                           y - 0.5 + (k / samples + 0.5) / samples);
+          const std::optional<Ray> ray = cam.unproject(at);
+          const double t = ray ? shape.hit(ray->origin, ray->direction) : -1;
+          if (t > 0) textureAt(ray->origin + t * ray->direction, rgb);
+          for (int ch = 0; ch < 3; ++ch) sum[ch] += rgb[ch];
+        }
         uint8_t* out = &images[c].pixels[3 * (size_t(y) * cam.width() + x)];
-        out[0] = 40, out[1] = 150, out[2] = 60;
-        const std::optional<Ray> ray = cam.unproject(Eigen::Vector2d(x, y));
-        if (!ray) continue;
-        const double t = shape.hit(ray->origin, ray->direction);
-        if (t > 0) textureAt(ray->origin + t * ray->direction, out);
+        for (int ch = 0; ch < 3; ++ch)
+          out[ch] = uint8_t((sum[ch] + samples * samples / 2) / (samples * samples));
       }
     }
   }

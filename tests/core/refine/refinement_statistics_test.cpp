@@ -30,6 +30,10 @@ RefinementStatistics randomStatistics(std::mt19937& rng, int vertices, int offse
       }
     }
   }
+  // Edges where the hull leaves, some not located (0).
+  std::uniform_int_distribution<int> edge(0, 255);
+  for (int i = 0; i < s.sampleCount(); ++i)
+    if (s.leavesHull(i)) s.edges[i] = uint8_t(edge(rng));
   return s;
 }
 
@@ -97,8 +101,8 @@ TEST(RefinementStatistics, CompressedWireRoundTripsExactly) {
 TEST(RefinementStatistics, CompressedAddEqualsPackedAdd) {
   std::mt19937 rng(11);
   RefinementStatisticsCodec codec;
-  RefinementStatistics from_packed, from_compressed, from_free;
-  for (RefinementStatistics* sum : {&from_packed, &from_compressed, &from_free})
+  RefinementStatistics from_packed, from_compressed, from_free, from_structs;
+  for (RefinementStatistics* sum : {&from_packed, &from_compressed, &from_free, &from_structs})
     sum->reset(120, 21, 6);
   std::vector<uint8_t> packed, wire;
   std::string error;
@@ -109,9 +113,13 @@ TEST(RefinementStatistics, CompressedAddEqualsPackedAdd) {
     ASSERT_TRUE(addEncodedRefinementStatistics(packed, from_packed, &error)) << error;
     ASSERT_TRUE(codec.add(wire, from_compressed, &error)) << error;
     ASSERT_TRUE(addEncodedRefinementStatistics(wire, from_free, &error)) << error;
+    ASSERT_TRUE(from_structs.add(s));
   }
   EXPECT_TRUE(from_compressed == from_packed);
   EXPECT_TRUE(from_free == from_packed);
+  // And, once the colour outside and the edges inside are dropped, what add() gives.
+  from_packed.dropOutside();
+  EXPECT_TRUE(from_packed == from_structs);
 }
 
 // What a hostile or broken node could send: every case refused with its reason, nothing changed,
@@ -156,12 +164,12 @@ TEST(RefinementStatistics, HostileCompressedWireIsRefused) {
   bad[7] = 2;
   EXPECT_EQ(refusal(bad), why + "unknown compression 2");
 
-  // Declared sizes: above the bound of 50 x 21 samples (8 + 11 a sample), below their counts, or
+  // Declared sizes: above the bound of 50 x 21 samples (8 + 12 a sample), below their counts, or
   // other than the frame's own.
-  EXPECT_EQ(refusal(withSize(11559)),
-            why + "compressed form declares 11559 packed bytes, 1050 samples take 1058 to 11558");
+  EXPECT_EQ(refusal(withSize(12609)),
+            why + "compressed form declares 12609 packed bytes, 1050 samples take 1058 to 12608");
   EXPECT_EQ(refusal(withSize(1000)),
-            why + "compressed form declares 1000 packed bytes, 1050 samples take 1058 to 11558");
+            why + "compressed form declares 1000 packed bytes, 1050 samples take 1058 to 12608");
   EXPECT_EQ(refusal(withSize(uint32_t(packed.size() + 1))),
             why + "zstd frame declares " + std::to_string(packed.size()) + " bytes, the header " +
                 std::to_string(packed.size() + 1));
@@ -204,16 +212,24 @@ TEST(RefinementStatistics, CombiningIsExactAndOrderIndependent) {
   for (int n = 0; n < 4; ++n) ASSERT_TRUE(forward.add(nodes[n]));
   for (int n = 3; n >= 0; --n) ASSERT_TRUE(backward.add(nodes[n]));
   EXPECT_TRUE(forward == backward);
-  // Sums are the plain sums where no node saw the sample outside; nothing where one did.
+  // Sums are the plain sums where no node saw the sample outside; nothing where one did. Edges
+  // are the innermost of the nodes' where the combined hull leaves; nothing elsewhere.
+  int edges = 0;
   for (int i = 0; i < forward.sampleCount(); ++i) {
-    int outside = 0, count = 0;
+    int outside = 0, count = 0, innermost = 256;
     uint32_t squares = 0;
-    for (const auto& n : nodes)
+    for (const auto& n : nodes) {
       outside += n.outside[i], count += n.colour_count[i], squares += n.squares[i];
+      if (n.edges[i] != 0) innermost = std::min<int>(innermost, n.edges[i]);
+    }
     EXPECT_EQ(forward.outside[i], outside);
     EXPECT_EQ(forward.colour_count[i], outside ? 0 : count);
     EXPECT_EQ(forward.squares[i], outside ? 0 : squares);
+    const bool leaves = forward.leavesHull(i);
+    EXPECT_EQ(forward.edges[i], leaves && innermost < 256 ? innermost : 0) << i;
+    edges += forward.edges[i] != 0;
   }
+  EXPECT_GT(edges, 20);  // the case is exercised
   RefinementStatistics other;
   other.reset(201, 21, 6);
   EXPECT_FALSE(forward.add(other));
