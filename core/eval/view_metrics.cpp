@@ -44,13 +44,15 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
   int64_t missed = 0, beyond = 0;
   std::vector<double> a(n), b(n);
   for (size_t i = 0; i < n; ++i) {
-    // The matte: the render over black through its alpha against the image through the mask.
-    const int alpha = rendered[4 * i + 3];
-    if (mask[i] || alpha) {
-      missed += mask[i] && !alpha;
-      beyond += !mask[i] && alpha;
+    // The matte: the render over black, every pixel it draws opaque, against the image through
+    // the mask. Opaque, as the studio's blend shows a view (PartialImageBlender): a renderer's
+    // alpha is its share of the cameras' weight, not how much of the pixel the actor covers.
+    const bool drawn = rendered[4 * i + 3] != 0;
+    if (mask[i] || drawn) {
+      missed += mask[i] && !drawn;
+      beyond += !mask[i] && drawn;
       for (int k = 0; k < 3; ++k) {
-        const double d = rendered[4 * i + k] * alpha / 255.0 - (mask[i] ? truth[4 * i + k] : 0);
+        const double d = (drawn ? rendered[4 * i + k] : 0) - (mask[i] ? truth[4 * i + k] : 0);
         matte_squared += d * d;
       }
     }

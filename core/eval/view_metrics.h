@@ -14,9 +14,10 @@ struct ViewScore {
   double psnr_db = 0;  // over R, G, B of the mask's pixels (peak 255)
   double ssim = 0;     // mean SSIM of luma (7x7 box windows, the usual constants) over the mask
   int64_t pixels = 0;  // in the mask
-  // The view as it would be composited: both images over black (the rendered one through its
-  // alpha, the real one through the mask), compared over every pixel either covers, so that a
-  // pixel drawn beyond the actor costs as much as one of the actor left undrawn.
+  // The view as it would be composited: both images over black (every pixel the render draws
+  // opaque, as the studio's blend shows it; the real one through the mask), compared over every
+  // pixel either covers, so that a pixel drawn beyond the actor costs as much as one of the actor
+  // left undrawn.
   double matte_psnr_db = 0;
   double missed_pct = 0;  // the mask's pixels left undrawn (alpha 0), % of the mask
   double beyond_pct = 0;  // pixels drawn outside the mask, % of the mask

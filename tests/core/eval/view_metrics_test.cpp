@@ -37,13 +37,13 @@ TEST(ViewMetrics, MatteScoreCountsPixelsDrawnBeyondTheActorAndLeftUndrawn) {
   EXPECT_NEAR(score.missed_pct, 100.0 / 3, 1e-9);
   EXPECT_EQ(score.beyond_pct, 0);
 
-  // The screen pixel drawn at half alpha in the screen's own colour: the mask-only score does not
-  // see it; the matte compares it, composited over black, with black.
+  // The screen pixel drawn in the screen's own colour, at a renderer's alpha of one half: the
+  // mask-only score does not see it; the matte compares it with black, whole, as the studio's
+  // blend shows every drawn pixel (a renderer's alpha is a share of weight, not coverage).
   rendered[12] = 100, rendered[13] = 200, rendered[14] = 100, rendered[15] = 128;
   score = compareOverMask(rendered, truth, mask, w, h);
   EXPECT_NEAR(score.psnr_db, psnr(100 + 3 * 100 * 100, 9), 1e-9);
-  const double a = 128 / 255.0;
-  const double beyond = std::pow(100 * a, 2) * 2 + std::pow(200 * a, 2);
+  const double beyond = std::pow(100, 2) * 2 + std::pow(200, 2);
   EXPECT_NEAR(score.matte_psnr_db, psnr(100 + 3 * 100 * 100 + beyond, 12), 1e-9);
   EXPECT_NEAR(score.beyond_pct, 100.0 / 3, 1e-9);
   EXPECT_LT(score.matte_psnr_db, score.psnr_db);
