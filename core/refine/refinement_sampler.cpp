@@ -52,8 +52,11 @@ uint8_t locateEdge(const Key& key, const ImageView& image, const Eigen::Vector2f
   } else {
     for (int k = 0; k < 4; ++k) {
       const float mid = 0.5f * (lo + hi), at = level(mid);
-      (at >= half ? hi : lo) = mid;
-      (at >= half ? at_hi : at_lo) = at;
+      if (at >= half) {
+        hi = mid, at_hi = at;
+      } else {
+        lo = mid, at_lo = at;
+      }
     }
     f = lo + (half - at_lo) / (at_hi - at_lo) * (hi - lo);
   }
@@ -78,10 +81,11 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
   const int n = static_cast<int>(positions.cols());
   const Eigen::Matrix3Xf* points = &positions;
   const Eigen::Matrix3Xf* point_normals = &normals;
-  if (config_.pointsPerVertex() == RefineConfig::kWindowPoints) {
-    if (window_positions_.cols() != 3 * n) {
-      window_positions_.resize(3, 3 * n);
-      window_normals_.resize(3, 3 * n);
+  constexpr int kPoints = RefineConfig::kWindowPoints;  // the vertex, one side, the other
+  if (config_.pointsPerVertex() == kPoints) {
+    if (window_positions_.cols() != kPoints * n) {
+      window_positions_.resize(3, kPoints * n);
+      window_normals_.resize(3, kPoints * n);
     }
     const float w = float(config_.window_m);
     for (int v = 0; v < n; ++v) {
@@ -90,7 +94,7 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
       window_positions_.col(v) = p;
       window_positions_.col(n + v) = p + along;
       window_positions_.col(2 * n + v) = p - along;
-      for (int k = 0; k < 3; ++k) window_normals_.col(k * n + v) = nrm;
+      for (int k = 0; k < kPoints; ++k) window_normals_.col(k * n + v) = nrm;
     }
     points = &window_positions_;
     point_normals = &window_normals_;
