@@ -72,8 +72,7 @@ void BackgroundModel::learn() {
   }
 }
 
-bool BackgroundModel::isForeground(const ImageView& image, int x, int y) const {
-  const Rgb c = colourAt(image, x, y);
+bool BackgroundModel::isForeground(const Rgb& c, int x, int y) const {
   const size_t b = size_t(y / block_) * columns_ + x / block_;
   const float dr = c.r - mean_[3 * b], dg = c.g - mean_[3 * b + 1], db = c.b - mean_[3 * b + 2];
   return dr * dr + dg * dg + db * db > limit2_[b];

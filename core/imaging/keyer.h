@@ -55,7 +55,11 @@ class GreenScreenKeyer {
   explicit GreenScreenKeyer(int threshold = 30) : threshold_(threshold) {}
 
   bool isForeground(const ImageView& image, int x, int y) const {
-    return backgroundLevel(image, x, y) < threshold_;
+    return isForeground(colourAt(image, x, y), x, y);
+  }
+  // The same for the colour `c` already read at (x, y).
+  bool isForeground(const Rgb& c, int /*x*/, int /*y*/) const {
+    return c.g - (c.r > c.b ? c.r : c.b) < threshold_;
   }
   // How much the pixel looks like the screen: its green excess. A pixel that the actor covers in
   // part mixes the two colours, so this is nearly linear in the screen's share of the pixel, and a
@@ -96,7 +100,11 @@ class BackgroundModel {
   // Adds a frame of the empty stage; call learn() after the last.
   void add(const ImageView& empty);
   void learn();
-  bool isForeground(const ImageView& image, int x, int y) const;
+  bool isForeground(const ImageView& image, int x, int y) const {
+    return isForeground(colourAt(image, x, y), x, y);
+  }
+  // The same for the colour `c` already read at (x, y).
+  bool isForeground(const Rgb& c, int x, int y) const;
   // How much the pixel looks like the empty stage: minus its colour's distance from its block's
   // mean, which is linear in the actor's share of the pixel (GreenScreenKeyer::backgroundLevel).
   float backgroundLevel(const ImageView& image, int x, int y) const;

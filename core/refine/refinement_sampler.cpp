@@ -7,25 +7,118 @@ namespace lumistage {
 
 namespace {
 
-// The key's background level (GreenScreenKeyer::backgroundLevel) at pixel position (u, w), pixel
-// centres at integers: bilinear between pixels, or between the 2x2 cells of a Bayer image (the key
-// reads a cell's colour), clamped to the image.
+// The four pixels around a pixel position (u, w), pixel centres at integers, or on a Bayer image
+// the four 2x2 cells (what the key and colourAt() read), clamped to the image, with the bilinear
+// weights of the right and lower ones.
+struct Neighbours {
+  int x0, y0, x1, y1;  // pixel coordinates of a pixel, or of a cell's first pixel
+  float fx, fy;
+};
+
+// A camera's image as the refinement interpolates it: its grid of pixels or Bayer cells, and its
+// colours read as colourAt() reads them, with the format's dispatch and the grid's size worked out
+// once a camera instead of at every read (the colour term reads four pixels a sample).
+class PixelGrid {
+ public:
+  explicit PixelGrid(const ImageView& image)
+      : image_(image),
+        stride_(size_t(image.width)),
+        bayer_(isBayer(image.format)),
+        step_(bayer_ ? 2 : 1),
+        columns_(image.width / step_),
+        rows_(image.height / step_) {
+    if (bayer_) {
+      const BayerLayout l = bayerLayout(image.format);
+      red_ = size_t(l.red_y) * stride_ + l.red_x;
+      blue_ = size_t(1 - l.red_y) * stride_ + 1 - l.red_x;
+      green1_ = size_t(l.red_y) * stride_ + 1 - l.red_x;
+      green2_ = size_t(1 - l.red_y) * stride_ + l.red_x;
+    }
+  }
+  const ImageView& image() const { return image_; }
+
+  Neighbours around(float u, float w) const {
+    // A Bayer cell k holds pixels 2k and 2k + 1: its centre is at 2k + 0.5.
+    const float x = std::clamp(bayer_ ? (u - 0.5f) * 0.5f : u, 0.0f, float(columns_ - 1));
+    const float y = std::clamp(bayer_ ? (w - 0.5f) * 0.5f : w, 0.0f, float(rows_ - 1));
+    const int x0 = std::max(0, std::min(int(x), columns_ - 2)),
+              y0 = std::max(0, std::min(int(y), rows_ - 2));
+    const int x1 = std::min(x0 + 1, columns_ - 1), y1 = std::min(y0 + 1, rows_ - 1);
+    return {x0 * step_, y0 * step_, x1 * step_, y1 * step_, x - float(x0), y - float(y0)};
+  }
+
+  // At a pixel, or at the Bayer cell whose first pixel (even x and y) it is: colourAt().
+  Rgb at(int x, int y) const {
+    if (bayer_) {
+      const uint8_t* cell = image_.data + size_t(y) * stride_ + x;
+      return {cell[red_], (cell[green1_] + cell[green2_] + 1) / 2, cell[blue_]};
+    }
+    if (image_.format == PixelFormat::kRgb8) {
+      const uint8_t* q = image_.data + 3 * (size_t(y) * stride_ + x);
+      return {q[0], q[1], q[2]};
+    }
+    return colourAt(image_, x, y);
+  }
+
+ private:
+  ImageView image_;
+  size_t stride_;
+  bool bayer_;
+  int step_, columns_, rows_;
+  size_t red_ = 0, blue_ = 0, green1_ = 0, green2_ = 0;
+};
+
+// The key's background level (GreenScreenKeyer::backgroundLevel) at pixel position (u, w):
+// bilinear between the four neighbours.
 template <typename Key>
-float interpolatedBackgroundLevel(const Key& key, const ImageView& image, float u, float w) {
-  const int step = isBayer(image.format) ? 2 : 1;
-  const int columns = image.width / step, rows = image.height / step;
-  // A Bayer cell k holds pixels 2k and 2k + 1: its centre is at 2k + 0.5.
-  const float x = std::clamp(step == 2 ? (u - 0.5f) * 0.5f : u, 0.0f, float(columns - 1));
-  const float y = std::clamp(step == 2 ? (w - 0.5f) * 0.5f : w, 0.0f, float(rows - 1));
-  const int x0 = std::max(0, std::min(int(x), columns - 2)),
-            y0 = std::max(0, std::min(int(y), rows - 2));
-  const int x1 = std::min(x0 + 1, columns - 1), y1 = std::min(y0 + 1, rows - 1);
-  const float fx = x - float(x0), fy = y - float(y0);
-  const auto at = [&](int cx, int cy) {
-    return float(key.backgroundLevel(image, cx * step, cy * step));
-  };
-  return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x1, y0)) +
-         fy * ((1 - fx) * at(x0, y1) + fx * at(x1, y1));
+float interpolatedBackgroundLevel(const Key& key, const PixelGrid& grid, float u, float w) {
+  const Neighbours n = grid.around(u, w);
+  const auto at = [&](int x, int y) { return float(key.backgroundLevel(grid.image(), x, y)); };
+  return (1 - n.fy) * ((1 - n.fx) * at(n.x0, n.y0) + n.fx * at(n.x1, n.y0)) +
+         n.fy * ((1 - n.fx) * at(n.x0, n.y1) + n.fx * at(n.x1, n.y1));
+}
+
+// The bilinear weights in fixed point: a whole pixel weighs kWeightOne.
+constexpr int kWeightBits = 6, kWeightOne = 1 << (2 * kWeightBits);
+// Below this share of the bilinear weight on pixels keyed as the actor, a point's colour is its
+// nearest pixel's.
+constexpr int kMinColourWeight = kWeightOne / 20;
+
+// The actor's colour at pixel position (u, w), on the statistics' scale (`shift` bits dropped):
+// bilinear between the four neighbours keyed as the actor, their weights renormalised, so that the
+// screen's colour beside a silhouette does not make the rim's points look inconsistent; the nearest
+// pixel's (ix, iy), which the caller keyed as the actor, where they weigh too little. The nearest
+// pixel alone put a point's projection up to half a pixel off in every camera, a colour error that
+// the variance counts as inconsistency: leave-one-camera-out +0.25 to +0.37 dB (docs/lumigraph.md).
+template <typename Key>
+void interpolatedColour(const Key& key, const PixelGrid& grid, float u, float w, int ix, int iy,
+                        int shift, uint32_t rgb[3]) {
+  const Neighbours n = grid.around(u, w);
+  constexpr float kScale = float(1 << kWeightBits);
+  const int wx = int(n.fx * kScale + 0.5f), wy = int(n.fy * kScale + 0.5f);
+  constexpr int kOne = 1 << kWeightBits;
+  const int xs[4] = {n.x0, n.x1, n.x0, n.x1}, ys[4] = {n.y0, n.y0, n.y1, n.y1};
+  const int weights[4] = {(kOne - wx) * (kOne - wy), wx * (kOne - wy), (kOne - wx) * wy, wx * wy};
+  int sum = 0, r = 0, g = 0, b = 0;
+  for (int k = 0; k < 4; ++k) {
+    const Rgb c = grid.at(xs[k], ys[k]);
+    const int wk = key.isForeground(c, xs[k], ys[k]) ? weights[k] : 0;
+    sum += wk, r += wk * c.r, g += wk * c.g, b += wk * c.b;
+  }
+  if (sum == kWeightOne) {
+    constexpr int kHalf = kWeightOne / 2, kBits = 2 * kWeightBits;
+    rgb[0] = uint32_t((r + kHalf) >> kBits) >> shift;
+    rgb[1] = uint32_t((g + kHalf) >> kBits) >> shift;
+    rgb[2] = uint32_t((b + kHalf) >> kBits) >> shift;
+  } else if (sum >= kMinColourWeight) {
+    rgb[0] = uint32_t((r + sum / 2) / sum) >> shift;
+    rgb[1] = uint32_t((g + sum / 2) / sum) >> shift;
+    rgb[2] = uint32_t((b + sum / 2) / sum) >> shift;
+  } else {
+    const Rgb c = colourAt(grid.image(), ix, iy);
+    rgb[0] = uint32_t(c.r) >> shift, rgb[1] = uint32_t(c.g) >> shift,
+    rgb[2] = uint32_t(c.b) >> shift;
+  }
 }
 
 // Where a camera's silhouette edge lies between the projections `a` (keyed actor) and `b` (keyed
@@ -34,12 +127,12 @@ float interpolatedBackgroundLevel(const Key& key, const ImageView& image, float 
 // step further in and out: the pixels at a and b may be mixed), i.e. where the actor covers half a
 // pixel. As an edge byte (RefinementStatistics::edges), 0 when the two sides do not differ.
 template <typename Key>
-uint8_t locateEdge(const Key& key, const ImageView& image, const Eigen::Vector2f& a,
+uint8_t locateEdge(const Key& key, const PixelGrid& grid, const Eigen::Vector2f& a,
                    const Eigen::Vector2f& b) {
   const Eigen::Vector2f d = b - a;
   const auto level = [&](float f) {
     const Eigen::Vector2f p = a + f * d;
-    return interpolatedBackgroundLevel(key, image, p.x(), p.y());
+    return interpolatedBackgroundLevel(key, grid, p.x(), p.y());
   };
   const float inner = level(-1), outer = level(2);
   if (!(outer > inner)) return 0;
@@ -139,6 +232,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
   const float min_cos = float(config_.min_facing_cos);
   const int n = static_cast<int>(positions.cols());
   const int first_window = n / config_.pointsPerVertex();  // the points after the vertices
+  const PixelGrid grid(image);
   for (int v = 0; v < n; ++v) {
     const Eigen::Vector3f x = positions.col(v), nrm = normals.col(v);
     // A line in the world is a line in camera coordinates: c(t) = c0 + t·d.
@@ -179,7 +273,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
         if (previous_inside && v < first_window) {
           uint8_t& edge = out.edges[s - 1];
           edge = RefinementStatistics::innerEdge(
-              edge, locateEdge(key, image, previous, Eigen::Vector2f(u, w)));
+              edge, locateEdge(key, grid, previous, Eigen::Vector2f(u, w)));
         }
         previous_inside = false;
         continue;
@@ -187,9 +281,9 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
       previous_inside = true;
       previous = Eigen::Vector2f(u, w);
       if (!visible) continue;
-      const Rgb rgb = colourAt(image, ix, iy);
-      const uint32_t r = uint32_t(rgb.r) >> shift, g = uint32_t(rgb.g) >> shift,
-                     b = uint32_t(rgb.b) >> shift;
+      uint32_t rgb[3];
+      interpolatedColour(key, grid, u, w, ix, iy, shift, rgb);
+      const uint32_t r = rgb[0], g = rgb[1], b = rgb[2];
       ++out.colour_count[s];
       out.sums[3 * s] = uint16_t(out.sums[3 * s] + r);
       out.sums[3 * s + 1] = uint16_t(out.sums[3 * s + 1] + g);
