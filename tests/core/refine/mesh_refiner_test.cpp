@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "core/geometry/ring_rig.h"
 #include "core/refine/refinement_sampler.h"
 #include "tests/core/refine/refine_test_scene.h"
 
@@ -439,6 +440,52 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
   interpolated_error /= inner, nearest_error /= inner;
   EXPECT_LT(interpolated_error, 0.4) << "nearest pixel: " << nearest_error;
   EXPECT_GT(nearest_error, 0.8);
+}
+
+// The sampler projects a vertex's offsets along a parabola through the projections of the
+// range's ends and middle: through a strong lens, every sample still lands on the pixel the
+// camera's own projection gives (the key alternates from one pixel column to the next, so a
+// projection a pixel off would flip it).
+TEST(RefinementSampler, ProjectsEveryOffsetAsTheCameraDoes) {
+  RingRigSpec spec;
+  spec.width = 320, spec.height = 240, spec.radius_m = 2.0, spec.vertical_fov_deg = 60;
+  spec.distortion = {-0.3, 0.1, 0.002, -0.002, 0.0};
+  const Rig rig = makeRingRig(spec);
+  const Camera& camera = rig.camera(0);
+  Image image;
+  image.resize(PixelFormat::kRgb8, camera.width(), camera.height());
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      uint8_t* q = &image.pixels[3 * (size_t(y) * image.width + x)];
+      const bool screen = x % 2 == 1;
+      q[0] = screen ? 40 : 120, q[1] = screen ? 200 : 110, q[2] = screen ? 60 : 100;
+    }
+  }
+  const GreenScreenKeyer keyer;
+  const std::vector<SamplerCamera> cameras = {{&camera, image.view(), &keyer, nullptr}};
+  // Off the optical axis, where the lens bends the lines most.
+  const TriangleMesh sphere = testing::icosphere(Eigen::Vector3d(0.3, 0.4, 1.3), 0.25, 3);
+  RefineConfig config;
+  config.t_max_m = 0.09;
+  config.window_points = 1;
+  RefinementSampler sampler(config);
+  RefinementStatistics stats;
+  sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
+  int compared = 0, different = 0;
+  for (int v = 0; v < sphere.vertexCount(); ++v) {
+    for (int i = 0; i < config.offset_count; ++i) {
+      const Eigen::Vector3d p = sphere.positions.col(v).cast<double>() +
+                                config.offsetAt(i) * sphere.normals.col(v).cast<double>();
+      const std::optional<Eigen::Vector2d> pixel = camera.project(p);
+      if (!pixel || !camera.inImage(*pixel)) continue;
+      ++compared;
+      const bool screen = int(std::floor(pixel->x() + 0.5)) % 2 == 1;
+      different += stats.outside[size_t(v) * config.offset_count + i] != (screen ? 1 : 0);
+    }
+  }
+  ASSERT_GT(compared, 10000);
+  // Only a projection within a few thousandths of a pixel of a column's border may differ.
+  EXPECT_LE(different, compared / 500) << different << " of " << compared;
 }
 
 // Window points: a vertex's two neighbours lie window_m along the tangent nearest the vertical
