@@ -383,63 +383,79 @@ TEST(RefinementSampler, LocatesTheHullsEdgeBelowAPixel) {
 
 // A point's colour is read between pixels (bilinear), from the pixels keyed as the actor only: on
 // an image whose red rises 4 levels a pixel to the right, the statistics hold each sample's red
-// as its projection's column gives it, not its nearest pixel's (up to 2 levels off); and beside
-// the silhouette's edge, the screen's colour never enters a sample's.
+// as its projection's column gives it, not its nearest pixel's (up to 2 levels off, 4 between a
+// Bayer image's cells); and beside the silhouette's edge, the screen's colour never enters a
+// sample's. On Bayer the colours are the 2x2 cells' (red at a cell's first column, half a pixel
+// left of its centre).
 TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
   const Rig rig = testing::smallRing();
   const Camera& camera = rig.camera(0);
   const Eigen::Vector3d centre(0, 0, 1.1);
   const Eigen::Vector2d middle = *camera.project(centre);
-  const int edge_x = int(std::lround(middle.x())) + 12;  // the actor left of it, the screen right
+  // The actor left of the edge, the screen right of it; an even column, so that no Bayer cell
+  // holds both.
+  const int edge_x = 2 * ((int(std::lround(middle.x())) + 12) / 2);
   const auto red = [&](double x) { return std::clamp(4.0 * (x - middle.x()) + 128.0, 0.0, 255.0); };
-  Image image;
-  image.resize(PixelFormat::kRgb8, camera.width(), camera.height());
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < image.width; ++x) {
-      uint8_t* q = &image.pixels[3 * (size_t(y) * image.width + x)];
+  std::vector<uint8_t> rgba(size_t(camera.width()) * camera.height() * 4);
+  for (int y = 0; y < camera.height(); ++y) {
+    for (int x = 0; x < camera.width(); ++x) {
+      uint8_t* q = &rgba[4 * (size_t(y) * camera.width() + x)];
       if (x < edge_x) {
         q[0] = uint8_t(std::lround(red(x))), q[1] = 60, q[2] = 120;
       } else {
         q[0] = 40, q[1] = 200, q[2] = 60;
       }
+      q[3] = 255;
     }
   }
   const GreenScreenKeyer keyer;
-  const std::vector<SamplerCamera> cameras = {{&camera, image.view(), &keyer, nullptr}};
   const TriangleMesh sphere = testing::icosphere(centre, 0.2, 3);
   RefineConfig config;
   config.colour_bits = 8;
   config.window_points = 1;
-  RefinementSampler sampler(config);
-  RefinementStatistics stats;
-  sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
-  double interpolated_error = 0, nearest_error = 0;
-  int inner = 0, beside_edge = 0;
-  for (int v = 0; v < sphere.vertexCount(); ++v) {
-    for (int i = 0; i < config.offset_count; ++i) {
-      const size_t s = size_t(v) * config.offset_count + i;
-      if (stats.colour_count[s] == 0) continue;
-      const Eigen::Vector3d p = sphere.positions.col(v).cast<double>() +
-                                config.offsetAt(i) * sphere.normals.col(v).cast<double>();
-      const double u = camera.project(p)->x();
-      ASSERT_LT(u, edge_x - 0.5) << "a sample whose nearest pixel is the screen has a colour";
-      if (u > edge_x - 1.0) {
-        // Its right-hand neighbours are the screen: the colour is the actor's alone.
-        ++beside_edge;
-        EXPECT_EQ(stats.sums[3 * s + 1], 60) << "vertex " << v << " offset " << i;
-        EXPECT_EQ(stats.sums[3 * s + 2], 120);
-      } else if (std::abs(u - middle.x()) < 25) {
-        ++inner;
-        interpolated_error += std::abs(stats.sums[3 * s] - red(u));
-        nearest_error += std::abs(red(std::floor(u + 0.5)) - red(u));
+  for (const PixelFormat format : {PixelFormat::kRgb8, PixelFormat::kBayerRggb8}) {
+    SCOPED_TRACE(format == PixelFormat::kRgb8 ? "rgb8" : "bayer");
+    const bool bayer = format != PixelFormat::kRgb8;
+    Image image;
+    rgbaToImage(rgba.data(), camera.width(), camera.height(), format, image);
+    const std::vector<SamplerCamera> cameras = {{&camera, image.view(), &keyer, nullptr}};
+    RefinementSampler sampler(config);
+    RefinementStatistics stats;
+    sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
+    // The red at pixel position u, as interpolated; and as the nearest pixel (cell) gives it.
+    const auto expected = [&](double u) { return red(bayer ? u - 0.5 : u); };
+    const auto nearest = [&](double u) {
+      const int x = int(std::floor(u + 0.5));
+      return red(bayer ? x & ~1 : x);
+    };
+    double interpolated_error = 0, nearest_error = 0;
+    int inner = 0, beside_edge = 0;
+    for (int v = 0; v < sphere.vertexCount(); ++v) {
+      for (int i = 0; i < config.offset_count; ++i) {
+        const size_t s = size_t(v) * config.offset_count + i;
+        if (stats.colour_count[s] == 0) continue;
+        const Eigen::Vector3d p = sphere.positions.col(v).cast<double>() +
+                                  config.offsetAt(i) * sphere.normals.col(v).cast<double>();
+        const double u = camera.project(p)->x();
+        ASSERT_LT(u, edge_x - 0.5) << "a sample whose nearest pixel is the screen has a colour";
+        if (u > edge_x - (bayer ? 1.5 : 1.0)) {
+          // Its right-hand neighbours are the screen: the colour is the actor's alone.
+          ++beside_edge;
+          EXPECT_EQ(stats.sums[3 * s + 1], 60) << "vertex " << v << " offset " << i;
+          EXPECT_EQ(stats.sums[3 * s + 2], 120);
+        } else if (std::abs(u - middle.x()) < 25) {
+          ++inner;
+          interpolated_error += std::abs(stats.sums[3 * s] - expected(u));
+          nearest_error += std::abs(nearest(u) - expected(u));
+        }
       }
     }
+    ASSERT_GT(inner, 200);
+    ASSERT_GT(beside_edge, 10);
+    interpolated_error /= inner, nearest_error /= inner;
+    EXPECT_LT(interpolated_error, 0.4) << "nearest pixel: " << nearest_error;
+    EXPECT_GT(nearest_error, 0.8);
   }
-  ASSERT_GT(inner, 200);
-  ASSERT_GT(beside_edge, 10);
-  interpolated_error /= inner, nearest_error /= inner;
-  EXPECT_LT(interpolated_error, 0.4) << "nearest pixel: " << nearest_error;
-  EXPECT_GT(nearest_error, 0.8);
 }
 
 // The sampler projects a vertex's offsets along a parabola through the projections of the
