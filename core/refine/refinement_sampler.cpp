@@ -261,7 +261,8 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
     // The offsets' projections lie on a smooth curve (the image of a line, bent a little by the
     // lens): a parabola through the projections of the range's ends and middle gives them within
     // a thousandth of a pixel on the reference rig (and through a strong lens: tested), saving
-    // 1.5 of a node's 7.4 ms (refine_bench) against projecting each through the lens.
+    // 1.5 of a node's 7.4 ms (refine_bench) against projecting each through the lens. The offsets
+    // lie symmetrically about 0 (RefineConfig::offsetAt).
     const float t_end = offsets_m_[offsets - 1];
     const Eigen::Vector3f c_in = c0 - t_end * d, c_out = c0 + t_end * d;
     const bool curve = offsets >= 3 && t_end > 0 && c_in.z() > 0 && c_out.z() > 0 && c0.z() > 0;
