@@ -10,7 +10,7 @@ int GreenScreenKeyer::learnScreen(const ImageView& screen, int step, int minimum
   for (int y = step / 2; y < screen.height; y += step) {
     for (int x = step / 2; x < screen.width; x += step) {
       const Rgb c = colourAt(screen, x, y);
-      const int e = c.g - std::max(c.r, c.b);
+      const int e = greenExcess(c);
       if (e > 0) excess.push_back(e);  // what is not green at all is not screen
     }
   }
@@ -72,17 +72,18 @@ void BackgroundModel::learn() {
   }
 }
 
-bool BackgroundModel::isForeground(const Rgb& c, int x, int y) const {
-  const size_t b = size_t(y / block_) * columns_ + x / block_;
+float BackgroundModel::distance2(const Rgb& c, size_t b) const {
   const float dr = c.r - mean_[3 * b], dg = c.g - mean_[3 * b + 1], db = c.b - mean_[3 * b + 2];
-  return dr * dr + dg * dg + db * db > limit2_[b];
+  return dr * dr + dg * dg + db * db;
+}
+
+bool BackgroundModel::isForeground(const Rgb& c, int x, int y) const {
+  const size_t b = blockOf(x, y);
+  return distance2(c, b) > limit2_[b];
 }
 
 float BackgroundModel::backgroundLevel(const ImageView& image, int x, int y) const {
-  const Rgb c = colourAt(image, x, y);
-  const size_t b = size_t(y / block_) * columns_ + x / block_;
-  const float dr = c.r - mean_[3 * b], dg = c.g - mean_[3 * b + 1], db = c.b - mean_[3 * b + 2];
-  return -std::sqrt(dr * dr + dg * dg + db * db);
+  return -std::sqrt(distance2(colourAt(image, x, y), blockOf(x, y)));
 }
 
 }  // namespace lumistage

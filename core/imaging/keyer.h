@@ -59,15 +59,15 @@ class GreenScreenKeyer {
   }
   // The same for the colour `c` already read at (x, y).
   bool isForeground(const Rgb& c, int /*x*/, int /*y*/) const {
-    return c.g - (c.r > c.b ? c.r : c.b) < threshold_;
+    return greenExcess(c) < threshold_;
   }
   // How much the pixel looks like the screen: its green excess. A pixel that the actor covers in
   // part mixes the two colours, so this is nearly linear in the screen's share of the pixel, and a
   // silhouette's edge lies where it is halfway between the actor's and the screen's.
   int backgroundLevel(const ImageView& image, int x, int y) const {
-    const Rgb c = colourAt(image, x, y);
-    return c.g - (c.r > c.b ? c.r : c.b);
+    return greenExcess(colourAt(image, x, y));
   }
+  static int greenExcess(const Rgb& c) { return c.g - (c.r > c.b ? c.r : c.b); }
   // Learns from a frame of the empty stage, or of the stage with the actor (a person rarely fills
   // the view): sets the threshold at three quarters of the 1st percentile of the screen's green
   // excess, and at least `minimum`. Returns the threshold. At half of it, the actor's edges that
@@ -111,6 +111,10 @@ class BackgroundModel {
   int frames() const { return frames_; }
 
  private:
+  size_t blockOf(int x, int y) const { return size_t(y / block_) * columns_ + x / block_; }
+  // The squared distance of `c` from block b's mean colour.
+  float distance2(const Rgb& c, size_t b) const;
+
   int width_, height_, block_, columns_, rows_;
   float k_;
   int frames_ = 0;

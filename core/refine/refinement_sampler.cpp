@@ -15,26 +15,17 @@ struct Neighbours {
   float fx, fy;
 };
 
-// A camera's image as the refinement interpolates it: its grid of pixels or Bayer cells, and its
-// colours read as colourAt() reads them, with the format's dispatch and the grid's size worked out
-// once a camera instead of at every read (the colour term reads four pixels a sample).
+// A camera's image as the refinement interpolates it: its grid of pixels or Bayer cells, worked
+// out once a camera instead of at every read (the colour term reads four pixels a sample; two
+// integer divisions a read were most of what a node's interpolation cost beyond the reads).
 class PixelGrid {
  public:
   explicit PixelGrid(const ImageView& image)
       : image_(image),
-        stride_(size_t(image.width)),
         bayer_(isBayer(image.format)),
         step_(bayer_ ? 2 : 1),
         columns_(image.width / step_),
-        rows_(image.height / step_) {
-    if (bayer_) {
-      const BayerLayout l = bayerLayout(image.format);
-      red_ = size_t(l.red_y) * stride_ + l.red_x;
-      blue_ = size_t(1 - l.red_y) * stride_ + 1 - l.red_x;
-      green1_ = size_t(l.red_y) * stride_ + 1 - l.red_x;
-      green2_ = size_t(1 - l.red_y) * stride_ + l.red_x;
-    }
-  }
+        rows_(image.height / step_) {}
   const ImageView& image() const { return image_; }
 
   Neighbours around(float u, float w) const {
@@ -47,25 +38,10 @@ class PixelGrid {
     return {x0 * step_, y0 * step_, x1 * step_, y1 * step_, x - float(x0), y - float(y0)};
   }
 
-  // At a pixel, or at the Bayer cell whose first pixel (even x and y) it is: colourAt().
-  Rgb at(int x, int y) const {
-    if (bayer_) {
-      const uint8_t* cell = image_.data + size_t(y) * stride_ + x;
-      return {cell[red_], (cell[green1_] + cell[green2_] + 1) / 2, cell[blue_]};
-    }
-    if (image_.format == PixelFormat::kRgb8) {
-      const uint8_t* q = image_.data + 3 * (size_t(y) * stride_ + x);
-      return {q[0], q[1], q[2]};
-    }
-    return colourAt(image_, x, y);
-  }
-
  private:
   ImageView image_;
-  size_t stride_;
   bool bayer_;
   int step_, columns_, rows_;
-  size_t red_ = 0, blue_ = 0, green1_ = 0, green2_ = 0;
 };
 
 // The key's background level (GreenScreenKeyer::backgroundLevel) at pixel position (u, w):
@@ -101,7 +77,7 @@ void interpolatedColour(const Key& key, const PixelGrid& grid, float u, float w,
   const int weights[4] = {(kOne - wx) * (kOne - wy), wx * (kOne - wy), (kOne - wx) * wy, wx * wy};
   int sum = 0, r = 0, g = 0, b = 0;
   for (int k = 0; k < 4; ++k) {
-    const Rgb c = grid.at(xs[k], ys[k]);
+    const Rgb c = colourAt(grid.image(), xs[k], ys[k]);
     const int wk = key.isForeground(c, xs[k], ys[k]) ? weights[k] : 0;
     sum += wk, r += wk * c.r, g += wk * c.g, b += wk * c.b;
   }
