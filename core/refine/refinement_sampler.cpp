@@ -16,8 +16,8 @@ struct Neighbours {
 };
 
 // A camera's image as the refinement interpolates it: its grid of pixels or Bayer cells, worked
-// out once a camera instead of at every read (the colour term reads four pixels a sample; two
-// integer divisions a read were most of what a node's interpolation cost beyond the reads).
+// out once a camera instead of at every read (the colour term reads four pixels a sample; the
+// grid's size divided out at each read cost about 0.2 ms of a node's 7.5, near the bench's noise).
 class PixelGrid {
  public:
   explicit PixelGrid(const ImageView& image)
