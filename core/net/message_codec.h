@@ -28,8 +28,9 @@ namespace lumistage {
 // count every node's statistics as a bad message); 4: takes recorded on the nodes (a version 3
 // node would refuse the studio's record command); 5: refinement statistics carry the hull's edges
 // and offsets eighths of a step (a version 4 studio would refuse the statistics and misplace every
-// vertex).
-inline constexpr uint16_t kProtocolVersion = 5;
+// vertex); 6: refinement statistics' values as differences and the cameras' disagreement (a
+// version 5 studio would read wrong colours).
+inline constexpr uint16_t kProtocolVersion = 6;
 
 struct HelloData {
   std::string node_name;

@@ -111,38 +111,124 @@ void forEachLeaving(const uint8_t* outside, uint8_t mask, size_t n, int offsets,
     if (phase != m - 1 && !(outside[s] & mask) && (outside[s + 1] & mask)) f(s);
 }
 
+// A sample's colour count as the packed form holds it (a nibble).
+inline int packedCount(int count) {
+  return std::min(count, 15);
+}
+
+inline uint32_t sumOfSquares(const uint16_t* sums) {
+  return uint32_t(sums[0]) * sums[0] + uint32_t(sums[1]) * sums[1] + uint32_t(sums[2]) * sums[2];
+}
+// (R² + G² + B²) / k of a sample's sums, rounded down.
+inline uint32_t meanSquare(const uint16_t* sums, int k) {
+  return sumOfSquares(sums) / uint32_t(k);
+}
+// What the packed form stores for the square of a sample seen by k >= 2 cameras: the square less
+// meanSquare(), which Cauchy-Schwarz keeps between 0 and the square. It is k times the colour's
+// variance over the cameras, summed over the channels: small where they agree, as they do near
+// the surface. (Modulo 2^32, so that any values round-trip.)
+inline uint32_t squareResidual(uint32_t square, const uint16_t* sums, int k) {
+  return square - meanSquare(sums, k);
+}
+
+// A run of `count` values of `bytes` bytes each, as byte planes: every value's low byte, then
+// every value's next byte, and so on (bytes of one significance together compress better).
+inline uint32_t readPlanes(const uint8_t* run, size_t count, int bytes, size_t i) {
+  uint32_t v = run[i];
+  for (int b = 1; b < bytes; ++b) v |= uint32_t(run[b * count + i]) << (8 * b);
+  return v;
+}
+inline void writePlanes(uint8_t* run, size_t count, int bytes, size_t i, uint32_t v) {
+  for (int b = 0; b < bytes; ++b) run[b * count + i] = uint8_t(v >> (8 * b));
+}
+
+// Reads the packed form's values in sample order: the sums from their three channels' runs of
+// differences, the squares from their residuals.
+class PackedValues {
+ public:
+  PackedValues(const uint8_t* values, size_t coloured, size_t squared, int sum_bytes,
+               int square_bytes)
+      : values_(values),
+        coloured_(coloured),
+        squared_(squared),
+        sum_bytes_(sum_bytes),
+        square_bytes_(square_bytes) {}
+  // The next coloured sample's sums.
+  void nextSums(uint16_t sums[3]) {
+    const size_t run = coloured_ * sum_bytes_;
+    if (sum_bytes_ == 1) {  // modulo 2^8, as the sums fit a byte
+      for (int c = 0; c < 3; ++c) sums[c] = last_[c] = uint8_t(last_[c] + values_[c * run + i_]);
+    } else {
+      for (int c = 0; c < 3; ++c) {
+        last_[c] = uint16_t(last_[c] + readPlanes(values_ + c * run, coloured_, 2, i_));
+        sums[c] = last_[c];
+      }
+    }
+    ++i_;
+  }
+  // The square of the sample whose sums nextSums() gave last, seen by k >= 2 cameras.
+  uint32_t nextSquare(const uint16_t sums[3], int k) {
+    const uint8_t* run = values_ + 3 * coloured_ * sum_bytes_;
+    return readPlanes(run, squared_, square_bytes_, q_++) + meanSquare(sums, k);
+  }
+  // Past the values: the edges.
+  const uint8_t* end() const {
+    return values_ + 3 * coloured_ * sum_bytes_ + squared_ * square_bytes_;
+  }
+
+ private:
+  const uint8_t* values_;
+  size_t coloured_, squared_;
+  int sum_bytes_, square_bytes_;
+  size_t i_ = 0, q_ = 0;  // the coloured and the squared samples read
+  uint16_t last_[3] = {0, 0, 0};
+};
+
 }  // namespace
 
 void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<uint8_t>& out) {
   const size_t n = stats.outside.size();
-  uint32_t max_sum = 0, max_square = 0;
+  uint32_t max_sum = 0, max_residual = 0;
   size_t coloured = 0, squared = 0, leaving = 0;
   forEachLeaving(stats.outside.data(), 0xff, n, stats.offset_count, [&](size_t) { ++leaving; });
   for (size_t s = 0; s < n; ++s) {
     if (stats.colour_count[s] == 0) continue;
     ++coloured;
-    squared += stats.colour_count[s] > 1;
-    max_sum = std::max({max_sum, uint32_t(stats.sums[3 * s]), uint32_t(stats.sums[3 * s + 1]),
-                        uint32_t(stats.sums[3 * s + 2])});
-    max_square = std::max(max_square, stats.squares[s]);
+    const uint16_t* v = &stats.sums[3 * s];
+    max_sum = std::max({max_sum, uint32_t(v[0]), uint32_t(v[1]), uint32_t(v[2])});
+    if (stats.colour_count[s] < 2) continue;
+    ++squared;
+    max_residual = std::max(
+        max_residual, squareResidual(stats.squares[s], v, packedCount(stats.colour_count[s])));
   }
-  const int sum_bytes = std::min(2, bytesFor(max_sum)), square_bytes = bytesFor(max_square);
-  out.resize(kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes + leaving);
+  const int sum_bytes = std::min(2, bytesFor(max_sum)), square_bytes = bytesFor(max_residual);
+  const size_t values = kHeaderBytes + n, residuals = values + 3 * coloured * sum_bytes;
+  out.resize(residuals + squared * square_bytes + leaving);
   size_t at = 0;
   put(out, at, uint32_t(stats.vertex_count), 4);
   out[at++] = uint8_t(stats.offset_count);
   out[at++] = uint8_t(stats.colour_bits);
   out[at++] = uint8_t(sum_bytes);
   out[at++] = uint8_t(square_bytes);
-  for (size_t s = 0; s < n; ++s) {
-    out[at++] = uint8_t(std::min<int>(stats.outside[s], 15) |
-                        (std::min<int>(stats.colour_count[s], 15) << 4));
-  }
+  for (size_t s = 0; s < n; ++s)
+    out[at++] =
+        uint8_t(std::min<int>(stats.outside[s], 15) | (packedCount(stats.colour_count[s]) << 4));
+  uint32_t last[3] = {0, 0, 0};
+  size_t i = 0, q = 0;  // the coloured and the squared samples written
   for (size_t s = 0; s < n; ++s) {
     if (stats.colour_count[s] == 0) continue;
-    for (int c = 0; c < 3; ++c) put(out, at, stats.sums[3 * s + c], sum_bytes);
-    if (stats.colour_count[s] > 1) put(out, at, stats.squares[s], square_bytes);
+    const uint16_t* v = &stats.sums[3 * s];
+    for (int c = 0; c < 3; ++c) {  // modulo 2^(8 sum_bytes)
+      writePlanes(&out[values + c * coloured * sum_bytes], coloured, sum_bytes, i, v[c] - last[c]);
+      last[c] = v[c];
+    }
+    ++i;
+    if (stats.colour_count[s] > 1) {
+      writePlanes(&out[residuals], squared, square_bytes, q++,
+                  squareResidual(stats.squares[s], v, packedCount(stats.colour_count[s])));
+    }
   }
+  at = residuals + squared * square_bytes;
   forEachLeaving(stats.outside.data(), 0xff, n, stats.offset_count,
                  [&](size_t s) { out[at++] = stats.edges[s]; });
 }
@@ -164,14 +250,15 @@ constexpr uint8_t kPackedOutside = 15;  // a packed count's outside count
 // Whether the packed form after its header holds exactly the n samples' counts and the values
 // they announce; the reason when not.
 const char* checkBody(std::span<const uint8_t> data, size_t n, int offsets, int sum_bytes,
-                      int square_bytes) {
+                      int square_bytes, size_t& coloured, size_t& squared) {
   if (data.size() < kHeaderBytes + n) return "truncated counts";
   const uint8_t* counts = data.data() + kHeaderBytes;
-  size_t coloured = 0, squared = 0;
+  size_t with_colour = 0, with_square = 0;  // not the references: the counts' bytes may alias them
   for (size_t s = 0; s < n; ++s) {
     const int c = counts[s] >> 4;
-    coloured += c != 0, squared += c > 1;
+    with_colour += c != 0, with_square += c > 1;
   }
+  coloured = with_colour, squared = with_square;
   size_t leaving = 0;
   forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t) { ++leaving; });
   if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes + leaving)
@@ -189,24 +276,22 @@ bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std:
   if (!validWidths(sum_bytes, square_bytes)) return fail("bad value widths");
   if (uint64_t(vertices) * offsets > uint64_t(max_samples)) return fail("too many samples");
   const size_t n = size_t(vertices) * offsets;
-  if (const char* why = checkBody(data, n, offsets, sum_bytes, square_bytes)) return fail(why);
+  size_t coloured, squared;
+  if (const char* why = checkBody(data, n, offsets, sum_bytes, square_bytes, coloured, squared))
+    return fail(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
   out.reset(int(vertices), offsets, bits);
-  const uint8_t* p = counts + n;
+  PackedValues values(counts + n, coloured, squared, sum_bytes, square_bytes);
   for (size_t s = 0; s < n; ++s) {
     out.outside[s] = counts[s] & 15;
-    out.colour_count[s] = counts[s] >> 4;
-    if (out.colour_count[s] == 0) continue;
-    for (int c = 0; c < 3; ++c, p += sum_bytes) out.sums[3 * s + c] = uint16_t(get(p, sum_bytes));
-    if (out.colour_count[s] == 1) {  // one camera: its colour is the sum
-      uint32_t q = 0;
-      for (int c = 0; c < 3; ++c) q += uint32_t(out.sums[3 * s + c]) * out.sums[3 * s + c];
-      out.squares[s] = q;
-      continue;
-    }
-    out.squares[s] = get(p, square_bytes);
-    p += square_bytes;
+    const int k = out.colour_count[s] = counts[s] >> 4;
+    if (k == 0) continue;
+    uint16_t* sums = &out.sums[3 * s];
+    values.nextSums(sums);
+    // One camera: its colour is the sum.
+    out.squares[s] = k == 1 ? sumOfSquares(sums) : values.nextSquare(sums, k);
   }
+  const uint8_t* p = values.end();
   forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t s) { out.edges[s] = *p++; });
   return true;
 }
@@ -220,26 +305,22 @@ bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::st
     return fail("sizes differ from the mesh's");
   if (!validWidths(sum_bytes, square_bytes)) return fail("bad value widths");
   const size_t n = size_t(vertices) * offsets;
-  if (const char* why = checkBody(data, n, offsets, sum_bytes, square_bytes)) return fail(why);
+  size_t coloured, squared;
+  if (const char* why = checkBody(data, n, offsets, sum_bytes, square_bytes, coloured, squared))
+    return fail(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
-  const uint8_t* p = counts + n;
+  PackedValues values(counts + n, coloured, squared, sum_bytes, square_bytes);
   for (size_t s = 0; s < n; ++s) {
     const int outside = counts[s] & 15, colour = counts[s] >> 4;
     if (outside) sum.outside[s] = uint8_t(std::min(255, sum.outside[s] + outside));
     if (colour == 0) continue;
     sum.colour_count[s] = uint8_t(std::min(255, sum.colour_count[s] + colour));
-    uint32_t q = 0;
-    for (int c = 0; c < 3; ++c, p += sum_bytes) {
-      const uint32_t v = sum_bytes == 1 ? p[0] : uint32_t(p[0] | (p[1] << 8));
-      sum.sums[3 * s + c] = uint16_t(sum.sums[3 * s + c] + v);
-      q += v * v;
-    }
-    if (colour > 1) {
-      q = get(p, square_bytes);
-      p += square_bytes;
-    }
-    sum.squares[s] += q;
+    uint16_t v[3];
+    values.nextSums(v);
+    for (int c = 0; c < 3; ++c) sum.sums[3 * s + c] = uint16_t(sum.sums[3 * s + c] + v[c]);
+    sum.squares[s] += colour == 1 ? sumOfSquares(v) : values.nextSquare(v, colour);
   }
+  const uint8_t* p = values.end();
   forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t s) {
     sum.edges[s] = RefinementStatistics::innerEdge(sum.edges[s], *p++);
   });

@@ -63,10 +63,15 @@ struct RefinementStatistics {
 //
 // Packed (encodeRefinementStatistics): a header (vertex count, offset count, colour bits, the byte
 // widths of sums and squares), then one byte a sample (outside count in the low nibble, colour
-// count in the high one, each at most 15), then the sums of the samples with colour and the
-// squares of those seen by two cameras or more (one camera's square follows from its sum), little
-// endian, in the narrowest widths their largest values need, then one byte for every sample where
-// the hull leaves (leavesHull()): its edge.
+// count in the high one, each at most 15), then the values, little endian, in the narrowest widths
+// they need: the sums of the samples with colour, channel by channel (every red sum, then every
+// green, then every blue), each as its difference from the channel's sum at the sample with colour
+// before it (modulo the width); then, for the samples seen by two cameras or more (one camera's
+// square follows from its sum), the square less (R² + G² + B²) / k of the sums (k the packed
+// colour count, rounded down; modulo 2^32), k times the colour's variance, which is small where
+// the cameras agree. Then one byte for every sample where the hull leaves (leavesHull()): its
+// edge. The differences and the variances are what makes the form compress: a third less than
+// the sums and squares as they are, on a node's statistics (docs/virtual-studio.md).
 //
 // Compressed (RefinementStatisticsCodec::encode, what nodes send): the packed form's vertex count,
 // offset count and colour bits in the same places, then 0 where the packed form has its sums'

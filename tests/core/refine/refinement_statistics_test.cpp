@@ -52,6 +52,51 @@ TEST(RefinementStatistics, WireFormRoundTripsExactly) {
   }
 }
 
+// The packed values are differences along the samples and the cameras' disagreement: where every
+// camera sees a vertex's colour alike at every offset, they are zero but at each vertex's first
+// sample, which is what makes a node's statistics compress (a third less than the sums as they
+// are). And they round-trip as exactly as any others.
+TEST(RefinementStatistics, PackedValuesAreDifferencesAndDisagreement) {
+  std::mt19937 rng(9);
+  std::uniform_int_distribution<int> colour(0, 63);
+  constexpr int kVertices = 100, kOffsets = 21, kCameras = 3;
+  RefinementStatistics s;
+  s.reset(kVertices, kOffsets, 6);
+  for (int v = 0; v < kVertices; ++v) {
+    const int rgb[3] = {colour(rng), colour(rng), colour(rng)};
+    for (int t = 0; t < kOffsets; ++t) {
+      const int i = v * kOffsets + t;
+      s.colour_count[i] = kCameras;
+      for (int c = 0; c < 3; ++c) {
+        s.sums[3 * i + c] = uint16_t(kCameras * rgb[c]);
+        s.squares[i] += uint32_t(kCameras * rgb[c] * rgb[c]);
+      }
+    }
+  }
+  std::vector<uint8_t> packed;
+  encodeRefinementStatistics(s, packed);
+  const size_t n = size_t(s.sampleCount());
+  ASSERT_EQ(packed.size(), kPackedStatisticsHeaderBytes + n + 3 * n + n);  // 1-byte values
+  const size_t values = packed.size() - kPackedStatisticsHeaderBytes - n;
+  const size_t zeros = size_t(std::count(packed.end() - values, packed.end(), uint8_t(0)));
+  EXPECT_GE(zeros, values - 3 * kVertices);  // each vertex's first sums may differ
+  RefinementStatistics back;
+  std::string error;
+  ASSERT_TRUE(decodeRefinementStatistics(packed, back, &error)) << error;
+  EXPECT_TRUE(back == s);
+  // One camera's red one level higher at one sample: its residual is no longer zero (and the red
+  // differences there and after it), and the values still round-trip.
+  s.sums[3 * 5] = uint16_t(s.sums[3 * 5] + 1);
+  s.squares[5] += 2 * uint32_t(s.sums[3 * 5] - 1) / kCameras + 1;  // (r + 1)² - r²
+  encodeRefinementStatistics(s, packed);
+  const size_t residual = kPackedStatisticsHeaderBytes + n + 3 * n + 5;
+  EXPECT_NE(packed[residual], 0);
+  EXPECT_EQ(packed[residual - 1], 0);
+  EXPECT_EQ(size_t(std::count(packed.end() - values, packed.end(), uint8_t(0))), zeros - 3);
+  ASSERT_TRUE(decodeRefinementStatistics(packed, back, &error)) << error;
+  EXPECT_TRUE(back == s);
+}
+
 TEST(RefinementStatistics, MalformedWireIsRefused) {
   std::mt19937 rng(8);
   const RefinementStatistics s = randomStatistics(rng, 50, 21, 3);
