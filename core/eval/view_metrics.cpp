@@ -102,6 +102,10 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
 
 void imageToRgba(const ImageView& image, std::vector<uint8_t>& rgba) {
   rgba.resize(size_t(image.width) * image.height * 4);
+  if (isBayer(image.format)) {
+    demosaicBayerToRgba(image, rgba.data());
+    return;
+  }
   for (int y = 0; y < image.height; ++y) {
     for (int x = 0; x < image.width; ++x) {
       const Rgb c = colourAt(image, x, y);

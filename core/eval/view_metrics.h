@@ -28,7 +28,8 @@ struct ViewScore {
 ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uint8_t> truth,
                           std::span<const uint8_t> mask, int width, int height);
 
-// Any camera image as RGBA8 (Bayer from its 2x2 cells, as the keyer reads it; mono8 as grey).
+// Any camera image as RGBA8: Bayer demosaiced at full resolution (demosaicBayerToRgba, as a
+// camera's software would show it), mono8 as grey.
 void imageToRgba(const ImageView& image, std::vector<uint8_t>& rgba);
 
 // Leave-one-camera-out: every camera's view rendered from the others (that camera inactive in the

@@ -51,6 +51,41 @@ TEST(Image, BayerLayoutsPutRedWhereTheirNamesSay) {
   EXPECT_FALSE(parsePixelFormat("bayer_rgbg8"));
 }
 
+TEST(Image, DemosaicRecoversColoursThatVaryLinearlyInsideTheBorder) {
+  // Each channel a different linear ramp (even steps, so that every bilinear mean is exact):
+  // mosaicked in any layout, the demosaic gives every pixel's colour back inside the border, and
+  // within a diagonal pixel's step on it (reflected there); the 2x2 cells are off inside too.
+  const int width = 12, height = 8;
+  std::vector<uint8_t> rgba(width * height * 4);
+  auto colour = [](int x, int y, int c) {
+    return c == 0 ? 20 + 8 * x + 2 * y : (c == 1 ? 200 - 6 * y + 2 * x : 40 + 4 * x + 10 * y);
+  };
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < 4; ++c)
+        rgba[4 * (y * width + x) + c] = uint8_t(c == 3 ? 255 : colour(x, y, c));
+  for (PixelFormat format : kAllPixelFormats) {
+    if (!isBayer(format)) continue;
+    Image image;
+    rgbaToImage(rgba.data(), width, height, format, image);
+    std::vector<uint8_t> out(rgba.size(), 7);
+    demosaicBayerToRgba(image.view(), out.data());
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) {
+        const bool border = x == 0 || y == 0 || x == width - 1 || y == height - 1;
+        for (int c = 0; c < 4; ++c) {
+          const int i = 4 * (y * width + x) + c;
+          EXPECT_NEAR(out[i], rgba[i], border ? 14 : 0)  // 14: blue's diagonal step
+              << pixelFormatName(format) << " at " << x << "," << y << " channel " << c;
+        }
+      }
+    }
+    std::vector<uint8_t> cells(width / 2 * height / 2 * 4);
+    bayerCellsToRgba(image.view(), cells.data());
+    EXPECT_NE(cells[1], rgba[1]) << pixelFormatName(format);  // not what the cells give
+  }
+}
+
 TEST(Image, BayerCellsAreTheirRedTheMeanOfTheirGreensAndTheirBlue) {
   // An image of odd width and height (its last column and row belong to no cell) whose 18 cells
   // a row take the eight-at-a-time path and the cell-at-a-time tail: every cell against the
