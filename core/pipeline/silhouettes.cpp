@@ -11,7 +11,7 @@ void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int 
   out.bits.assign((size_t(out.width) * out.height + 7) / 8, 0);
   for (int y = 0; y < out.height; ++y) {
     for (int x = 0; x < out.width; ++x) {
-      if (key.isForeground(image, x * step + step / 2, y * step + step / 2)) {
+      if (keyCell(key, image, x, y, step)) {
         const size_t i = size_t(y) * out.width + x;
         out.bits[i / 8] |= uint8_t(1u << (i % 8));
       }

@@ -24,7 +24,8 @@ struct LowResSilhouette {
   }
 };
 
-// Keys the image at the centre of every cell (only those pixels are read) and packs the result.
+// Keys every cell by the pixels around its centre (keyCell: only those are read) and packs the
+// result.
 // `out`'s buffer is reused.
 void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
                        LowResSilhouette& out);

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "core/imaging/keyer.h"
+#include "core/pipeline/silhouettes.h"
 
 namespace {
 
@@ -36,6 +37,18 @@ void lowResolutionSilhouette(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * int64_t(mask.size()));
 }
 BENCHMARK(lowResolutionSilhouette)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
+
+// The same packed into bits, as a node computes it (computeSilhouette).
+void nodeSilhouette(benchmark::State& state) {
+  const lumistage::Image image = stageFrame();
+  const lumistage::GreenScreenKeyer keyer;
+  lumistage::LowResSilhouette silhouette;
+  for (auto _ : state) {
+    lumistage::computeSilhouette(keyer, image.view(), 0, int(state.range(0)), silhouette);
+    benchmark::DoNotOptimize(silhouette.bits.data());
+  }
+}
+BENCHMARK(nodeSilhouette)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "core/sim/virtual_studio.h"
 #include "tests/core/sim/reference_studio.h"
 
@@ -109,6 +111,41 @@ TEST_F(KeyerTest, LowResolutionSilhouetteSamplesCellCentres) {
   }
   EXPECT_GT(actor, 30u);
   EXPECT_GT(double(agree) / mask.size(), 0.99);
+}
+
+TEST(Keyer, CellsAreKeyedByTheMeanOfThePixelsAroundTheirCentre) {
+  // Pixel by pixel: 3x3 windows, whole and cut by the edges, against their plain mean; on Bayer,
+  // the cells read once and weighted give the mean of the nine pixels' cell colours.
+  const int width = 8, height = 6;
+  std::vector<uint8_t> rgb(width * height * 3), bayer(width * height);
+  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = uint8_t((i * 53 + 7) % 256);
+  for (size_t i = 0; i < bayer.size(); ++i) bayer[i] = uint8_t((i * 91 + 3) % 256);
+  for (const ImageView view : {ImageView{PixelFormat::kRgb8, width, height, rgb.data()},
+                               ImageView{PixelFormat::kBayerGrbg8, width, height, bayer.data()}}) {
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) {
+        int sum[3] = {0, 0, 0}, n = 0;
+        for (int yy = std::max(0, y - 1); yy <= std::min(height - 1, y + 1); ++yy) {
+          for (int xx = std::max(0, x - 1); xx <= std::min(width - 1, x + 1); ++xx) {
+            const Rgb c = colourAt(view, xx, yy);
+            sum[0] += c.r, sum[1] += c.g, sum[2] += c.b, ++n;
+          }
+        }
+        const Rgb mean = meanColourAround(view, x, y);
+        EXPECT_EQ(mean.r, (sum[0] + n / 2) / n) << pixelFormatName(view.format) << x << "," << y;
+        EXPECT_EQ(mean.g, (sum[1] + n / 2) / n) << pixelFormatName(view.format) << x << "," << y;
+        EXPECT_EQ(mean.b, (sum[2] + n / 2) / n) << pixelFormatName(view.format) << x << "," << y;
+      }
+    }
+  }
+  // A cell whose centre pixel alone is the screen's green, its neighbours the actor's grey: keyed
+  // as the actor (the mean is grey-green), where the centre pixel alone would say screen.
+  std::vector<uint8_t> cell(4 * 4 * 3, 100);
+  cell[3 * (2 * 4 + 2) + 0] = 30, cell[3 * (2 * 4 + 2) + 1] = 200, cell[3 * (2 * 4 + 2) + 2] = 30;
+  const ImageView view{PixelFormat::kRgb8, 4, 4, cell.data()};
+  const GreenScreenKeyer keyer(30);
+  EXPECT_FALSE(keyer.isForeground(view, 2, 2));
+  EXPECT_TRUE(keyCell(keyer, view, 0, 0, 4));
 }
 
 TEST(Keyer, ColourOfABayerPixelComesFromItsCell) {
