@@ -16,7 +16,9 @@ struct PoseTrackerOptions {
   // MPJPE 19.0 / 27.1 / 19.4 / 24.1 -> 18.9 / 25.7 / 20.6 / 20.9 mm (walk / arm wave / turn /
   // crouch), the worst frame of each 26 / 32 / 26 / 26 mm against 24 / 37 / 26 / 52, for 14 ms a
   // tracked frame against 6 (tracking_bench; docs/lumigraph.md). 2.5 cm and 2.25 cm: lower means
-  // on some clips, but a lost frame on the turn and the arm wave's arm lost for good.
+  // on some clips, but a lost frame on the turn and the arm wave's arm lost for good. (Measured
+  // with each cell keyed by its centre pixel; keyed by the 3x3 pixels around it, keyCell, step 4
+  // gives 15.2 / 20.1 / 14.9 / 16.8 mm on 40-frame clips.)
   int silhouette_step = 4;
   double voxel_m = 0.02;
   Eigen::Vector3d stage_lower{-1.5, -1.5, 0.0}, stage_upper{1.5, 1.5, 2.2};
