@@ -1,6 +1,6 @@
 #include "core/capture/image.h"
 
-#include <algorithm>
+#include <opencv2/imgproc.hpp>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -111,38 +111,13 @@ void bayerCellsToRgba(const ImageView& image, uint8_t* rgba) {
 }
 
 void demosaicBayerToRgba(const ImageView& image, uint8_t* rgba) {
-  const BayerLayout layout = bayerLayout(image.format);
-  const int w = image.width, h = image.height;
-  // The channel of the pixel at (x, y): 0 red, 2 blue, 1 green.
-  auto channel = [&](int x, int y) {
-    const bool rx = (x & 1) == layout.red_x, ry = (y & 1) == layout.red_y;
-    return rx && ry ? 0 : (!rx && !ry ? 2 : 1);
-  };
-  // Reflected about the border pixel, which keeps a neighbour's place in the Bayer cell.
-  auto reflect = [](int i, int n) {
-    return i < 0 ? std::min(1, n - 1) : (i >= n ? std::max(0, n - 2) : i);
-  };
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      int sum[3] = {0, 0, 0}, count[3] = {0, 0, 0};
-      for (int dy = -1; dy <= 1; ++dy) {
-        const int yy = reflect(y + dy, h);
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int xx = reflect(x + dx, w);
-          const int c = channel(xx, yy);
-          sum[c] += image.data[size_t(yy) * w + xx];
-          ++count[c];
-        }
-      }
-      uint8_t* out = rgba + 4 * (size_t(y) * w + x);
-      const int own = channel(x, y);
-      for (int c = 0; c < 3; ++c) {
-        out[c] = c == own ? image.data[size_t(y) * w + x]
-                          : uint8_t(count[c] ? (sum[c] + count[c] / 2) / count[c] : 0);
-      }
-      out[3] = 255;
-    }
-  }
+  // OpenCV names a pattern by its second row: its "BG" is RGGB.
+  const BayerLayout l = bayerLayout(image.format);
+  const int code = l.red_y == 0 ? (l.red_x == 0 ? cv::COLOR_BayerBG2RGBA : cv::COLOR_BayerGB2RGBA)
+                                : (l.red_x == 0 ? cv::COLOR_BayerGR2RGBA : cv::COLOR_BayerRG2RGBA);
+  const cv::Mat bayer(image.height, image.width, CV_8UC1, const_cast<uint8_t*>(image.data));
+  cv::Mat out(image.height, image.width, CV_8UC4, rgba);
+  cv::cvtColor(bayer, out, code);
 }
 
 void rgbaToRgb(const uint8_t* rgba, int width, int height, uint8_t* rgb) {

@@ -84,10 +84,9 @@ void rgbaToImage(const uint8_t* rgba, int width, int height, PixelFormat format,
 // (width / 2) x (height / 2) texels. Mono8 is read as a Bayer image of the default layout.
 void bayerCellsToRgba(const ImageView& image, uint8_t* rgba);
 // A Bayer image demosaiced at full resolution, RGBA8 (alpha 255), rows top first: each pixel's
-// missing channels the mean of the pixels of that colour among its 8 neighbours (bilinear; the
-// border reflected: exact inside it for colours that vary linearly). For what must look like the
-// camera's image, not for the hot paths (about 9 reads a pixel). Mono8 is read as the default
-// layout.
+// missing channels the mean of the pixels of that colour among its 8 neighbours (OpenCV's
+// bilinear demosaic: exact inside the border for colours that vary linearly). For what must look
+// like the camera's image, not for the hot paths. Mono8 is read as the default layout.
 void demosaicBayerToRgba(const ImageView& image, uint8_t* rgba);
 
 }  // namespace lumistage

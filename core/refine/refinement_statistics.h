@@ -71,7 +71,7 @@ struct RefinementStatistics {
 // colour count, rounded down; modulo 2^32), k times the colour's variance, which is small where
 // the cameras agree. Then one byte for every sample where the hull leaves (leavesHull()): its
 // edge. The differences and the variances are what makes the form compress: a third less than
-// the sums and squares as they are, on a node's statistics (docs/virtual-studio.md).
+// the sums and squares as they are, on a node's statistics (docs/lumigraph.md).
 //
 // Compressed (RefinementStatisticsCodec::encode, what nodes send): the packed form's vertex count,
 // offset count and colour bits in the same places, then 0 where the packed form has its sums'

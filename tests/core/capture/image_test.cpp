@@ -54,7 +54,7 @@ TEST(Image, BayerLayoutsPutRedWhereTheirNamesSay) {
 TEST(Image, DemosaicRecoversColoursThatVaryLinearlyInsideTheBorder) {
   // Each channel a different linear ramp (even steps, so that every bilinear mean is exact):
   // mosaicked in any layout, the demosaic gives every pixel's colour back inside the border, and
-  // within a diagonal pixel's step on it (reflected there); the 2x2 cells are off inside too.
+  // within a diagonal pixel's step on it; the 2x2 cells are off inside too.
   const int width = 12, height = 8;
   std::vector<uint8_t> rgba(width * height * 4);
   auto colour = [](int x, int y, int c) {
