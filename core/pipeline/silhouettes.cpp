@@ -9,7 +9,7 @@ namespace {
 // image, so the 3x3 pixels around it always lie in the cells (x/2 - 1, y/2 - 1) (one pixel of the
 // window: its last column and row) to (x/2, y/2) (two pixels a side), weighted 1, 2, 2, 4 (over
 // 9). Each cell decoded as colourAt decodes it, straight from the mosaic's rows: the same result
-// as keyCell, 133 against 433-565 us a camera at step 4 (235 us through colourAt).
+// as keyCell, 122 against 433-565 us a camera at step 4 (235 us through colourAt).
 void bayerSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step,
                      LowResSilhouette& out) {
   const BayerLayout l = bayerLayout(image.format);
