@@ -58,12 +58,13 @@ TEST(PoseTracker, TracksAWalkFromTheTPose) {
   EXPECT_LT(e.max_m, 0.08);
   // The shape calibration found the actor's size from the hull (1.82 m, plus hair, longer legs):
   // the calibrated skeleton's head and pelvis stand where the actor's do. (The legs' length is
-  // the least certain: 3.3 cm long here at step 4 and 2 cm voxels; the nodes' mesh takes only the
-  // skeleton's overall scale from it, posed_body.h.)
+  // the least certain: the pelvis 2.4 cm high here at step 4 and 2 cm voxels, 3.3 cm while the
+  // calibrated girth also lengthened the capsules; the nodes' mesh takes only the skeleton's
+  // overall scale from it, posed_body.h.)
   const auto& found = tracker.skeleton().restPositions();
   const auto& actor = stage.actor.skeleton.restPositions();
   EXPECT_NEAR(found[kHead].z(), actor[kHead].z(), 0.03);
-  EXPECT_NEAR(found[kPelvis].z(), actor[kPelvis].z(), 0.04);
+  EXPECT_NEAR(found[kPelvis].z(), actor[kPelvis].z(), 0.03);
 }
 
 TEST(PoseTracker, RecoversARandomPose) {
@@ -132,7 +133,8 @@ TEST(PoseTracker, TracksAnActorFifteenPercentTallerAfterShapeCalibration) {
   const auto& found = tracker.skeleton().restPositions();
   const auto& actor = stage.actor.skeleton.restPositions();
   EXPECT_NEAR(found[kHead].z(), actor[kHead].z(), 0.04);
-  EXPECT_NEAR(found[kPelvis].z(), actor[kPelvis].z(), 0.04);
+  // 2.2 cm; 2.85 cm while the calibrated girth also lengthened the capsules.
+  EXPECT_NEAR(found[kPelvis].z(), actor[kPelvis].z(), 0.026);
   EXPECT_EQ(e.tracked, e.frames);
   EXPECT_LT(e.mean_m, 0.03);
   EXPECT_LT(e.max_m, 0.08);
