@@ -33,10 +33,7 @@ void bayerSilhouette(const GreenScreenKeyer& key, const ImageView& image, int st
           g += weight * ((red[j][c + 1 - l.red_x] + blue[j][c + l.red_x] + 1) / 2);
         }
       }
-      if (key.isForeground(Rgb{(r + 4) / 9, (g + 4) / 9, (b + 4) / 9}, x, y)) {
-        const size_t i = size_t(cy) * out.width + cx;
-        out.bits[i / 8] |= uint8_t(1u << (i % 8));
-      }
+      if (key.isForeground(Rgb{(r + 4) / 9, (g + 4) / 9, (b + 4) / 9}, x, y)) out.set(cx, cy);
     }
   }
 }
@@ -56,10 +53,7 @@ void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int 
   }
   for (int y = 0; y < out.height; ++y) {
     for (int x = 0; x < out.width; ++x) {
-      if (keyCell(key, image, x, y, step)) {
-        const size_t i = size_t(y) * out.width + x;
-        out.bits[i / 8] |= uint8_t(1u << (i % 8));
-      }
+      if (keyCell(key, image, x, y, step)) out.set(x, y);
     }
   }
 }

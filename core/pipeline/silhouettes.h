@@ -22,11 +22,14 @@ struct LowResSilhouette {
     const size_t i = size_t(y) * width + x;
     return (bits[i / 8] >> (i % 8)) & 1;
   }
+  void set(int x, int y) {
+    const size_t i = size_t(y) * width + x;
+    bits[i / 8] |= uint8_t(1u << (i % 8));
+  }
 };
 
 // Keys every cell by the pixels around its centre (keyCell: only those are read) and packs the
-// result.
-// `out`'s buffer is reused.
+// result. `out`'s buffer is reused.
 void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
                        LowResSilhouette& out);
 

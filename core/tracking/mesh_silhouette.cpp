@@ -43,10 +43,7 @@ void rasterizeSilhouette(const Eigen::Matrix3Xf& positions,
           const float e = (b - a).x() * (q - a).y() - (b - a).y() * (q - a).x();
           inside = s * e >= 0;
         }
-        if (inside) {
-          const size_t i = size_t(y) * out.width + x;
-          out.bits[i / 8] |= uint8_t(1u << (i % 8));
-        }
+        if (inside) out.set(x, y);
       }
     }
   }

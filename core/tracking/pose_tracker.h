@@ -18,7 +18,8 @@ struct PoseTrackerOptions {
   // tracked frame against 6 (tracking_bench; docs/lumigraph.md). 2.5 cm and 2.25 cm: lower means
   // on some clips, but a lost frame on the turn and the arm wave's arm lost for good. (Measured
   // with each cell keyed by its centre pixel; keyed by the 3x3 pixels around it, keyCell, step 4
-  // gives 15.2 / 20.1 / 14.9 / 16.8 mm on 40-frame clips.)
+  // gave 15.2 / 20.1 / 14.9 / 16.8 mm on 40-frame clips, 14.8 / 18.4 / 13.4 / 16.0 mm once the
+  // girth stopped lengthening the capsules.)
   int silhouette_step = 4;
   double voxel_m = 0.02;
   Eigen::Vector3d stage_lower{-1.5, -1.5, 0.0}, stage_upper{1.5, 1.5, 2.2};

@@ -69,7 +69,7 @@ void locateActor(benchmark::State& state) {
     s.camera = c, s.step = 8, s.width = 128, s.height = 96;
     s.bits.assign(size_t(16) * 96, 0);
     for (int y = 30; y < 80; ++y) {
-      for (int x = 56; x < 72; ++x) s.bits[(size_t(y) * 128 + x) / 8] |= uint8_t(1u << (x % 8));
+      for (int x = 56; x < 72; ++x) s.set(x, y);
     }
     all.push_back(&s);
   }
