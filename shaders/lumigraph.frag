@@ -18,6 +18,10 @@ uniform int use_masks;
 
 out vec4 colour;
 
+// Below this much of the actor where every own camera samples its mask (a twentieth of a cell
+// among the four blended), a fragment is clearly off the actor.
+const float kClearlyOff = 0.05;
+
 // Bilinear in RGBA images, or, for Bayer images (the array holds their 2x2 cells' colours, cell
 // centres at texels 2c + 1), between the colours of the four nearest cells.
 vec3 sampleImage(vec2 texel, int layer) {
@@ -25,7 +29,7 @@ vec3 sampleImage(vec2 texel, int layer) {
 }
 
 void main() {
-  float own = 0.0, unmasked = 0.0;
+  float own = 0.0, unmasked = 0.0, actor = 0.0;
   vec3 rgb = vec3(0.0), rgb_unmasked = vec3(0.0);
   for (int j = 0; j < kOwnCameras; ++j) {
     float w = v_weight[j];
@@ -35,8 +39,11 @@ void main() {
     unmasked += w;
     // The colour is normalised by the weights, so a partly masked camera would still colour a
     // pixel alone: half a cell off the silhouette (mask 0.5) already counts as off.
-    if (use_masks != 0)
-      w *= smoothstep(0.5, 0.75, texture(masks, vec3(v_texel[j] / images_size, float(j))).r);
+    if (use_masks != 0) {
+      float m = texture(masks, vec3(v_texel[j] / images_size, float(j))).r;
+      actor = max(actor, m);
+      w *= smoothstep(0.5, 0.75, m);
+    }
     rgb += w * c;
     own += w;
   }
@@ -44,10 +51,15 @@ void main() {
     colour = vec4(0.0);
   } else if (own > 0.0) {
     colour = vec4(rgb / own, max(own / v_total, 1.0 / 255.0));  // a masked share stays drawn
+  } else if (use_masks != 0 && actor < kClearlyOff) {
+    // A cell or more off the actor in every own camera (the generic mesh's foot beside the shoe, a
+    // mis-posed hand): nothing of the actor is there. Discarded, it writes no depth either, so
+    // the mesh behind it (the body behind the hand) or the background shows.
+    discard;
   } else {
-    // Off the actor in every own camera: the unmasked colour, at a sixteenth of the share, so that
-    // a node whose cameras see the actor there outweighs it in the studio's blend, and the pixel is
-    // still drawn where no camera does (a hole would show more than the screen's colour).
+    // Just off the actor in every own camera (the cells' rim): the unmasked colour, at a sixteenth
+    // of the share, so that a node whose cameras see the actor there outweighs it in the studio's
+    // blend, and the silhouette's edge is still drawn where no camera does.
     colour = vec4(rgb_unmasked / unmasked, max(unmasked / v_total / 16.0, 1.0 / 255.0));
   }
 }

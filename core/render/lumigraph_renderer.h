@@ -89,8 +89,9 @@ class LumigraphRenderer {
   // A low-resolution foreground mask of own camera `own_index`'s current image (one byte a cell,
   // 0 background, 255 foreground; cells of the camera's size / the mask's, the same for every
   // own camera). A camera's weight is scaled by the mask (bilinear) where it samples: where the
-  // mesh reaches beyond the actor in that camera, the others colour it, or, beyond the actor in
-  // all, nothing does (instead of the screen's green). Without masks, every pixel counts.
+  // mesh reaches beyond the actor in that camera, the others colour it; just beyond it in all, the
+  // unmasked colour at a sixteenth of the share; further beyond it in all, nothing (the fragment
+  // is discarded, and what lies behind it shows). Without masks, every pixel counts.
   void setMask(int own_index, std::span<const uint8_t> mask, int width, int height);
 
   // Renders the desired camera's view (its size, lens distortion included) of every clone: a
