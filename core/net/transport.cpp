@@ -42,6 +42,18 @@ bool sendFrame(zmq::socket_t& socket, std::span<const uint8_t> bytes, bool more,
   return result.has_value();
 }
 
+// ZMTP heartbeats on every connection: a peer whose PC lost power or whose cable was pulled never
+// closes its TCP connection, and a node would keep queueing for a studio that is gone. A
+// connection that answers no ping for kHeartbeatTimeoutMs is closed, and the dealer reconnects by
+// itself.
+constexpr int kHeartbeatIntervalMs = 1000, kHeartbeatTimeoutMs = 4000;
+
+void setHeartbeats(zmq::socket_t& socket) {
+  socket.set(zmq::sockopt::heartbeat_ivl, kHeartbeatIntervalMs);
+  socket.set(zmq::sockopt::heartbeat_timeout, kHeartbeatTimeoutMs);
+  socket.set(zmq::sockopt::heartbeat_ttl, kHeartbeatTimeoutMs);
+}
+
 bool waitReadable(zmq::socket_t& socket, std::chrono::milliseconds timeout, int wake_fd = -1) {
   zmq::pollitem_t items[2] = {{socket.handle(), 0, ZMQ_POLLIN, 0},
                               {nullptr, wake_fd, ZMQ_POLLIN, 0}};
@@ -135,6 +147,12 @@ StudioEndpoint::StudioEndpoint(StudioEndpointConfig config) : state_(std::make_u
   s.router = zmq::socket_t(s.context, zmq::socket_type::router);
   s.router.set(zmq::sockopt::linger, 0);
   s.router.set(zmq::sockopt::router_mandatory, true);
+  setHeartbeats(s.router);
+  // A node that comes back under its name (rebooted, its cable plugged in again) takes the name
+  // over from its old connection, which may not have timed out yet: a ROUTER otherwise ignores a
+  // second connection under a name it holds, and libzmq then reads the node's next message as its
+  // name. Under CURVE a message still counts for the node its key names, whatever it calls itself.
+  s.router.set(zmq::sockopt::router_handover, true);
   // Oversized messages never reach memory: libzmq drops the connection that sends one.
   s.router.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(s.config.limits.max_bytes));
   if (s.config.security == TransportSecurity::kCurve) {
@@ -262,6 +280,7 @@ NodeEndpoint::NodeEndpoint(NodeEndpointConfig config) : state_(std::make_unique<
   s.dealer.set(zmq::sockopt::routing_id, s.config.name);
   // Messages wait for an accepted connection instead of piling up for a studio that refused us.
   s.dealer.set(zmq::sockopt::immediate, true);
+  setHeartbeats(s.dealer);
   s.dealer.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(s.config.limits.max_bytes));
   if (s.config.security == TransportSecurity::kCurve) {
     requireKey(s.config.node_key.public_key, "node public key");

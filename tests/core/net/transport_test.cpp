@@ -1,7 +1,13 @@
 #include "core/net/transport.h"
 
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <thread>
 
 #include "core/base/error.h"
@@ -119,6 +125,107 @@ TEST(Transport, MalformedMessageIsDroppedAndCountedAgainstItsSender) {
   in = studio.receive(kPatience);
   ASSERT_TRUE(in.has_value());
   EXPECT_TRUE(in->result.ok()) << in->result.error;
+}
+
+// A TCP relay for one connection to a port on 127.0.0.1 that can go silent without closing
+// anything: a node whose PC lost power or whose cable was pulled, as the studio sees it (the
+// connection stays open, nothing comes back, not even an answer to a ping).
+class SilenceableRelay {
+ public:
+  explicit SilenceableRelay(int target_port) {
+    listen_fd_ = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t length = sizeof address;
+    if (bind(listen_fd_, reinterpret_cast<sockaddr*>(&address), length) != 0 ||
+        listen(listen_fd_, 1) != 0 ||
+        getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&address), &length) != 0) {
+      throw std::runtime_error("relay: cannot listen");
+    }
+    port_ = ntohs(address.sin_port);
+    thread_ = std::thread([this, target_port] { run(target_port); });
+  }
+  ~SilenceableRelay() {
+    stop_ = true;
+    thread_.join();
+    for (int fd : {listen_fd_, client_fd_, target_fd_})
+      if (fd >= 0) close(fd);
+  }
+  std::string endpoint() const { return "tcp://127.0.0.1:" + std::to_string(port_); }
+  void silence() { silent_ = true; }
+
+ private:
+  void run(int target_port) {
+    pollfd accepting{listen_fd_, POLLIN, 0};
+    while (!stop_ && poll(&accepting, 1, 50) <= 0) {
+    }
+    if (stop_) return;
+    client_fd_ = accept(listen_fd_, nullptr, nullptr);
+    target_fd_ = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in target{};
+    target.sin_family = AF_INET;
+    target.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    target.sin_port = htons(uint16_t(target_port));
+    if (connect(target_fd_, reinterpret_cast<sockaddr*>(&target), sizeof target) != 0) return;
+    char buffer[65536];
+    while (!stop_) {
+      pollfd fds[2] = {{client_fd_, POLLIN, 0}, {target_fd_, POLLIN, 0}};
+      if (silent_ || poll(fds, 2, 50) <= 0) {
+        if (silent_) std::this_thread::sleep_for(milliseconds(20));
+        continue;
+      }
+      for (int k = 0; k < 2; ++k) {
+        if (!(fds[k].revents & POLLIN)) continue;
+        const ssize_t n = read(fds[k].fd, buffer, sizeof buffer);
+        if (n <= 0) return;
+        for (ssize_t sent = 0; sent < n;) {
+          const ssize_t m = write(fds[1 - k].fd, buffer + sent, size_t(n - sent));
+          if (m <= 0) return;
+          sent += m;
+        }
+      }
+    }
+  }
+
+  int listen_fd_ = -1, client_fd_ = -1, target_fd_ = -1, port_ = 0;
+  std::atomic<bool> stop_{false}, silent_{false};
+  std::thread thread_;
+};
+
+// A node whose PC lost power comes back under the same name: its old connection never closed, and
+// a router admits one connection a name, so the studio would ignore the node until it restarted.
+// The new connection takes the name over, and the node's messages arrive again at once.
+TEST(Transport, ANodeWhoseConnectionDiedSilentlyIsHeardAgainWhenItComesBack) {
+  StudioEndpointConfig plain_studio;
+  plain_studio.bind = "tcp://127.0.0.1:*";
+  plain_studio.security = TransportSecurity::kPlain;
+  StudioEndpoint studio(plain_studio);
+  const std::string endpoint = studio.endpoint();
+  SilenceableRelay relay(std::stoi(endpoint.substr(endpoint.rfind(':') + 1)));
+  NodeEndpointConfig config;
+  config.name = "node1";
+  config.security = TransportSecurity::kPlain;
+  config.connect = relay.endpoint();
+  NodeEndpoint before(config);
+  ASSERT_TRUE(before.send(hello("node1"), kPatience));
+  std::optional<ReceivedMessage> in = studio.receive(kPatience);
+  ASSERT_TRUE(in.has_value());
+  ASSERT_EQ(in->node, "node1");
+
+  relay.silence();  // the power is gone; the connection stays
+  config.connect = endpoint;
+  NodeEndpoint after(config);  // the node restarted
+  const auto start = std::chrono::steady_clock::now();
+  bool heard = false;
+  while (!heard && std::chrono::steady_clock::now() - start < std::chrono::seconds(20)) {
+    after.send(hello("node1"), milliseconds(100));
+    in = studio.receive(milliseconds(100));
+    heard = in.has_value() && in->result.ok() && in->node == "node1";
+  }
+  EXPECT_TRUE(heard) << "the studio never heard the node again";
+  std::printf("  heard again after %.1f s\n",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
 TEST(Transport, PlainModeWorksOnlyWhenBothSidesAskForIt) {
