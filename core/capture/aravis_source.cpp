@@ -76,6 +76,7 @@ struct AravisSource::Device {
   CameraStats stats;
   std::deque<std::chrono::steady_clock::time_point> recent;  // arrival times, for the frame rate
   int64_t last_frame_id = -1;
+  FrameIdUnwrapper unwrap;
 };
 
 AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
@@ -209,8 +210,8 @@ void AravisSource::receive(int camera) {
                                ? statusName(status)
                                : fmt::format("short image: {} bytes, expected {}", size, bytes);
     } else {
-      const int64_t frame_id = static_cast<int64_t>(arv_buffer_get_frame_id(buffer));
-      // GigE Vision frame ids count 1..65535 and wrap; a jump means frames never arrived.
+      const int64_t frame_id = d.unwrap(static_cast<int64_t>(arv_buffer_get_frame_id(buffer)));
+      // A jump means frames never arrived.
       if (d.last_frame_id >= 0 && frame_id > d.last_frame_id + 1)
         d.stats.dropped += frame_id - d.last_frame_id - 1;
       d.last_frame_id = frame_id;

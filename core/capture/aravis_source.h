@@ -27,6 +27,25 @@ struct AravisDeviceInfo {
 // open virtual cameras by address), USB3 Vision on the bus.
 std::vector<AravisDeviceInfo> discoverAravisCameras();
 
+// A camera's frame ids, counting on across the wrap of GigE Vision 1.x's 16-bit block ids
+// (1..65535, then 1 again: 36 minutes at 30 frames a second), so that every frame after it is not
+// taken for one older than the last (the node's grouper and the studio would drop them all). Ids
+// above 65535 (GigE Vision 2, USB3 Vision: 64 bits) are passed on as they are.
+class FrameIdUnwrapper {
+ public:
+  int64_t operator()(int64_t raw) {
+    if (last_raw_ >= 0 && raw < last_raw_ && last_raw_ <= kLargest &&
+        last_raw_ - raw > kLargest / 2)
+      epoch_ += kLargest;
+    last_raw_ = raw;
+    return raw <= kLargest ? epoch_ + raw : raw;
+  }
+
+ private:
+  static constexpr int64_t kLargest = 65535;
+  int64_t last_raw_ = -1, epoch_ = 0;
+};
+
 enum class TriggerMode {
   kFreeRunning,  // the camera's own frame rate
   kSoftware,     // AravisSource::trigger() fires every camera: a fallback for synchronisation

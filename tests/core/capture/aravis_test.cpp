@@ -43,6 +43,22 @@ std::shared_ptr<FrameLoop> randomLoop(const Rig& rig, int length, double fps, Pi
   return loop;
 }
 
+// GigE Vision 1.x block ids wrap from 65535 to 1: the ids count on (and a frame lost across the
+// wrap still leaves its gap); 64-bit ids pass as they are.
+TEST(Aravis, FrameIdsCountOnAcrossTheSixteenBitWrap) {
+  FrameIdUnwrapper unwrap;
+  std::vector<int64_t> ids;
+  for (int64_t raw : {65533, 65534, 65535, 1, 2, 4}) ids.push_back(unwrap(raw));
+  EXPECT_EQ(ids, (std::vector<int64_t>{65533, 65534, 65535, 65536, 65537, 65539}));
+  FrameIdUnwrapper again;
+  for (int64_t raw : {65000, 30, 32000, 65534, 2}) ids.push_back(again(raw));
+  EXPECT_EQ(std::vector<int64_t>(ids.end() - 5, ids.end()),
+            (std::vector<int64_t>{65000, 65565, 97535, 131069, 131072}));
+  FrameIdUnwrapper wide;
+  EXPECT_EQ(wide(70000), 70000);
+  EXPECT_EQ(wide(5), 5);  // after a 64-bit id, no wrap is assumed
+}
+
 TEST(Aravis, VirtualCamerasStreamTheSyntheticFramesBitExact) {
   const Rig rig = smallRig(2, 320, 240);
   const double fps = 50;
