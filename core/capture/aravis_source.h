@@ -30,7 +30,9 @@ std::vector<AravisDeviceInfo> discoverAravisCameras();
 // A camera's frame ids, counting on across the wrap of GigE Vision 1.x's 16-bit block ids
 // (1..65535, then 1 again: 36 minutes at 30 frames a second), so that every frame after it is not
 // taken for one older than the last (the node's grouper and the studio would drop them all). Ids
-// above 65535 (GigE Vision 2, USB3 Vision: 64 bits) are passed on as they are.
+// above 65535 (GigE Vision 2, USB3 Vision: 64 bits) are passed on as they are. Cameras' ids stay
+// comparable (the nodes group frames by id) when they start streaming between the same two wraps,
+// as cameras started together on a trigger do.
 class FrameIdUnwrapper {
  public:
   int64_t operator()(int64_t raw) {
