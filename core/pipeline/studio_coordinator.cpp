@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <limits>
 
 #include "core/body/human_model.h"
 #include "core/pipeline/posed_body.h"
@@ -81,9 +82,13 @@ void StudioCoordinator::maybeFinish(int64_t frame_id, FrameState& frame) {
     return;
   }
   if (frame.offsets_sent_ns == 0) return;
+  // Every view's image from every node whose statistics were refined (a node whose statistics
+  // came late still renders and is blended, but is not waited for, nor counts for one that is).
   for (const ViewData& view : views_) {
     const auto it = frame.image_nodes.find(view.view);
-    if (it == frame.image_nodes.end() || it->second.size() < frame.statistics_nodes.size()) return;
+    if (it == frame.image_nodes.end()) return;
+    for (const std::string& node : frame.statistics_nodes)
+      if (!it->second.count(node)) return;
   }
   finishFrame(frame_id, frame);
 }
@@ -162,9 +167,14 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     if (stale || recordingTake()) sendTake(node);
     return;
   }
-  if (std::holds_alternative<SilhouettesData>(message.body))
+  if (std::holds_alternative<SilhouettesData>(message.body)) {
+    if (!acceptFrameId(node, message.frame_id)) {
+      ++node.report.bad_messages;
+      return;
+    }
     newest_seen_ = std::max(newest_seen_, message.frame_id);  // where the cameras are (takes)
-  if (message.frame_id <= newest_done_) return;               // a frame already done or given up
+  }
+  if (message.frame_id <= newest_done_) return;  // a frame already done or given up
   if (std::find(refused_.begin(), refused_.end(), message.frame_id) != refused_.end())
     return;  // dropped at admission
   if (const auto* silhouettes = std::get_if<SilhouettesData>(&message.body)) {
@@ -212,17 +222,29 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       return;
     FrameState& frame = it->second;
     if (frame.statistics_nodes.count(node.report.name)) return;
-    if (stats->offset_count != options_.refine.offset_count || stats->packed.size() < 8) {
+    const int colour_bits = stats->packed.size() >= 8 ? stats->packed[5] : 0;
+    if (stats->offset_count != options_.refine.offset_count || colour_bits < 1 || colour_bits > 8) {
       ++node.report.bad_messages;
+      if (!node.told_statistics) {
+        node.told_statistics = true;
+        spdlog::warn(
+            "node {}: frame {}: refinement statistics at {} offsets and {} colour bits, the studio "
+            "refines at {} offsets: not used; is the node's refine: configuration another?",
+            node.report.name, message.frame_id, stats->offset_count, colour_bits,
+            options_.refine.offset_count);
+      }
       return;
     }
     if (frame.refine_sum.vertex_count == 0)
-      frame.refine_sum.reset(int(stats->vertex_count), stats->offset_count, stats->packed[5]);
+      frame.refine_sum.reset(int(stats->vertex_count), stats->offset_count, colour_bits);
     // Integer sums of every node's cameras add up exactly, in any order.
     std::string error;
     if (!statistics_codec_.add(stats->packed, frame.refine_sum, &error)) {
       spdlog::warn("node {}: frame {}: {}", node.report.name, message.frame_id, error);
       ++node.report.bad_messages;
+      // The first node's statistics set the sum's sizes: when they were refused, the next node's
+      // set them again, rather than be refused for differing from them.
+      if (frame.statistics_nodes.empty()) frame.refine_sum.vertex_count = 0;
       return;
     }
     frame.statistics_nodes.insert(node.report.name);
@@ -236,6 +258,8 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     if (view == views_.end() || image->width != view->width || image->height != view->height)
       return;  // a view no longer asked for, or resized since
     FrameState& frame = it->second;
+    // Once a node and view: a repeated image would be blended twice.
+    if (frame.image_nodes[image->view].count(node.report.name)) return;
     const size_t pixels = size_t(image->width) * image->height;
     PartialImageBlender& blender = frame.blends[image->view];
     if (blender.width() != image->width || blender.height() != image->height)
@@ -257,6 +281,50 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     frame.image_nodes[image->view].insert(node.report.name);
     maybeFinish(message.frame_id, frame);
   }
+}
+
+bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
+  // Ids beyond half the range leave no room to count on (takes start ahead of the newest).
+  if (frame_id < 0 || frame_id > std::numeric_limits<int64_t>::max() / 2) return false;
+  node.newest_frame = frame_id;
+  const auto near = [](int64_t a, int64_t b) { return std::abs(a - b) <= kFrameIdWindow; };
+  if (newest_seen_ < 0 || near(frame_id, newest_seen_)) {
+    node.told_frame_id = false;
+    return true;
+  }
+  int live = 0, with_it = 0;
+  int64_t oldest_with_it = frame_id;
+  for (const auto& [name, n] : nodes_) {
+    if (n.report.lost || n.last_ns == 0) continue;
+    ++live;
+    if (n.newest_frame >= 0 && near(n.newest_frame, frame_id)) {
+      ++with_it;
+      oldest_with_it = std::min(oldest_with_it, n.newest_frame);
+    }
+  }
+  if (2 * with_it <= live) {
+    if (!node.told_frame_id) {
+      node.told_frame_id = true;
+      spdlog::warn(
+          "node {}: silhouettes of frame {}, {} frames from the newest the studio has seen ({}): "
+          "not used unless most nodes' frame ids move there too",
+          node.report.name, frame_id, frame_id - newest_seen_, newest_seen_);
+    }
+    return false;
+  }
+  spdlog::warn("the cameras' frame ids moved from {} to {} on {} of {} nodes: following them",
+               newest_seen_, frame_id, with_it, live);
+  // The frames in flight belong to the old count; the poses still being fitted for them find no
+  // frame to go to.
+  for (auto it = frames_.begin(); it != frames_.end();) {
+    if (counting_) ++frames_dropped_;
+    it = retireFrame(it);
+  }
+  refused_.fill(-1);
+  newest_done_ = oldest_with_it - 1;
+  newest_seen_ = frame_id;
+  for (auto& [name, n] : nodes_) n.told_frame_id = false;
+  return true;
 }
 
 void StudioCoordinator::FrameState::clearForReuse() {

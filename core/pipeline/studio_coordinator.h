@@ -198,7 +198,18 @@ class StudioCoordinator {
     NodeReport report;
     RecentSamples statistics_ms{256}, image_ms{256};  // its answers' times
     bool told_silhouette_size = false;  // warned once that its silhouettes are of another step
+    bool told_statistics = false;       // warned once that its statistics do not fit
+    bool told_frame_id = false;         // warned that its frame ids are far from the others'
+    int64_t newest_frame = -1;          // the frame id of its newest silhouettes
   };
+  // The cameras' frame ids move together, a frame at a time. A node's silhouettes whose frame id
+  // lies more than kFrameIdWindow from the newest the studio has seen (a corrupt or hostile
+  // message, a node replaying another session, cameras restarted on one node alone) are refused
+  // and counted, instead of ending every frame in flight or leaving every later frame "done"
+  // already; when most live nodes' ids move together (the cameras or the session restarted), the
+  // studio follows them. False: refuse the message.
+  static constexpr int64_t kFrameIdWindow = 300;
+  bool acceptFrameId(NodeState& node, int64_t frame_id);
 
   // The frame's state, a spare one when it is new.
   FrameState& frameState(int64_t frame_id);

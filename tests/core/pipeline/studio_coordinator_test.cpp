@@ -255,5 +255,114 @@ TEST(StudioCoordinator, NodesWhoseMessagesWaitWhileTheStudioWorksAreNotLost) {
   EXPECT_EQ(studio.nodeState("node2"), "lost");
 }
 
+// The bad messages the studio counted for `name`.
+int64_t badMessagesOf(const StudioCoordinator& studio, const std::string& name) {
+  for (const NodeReport& n : studio.report().nodes)
+    if (n.name == name) return n.bad_messages;
+  return -1;
+}
+
+// The next pose the studio sends `node`, for a frame at or after `frame_id`.
+std::optional<int64_t> nextPoseFrame(ScriptedNode& node, StudioCoordinator& studio,
+                                     int64_t frame_id) {
+  for (int k = 0; k < 8; ++k) {
+    const std::optional<Message> pose = node.await<PoseData>(studio);
+    if (!pose) return std::nullopt;
+    if (pose->frame_id >= frame_id) return pose->frame_id;
+  }
+  return std::nullopt;
+}
+
+// One node's silhouettes of a frame a trillion frames ahead (a corrupt or hostile message) are
+// refused and counted; they neither end the frames in flight nor leave every later frame "done".
+TEST(StudioCoordinator, SilhouettesOfAFrameFarFromTheOthersAreRefusedAndFramesGoOn) {
+  StudioCoordinatorOptions options;
+  options.deadline = milliseconds(50);
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
+  ASSERT_TRUE(node1.send(1, SilhouettesData{}));
+  ASSERT_TRUE(node2.send(1, SilhouettesData{}));
+  ASSERT_EQ(nextPoseFrame(node1, studio, 1), 1);
+  ASSERT_TRUE(node1.send(1'000'000'000'000, SilhouettesData{}));
+  studio.runFor(milliseconds(300));  // past every deadline
+  EXPECT_EQ(badMessagesOf(studio, "node1"), 1);
+  ASSERT_TRUE(node1.send(2, SilhouettesData{}));
+  ASSERT_TRUE(node2.send(2, SilhouettesData{}));
+  EXPECT_EQ(nextPoseFrame(node1, studio, 2), 2);
+  EXPECT_EQ(badMessagesOf(studio, "node2"), 0);
+}
+
+// When most nodes' frame ids move together (the cameras restarted, or the session), forward or
+// back, the studio follows them; a node alone is not followed.
+TEST(StudioCoordinator, WhenMostNodesFrameIdsMoveTogetherTheStudioFollows) {
+  StudioCoordinatorOptions options;
+  options.deadline = milliseconds(50);
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
+  const auto both = [&](int64_t frame_id) {
+    return node1.send(frame_id, SilhouettesData{}) && node2.send(frame_id, SilhouettesData{});
+  };
+  ASSERT_TRUE(both(5000));
+  ASSERT_EQ(nextPoseFrame(node1, studio, 5000), 5000);
+  for (const int64_t moved : {900000, 3}) {
+    SCOPED_TRACE(moved);
+    ASSERT_TRUE(node1.send(moved, SilhouettesData{}));  // alone: refused
+    studio.runFor(milliseconds(100));
+    ASSERT_TRUE(node1.send(moved + 1, SilhouettesData{}));
+    ASSERT_TRUE(node2.send(moved + 1, SilhouettesData{}));  // now both: followed
+    EXPECT_EQ(nextPoseFrame(node1, studio, moved), moved + 1);
+    ASSERT_TRUE(both(moved + 2));
+    EXPECT_EQ(nextPoseFrame(node1, studio, moved + 2), moved + 2);
+  }
+  EXPECT_EQ(badMessagesOf(studio, "node1"), 4);  // both its messages before node2's moved
+  EXPECT_EQ(badMessagesOf(studio, "node2"), 0);
+}
+
+// The first statistics of a frame set the sums' sizes. When they are refused (here another mesh's
+// header over a broken body), the next node's set them afresh instead of being refused in turn;
+// and a node's image sent twice is blended once.
+TEST(StudioCoordinator, OneNodesBadStatisticsOrRepeatedImageSpoilNoOtherNodes) {
+  StudioCoordinatorOptions options;
+  options.deadline = milliseconds(2000);
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
+  ASSERT_TRUE(node1.send(1, SilhouettesData{}));
+  ASSERT_TRUE(node2.send(1, SilhouettesData{}));
+  ASSERT_EQ(nextPoseFrame(node1, studio, 1), 1);
+  const RefineConfig& refine = options.refine;
+  RefinementStatistics stats;
+  stats.reset(10, refine.offset_count, refine.colour_bits);
+  RefinementStatistics other;
+  other.reset(11, refine.offset_count, refine.colour_bits);
+  VertexStatisticsData broken = statisticsMessage(other, refine);
+  for (size_t i = 8; i < broken.packed.size(); ++i) broken.packed[i] ^= 0x5a;
+  ASSERT_TRUE(node1.send(1, broken));
+  studio.runFor(milliseconds(50));
+  ASSERT_TRUE(node1.send(1, statisticsMessage(stats, refine)));
+  ASSERT_TRUE(node2.send(1, statisticsMessage(stats, refine)));
+  ASSERT_TRUE(node1.await<OffsetsData>(studio));
+  EXPECT_GE(badMessagesOf(studio, "node1"), 1);
+  EXPECT_EQ(badMessagesOf(studio, "node2"), 0);
+
+  const ViewData& view = studio.view();
+  const auto image = [&](uint8_t red, uint8_t alpha) {
+    PartialImageData i{view.view, view.width, view.height, ImageEncoding::kRawRgba,
+                       std::vector<uint8_t>(size_t(view.width) * view.height * 4, 0)};
+    i.data[0] = red, i.data[3] = alpha;
+    return i;
+  };
+  ASSERT_TRUE(node1.send(1, image(200, 255)));
+  ASSERT_TRUE(node1.send(1, image(0, 255)));  // the same node and view again
+  studio.runFor(milliseconds(50));
+  ASSERT_TRUE(node2.send(1, image(0, 0)));
+  for (int slice = 0; slice < 300 && studio.framesDone() == 0; ++slice)
+    studio.runFor(milliseconds(10));
+  ASSERT_EQ(studio.framesDone(), 1);
+  EXPECT_EQ(studio.lastImage(0).rgba.at(0), 200);
+}
+
 }  // namespace
 }  // namespace lumistage
