@@ -321,6 +321,10 @@ Check decodeView(const fb::View& in, const MessageLimits& limits, ViewData& out)
     return "view: " + num(in.width()) + "x" + num(in.height()) + " pixels, expected 1 to " +
            num(limits.max_image_pixels);
   }
+  if (std::max(in.width(), in.height()) > uint32_t(limits.max_view_side)) {
+    return "view: " + num(in.width()) + "x" + num(in.height()) + " pixels, expected at most " +
+           num(limits.max_view_side) + " a side";
+  }
   const size_t clone_numbers = sizeOf(in.clones());
   if (clone_numbers % 3 != 0 || clone_numbers / 3 > size_t(limits.max_clones)) {
     return "view: clones take 3 numbers each (offset x, y, yaw), at most " +

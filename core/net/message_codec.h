@@ -176,6 +176,7 @@ struct MessageLimits {
   int max_joints = 128;
   int max_mask_pixels = 1024 * 1024;
   int max_image_pixels = 4096 * 4096;
+  int max_view_side = 8192;  // a view's width or height: what every GPU's framebuffer holds
   int max_stages = 64;
   size_t max_string_bytes = 1024;
 };

@@ -283,14 +283,27 @@ void CameraNode::statisticsLoop(const std::atomic<bool>& stop) {
   } catch (const Error& e) {
     spdlog::error("node {}: no lumigraph rendering: {}", name_, e.what());
   }
+  int64_t failures = 0;
   while (!stop) {
     studio_work_.clear();
-    if (std::optional<Message> offsets = offsets_.pop(std::chrono::milliseconds(0))) {
-      for (Message& image : partialImagesWithOffsets(*offsets)) post(std::move(image));
-    } else if (std::optional<Message> pose = poses_.pop(std::chrono::milliseconds(0))) {
-      if (std::optional<Message> reply = statisticsFor(*pose)) post(std::move(*reply));
-    } else {
-      studio_work_.wait(std::chrono::milliseconds(20));
+    // A frame the node cannot make (a view its GPU cannot hold, out of memory) is skipped and
+    // said, and the node goes on with the next: an exception leaving this thread would end the
+    // process.
+    int64_t frame_id = -1;
+    try {
+      if (std::optional<Message> offsets = offsets_.pop(std::chrono::milliseconds(0))) {
+        frame_id = offsets->frame_id;
+        for (Message& image : partialImagesWithOffsets(*offsets)) post(std::move(image));
+      } else if (std::optional<Message> pose = poses_.pop(std::chrono::milliseconds(0))) {
+        frame_id = pose->frame_id;
+        if (std::optional<Message> reply = statisticsFor(*pose)) post(std::move(*reply));
+      } else {
+        studio_work_.wait(std::chrono::milliseconds(20));
+      }
+    } catch (const std::exception& e) {
+      if (++failures <= 10 || failures % 1000 == 0)
+        spdlog::error("node {}: frame {} skipped ({} so far): {}", name_, frame_id, failures,
+                      e.what());
     }
   }
   // The GL objects belong to this thread's context.
@@ -322,9 +335,17 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
   Posed& posed = it->second;
   const std::shared_ptr<const Set> set = posed.set;
   const Eigen::Vector3d pivot = posed.pivot;
-  // Offsets for another mesh or configuration are ignored.
+  // Offsets for another mesh or configuration are ignored, and said once.
   const bool fits = offsets.offsets.size() == size_t(posed.positions.cols()) &&
                     offsets.offset_count == options_.refine.offsetLevels();
+  if (!fits && !told_offsets_) {
+    told_offsets_ = true;
+    spdlog::warn(
+        "node {}: frame {}: the studio's offsets are for {} vertices at {} levels, this node "
+        "refines {} at {}: not used; are the studio's refine: configuration and body another?",
+        name_, message.frame_id, offsets.offsets.size(), offsets.offset_count,
+        posed.positions.cols(), options_.refine.offsetLevels());
+  }
   if (fits) {
     applyOffsets(options_.refine, offsets.offsets, posed.positions, posed.normals, positions_);
     // The refined surface's own normals (the lumigraph's facing term and rim dilation): 0.1 dB

@@ -193,6 +193,7 @@ class CameraNode {
     Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  // the actor's place on the floor, for clones
   };
   std::map<int64_t, Posed> posed_;  // frames awaiting their offsets (statistics thread's alone)
+  bool told_offsets_ = false;       // said that the studio's offsets do not fit (that thread's)
   // Map nodes of frames done with, reused with their matrices: keeping a frame's posed mesh does
   // not allocate once warmed up.
   std::vector<std::map<int64_t, Posed>::node_type> spare_posed_;

@@ -319,6 +319,13 @@ TEST(MessageCodec, MalformedViewsAreRefusedWithTheirReason) {
   bytes = encodeMessage(message);
   result = decodeMessage(bytes.data(), bytes.size());
   EXPECT_EQ(result.error, "view: a clone's offset or turn is not a finite number within 1000");
+  // Few pixels, but wider than a framebuffer can be (the node's renderer would throw).
+  view.clones.clear();
+  view.width = 20000, view.height = 10;
+  message.body = view;
+  bytes = encodeMessage(message);
+  result = decodeMessage(bytes.data(), bytes.size());
+  EXPECT_EQ(result.error, "view: 20000x10 pixels, expected at most 8192 a side");
 }
 
 }  // namespace

@@ -310,7 +310,8 @@ TEST(StudioCoordinator, WhenMostNodesFrameIdsMoveTogetherTheStudioFollows) {
     SCOPED_TRACE(moved);
     ASSERT_TRUE(node1.send(moved, SilhouettesData{}));  // alone: refused
     studio.runFor(milliseconds(100));
-    ASSERT_TRUE(node1.send(moved + 1, SilhouettesData{}));
+    ASSERT_TRUE(node1.send(moved + 1, SilhouettesData{}));  // still alone: refused
+    studio.runFor(milliseconds(100));
     ASSERT_TRUE(node2.send(moved + 1, SilhouettesData{}));  // now both: followed
     EXPECT_EQ(nextPoseFrame(node1, studio, moved), moved + 1);
     ASSERT_TRUE(both(moved + 2));
