@@ -91,9 +91,7 @@ void addCameraCommands(CLI::App& app) {
     Rig rig;
     if (!v->session.empty()) {
       // A recording, in its own pixel format, as the cameras would have delivered it.
-      const SessionReader reader(v->session);
-      for (const std::string& warning : reader.warnings())
-        fmt::print(stderr, "warning: {}\n", warning);
+      const SessionReader reader(v->session);  // which logs its warnings
       rig = reader.rig();
       format = reader.pixelFormat();
       loop->fps = reader.fps();

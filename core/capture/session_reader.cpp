@@ -1,10 +1,12 @@
 #include "core/capture/session_reader.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <array>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <map>
@@ -12,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string_view>
+#include <type_traits>
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
@@ -29,7 +32,9 @@ template <typename T>
 bool parseNumber(std::string_view text, T& out) {
   if (text.empty()) return false;
   const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), out);
-  return ec == std::errc() && end == text.data() + text.size();
+  if (ec != std::errc() || end != text.data() + text.size()) return false;
+  if constexpr (std::is_floating_point_v<T>) return std::isfinite(out);  // not "nan" nor "inf"
+  return true;
 }
 
 std::vector<std::string_view> splitFields(std::string_view line) {
@@ -200,6 +205,8 @@ SessionReader::SessionReader(const fs::path& folder) : folder_(folder) {
   readSessionYaml();
   readIndex();
   checkImages();
+  // Every command that opens a session says why it is shorter than recorded.
+  for (const std::string& warning : warnings_) spdlog::warn("{}", warning);
 }
 
 void SessionReader::readSessionYaml() {
@@ -221,7 +228,8 @@ void SessionReader::readSessionYaml() {
   source_ = yaml.string(yaml.required(root, "", "source", "where the frames came from"), "source");
   const YAML::Node fps = yaml.required(root, "", "fps", "frames per second");
   fps_ = yaml.number(fps, "fps");
-  if (fps_ <= 0) yaml.fail(fps, "fps", "expected a positive frame rate, got " + fps.Scalar());
+  if (!(fps_ > 0 && fps_ <= 1000))
+    yaml.fail(fps, "fps", "expected a frame rate above 0 and at most 1000, got " + fps.Scalar());
   const YAML::Node pixel_format = yaml.required(root, "", "pixel_format", pixelFormatNames());
   const std::optional<PixelFormat> parsed =
       parsePixelFormat(yaml.string(pixel_format, "pixel_format"));

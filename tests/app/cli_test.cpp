@@ -497,6 +497,16 @@ TEST(Cli, ExportWritesTheCaptureAsBvhGltfAndPlyThatReadBack) {
   EXPECT_NEAR(high - low, 1.74f, 0.1f);
   EXPECT_TRUE(fs::exists(out / "meshes" / "000004.ply"));
 
+  // The last frame's image of a camera cut short (the disk filled): the session ends before it,
+  // and the command says so, naming the file, instead of exporting one frame less in silence.
+  const fs::path cut = session / "cam03" / "000004.png";
+  fs::resize_file(cut, fs::file_size(cut) / 2);
+  r = run(kCli + " export --session " + session.string() + " --out " +
+          (folder / "export_cut").string() + " --bvh");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("4 frames exported"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("cam03/000004.png"), std::string::npos) << r.output;
+
   // A session nobody can be tracked in: a clear error, nothing half-written claimed.
   r = run(kCli + " export --session " + (folder / "nothing").string() + " --out " +
           (folder / "export2").string());

@@ -230,7 +230,9 @@ TEST(SessionReader, MalformedFilesAreErrorsNamingFileAndLine) {
   replaceInFile(yaml, "format: lumistage-session", "format: lumistage-rig");
   expectError(yaml + ":2: format: expected lumistage-session, got 'lumistage-rig'");
   replaceInFile(yaml, "fps: 30", "fps: -30");
-  expectError(yaml + ":6: fps: expected a positive frame rate, got -30");
+  expectError(yaml + ":6: fps: expected a frame rate above 0 and at most 1000, got -30");
+  replaceInFile(yaml, "fps: 30", "fps: 1e10");  // a frame period of 0 ns: nodes divided by it
+  expectError(yaml + ":6: fps: expected a frame rate above 0 and at most 1000, got 1e10");
   replaceInFile(yaml, "truth: false", "truth: false\nlens: wide");
   expectError(yaml + ":11: lens: unknown key 'lens'");
   replaceInFile(index, "1,", "x1,");
@@ -271,6 +273,19 @@ TEST(SessionReader, ReadsGroundTruthJointsAndMaskPaths) {
   }
   EXPECT_TRUE(fs::exists(reader.truthMaskPath(1, 2)));
   EXPECT_EQ(reader.truthMaskPath(1, 2), folder / "truth" / "masks" / "cam02" / "000002.png");
+  // A joint that is not a number is an error naming the file and line, not NaN scores.
+  const std::string csv = (folder / "truth" / "joints.csv").string();
+  const std::string text = readFile(csv);
+  const size_t line3 = text.find('\n', text.find('\n') + 1) + 1;  // frame 1's line
+  const size_t comma = text.find(',', line3);
+  std::ofstream(csv, std::ios::trunc)
+      << text.substr(0, comma + 1) << "nan" << text.substr(text.find(',', comma + 1));
+  try {
+    reader.readTruthJoints();
+    ADD_FAILURE() << "a NaN joint was read";
+  } catch (const Error& e) {
+    EXPECT_TRUE(contains(e.what(), csv + ":3: expected a frame number and 6 numbers")) << e.what();
+  }
   fs::remove_all(folder);
 }
 
