@@ -1,6 +1,8 @@
 #include "core/base/yaml_reader.h"
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "core/base/error.h"
 
@@ -76,8 +78,16 @@ void YamlReader::requireSequence(const YAML::Node& node, std::string_view key, i
 
 void YamlReader::checkKeys(const YAML::Node& map, std::string_view key,
                            std::initializer_list<std::string_view> allowed) const {
+  std::vector<std::pair<std::string, int>> seen;  // the keys so far, and their lines
   for (const auto& entry : map) {
     const std::string name = entry.first.Scalar();
+    // YAML keeps the first of two equal keys: the second, a hand edit, would be ignored.
+    for (const auto& [other, line] : seen) {
+      if (other == name)
+        fail(entry.first, child(key, name),
+             "given twice (first at line " + std::to_string(line) + ")");
+    }
+    seen.emplace_back(name, entry.first.Mark().line + 1);
     bool known = false;
     for (std::string_view a : allowed) known = known || name == a;
     if (!known) {

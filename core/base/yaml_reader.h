@@ -27,7 +27,8 @@ class YamlReader {
   void requireMap(const YAML::Node& node, std::string_view key) const;
   // A sequence, of exactly `size` entries unless size < 0.
   void requireSequence(const YAML::Node& node, std::string_view key, int size = -1) const;
-  // Rejects keys outside `allowed`: a misspelt key must not be silently ignored.
+  // Rejects keys outside `allowed` and keys given twice: a misspelt or repeated key must not be
+  // silently ignored.
   void checkKeys(const YAML::Node& map, std::string_view key,
                  std::initializer_list<std::string_view> allowed) const;
 

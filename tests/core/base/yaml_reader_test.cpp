@@ -32,6 +32,12 @@ TEST(YamlReader, MissingAndUnknownKeys) {
               in.checkKeys(root["outer"], "outer", {"alpha", "beta"});
             }),
             "test.yaml:3: outer.betta: unknown key 'betta'; expected one of: alpha, beta");
+  // A key given twice (YAML would keep the first and ignore the edit below it).
+  const YAML::Node twice = in.parseDocument("outer:\n  alpha: 1\n  beta: 2\n  alpha: 3\n");
+  EXPECT_EQ(testing::errorOf([&] {
+              in.checkKeys(twice["outer"], "outer", {"alpha", "beta"});
+            }),
+            "test.yaml:4: outer.alpha: given twice (first at line 2)");
 }
 
 TEST(YamlReader, SyntaxErrorsCarryTheirLine) {
