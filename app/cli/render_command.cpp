@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -89,10 +90,24 @@ void addRenderCommand(CLI::App& app) {
       clones.push_back(t);
     }
     const Camera first = pathCamera(a->path, rig, 0, a->width, a->height);
-    cv::VideoWriter video(a->out, cv::VideoWriter::fourcc('m', 'p', '4', 'v'),
+    // The video is made beside its name (the same extension: it chooses the container) and
+    // renamed over it once it reads back whole: a failed frame, a full disk or an interrupted
+    // render never replaces a good video with a torn one.
+    const std::filesystem::path out(a->out);
+    const std::filesystem::path partial =
+        out.parent_path() / (out.stem().string() + ".partial" + out.extension().string());
+    cv::VideoWriter video(partial.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'),
                           a->fps > 0 ? a->fps : session.fps(),
                           cv::Size(first.width(), first.height()));
     if (!video.isOpened()) throw Error(a->out + ": cannot open a video writer (OpenCV/FFmpeg)");
+    struct RemovePartial {
+      const std::filesystem::path& path;
+      bool keep = false;
+      ~RemovePartial() {
+        std::error_code ignored;
+        if (!keep) std::filesystem::remove(path, ignored);
+      }
+    } remove_partial{partial};
     fmt::print("rendering {} frames of {}x{} on {}\n", frames, first.width(), first.height(),
                gl.description());
     std::vector<CameraFrame> images;
@@ -121,6 +136,16 @@ void addRenderCommand(CLI::App& app) {
       printProgress("render", i + 1, frames, ms);
     }
     video.release();
+    cv::VideoCapture check(partial.string());
+    const int read_back = check.isOpened() ? int(check.get(cv::CAP_PROP_FRAME_COUNT)) : 0;
+    check.release();
+    if (read_back != frames) {
+      throw Error(fmt::format(
+          "{}: the video read back {} of its {} frames (disk full?); {}", a->out, read_back, frames,
+          std::filesystem::exists(out) ? "the old file is left as it was" : "nothing written"));
+    }
+    std::filesystem::rename(partial, out);
+    remove_partial.keep = true;
     fmt::print("wrote {}\n", a->out);
   });
 }

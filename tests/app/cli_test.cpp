@@ -15,6 +15,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
 #include <string>
 
 #include "core/base/atomic_file.h"
@@ -461,6 +463,43 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
   EXPECT_GT(reportNumber(text, "loo_missed_pct_unrefined"), reportNumber(text, "loo_missed_pct"))
       << text;
   EXPECT_GT(reportNumber(text, "loo_beyond_pct"), 0.0) << text;
+  fs::remove_all(folder);
+}
+
+// lumistage render makes a video of the session along a camera path. A render that fails part way
+// (here a mesh missing for the second frame) says so, leaves the video it would have replaced as
+// it was, and no torn file beside it.
+TEST(Cli, RenderWritesAVideoAndAFailedRenderReplacesNothing) {
+  const fs::path folder = tempPath("render");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240",
+                               "actor:\n  vertices: 2000\n", "--frames 3"));
+  const fs::path session = folder / "session", video = folder / "orbit.mp4";
+  const std::string common = kCli + " render --session " + session.string() +
+                             " --width 160 --height 120 --out " + video.string() + " --mesh ";
+  Result r = run(common + "truth");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto frames = [&] {
+    cv::VideoCapture c(video.string());
+    return c.isOpened() ? int(c.get(cv::CAP_PROP_FRAME_COUNT)) : -1;
+  };
+  ASSERT_EQ(frames(), 3);
+  {
+    cv::VideoCapture c(video.string());
+    cv::Mat first;
+    ASSERT_TRUE(c.read(first));
+    EXPECT_EQ(first.cols, 160);
+    double brightest = 0;
+    cv::minMaxLoc(first.reshape(1), nullptr, &brightest);
+    EXPECT_GT(brightest, 100) << "no actor in the video";
+  }
+  fs::create_directories(folder / "meshes");
+  fs::copy_file(session / "truth" / "surface" / "000000.ply", folder / "meshes" / "000000.ply");
+  r = run(common + (folder / "meshes").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("000001.ply"), std::string::npos) << r.output;
+  EXPECT_EQ(frames(), 3);
+  for (const auto& entry : fs::directory_iterator(folder))
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
   fs::remove_all(folder);
 }
 
