@@ -238,6 +238,11 @@ class Parser {
       }
       const double n = number({words[1], number_}, "Frames");
       if (n < 0 || n != std::floor(n)) fail(number_, "expected a whole number of frames");
+      // A frame a line: no more frames than the file has lines (before making room for them).
+      if (n > double(lines_.size())) {
+        fail(number_, fmt::format("'Frames: {}' announces more frames than the file's {} lines",
+                                  words[1], lines_.size()));
+      }
       out.frames.resize(static_cast<size_t>(n));
     }
     {

@@ -34,7 +34,10 @@ TriangleMesh readPlyMesh(const std::filesystem::path& path) {
   if (vertices < 0 || faces < 0 || vertex_properties != 3)
     throw Error(path.string() + ": expected 'element vertex' (float x, y, z) and 'element face'");
   size_t at = end + std::strlen("end_header\n");
-  if (data.size() < at + size_t(vertices) * 12 + size_t(faces) * 13)
+  // Counts checked against the bytes there are before they are multiplied (a count near 2^63
+  // wrapped the product into a small one).
+  if (size_t(vertices) > data.size() / 12 || size_t(faces) > data.size() / 13 ||
+      data.size() < at + size_t(vertices) * 12 + size_t(faces) * 13)
     throw Error(path.string() + ": shorter than its header says");
   TriangleMesh mesh;
   mesh.positions.resize(3, vertices);

@@ -104,6 +104,15 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
         throw fail(fmt::format("{}: expected a non-negative integer, found '{}'", what, s));
       return v;
     };
+    // Samples are frames of a wand's wave: a million is over nine hours at 30 frames a second,
+    // and every sample takes room for every camera.
+    constexpr int kMaxSample = 1'000'000;
+    auto sampleId = [&](std::string_view s) {
+      const int v = integer(s, "sample");
+      if (v >= kMaxSample)
+        throw fail(fmt::format("sample {} is beyond the largest, {}", v, kMaxSample - 1));
+      return v;
+    };
     auto number = [&](std::string_view s, const char* what) {
       double v = 0;
       const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
@@ -126,7 +135,7 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
       cameras.push_back(c);
     } else if (w[0] == "point") {
       expect(5, "point SAMPLE CAMERA X_PX Y_PX");
-      const int sample = integer(w[1], "sample");
+      const int sample = sampleId(w[1]);
       int camera = -1;
       for (size_t c = 0; c < cameras.size(); ++c) {
         if (cameras[c].name == w[2]) camera = static_cast<int>(c);
@@ -142,7 +151,7 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
       max_sample = std::max(max_sample, sample);
     } else if (w[0] == "pair") {
       expect(3, "pair SAMPLE_A SAMPLE_B");
-      pairs.emplace_back(integer(w[1], "sample"), integer(w[2], "sample"));
+      pairs.emplace_back(sampleId(w[1]), sampleId(w[2]));
       max_sample = std::max({max_sample, pairs.back().first, pairs.back().second});
     } else if (w[0] == "floor") {
       expect(5, "floor SAMPLE X_M Y_M Z_M");

@@ -215,6 +215,9 @@ TEST(Bvh, MalformedFilesNameFileLineAndWhatWasExpected) {
   std::string m = load(good.substr(0, good.find("JOINT RightArm")));
   EXPECT_TRUE(contains(m, "bad.bvh:")) << m;
   EXPECT_TRUE(contains(m, "truncated")) << m;
+  // A frame count no file could hold: refused before room is made for it.
+  m = load(replaced("Frames: 4", "Frames: 1000000000000000"));
+  EXPECT_TRUE(contains(m, "announces more frames than the file's")) << m;
   // Truncated in the motion: three of four frames.
   m = load(good.substr(0, good.rfind("0 95 0 0 0 0")));
   EXPECT_TRUE(contains(m, "expected 4 frames")) << m;

@@ -44,6 +44,11 @@ TEST(WandSession, ErrorsNameTheLine) {
   EXPECT_NE(error(head + "point x cam01 1 2\n").find("sample: expected a non-negative integer"),
             std::string::npos);
   EXPECT_NE(error("camera cam01 640 480\n").find("w.txt:1"), std::string::npos);
+  // A sample id whose room (every camera's, every sample up to it) no machine has.
+  EXPECT_NE(error(head + "point 2147483647 cam01 1 1\n").find("sample 2147483647 is beyond"),
+            std::string::npos);
+  EXPECT_NE(error(head + "pair 0 1000000\n").find("w.txt:3: sample 1000000 is beyond"),
+            std::string::npos);
   EXPECT_NE(error(head + "blob 1\n").find("unknown line kind 'blob'"), std::string::npos);
   const WandSession ok = parseWandSession(head + "point 3 cam01 10.5 20.25\n", "w.txt");
   EXPECT_EQ(ok.sampleCount(), 4);

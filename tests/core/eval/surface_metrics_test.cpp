@@ -71,6 +71,12 @@ TEST(SurfaceDistance, ReadsTruthSurfacesAndRefusesBrokenOnes) {
   std::ofstream(folder / "short.ply", std::ios::binary) << header << body.substr(0, 40);
   EXPECT_NE(testing::errorOf([&] { readPlyMesh(folder / "short.ply"); }).find("short.ply"),
             std::string::npos);
+  // A vertex count whose size in bytes wraps around to a small one: refused, not allocated.
+  std::string huge = header;
+  huge.replace(huge.find("vertex 3"), 8, "vertex 1537228672809129302");
+  std::ofstream(folder / "huge.ply", std::ios::binary) << huge << body;
+  EXPECT_EQ(testing::errorOf([&] { readPlyMesh(folder / "huge.ply"); }),
+            (folder / "huge.ply").string() + ": shorter than its header says");
 }
 
 }  // namespace
