@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "app/cli/progress.h"
@@ -196,11 +197,14 @@ void addCameraCommands(CLI::App& app) {
     std::unique_ptr<SessionRecorder> recorder;
     std::unique_ptr<FrameGrouper> grouper;
     if (!s->record.empty()) {
-      const PixelFormat format = s->session.empty() ? pixelFormatOption(s->pixel_format)
-                                                    : SessionReader(s->session).pixelFormat();
-      recorder = std::make_unique<SessionRecorder>(s->record, rig, format, s->fps,
-                                                   s->session.empty() ? "aravis" : "replay", 8,
-                                                   *parseImageFiles(s->image_files));
+      // A replayed session is recorded in its own format and at its own rate.
+      std::optional<SessionReader> replayed;
+      if (!s->session.empty()) replayed.emplace(s->session);
+      const PixelFormat format =
+          replayed ? replayed->pixelFormat() : pixelFormatOption(s->pixel_format);
+      recorder = std::make_unique<SessionRecorder>(
+          s->record, rig, format, replayed ? replayed->fps() : s->fps,
+          s->session.empty() ? "aravis" : "replay", 8, *parseImageFiles(s->image_files));
       grouper = std::make_unique<FrameGrouper>(rig.cameraCount());
     }
     const double cpu_start = cpuSeconds();

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cctype>
 #include <stdexcept>
 
 #include "core/base/atomic_file.h"
@@ -167,7 +169,20 @@ Rig parseRig(std::string_view yaml_text, std::string_view source_name) {
                 "node '" + node.name + "' is defined twice; names must be unique");
       }
     }
-    if (n["host"]) node.host = in.string(n["host"], YamlReader::child(key, "host"));
+    if (n["host"]) {
+      // A host name or address (what the rig file is written back with, quoted).
+      node.host = in.string(n["host"], YamlReader::child(key, "host"));
+      const bool valid = !node.host.empty() && node.host.size() <= 253 &&
+                         std::all_of(node.host.begin(), node.host.end(), [](char c) {
+                           return std::isalnum(static_cast<unsigned char>(c)) || c == '.' ||
+                                  c == '-' || c == ':' || c == '_';
+                         });
+      if (!valid) {
+        in.fail(n["host"], YamlReader::child(key, "host"),
+                "expected a host name or address (letters, digits, '.', '-', ':', '_'), got '" +
+                    node.host + "'");
+      }
+    }
     const std::string c_key = YamlReader::child(key, "cameras");
     const YAML::Node list = in.required(n, key, "cameras", "a list of camera names");
     in.requireSequence(list, c_key);

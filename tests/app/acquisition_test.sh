@@ -41,9 +41,11 @@ for camera in cam01 cam02 cam03; do
   done
 done
 
-# The recording replays.
-"$cli" stream --session "$work/recorded" --replay fast --seconds 5 > "$work/replay.log" 2>&1 || fail "replay: $(cat "$work/replay.log")"
+# The recording replays, and a replay recorded again keeps the session's rate (the cameras' 20,
+# not the option's default).
+"$cli" stream --session "$work/recorded" --replay fast --seconds 5 --record "$work/again" > "$work/replay.log" 2>&1 || fail "replay: $(cat "$work/replay.log")"
 grep -q "^cam03 *$sets " "$work/replay.log" || fail "replay did not give $sets frames of cam03: $(cat "$work/replay.log")"
+grep -q "^fps: 20$" "$work/again/session.yaml" || fail "the replay was recorded at another rate: $(grep fps "$work/again/session.yaml")"
 # The same cameras, live, through a camera-node process into the studio's pipeline.
 "$cli" run --rig "$work/served/rig.yaml" --address 127.0.1.3 --frames 20 --seconds 15 > "$work/run.log" 2>&1 || fail "run: $(cat "$work/run.log")"
 grep -q "^20 frames in all" "$work/run.log" || fail "the pipeline did not complete 20 frames from live cameras: $(cat "$work/run.log")"

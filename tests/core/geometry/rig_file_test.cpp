@@ -180,6 +180,11 @@ TEST(RigFile, OtherMistakesGetTheirOwnMessages) {
   EXPECT_NE(errorOf(replaced(kGood, "fx: 800, fy: 801", "fx: .nan, fy: 801"))
                 .find("expected a finite number"),
             std::string::npos);
+  // A host the rig file could not be written back with (the session's rig.yaml would not parse).
+  EXPECT_NE(errorOf(replaced(kGood, "host: \"10.0.0.11\"", "host: 'pc\"1'"))
+                .find("host: expected a host name or address (letters, digits, '.', '-', ':', "
+                      "'_'), got 'pc\"1'"),
+            std::string::npos);
 }
 
 TEST(RigFile, MissingFileNamesThePath) {

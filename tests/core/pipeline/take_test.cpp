@@ -1,6 +1,7 @@
 // Takes recorded on the nodes (TakeRecorder) and joined into one session (mergeTake), with real
 // files: each node's part holds exactly the frames asked of it, bit-exact, and the parts merge
 // into the session of every camera.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -222,6 +223,18 @@ TEST(Take, PartsThatDoNotBelongTogetherAreRefusedByName) {
               mergeTake({a, b}, folder / "out4", rig);
             }),
             "take: the rig's camera " + rig.camera(2).name() + " is in none of the parts");
+  {  // A rig whose first camera is of another size than the part filmed.
+    std::vector<Camera> cameras = rig.cameras();
+    const Camera c = cameras[0];
+    cameras[0] = Camera(c.name(), 2 * c.width(), 2 * c.height(), c.intrinsics(), c.distortion(),
+                        c.rotation(), c.translation());
+    const Rig other(cameras, rig.nodes());
+    EXPECT_EQ(testing::errorOf([&] {
+                mergeTake({a, b}, folder / "out6", other);
+              }),
+              fmt::format("take: the rig's camera {} is {}x{}, its part filmed {}x{}", c.name(),
+                          2 * c.width(), 2 * c.height(), c.width(), c.height()));
+  }
   EXPECT_NE(testing::errorOf([&] { takeParts({folder / "nothing"}); }).find("no such folder"),
             std::string::npos);
   // Frames 2 of a and b in common; the out folder must be new.
