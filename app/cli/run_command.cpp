@@ -305,6 +305,11 @@ void addRunCommand(CLI::App& app) {
       if (!cv::imwrite(a->image, bgra)) throw Error(a->image + ": cannot write the image");
       fmt::print("wrote {} (frame {})\n", a->image, image.frame_id);
     }
+    // The figures are printed either way, but a run a node died in did not measure the rig.
+    if (pipeline.nodesFailed() > 0) {
+      throw Error(fmt::format("{} node process{} failed during the run (see above)",
+                              pipeline.nodesFailed(), pipeline.nodesFailed() > 1 ? "es" : ""));
+    }
   });
 }
 

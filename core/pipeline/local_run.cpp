@@ -127,6 +127,7 @@ void LocalPipelineRun::runFor(std::chrono::milliseconds duration) {
     int status = 0;
     if (running_[n] && waitpid(children_[n], &status, WNOHANG) == children_[n]) {
       running_[n] = false;
+      nodes_failed_ += !WIFEXITED(status) || WEXITSTATUS(status) != 0;
       exits_.push_back(fmt::format("node {} exited ({})", names_[n],
                                    WIFEXITED(status) ? fmt::format("status {}", WEXITSTATUS(status))
                                                      : fmt::format("signal {}", WTERMSIG(status))));

@@ -50,6 +50,8 @@ class LocalPipelineRun {
   void runFor(std::chrono::milliseconds duration);
   // "node node3 exited (status 1)" for each node that exited since the last call.
   std::vector<std::string> takeExits();
+  // How many node processes ended on a signal or a failure status (not stopped by killNode).
+  int nodesFailed() const { return nodes_failed_; }
   // Whether a node process started here still runs (always, for nodes on other PCs).
   bool anyNodeRunning() const;
   // CPU time (user + system, seconds) the running node processes have used so far.
@@ -102,6 +104,7 @@ class LocalPipelineRun {
   std::vector<bool> running_;
   std::vector<pid_t> killed_;  // by killNode, not yet reaped
   std::vector<std::string> exits_;
+  int nodes_failed_ = 0;
   double frame_rate_ = 30;
 };
 

@@ -240,6 +240,24 @@ TEST(Cli, NodeChecksItsPlaceInTheRig) {
       << r.output;
 }
 
+// A node process that dies during a run (killed here, as by a crash): the run says which, still
+// prints its figures, and exits with a failure, so that no script takes a run without that node
+// for a measurement of the rig.
+TEST(Cli, RunFailsWhenANodeProcessDies) {
+  const fs::path folder = tempPath("node_dies");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 2 --cameras-per-node 1 --width 320 --height 240",
+                               "actor:\n  vertices: 2000\n", "--frames 4"));
+  // ('[n]ode2': the pattern must not match this shell's own command line.)
+  const Result r = run("(" + kCli + " run --session " + (folder / "session").string() +
+                       " --frames 100000 --seconds 5 & sleep 2; pkill -9 -f -- '--node [n]ode2'; "
+                       "wait $!)");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("node node2 exited (signal 9)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("frames in all"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 node process failed during the run"), std::string::npos) << r.output;
+  fs::remove_all(folder);
+}
+
 // A screen lit a third as bright as the reference one: each node says which of its cameras sees
 // it too dim to key cleanly, and runs on.
 TEST(Cli, RunWarnsOfADimScreenNamingTheCamera) {
