@@ -441,14 +441,16 @@ void StudioCoordinator::takePoses() {
 }
 
 void StudioCoordinator::sendPose(int64_t frame_id, FrameState& frame) {
-  std::vector<std::vector<uint8_t>> view_bytes;  // before the pose: the views to render it for
-  for (const ViewData& view : views_) {
-    Message view_message;
-    view_message.sender = "studio";
-    view_message.frame_id = frame_id;
-    view_message.sent_ns = steadyNowNs();
-    view_message.body = view;
-    view_bytes.push_back(encodeMessage(view_message));
+  // Before the pose, the views to render it for, encoded into buffers kept from frame to frame.
+  while (view_encoders_.size() < views_.size())
+    view_encoders_.push_back(std::make_unique<MessageEncoder>());
+  view_bytes_.clear();
+  for (size_t v = 0; v < views_.size(); ++v) {
+    view_message_.sender = "studio";
+    view_message_.frame_id = frame_id;
+    view_message_.sent_ns = steadyNowNs();
+    view_message_.body = views_[v];  // the same alternative: its vectors keep their memory
+    view_bytes_.push_back(view_encoders_[v]->encode(view_message_));
   }
   Message message;
   message.sender = "studio";
@@ -459,7 +461,7 @@ void StudioCoordinator::sendPose(int64_t frame_id, FrameState& frame) {
   for (auto& [name, node] : nodes_) {
     if (node.report.lost || node.peer.empty()) continue;
     bool sent = true;
-    for (const std::vector<uint8_t>& v : view_bytes)
+    for (const std::span<const uint8_t> v : view_bytes_)
       sent = sent && endpoint_.send(node.peer, v, std::chrono::milliseconds(5));
     if (sent && endpoint_.send(node.peer, bytes, std::chrono::milliseconds(5)))
       frame.pose_nodes.insert(name);

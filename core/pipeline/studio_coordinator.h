@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <span>
 #include <optional>
 #include <set>
 #include <string>
@@ -287,6 +288,10 @@ class StudioCoordinator {
   std::vector<std::map<int64_t, FrameState>::node_type> spare_frames_;
   std::map<std::string, NodeState> nodes_;
   MessageEncoder encoder_;
+  // The views sent with each pose (sendPose): one encoder a view, kept with its message.
+  std::vector<std::unique_ptr<MessageEncoder>> view_encoders_;
+  std::vector<std::span<const uint8_t>> view_bytes_;
+  Message view_message_;
   int64_t newest_done_ = -1;
   int64_t newest_seen_ = -1;  // the newest frame any node sent silhouettes of
   RecordData take_;
