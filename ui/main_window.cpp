@@ -233,7 +233,14 @@ void MainWindow::startSource(const SourceSpec& spec) {
   worker->moveToThread(source_thread_);
   connect(source_thread_, &QThread::started, worker, &SourceWorker::run);
   connect(worker, &SourceWorker::finished, source_thread_, &QThread::quit);
-  connect(source_thread_, &QThread::finished, worker, &QObject::deleteLater);
+  // A source that fails is cleaned up as by stopSource(), which deletes the worker once its
+  // thread has ended, so source_worker_ never points at a deleted one.
+  connect(
+      worker, &SourceWorker::finished, this,
+      [this, generation = ++source_generation_] {
+        if (generation == source_generation_) stopSource();
+      },
+      Qt::QueuedConnection);
   connect(worker, &SourceWorker::opened, this,
           [this](std::shared_ptr<const Rig> rig, const QString& description) {
             showRig(std::make_unique<Rig>(*rig), description);
@@ -284,9 +291,10 @@ void MainWindow::showPipeline() {
 
 void MainWindow::stopSource() {
   if (!source_thread_) return;
-  if (source_worker_) source_worker_->stop();  // the worker is alive until its thread finishes
+  source_worker_->stop();
   source_thread_->quit();
   source_thread_->wait();
+  delete source_worker_;  // its thread has ended
   delete source_thread_;
   source_thread_ = nullptr;
   source_worker_ = nullptr;

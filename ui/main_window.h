@@ -47,6 +47,7 @@ class MainWindow : public QMainWindow {
   // rig replaces the loaded one. Errors arrive in sourceFailed and in the status bar.
   void startSource(const SourceSpec& spec);
   void stopSource();
+  bool sourceRunning() const { return source_thread_ != nullptr; }
   // The demo: the virtual studio's demo session (made first if needed, with progress) replayed
   // as the cameras' source and run through the distributed pipeline.
   void startDemo();
@@ -90,6 +91,7 @@ class MainWindow : public QMainWindow {
   StagePlanView* stage_plan_;
   QThread* source_thread_ = nullptr;
   SourceWorker* source_worker_ = nullptr;
+  int source_generation_ = 0;  // sources started, so that a late 'finished' stops no later one
   RigPanel* rig_panel_;
   PipelinePanel* pipeline_panel_;
   HealthPanel* health_panel_;

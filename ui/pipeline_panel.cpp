@@ -309,7 +309,15 @@ void PipelinePanel::start(LocalRunOptions options) {
   if (view_data_) worker_->setView(*view_data_);
   connect(thread_, &QThread::started, worker_, &PipelineWorker::run);
   connect(worker_, &PipelineWorker::finished, thread_, &QThread::quit);
-  connect(thread_, &QThread::finished, worker_, &QObject::deleteLater);
+  // A pipeline that ends by itself (a session that is none, a key store missing) is cleaned up
+  // as by Stop, and the buttons say so; stop() deletes the worker once its thread has ended, so
+  // worker_ never points at a deleted one. (Not a later pipeline's: the generation tells.)
+  connect(
+      worker_, &PipelineWorker::finished, this,
+      [this, generation = ++generation_] {
+        if (generation == generation_) stop();
+      },
+      Qt::QueuedConnection);
   connect(worker_, &PipelineWorker::snapshot, this, &PipelinePanel::show);
   connect(worker_, &PipelineWorker::view, this, &PipelinePanel::view);
   connect(worker_, &PipelineWorker::message, summary_, &QLabel::setText);
@@ -325,9 +333,10 @@ void PipelinePanel::start(LocalRunOptions options) {
 
 void PipelinePanel::stop() {
   if (!thread_) return;
-  worker_->stop();  // alive until its thread finishes
+  worker_->stop();
   thread_->quit();
   thread_->wait();
+  delete worker_;  // its thread has ended
   delete thread_;
   thread_ = nullptr;
   worker_ = nullptr;

@@ -153,6 +153,7 @@ class PipelinePanel : public QWidget {
   QString takes_folder_;
   QThread* thread_ = nullptr;
   PipelineWorker* worker_ = nullptr;
+  int generation_ = 0;  // pipelines started, so that a late 'finished' stops no later one
   PipelineSnapshot last_;
   std::optional<ViewData> view_data_;
   QString demo_session_;

@@ -318,6 +318,38 @@ class MainWindowTest : public QObject {
     QVERIFY(!QFile::exists(dir.filePath("again.avi")));
   }
 
+  // A pipeline or a source that cannot start (a folder that is no session) ends by itself: it
+  // says why, and the studio is ready to start again, its controls pointing at no worker that
+  // is gone (they crashed the studio before).
+  void aPipelineOrSourceThatCannotStartSaysWhyAndCanStartAgain() {
+    QTemporaryDir dir;
+    MainWindow window;
+    lumistage::LocalRunOptions options;
+    options.session = dir.filePath("nothing").toStdString();
+    options.node_binary = LUMISTAGE_NODE;
+    window.pipeline()->start(options);
+    QTRY_VERIFY_WITH_TIMEOUT(!window.pipeline()->running(), 10000);
+    auto* summary = window.pipeline()->findChild<QLabel*>("pipeline_summary");
+    QVERIFY2(summary->text().contains("nothing"), qPrintable(summary->text()));
+    window.pipeline()->setView(window.viewport()->viewport()->viewData());
+    window.pipeline()->killNode("node1");
+    window.pipeline()->stopRecording();
+    QVERIFY(!window.pipeline()->startRecording(dir.filePath("v.avi")));
+    window.pipeline()->stop();
+
+    lumistage::SourceSpec spec;
+    QVERIFY(lumistage::SourceSpec::parse("session:" + dir.filePath("nothing"), spec).isEmpty());
+    QSignalSpy failed(&window, &MainWindow::sourceFailed);
+    window.startSource(spec);
+    QTRY_VERIFY_WITH_TIMEOUT(!window.sourceRunning(), 10000);
+    QCOMPARE(failed.count(), 1);
+    window.stopSource();
+    QVERIFY(lumistage::SourceSpec::parse("virtual", spec).isEmpty());
+    window.startSource(spec);
+    QVERIFY(window.sourceRunning());
+    window.stopSource();
+  }
+
   void unknownSourceIsRefusedWithTheChoices() {
     lumistage::SourceSpec spec;
     QVERIFY(lumistage::SourceSpec::parse("webcam", spec)
