@@ -838,7 +838,8 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
       if (c < best) best = c, best_pose = p;
     }
   }
-  if (opt.calibrate_shape && !shape_calibrated) {
+  const bool calibrating = opt.calibrate_shape && !shape_calibrated;
+  if (calibrating) {
     // Coordinate search over the body's proportions, refitting the pose for every trial.
     constexpr int kParams = 7;
     // Which of them: the legs' length, the girth and the feet (shoes). The hull's top fixes the
@@ -894,11 +895,16 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
     }
     setShape(make(k));
     best = fit(best_pose, opt.init_iterations);
-    shape_calibrated = true;
   }
   const double rms = fitRms(best_pose);
   out.fit_rms_m = rms;
-  if (rms > opt.lost_rms_m) return false;
+  if (rms > opt.lost_rms_m) {
+    // A hull no body fits (a prop, someone half inside the stage, a hull carved by some cameras
+    // only) is no actor to take the proportions from: the next initialisation calibrates anew.
+    if (calibrating) foot_scale = 1.0;
+    return false;
+  }
+  if (calibrating) shape_calibrated = true;
   pose = previous = best_pose;
   has_previous = false;
   return true;

@@ -140,6 +140,40 @@ TEST(PoseTracker, TracksAnActorFifteenPercentTallerAfterShapeCalibration) {
   EXPECT_LT(e.max_m, 0.08);
 }
 
+// Something that is no body stands on the stage first (a wide column, a prop of the actor's
+// height): no fit, and its proportions are not kept; the 15% taller actor who then walks on is
+// calibrated on their own hull.
+TEST(PoseTracker, ShapeIsCalibratedOnTheFirstBodyThatFitsNotOnAProp) {
+  SyntheticStage stage(kStudio, /*height_scale=*/1.15);
+  PoseTracker tracker(stage.config.rig, generic());
+  const MotionClip clip = makeBuiltinClip("arm_wave", stage.actor.skeleton, 30.0, 2);
+  stage.render(clip.sample(0));  // silhouettes of the stage's size, for the column's
+  std::vector<LowResSilhouette> column = stage.silhouettes;
+  std::vector<const LowResSilhouette*> pointers;
+  for (int c = 0; c < int(column.size()); ++c) {
+    LowResSilhouette& s = column[c];
+    std::fill(s.bits.begin(), s.bits.end(), uint8_t(0));
+    const Camera& camera = stage.config.rig.camera(s.camera);
+    for (double z = 0; z <= 1.9; z += 0.02)
+      for (double a = 0; a < 2 * M_PI; a += 0.02)
+        for (double r = 0; r <= 0.3; r += 0.05)
+          if (const auto p = camera.project(Eigen::Vector3d(r * std::cos(a), r * std::sin(a), z))) {
+            const int x = int(p->x() / s.step), y = int(p->y() / s.step);
+            if (x >= 0 && y >= 0 && x < s.width && y < s.height) s.set(x, y);
+          }
+    pointers.push_back(&s);
+  }
+  const TrackResult& prop = tracker.track(pointers);
+  EXPECT_FALSE(prop.valid()) << "a body fitted a column " << prop.fit_rms_m << " m";
+  const ClipErrors e = trackClip(stage, tracker, clip, 0, 30);
+  const auto& found = tracker.skeleton().restPositions();
+  const auto& actor = stage.actor.skeleton.restPositions();
+  EXPECT_NEAR(found[kHead].z(), actor[kHead].z(), 0.04);
+  EXPECT_NEAR(found[kPelvis].z(), actor[kPelvis].z(), 0.026);
+  EXPECT_EQ(e.tracked, e.frames);
+  EXPECT_LT(e.mean_m, 0.03);
+}
+
 TEST(PoseTracker, SeesNobodyOnAnEmptyStage) {
   SyntheticStage stage(kStudio);
   PoseTracker tracker(stage.config.rig, generic());
