@@ -1,5 +1,7 @@
 #include "core/tracking/pose_tracker.h"
 
+#include <spdlog/spdlog.h>
+
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
@@ -115,6 +117,7 @@ struct PoseTracker::Impl {
   std::vector<std::vector<float>> dt;
   std::vector<Eigen::Array4i> dt_box;
   std::vector<uint8_t> present;
+  std::vector<uint8_t> told_empty;  // per camera: said that its silhouette is left out
   std::vector<float> dt_f, dt_d, dt_z, dt_col;
   std::vector<int> dt_v;
   // Body model.
@@ -223,6 +226,7 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   for (int c = 0; c < cameras; ++c) dt[c].assign(size_t(cell_w[c]) * cell_h[c], kFarCells);
   dt_box.assign(cameras, Eigen::Array4i(0, 0, -1, -1));
   present.assign(cameras, 0);
+  told_empty.assign(cameras, 0);
   const int longest = std::max(*std::max_element(cell_w.begin(), cell_w.end()),
                                *std::max_element(cell_h.begin(), cell_h.end()));
   dt_f.resize(longest);
@@ -454,6 +458,30 @@ void PoseTracker::Impl::prepareSilhouettes(
       std::copy(r, r + bw, dt_f.begin());
       edt1d(dt_f.data(), bw, dt_d.data(), dt_v.data(), dt_z.data());
       for (int x = 0; x < bw; ++x) r[x] = std::sqrt(std::min(dt_d[x], kFarCells * kFarCells));
+    }
+  }
+  // A camera that sees nobody while most see someone (covered by the screen's colour, bumped to
+  // the wall, its key broken) would carve away every voxel it sees, the actor's too, and the
+  // tracker would see nobody: it is left out of this frame's hull, and said once. (An actor
+  // outside a camera's view needs no such camera: voxels it cannot see get no vote from it.)
+  int given = 0, with_someone = 0;
+  for (int c = 0; c < cameras; ++c) {
+    given += present[c];
+    with_someone += present[c] && dt_box[c][2] >= dt_box[c][0];
+  }
+  for (int c = 0; c < cameras; ++c) {
+    if (!present[c]) continue;
+    if (dt_box[c][2] >= dt_box[c][0]) {
+      told_empty[c] = 0;
+    } else if (with_someone >= 3 && 2 * with_someone > given) {
+      present[c] = 0;
+      if (!told_empty[c]) {
+        told_empty[c] = 1;
+        spdlog::warn(
+            "tracker: camera {} sees nobody while {} of {} cameras see the actor: left out of the "
+            "hull until it sees someone again (covered, moved, or its key broken?)",
+            rig.camera(c).name(), with_someone, given);
+      }
     }
   }
 }
