@@ -10,7 +10,7 @@ namespace lumistage {
 
 ClonePanel::ClonePanel(CloneSet* clones, QWidget* parent)
     : QWidget(parent), clones_(clones), list_(new QListWidget(this)) {
-  auto* add = new QPushButton(tr("Add clone"), this);
+  auto* add = add_button_ = new QPushButton(tr("Add clone"), this);
   auto* remove = new QPushButton(tr("Remove"), this);
   auto* left = new QPushButton(tr("Turn left"), this);
   auto* right = new QPushButton(tr("Turn right"), this);
@@ -37,6 +37,7 @@ int ClonePanel::addClone() {
   // Alternate sides, further out each time.
   const double side = (n % 2 == 0 ? 1 : -1) * 1.2 * (n / 2 + 1);
   const int id = clones_->add({0, side});
+  if (id == 0) return 0;  // as many as the nodes take; the button is disabled
   refresh();
   for (int r = 0; r < list_->count(); ++r) {
     if (list_->item(r)->data(Qt::UserRole).toInt() == id) list_->setCurrentRow(r);
@@ -72,6 +73,9 @@ void ClonePanel::refresh() {
     list_->addItem(item);
     if (c.id == selected) list_->setCurrentItem(item);
   }
+  const bool full = int(clones_->clones().size()) >= CloneSet::kMaxClones;
+  add_button_->setEnabled(!full);
+  add_button_->setToolTip(full ? tr("At most %1 clones").arg(CloneSet::kMaxClones) : QString());
 }
 
 }  // namespace lumistage

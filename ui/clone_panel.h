@@ -5,6 +5,7 @@
 #include "core/render/clone_set.h"
 
 class QListWidget;
+class QPushButton;
 
 namespace lumistage {
 
@@ -32,6 +33,7 @@ class ClonePanel : public QWidget {
  private:
   CloneSet* clones_;
   QListWidget* list_;
+  QPushButton* add_button_;
 };
 
 }  // namespace lumistage

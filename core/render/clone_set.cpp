@@ -10,11 +10,22 @@ Eigen::Affine3d Clone::transform(const Eigen::Vector3d& pivot) const {
          Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) * Eigen::Translation3d(-pivot);
 }
 
+namespace {
+Eigen::Vector2d withinReach(const Eigen::Vector2d& offset_m) {
+  // NaN (a floor point of a ray parallel to the floor) becomes 0.
+  const auto clamp = [](double v) {
+    return std::isnan(v) ? 0.0 : std::clamp(v, -CloneSet::kReachM, CloneSet::kReachM);
+  };
+  return {clamp(offset_m.x()), clamp(offset_m.y())};
+}
+}  // namespace
+
 int CloneSet::add(const Eigen::Vector2d& offset_m, double yaw_rad) {
+  if (int(clones_.size()) >= kMaxClones) return 0;
   Clone c;
   c.id = next_id_++;
   c.name = "clone " + std::to_string(c.id);
-  c.offset_m = offset_m;
+  c.offset_m = withinReach(offset_m);
   c.yaw_rad = yaw_rad;
   clones_.push_back(c);
   return c.id;
@@ -44,13 +55,13 @@ const Clone* CloneSet::find(int id) const {
 
 bool CloneSet::moveTo(int id, const Eigen::Vector2d& offset_m) {
   Clone* c = findMutable(id);
-  if (c) c->offset_m = offset_m;
+  if (c) c->offset_m = withinReach(offset_m);
   return c != nullptr;
 }
 
 bool CloneSet::moveBy(int id, const Eigen::Vector2d& delta_m) {
   Clone* c = findMutable(id);
-  if (c) c->offset_m += delta_m;
+  if (c) c->offset_m = withinReach(c->offset_m + delta_m);
   return c != nullptr;
 }
 

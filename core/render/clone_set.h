@@ -23,9 +23,16 @@ struct Clone {
 
 // The clones of the actor the director placed: added, moved, turned and removed by id. Kept
 // minimal, as a list of rigid transforms, for the renderer to draw and the studio to edit.
+// A set holds at most kMaxClones, each within kReachM of the actor on either axis: what the
+// nodes take in a view (MessageLimits::max_clones; offsets within 1000 m), so that no edit makes
+// the nodes refuse the view and the director's picture freeze.
 class CloneSet {
  public:
-  int add(const Eigen::Vector2d& offset_m, double yaw_rad = 0);  // returns the new id
+  static constexpr int kMaxClones = 64;
+  static constexpr double kReachM = 20.0;
+  // Returns the new id, or 0 when the set holds kMaxClones already. Offsets are clamped to
+  // +-kReachM on each axis, here and when moved.
+  int add(const Eigen::Vector2d& offset_m, double yaw_rad = 0);
   bool remove(int id);
   bool moveTo(int id, const Eigen::Vector2d& offset_m);
   bool moveBy(int id, const Eigen::Vector2d& delta_m);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "core/net/message_codec.h"
 #include "core/render/orbit_view.h"
 
 namespace lumistage {
@@ -27,6 +28,35 @@ TEST(CloneSet, AddsMovesTurnsAndRemoves) {
   EXPECT_FALSE(set.moveBy(a, {1, 1}));
   ASSERT_EQ(set.transforms().size(), 1u);
   EXPECT_EQ(set.add({0, 0}), b + 1);  // ids are never reused
+}
+
+// No edit leaves the set beyond what the nodes take in a view (they would refuse every view and
+// the director's picture would freeze): 64 clones, offsets within 20 m; and every view of them
+// is one the nodes decode.
+TEST(CloneSet, StaysWithinWhatTheNodesTake) {
+  CloneSet set;
+  const int far = set.add({5000, -0.5});
+  EXPECT_EQ(set.find(far)->offset_m, Eigen::Vector2d(CloneSet::kReachM, -0.5));
+  EXPECT_TRUE(set.moveBy(far, {0, -1e9}));  // a drag toward the horizon
+  EXPECT_EQ(set.find(far)->offset_m, Eigen::Vector2d(CloneSet::kReachM, -CloneSet::kReachM));
+  EXPECT_TRUE(set.moveTo(far, {std::nan(""), 1}));
+  EXPECT_EQ(set.find(far)->offset_m, Eigen::Vector2d(0, 1));
+  while (int(set.clones().size()) < CloneSet::kMaxClones) ASSERT_GT(set.add({1, 1}), 0);
+  EXPECT_EQ(set.add({1, 1}), 0);
+  EXPECT_EQ(int(set.clones().size()), CloneSet::kMaxClones);
+  EXPECT_EQ(CloneSet::kMaxClones, MessageLimits{}.max_clones);
+
+  Message message;
+  message.sender = "studio";
+  ViewData view{0, 320, 240, 300, 300, 160, 120, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, 3}, {}};
+  set.moveBy(far, {-1e9, 1e9});
+  for (const Clone& c : set.clones())
+    view.clones.insert(view.clones.end(),
+                       {float(c.offset_m.x()), float(c.offset_m.y()), float(c.yaw_rad)});
+  message.body = view;
+  const std::vector<uint8_t> bytes = encodeMessage(message);
+  const DecodeResult decoded = decodeMessage(bytes.data(), bytes.size());
+  EXPECT_TRUE(decoded.ok()) << decoded.error;
 }
 
 TEST(CloneSet, TurnsAboutThePivot) {
