@@ -320,7 +320,13 @@ void PipelinePanel::start(LocalRunOptions options) {
       Qt::QueuedConnection);
   connect(worker_, &PipelineWorker::snapshot, this, &PipelinePanel::show);
   connect(worker_, &PipelineWorker::view, this, &PipelinePanel::view);
-  connect(worker_, &PipelineWorker::message, summary_, &QLabel::setText);
+  // The worker's last word (a recording that cannot be written, a node that exited) stays under
+  // the figures, which the snapshots rewrite five times a second.
+  notice_.clear();
+  connect(worker_, &PipelineWorker::message, this, [this](const QString& text) {
+    notice_ = text;
+    summary_->setText(text.toHtmlEscaped());
+  });
   connect(worker_, &PipelineWorker::recordingEnded, this, &PipelinePanel::recordingEnded);
   connect(worker_, &PipelineWorker::takeRefused, this, &PipelinePanel::refuseTake);
   start_button_->setEnabled(false);
@@ -516,7 +522,8 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
                         .arg(r.raw_bytes_per_frame_per_node / 1000, 0, 'f', 0)
                         .arg(r.refusals)
                         .arg(r.frames_in_flight)
-                        .arg(r.frames_refused));
+                        .arg(r.frames_refused) +
+                    (notice_.isEmpty() ? QString() : "<br>" + notice_.toHtmlEscaped()));
   stages_->setRowCount(static_cast<int>(r.stage_ms.size()));
   int stage_row = 0;
   for (const auto& [stage, ms] : r.stage_ms) {

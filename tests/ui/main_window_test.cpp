@@ -304,6 +304,9 @@ class MainWindowTest : public QObject {
     QTRY_VERIFY_WITH_TIMEOUT(!viewport->recording(), 5000);
     const int64_t frames = window.pipeline()->lastReport().frames;
     QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames > frames + 3, 5000);
+    // Why, still said under the figures the frames since have rewritten.
+    const QString summary = window.pipeline()->findChild<QLabel*>("pipeline_summary")->text();
+    QVERIFY2(summary.contains("fps") && summary.contains("taken.avi"), qPrintable(summary));
     // Stopping the pipeline ends a recording: the file is finished, the button goes up.
     viewport->record(true, dir.filePath("last.avi"));
     QTRY_VERIFY_WITH_TIMEOUT(viewport->viewport()->snapshot().recorded_frames >= 2, 10000);
