@@ -288,7 +288,7 @@ void PipelinePanel::startChosen() {
       bool ok = false;
       const QString address = QInputDialog::getText(
           this, tr("Aravis cameras"), tr("First camera's address (camera i at address + i):"),
-          QLineEdit::Normal, "127.0.0.2", &ok);
+          QLineEdit::Normal, "127.0.1.1", &ok);
       if (!ok || address.isEmpty()) return;
       options.rig = rig.toStdString();
       options.address = address.toStdString();
