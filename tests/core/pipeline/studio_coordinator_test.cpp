@@ -273,67 +273,69 @@ std::optional<int64_t> nextPoseFrame(ScriptedNode& node, StudioCoordinator& stud
   return std::nullopt;
 }
 
+// A studio of two one-camera nodes played by the test, each node's silhouettes of `first_frame`
+// sent and the pose for it back.
+struct TwoNodeStudio {
+  explicit TwoNodeStudio(milliseconds deadline, int64_t first_frame = 1)
+      : made(twoCameraStudio(1,
+                             [&] {
+                               StudioCoordinatorOptions options;
+                               options.deadline = deadline;
+                               return options;
+                             }())),
+        studio(*made),
+        node1(studio.endpoint(), "node1"),
+        node2(studio.endpoint(), "node2") {
+    EXPECT_TRUE(both(first_frame));
+    EXPECT_EQ(nextPoseFrame(node1, studio, first_frame), first_frame);
+  }
+  bool both(int64_t frame_id) {
+    return node1.send(frame_id, SilhouettesData{}) && node2.send(frame_id, SilhouettesData{});
+  }
+  std::unique_ptr<StudioCoordinator> made;
+  StudioCoordinator& studio;
+  ScriptedNode node1, node2;
+};
+
 // One node's silhouettes of a frame a trillion frames ahead (a corrupt or hostile message) are
 // refused and counted; they neither end the frames in flight nor leave every later frame "done".
 TEST(StudioCoordinator, SilhouettesOfAFrameFarFromTheOthersAreRefusedAndFramesGoOn) {
-  StudioCoordinatorOptions options;
-  options.deadline = milliseconds(50);
-  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
-  StudioCoordinator& studio = *made;
-  ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
-  ASSERT_TRUE(node1.send(1, SilhouettesData{}));
-  ASSERT_TRUE(node2.send(1, SilhouettesData{}));
-  ASSERT_EQ(nextPoseFrame(node1, studio, 1), 1);
-  ASSERT_TRUE(node1.send(1'000'000'000'000, SilhouettesData{}));
-  studio.runFor(milliseconds(300));  // past every deadline
-  EXPECT_EQ(badMessagesOf(studio, "node1"), 1);
-  ASSERT_TRUE(node1.send(2, SilhouettesData{}));
-  ASSERT_TRUE(node2.send(2, SilhouettesData{}));
-  EXPECT_EQ(nextPoseFrame(node1, studio, 2), 2);
-  EXPECT_EQ(badMessagesOf(studio, "node2"), 0);
+  TwoNodeStudio two(milliseconds(50));
+  ASSERT_TRUE(two.node1.send(1'000'000'000'000, SilhouettesData{}));
+  two.studio.runFor(milliseconds(300));  // past every deadline
+  EXPECT_EQ(badMessagesOf(two.studio, "node1"), 1);
+  ASSERT_TRUE(two.both(2));
+  EXPECT_EQ(nextPoseFrame(two.node1, two.studio, 2), 2);
+  EXPECT_EQ(badMessagesOf(two.studio, "node2"), 0);
 }
 
 // When most nodes' frame ids move together (the cameras restarted, or the session), forward or
 // back, the studio follows them; a node alone is not followed.
 TEST(StudioCoordinator, WhenMostNodesFrameIdsMoveTogetherTheStudioFollows) {
-  StudioCoordinatorOptions options;
-  options.deadline = milliseconds(50);
-  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
-  StudioCoordinator& studio = *made;
-  ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
-  const auto both = [&](int64_t frame_id) {
-    return node1.send(frame_id, SilhouettesData{}) && node2.send(frame_id, SilhouettesData{});
-  };
-  ASSERT_TRUE(both(5000));
-  ASSERT_EQ(nextPoseFrame(node1, studio, 5000), 5000);
+  TwoNodeStudio two(milliseconds(50), 5000);
   for (const int64_t moved : {900000, 3}) {
     SCOPED_TRACE(moved);
-    ASSERT_TRUE(node1.send(moved, SilhouettesData{}));  // alone: refused
-    studio.runFor(milliseconds(100));
-    ASSERT_TRUE(node1.send(moved + 1, SilhouettesData{}));  // still alone: refused
-    studio.runFor(milliseconds(100));
-    ASSERT_TRUE(node2.send(moved + 1, SilhouettesData{}));  // now both: followed
-    EXPECT_EQ(nextPoseFrame(node1, studio, moved), moved + 1);
-    ASSERT_TRUE(both(moved + 2));
-    EXPECT_EQ(nextPoseFrame(node1, studio, moved + 2), moved + 2);
+    ASSERT_TRUE(two.node1.send(moved, SilhouettesData{}));  // alone: refused
+    two.studio.runFor(milliseconds(100));
+    ASSERT_TRUE(two.node1.send(moved + 1, SilhouettesData{}));  // still alone: refused
+    two.studio.runFor(milliseconds(100));
+    ASSERT_TRUE(two.node2.send(moved + 1, SilhouettesData{}));  // now both: followed
+    EXPECT_EQ(nextPoseFrame(two.node1, two.studio, moved), moved + 1);
+    ASSERT_TRUE(two.both(moved + 2));
+    EXPECT_EQ(nextPoseFrame(two.node1, two.studio, moved + 2), moved + 2);
   }
-  EXPECT_EQ(badMessagesOf(studio, "node1"), 4);  // both its messages before node2's moved
-  EXPECT_EQ(badMessagesOf(studio, "node2"), 0);
+  EXPECT_EQ(badMessagesOf(two.studio, "node1"), 4);  // both its messages before node2's moved
+  EXPECT_EQ(badMessagesOf(two.studio, "node2"), 0);
 }
 
-// The first statistics of a frame set the sums' sizes. When they are refused (here another mesh's
-// header over a broken body), the next node's set them afresh instead of being refused in turn;
-// and a node's image sent twice is blended once.
+// The first statistics of a frame set the sums' sizes. When they are refused (here another mesh's,
+// their body corrupted), the next node's set them afresh instead of being refused in turn; and a
+// node's image sent twice is blended once.
 TEST(StudioCoordinator, OneNodesBadStatisticsOrRepeatedImageSpoilNoOtherNodes) {
-  StudioCoordinatorOptions options;
-  options.deadline = milliseconds(2000);
-  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
-  StudioCoordinator& studio = *made;
-  ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
-  ASSERT_TRUE(node1.send(1, SilhouettesData{}));
-  ASSERT_TRUE(node2.send(1, SilhouettesData{}));
-  ASSERT_EQ(nextPoseFrame(node1, studio, 1), 1);
-  const RefineConfig& refine = options.refine;
+  TwoNodeStudio two(milliseconds(2000));
+  StudioCoordinator& studio = two.studio;
+  ScriptedNode &node1 = two.node1, &node2 = two.node2;
+  const RefineConfig refine;
   RefinementStatistics stats;
   stats.reset(10, refine.offset_count, refine.colour_bits);
   RefinementStatistics other;
