@@ -40,6 +40,7 @@ Message CameraNode::silhouettesOf(const Set& set) const {
   SilhouettesData silhouettes;
   LowResSilhouette s;
   for (size_t k = 0; k < cameras_.size(); ++k) {
+    if (!set.has(k)) continue;  // a camera that delivers nothing: the studio goes without it
     computeSilhouette(silhouette_keyer_, set.frames[k].image.view(), cameras_[k],
                       options_.silhouette_step, s);
     silhouettes.masks.push_back({s.camera, s.width, s.height, std::move(s.bits)});
@@ -63,10 +64,11 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   posedBodyMesh(body_, pose_data, transforms_, positions_, normals_);
 
   // The refinement's samples: every vertex's offsets along its normal in this node's cameras.
-  sampler_cameras_.resize(cameras_.size());
+  sampler_cameras_.clear();
   for (size_t k = 0; k < cameras_.size(); ++k) {
-    sampler_cameras_[k] = {&rig_.camera(cameras_[k]), set->frames[k].image.view(),
-                           &(*set->keyers)[k], nullptr};
+    if (!set->has(k)) continue;
+    sampler_cameras_.push_back(
+        {&rig_.camera(cameras_[k]), set->frames[k].image.view(), &(*set->keyers)[k], nullptr});
   }
   sampler_.sample(sampler_cameras_, positions_, normals_, body_.rest.triangles, refine_stats_);
   VertexStatisticsData stats;
@@ -98,6 +100,15 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
   // older studio) this node's own (the rig's depth maps, about 2 ms).
   renderer_->setMesh(positions_, normals_, body_.rest.triangles, visibility);
   for (size_t k = 0; k < cameras_.size(); ++k) {
+    if (!set.has(k)) {
+      // No frame of this camera in the set: its weight is taken away everywhere (the others,
+      // and the other nodes', colour the view).
+      const Camera& camera = rig_.camera(cameras_[k]);
+      const int w = camera.width() / kMaskStep, h = camera.height() / kMaskStep;
+      mask_.assign(size_t(w) * h, 0);
+      renderer_->setMask(static_cast<int>(k), mask_, w, h);
+      continue;
+    }
     const ImageView image = set.frames[k].image.view();
     renderer_->setImage(static_cast<int>(k), image);
     // Where the mesh reaches beyond the actor in this camera, its colour is the screen's: the
@@ -140,8 +151,18 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
 }
 
 void CameraNode::captureLoop(const std::atomic<bool>& stop) {
-  // Frames arrive camera by camera; a set is complete when all own cameras are in.
+  // Frames arrive camera by camera; a set goes out when every own camera that delivers is in. A
+  // camera that has delivered nothing for more than kSilentFrames frame ids (unplugged,
+  // its cable pulled, its port dead) no longer holds its node's sets back: they go out with the
+  // cameras there are, and the node says so once. (Waiting for it lost the node's other cameras
+  // too: every set was incomplete and dropped.)
+  // A camera not heard from yet is waited for during the first kStartFrames frame ids.
+  // (kSilentFrames: the 4 sets the node waited on before.)
+  constexpr int64_t kSilentFrames = 4, kStartFrames = 60;
   std::map<int64_t, std::shared_ptr<Set>> assembling;
+  std::vector<int64_t> last_id(cameras_.size(), -1);
+  std::vector<uint8_t> told_silent(cameras_.size(), 0);
+  int64_t newest = -1, first = -1;
   CameraFrame frame;
   while (!stop) {
     bool got = false;
@@ -153,6 +174,10 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     if (!got) continue;
     const auto k = std::find(cameras_.begin(), cameras_.end(), frame.camera) - cameras_.begin();
     if (k >= static_cast<long>(cameras_.size())) continue;
+    if (first < 0 || frame.frame_id < newest - 300) {  // the first frame, or the cameras restarted
+      first = newest = frame.frame_id;
+      std::fill(last_id.begin(), last_id.end(), -1);
+    }
     std::shared_ptr<Set>& set = assembling[frame.frame_id];
     if (!set) {
       set = newSet();
@@ -161,15 +186,40 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     }
     std::swap(set->frames[k], frame);
     frame_pool_->take(frame);  // buffers of a set let go, for the next frame
-    int complete = 0;
-    for (const CameraFrame& f : set->frames) complete += f.frame_id == set->frame_id;
-    if (complete == static_cast<int>(cameras_.size())) {
-      set->captured_ns = steadyNowNs();
-      if (screen_sets_learnt_ < kScreenWarmupSets) learnScreens(*set);
-      set->keyers = published_keyers_;
-      takes_.offer(set->frame_id, set->frames);
-      sets_.push(set);
-      assembling.erase(set->frame_id);
+    last_id[k] = std::max(last_id[k], set->frame_id);
+    newest = std::max(newest, set->frame_id);
+    for (auto it = assembling.begin(); it != assembling.end();) {
+      Set& s = *it->second;
+      size_t present = 0;
+      bool waiting = false;
+      for (size_t c = 0; c < cameras_.size(); ++c) {
+        present += s.has(c);
+        const bool live =
+            last_id[c] >= 0 ? last_id[c] >= newest - kSilentFrames : newest - first < kStartFrames;
+        waiting = waiting || (!s.has(c) && live);
+      }
+      if (waiting) {
+        ++it;
+        continue;
+      }
+      for (size_t c = 0; c < cameras_.size(); ++c) {
+        if (s.has(c) == !told_silent[c]) continue;
+        told_silent[c] = !s.has(c);
+        if (told_silent[c])
+          spdlog::warn("node {}: camera {} delivers no frames: its node's sets go out without it",
+                       name_, rig_.camera(cameras_[c]).name());
+        else
+          spdlog::info("node {}: camera {} delivers again", name_, rig_.camera(cameras_[c]).name());
+      }
+      s.captured_ns = steadyNowNs();
+      s.keyers = published_keyers_;
+      if (present == cameras_.size()) {  // screens are learnt, and takes recorded, from whole sets
+        if (screen_sets_learnt_ < kScreenWarmupSets) learnScreens(s);
+        s.keyers = published_keyers_;
+        takes_.offer(s.frame_id, s.frames);
+      }
+      sets_.push(it->second);
+      it = assembling.erase(it);
     }
     while (assembling.size() > 4) assembling.erase(assembling.begin());  // a camera fell behind
   }
