@@ -80,6 +80,7 @@ void SourceWorker::run() {
       // Paced by the machine's clock: the same instant, with the same frame ids, as the pipeline's
       // nodes replaying the session, so that overlays of the pipeline's body match the pictures.
       options.synchronized = true;
+      options.cancel = &stop_;  // closing the window while the demo loads does not wait for it
       source = std::make_unique<SessionSource>(spec_.path.toStdString(), options);
     } else {
       if (spec_.rig.isEmpty()) throw std::runtime_error("Aravis cameras need a rig file (--rig)");

@@ -57,7 +57,11 @@ SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions 
         options_.memory_limit_bytes / 1048576.0));
   }
   memory_.resize(frames);
-  for (int i = 0; i < frames; ++i) reader_.readFrame(i, memory_[i], cameras_);
+  for (int i = 0; i < frames; ++i) {
+    if (options_.cancel && options_.cancel->load())
+      throw Error(folder.string() + ": replay stopped while its frames were being loaded");
+    reader_.readFrame(i, memory_[i], cameras_);
+  }
 }
 
 bool SessionSource::loadSet() {

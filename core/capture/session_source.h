@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -32,6 +33,9 @@ struct ReplayOptions {
   // the same instant with the same id, as hardware-triggered cameras do; with kFromMemory it
   // replays synchronised from memory. Implies looping.
   bool synchronized = false;
+  // kFromMemory decodes the whole session when made (seconds for a dozen cameras): set this, from
+  // another thread, to stop it; the constructor then throws Error.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 // Replays a recorded session through the FrameSource interface: the frames of a set come out

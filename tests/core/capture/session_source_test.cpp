@@ -105,6 +105,21 @@ TEST(Replay, FromMemoryOverTheLimitSaysHowMuchItWouldNeed) {
   fs::remove_all(folder);
 }
 
+// Loading a session into memory stops when asked (the studio's window closed meanwhile).
+TEST(Replay, FromMemoryLoadingStopsWhenCancelled) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("replay_cancel");
+  record(folder, rig, PixelFormat::kRgb8, 2);
+  std::atomic<bool> cancel{true};
+  ReplayOptions options = replay(ReplayMode::kFromMemory, false);
+  options.cancel = &cancel;
+  EXPECT_THROW(SessionSource(folder, options), Error);
+  cancel = false;
+  SessionSource loaded(folder, options);
+  EXPECT_FALSE(loaded.finished());
+  fs::remove_all(folder);
+}
+
 TEST(Replay, AnImageDamagedAfterOpeningEndsTheReplayWithItsName) {
   const Rig rig = smallRig();
   const fs::path folder = freshFolder("replay_damaged");
