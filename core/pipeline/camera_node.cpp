@@ -214,7 +214,10 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       s.captured_ns = steadyNowNs();
       s.keyers = published_keyers_;
       if (present == cameras_.size()) {  // screens are learnt, and takes recorded, from whole sets
-        if (screen_sets_learnt_ < kScreenWarmupSets) learnScreens(s);
+        if (screen_sets_learnt_ < kScreenWarmupSets)
+          learnScreens(s);
+        else if (s.frame_id % kScreenRetrySets == 0)
+          relearnWarnedScreens(s);
         s.keyers = published_keyers_;
         takes_.offer(s.frame_id, s.frames);
       }
@@ -248,6 +251,26 @@ std::shared_ptr<CameraNode::Set> CameraNode::newSet() {
     pool->give(set->frames);
     delete set;
   });
+}
+
+void CameraNode::relearnWarnedScreens(const Set& set) {
+  bool changed = false;
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    {
+      std::lock_guard lock(source_mutex_);
+      if (screen_warnings_[c].empty()) continue;
+    }
+    GreenScreenKeyer keyer;
+    keyer.learnScreen(set.frames[c].image.view());
+    if (keyer.screenExcess() < GreenScreenKeyer::kDimScreenExcess) continue;
+    keyers_[c] = keyer;
+    changed = true;
+    spdlog::info("node {}: camera {}: green screen learnt now, key threshold {}", name_,
+                 rig_.camera(cameras_[c]).name(), keyer.threshold());
+    std::lock_guard lock(source_mutex_);
+    screen_warnings_[c].clear();
+  }
+  if (changed) published_keyers_ = std::make_shared<const std::vector<GreenScreenKeyer>>(keyers_);
 }
 
 void CameraNode::learnScreens(const Set& set) {

@@ -140,7 +140,7 @@ class CameraNode {
   std::unique_ptr<FrameSource> source_;
   std::mutex source_mutex_;  // next() on the capture thread, stats() on the network thread
   // Per own camera, what learning its green screen found wrong (empty: nothing); under
-  // source_mutex_, written once by the capture thread, sent in every heartbeat.
+  // source_mutex_, written by the capture thread, sent in every heartbeat.
   std::vector<std::string> screen_warnings_;
   NodeEndpoint endpoint_;  // the network thread's alone
   SkinnedMesh body_;       // the statistics thread's alone
@@ -153,7 +153,10 @@ class CameraNode {
   // learnt one (0.1% of the actor's pixels missed instead of 0.6%), the joints came closer on
   // three clips of four but the calibrated body sized the generic mesh worse (leave-one-out 1 to
   // 2 dB lower).
-  static constexpr int kScreenWarmupSets = 30;
+  // A camera whose screen could not be keyed then (a lens cap, the lights still off) is tried
+  // again every kScreenRetrySets frames, and its warning cleared once its screen keys cleanly.
+  static constexpr int kScreenWarmupSets = 30, kScreenRetrySets = 30;
+  void relearnWarnedScreens(const Set& set);
   std::vector<GreenScreenKeyer> keyers_;
   std::shared_ptr<const std::vector<GreenScreenKeyer>> published_keyers_;
   int screen_sets_learnt_ = 0;  // sets learnt from so far; kScreenWarmupSets once fixed

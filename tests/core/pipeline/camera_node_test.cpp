@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
 #include <thread>
 
 #include "core/body/human_model.h"
@@ -17,11 +18,17 @@ namespace {
 using std::chrono::milliseconds;
 
 // The frames of a node's cameras, every camera of every frame in turn (a screen-green image), a
-// frame every 5 ms; from frame `dies_at` on, camera `dead` delivers nothing (unplugged).
-class DyingCameraSource : public FrameSource {
+// frame every 5 ms; from frame `dies_at` on, camera `dead` delivers nothing (unplugged); before
+// frame `dark_until` every image is black (lens caps on).
+class ScriptedSource : public FrameSource {
  public:
-  DyingCameraSource(Rig rig, std::vector<int> cameras, int dead, int64_t dies_at)
-      : rig_(std::move(rig)), cameras_(std::move(cameras)), dead_(dead), dies_at_(dies_at) {}
+  ScriptedSource(Rig rig, std::vector<int> cameras, int dead, int64_t dies_at,
+                 int64_t dark_until = 0)
+      : rig_(std::move(rig)),
+        cameras_(std::move(cameras)),
+        dead_(dead),
+        dies_at_(dies_at),
+        dark_until_(dark_until) {}
   const Rig& rig() const override { return rig_; }
   bool next(CameraFrame& frame, milliseconds) override {
     for (;;) {
@@ -35,8 +42,12 @@ class DyingCameraSource : public FrameSource {
       frame.timestamp_ns = id * 33'333'333;
       const Camera& c = rig_.camera(camera);
       frame.image.resize(PixelFormat::kRgb8, c.width(), c.height());
-      for (size_t p = 0; p + 2 < frame.image.pixels.size(); p += 3)
-        frame.image.pixels[p] = 40, frame.image.pixels[p + 1] = 150, frame.image.pixels[p + 2] = 60;
+      const bool dark = id < dark_until_;
+      for (size_t p = 0; p + 2 < frame.image.pixels.size(); p += 3) {
+        frame.image.pixels[p] = dark ? 0 : 40;
+        frame.image.pixels[p + 1] = dark ? 0 : 150;
+        frame.image.pixels[p + 2] = dark ? 0 : 60;
+      }
       return true;
     }
   }
@@ -46,49 +57,96 @@ class DyingCameraSource : public FrameSource {
   Rig rig_;
   std::vector<int> cameras_;
   int dead_;
-  int64_t dies_at_;
+  int64_t dies_at_, dark_until_;
   size_t next_ = 0;
+};
+
+// A node of the small ring's first node's cameras, talking to a studio endpoint the test holds.
+struct NodeUnderTest {
+  explicit NodeUnderTest(
+      std::function<std::unique_ptr<FrameSource>(const Rig&, std::vector<int>)> make_source)
+      : rig(testing::smallRing()),
+        studio([] {
+          StudioEndpointConfig config;
+          config.bind = "tcp://127.0.0.1:*";
+          config.security = TransportSecurity::kPlain;
+          return config;
+        }()),
+        cameras(rig.nodes().front().cameras),
+        node(
+            rig, rig.nodes().front().name, make_source(rig, cameras),
+            [&] {
+              NodeEndpointConfig endpoint;
+              endpoint.connect = studio.endpoint();
+              endpoint.name = rig.nodes().front().name;
+              endpoint.security = TransportSecurity::kPlain;
+              return endpoint;
+            }(),
+            loadGenericHuman()),
+        running([this] { node.run(stop); }) {}
+  ~NodeUnderTest() {
+    stop = true;
+    running.join();
+  }
+  // Hands every message the node sends to `take` until it returns true or 20 s pass.
+  bool receiveUntil(const std::function<bool(const Message&)>& take) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (std::chrono::steady_clock::now() < deadline) {
+      const std::optional<ReceivedMessage> in = studio.receive(milliseconds(100));
+      if (in && in->result.ok() && take(*in->result.message)) return true;
+    }
+    return false;
+  }
+
+  Rig rig;
+  StudioEndpoint studio;
+  std::vector<int> cameras;
+  std::atomic<bool> stop{false};
+  CameraNode node;
+  std::thread running;
 };
 
 // One of a node's cameras stops delivering (its cable pulled): the node's sets go out with the
 // others, whose silhouettes keep reaching the studio, instead of every set waiting for the dead
 // camera and being dropped.
 TEST(CameraNode, ACameraThatStopsDeliveringDoesNotSilenceItsNode) {
-  const Rig rig = testing::smallRing();
-  StudioEndpointConfig studio_config;
-  studio_config.bind = "tcp://127.0.0.1:*";
-  studio_config.security = TransportSecurity::kPlain;
-  StudioEndpoint studio(studio_config);
-  const std::string node_name = rig.nodes().front().name;
-  const std::vector<int> cameras = rig.nodes().front().cameras;
-  ASSERT_GE(cameras.size(), 2u);
-  NodeEndpointConfig endpoint;
-  endpoint.connect = studio.endpoint();
-  endpoint.name = node_name;
-  endpoint.security = TransportSecurity::kPlain;
-  constexpr int64_t kDiesAt = 20;
-  CameraNode node(rig, node_name,
-                  std::make_unique<DyingCameraSource>(rig, cameras, cameras[1], kDiesAt), endpoint,
-                  loadGenericHuman());
-  std::atomic<bool> stop{false};
-  std::thread running([&] { node.run(stop); });
+  static constexpr int64_t kDiesAt = 20;
+  NodeUnderTest t([](const Rig& rig, std::vector<int> cameras) {
+    const int dead = cameras.at(1);
+    return std::make_unique<ScriptedSource>(rig, std::move(cameras), dead, kDiesAt);
+  });
   size_t masks_before = 0, masks_after = 0;
   int64_t newest = -1;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (newest < kDiesAt + 40 && std::chrono::steady_clock::now() < deadline) {
-    const std::optional<ReceivedMessage> in = studio.receive(milliseconds(100));
-    if (!in || !in->result.ok()) continue;
-    const Message& m = *in->result.message;
+  const bool reached = t.receiveUntil([&](const Message& m) {
     const auto* silhouettes = std::get_if<SilhouettesData>(&m.body);
-    if (!silhouettes) continue;
+    if (!silhouettes) return false;
     newest = std::max(newest, m.frame_id);
     (m.frame_id < kDiesAt ? masks_before : masks_after) = silhouettes->masks.size();
-  }
-  stop = true;
-  running.join();
-  EXPECT_GE(newest, kDiesAt + 40) << "the node's silhouettes stopped after its camera died";
-  EXPECT_EQ(masks_before, cameras.size());
-  EXPECT_EQ(masks_after, cameras.size() - 1);
+    return newest >= kDiesAt + 40;
+  });
+  EXPECT_TRUE(reached) << "the node's silhouettes stopped after frame " << newest;
+  EXPECT_EQ(masks_before, t.cameras.size());
+  EXPECT_EQ(masks_after, t.cameras.size() - 1);
+}
+
+// Lens caps on while the node learns the screens: every camera is said to see no screen; the
+// caps off, the screens are learnt after all and the warnings go from the cameras' health.
+TEST(CameraNode, AScreenThatCouldNotBeLearntIsLearntWhenItShows) {
+  NodeUnderTest t([](const Rig& rig, std::vector<int> cameras) {
+    return std::make_unique<ScriptedSource>(rig, std::move(cameras), -1, 0, /*dark_until=*/150);
+  });
+  const auto warnings = [](const Message& m) {
+    int n = 0;
+    if (const auto* h = std::get_if<HeartbeatData>(&m.body))
+      for (const CameraHealthData& c : h->cameras)
+        n += c.last_error.find("no green screen") != std::string::npos;
+    return std::get_if<HeartbeatData>(&m.body) ? n : -1;
+  };
+  EXPECT_TRUE(t.receiveUntil([&](const Message& m) {
+    return warnings(m) == int(t.cameras.size());
+  })) << "no camera was said to see no screen";
+  EXPECT_TRUE(t.receiveUntil([&](const Message& m) { return warnings(m) == 0; }))
+      << "the warnings stayed after the screens showed";
 }
 
 }  // namespace
