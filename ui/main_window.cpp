@@ -48,6 +48,7 @@ MainWindow::MainWindow(QWidget* parent)
       clone_panel_(new ClonePanel(&clones_, this)),
       demo_session_(new DemoSession(this)),
       status_(new QLabel(this)) {
+  status_->setObjectName("status");
   setWindowTitle(tr("Lumistage Studio"));
   setDockNestingEnabled(true);
   qRegisterMetaType<std::shared_ptr<const lumistage::Rig>>();
@@ -201,7 +202,8 @@ void MainWindow::showRig(std::unique_ptr<Rig> rig, const QString& origin) {
   calibration_panel_->setRig(*rig);
   rig_ = std::move(rig);
   status_->setText(
-      tr("%1: %2 cameras on %3 nodes").arg(origin).arg(rig_->cameraCount()).arg(rig_->nodeCount()));
+      tr("%1: %2 cameras on %3 nodes").arg(origin).arg(rig_->cameraCount()).arg(rig_->nodeCount()) +
+      (report_error_.isEmpty() ? QString() : " · " + report_error_));
   setWindowTitle(tr("Lumistage Studio - %1").arg(origin));
 }
 
@@ -217,9 +219,13 @@ QString MainWindow::openRig(const QString& path) {
   // A calibration report beside the rig gives the calibration check its reprojection errors.
   const QString report = QFileInfo(path).absolutePath() + "/calibration_report.json";
   ReprojectionErrors errors;
+  // Said with the rig for as long as it is shown (the source's messages would overwrite it).
+  report_error_.clear();
   if (QFileInfo::exists(report)) {
-    if (const QString error = loadCalibrationReport(report, errors); !error.isEmpty())
-      status_->setText(tr("Calibration report ignored: %1").arg(error));
+    if (const QString error = loadCalibrationReport(report, errors); !error.isEmpty()) {
+      report_error_ = tr("Calibration report ignored: %1").arg(error);
+      status_->setText(status_->text() + " · " + report_error_);
+    }
   }
   calibration_panel_->setReprojectionErrors(errors);
   return {};

@@ -103,6 +103,7 @@ class MainWindow : public QMainWindow {
       *clone_dock_;
   QByteArray default_state_;
   QLabel* status_;
+  QString report_error_;  // why the rig's calibration report was not used (empty: it was, or none)
 };
 
 }  // namespace lumistage

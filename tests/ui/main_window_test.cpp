@@ -482,6 +482,20 @@ class MainWindowTest : public QObject {
     bad.write(R"({"cameras": [{"name": "cam01"}]})");
     bad.close();
     QVERIFY(lumistage::loadCalibrationReport(dir.filePath("bad.json"), errors).contains("rms_px"));
+
+    // A bad report beside the rig is said, and still said once a source has opened.
+    QVERIFY(QFile::copy(reference_, dir.filePath("stage.yaml")));
+    QVERIFY(QFile::copy(dir.filePath("bad.json"), dir.filePath("calibration_report.json")));
+    MainWindow window;
+    QCOMPARE(window.openRig(dir.filePath("stage.yaml")), QString());
+    auto* status = window.findChild<QLabel*>("status");
+    QVERIFY2(status->text().contains("Calibration report ignored"), qPrintable(status->text()));
+    lumistage::SourceSpec spec;
+    QVERIFY(lumistage::SourceSpec::parse("virtual", spec).isEmpty());
+    window.startSource(spec);
+    QTRY_VERIFY_WITH_TIMEOUT(status->text().contains("cameras on"), 20000);
+    QVERIFY2(status->text().contains("Calibration report ignored"), qPrintable(status->text()));
+    window.stopSource();
   }
 
   void clonesAreAddedDraggedTurnedAndRemoved() {
