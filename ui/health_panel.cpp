@@ -157,6 +157,11 @@ void HealthPanel::setRig(const Rig& rig) {
 
 void HealthPanel::showSnapshot(const PipelineSnapshot& s) {
   const double t = clock_.elapsed() / 1000.0;
+  if (s.report.nodes.empty()) {  // no pipeline (stopped): the source's figures are the cameras'
+    for (Row& row : rows_) row.from_pipeline = false;
+    refresh();
+    return;
+  }
   for (const NodeReport& node : s.report.nodes) {
     const QString node_name = QString::fromStdString(node.name);
     const bool exited = s.exited.contains(node_name);

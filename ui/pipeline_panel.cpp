@@ -351,6 +351,10 @@ void PipelinePanel::stop() {
   take_button_->setEnabled(false);
   take_button_->setText(tr("Record take"));
   emit recordingEnded();  // whatever was recording is finished with its worker
+  // The panels forget the pipeline: the viewport its last image and body, the overlay its pose,
+  // the camera health its nodes' reports (the source's own figures show again).
+  last_ = PipelineSnapshot();
+  emit snapshot(last_);
 }
 
 void PipelinePanel::setView(const ViewData& view) {

@@ -311,10 +311,14 @@ class MainWindowTest : public QObject {
     viewport->record(true, dir.filePath("last.avi"));
     QTRY_VERIFY_WITH_TIMEOUT(viewport->viewport()->snapshot().recorded_frames >= 2, 10000);
 
+    QVERIFY(!viewport->viewport()->snapshot().view.isNull());
     window.pipeline()->stop();
     QVERIFY(!window.pipeline()->running());
     QVERIFY(!viewport->recording());
     QVERIFY(QFileInfo(dir.filePath("last.avi")).size() > 1000);
+    // The viewport forgets the stopped pipeline's last image and body.
+    QVERIFY(viewport->viewport()->snapshot().view.isNull());
+    QVERIFY(!viewport->viewport()->snapshot().mesh);
     // Nothing to record without the pipeline: the button goes back up.
     viewport->record(true, dir.filePath("again.avi"));
     QVERIFY(!viewport->recording());
