@@ -319,7 +319,10 @@ void PipelinePanel::start(LocalRunOptions options) {
       },
       Qt::QueuedConnection);
   connect(worker_, &PipelineWorker::snapshot, this, &PipelinePanel::show);
-  connect(worker_, &PipelineWorker::view, this, &PipelinePanel::view);
+  // (What a stopped pipeline's worker sent before it stopped, still queued, is not shown.)
+  connect(worker_, &PipelineWorker::view, this, [this](const PipelineView& v) {
+    if (thread_) emit view(v);
+  });
   // The worker's last word (a recording that cannot be written, a node that exited) stays under
   // the figures, which the snapshots rewrite five times a second.
   notice_.clear();
@@ -463,6 +466,7 @@ QTableWidgetItem* stageItem(const std::string& stage) {
 }  // namespace
 
 void PipelinePanel::show(const PipelineSnapshot& s) {
+  if (!thread_) return;  // still queued from a pipeline stopped since
   const bool was_recording = last_.take_recording;
   last_ = s;
   if (s.take_recording) take_error_.clear();

@@ -153,9 +153,8 @@ class PipelinePanel : public QWidget {
   QString takes_folder_;
   QThread* thread_ = nullptr;
   PipelineWorker* worker_ = nullptr;
-  int generation_ = 0;
-  QString notice_;  // the worker's last message, shown under the figures  // pipelines started, so
-                    // that a late 'finished' stops no later one
+  int generation_ = 0;  // pipelines started, so that a late 'finished' stops no later one
+  QString notice_;      // the worker's last message, shown under the figures
   PipelineSnapshot last_;
   std::optional<ViewData> view_data_;
   QString demo_session_;
