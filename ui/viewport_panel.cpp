@@ -444,6 +444,7 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
   path->addWidget(time_label_);
   timeline_->setRange(0, static_cast<int>(kTimelineLength_s * 10));
   play_->setCheckable(true);
+  play_->setObjectName("play_path");
   connect(key, &QPushButton::clicked, this, &ViewportPanel::addKey);
   connect(unkey, &QPushButton::clicked, this, &ViewportPanel::removeKey);
   connect(play_, &QPushButton::toggled, this, &ViewportPanel::play);
@@ -562,6 +563,10 @@ void ViewportPanel::refreshTimeline() {
   time_label_->setText(tr("%1 s  (keys: %2)")
                            .arg(time_s_, 0, 'f', 1)
                            .arg(keys.isEmpty() ? tr("none") : keys.join(", ")));
+  // A path needs two keys: until then the button says so instead of doing nothing.
+  const bool playable = path_.keys().size() >= 2;
+  play_->setEnabled(playable);
+  play_->setToolTip(playable ? QString() : tr("Set two keys or more (Key) to play a path"));
 }
 
 }  // namespace lumistage

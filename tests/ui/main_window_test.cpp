@@ -431,12 +431,16 @@ class MainWindowTest : public QObject {
     QVERIFY(panel->snapToCamera(3));
     QVERIFY((panel->viewport()->view().eye() - window.rig()->camera(3).centre()).norm() < 1e-6);
     QVERIFY(!panel->snapToCamera(99));
+    auto* play = panel->findChild<QPushButton*>("play_path");
+    QVERIFY(!play->isEnabled());  // no path to play yet: the button says so
     panel->setTime(0);
     panel->addKey();
+    QVERIFY(!play->isEnabled());
     panel->setTime(1.0);  // moving along the timeline follows the path: snap after it
     QVERIFY(panel->snapToCamera(9));
     panel->addKey();
     QCOMPARE(panel->path().keys().size(), size_t(2));
+    QVERIFY(play->isEnabled());
     panel->setTime(0);
     QVERIFY((panel->viewport()->view().eye() - window.rig()->camera(3).centre()).norm() < 1e-6);
     panel->play(true);
