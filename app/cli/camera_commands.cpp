@@ -8,7 +8,6 @@
 #include <csignal>
 #include <cstdio>
 #include <memory>
-#include <optional>
 #include <thread>
 
 #include "app/cli/progress.h"
@@ -163,6 +162,7 @@ void addCameraCommands(CLI::App& app) {
       ->capture_default_str();
   stream->callback([s] {
     std::unique_ptr<FrameSource> source;
+    const SessionReader* replayed = nullptr;  // the session replayed, if any
     if (!s->session.empty()) {
       ReplayOptions options;
       if (s->replay == "rate") {
@@ -175,7 +175,9 @@ void addCameraCommands(CLI::App& app) {
         throw CLI::ValidationError("--replay",
                                    "expected rate, fast or memory, got '" + s->replay + "'");
       }
-      source = std::make_unique<SessionSource>(s->session, options);
+      auto session = std::make_unique<SessionSource>(s->session, options);
+      replayed = &session->reader();
+      source = std::move(session);
     } else {
       if (s->rig.empty()) throw CLI::RequiredError("--rig (or --session)");
       const Rig rig = loadRig(s->rig);
@@ -198,8 +200,6 @@ void addCameraCommands(CLI::App& app) {
     std::unique_ptr<FrameGrouper> grouper;
     if (!s->record.empty()) {
       // A replayed session is recorded in its own format and at its own rate.
-      std::optional<SessionReader> replayed;
-      if (!s->session.empty()) replayed.emplace(s->session);
       const PixelFormat format =
           replayed ? replayed->pixelFormat() : pixelFormatOption(s->pixel_format);
       recorder = std::make_unique<SessionRecorder>(

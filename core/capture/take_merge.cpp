@@ -103,13 +103,12 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
         throw Error("take: the rig's camera " + camera.name() + " is in none of the parts");
       // The parts' images are what they are: a rig of another size would make a session no
       // reader opens.
-      for (const Camera& filmed : cameras) {
-        if (filmed.name() == camera.name() &&
-            (filmed.width() != camera.width() || filmed.height() != camera.height())) {
-          throw Error(fmt::format("take: the rig's camera {} is {}x{}, its part filmed {}x{}",
-                                  camera.name(), camera.width(), camera.height(), filmed.width(),
-                                  filmed.height()));
-        }
+      const auto [group, k] = owner.at(camera.name());
+      const Camera& filmed = readers[groups[group].front()]->rig().camera(k);
+      if (filmed.width() != camera.width() || filmed.height() != camera.height()) {
+        throw Error(fmt::format("take: the rig's camera {} is {}x{}, its part filmed {}x{}",
+                                camera.name(), camera.width(), camera.height(), filmed.width(),
+                                filmed.height()));
       }
       names.insert(camera.name());
     }

@@ -212,15 +212,13 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
           spdlog::info("node {}: camera {} delivers again", name_, rig_.camera(cameras_[c]).name());
       }
       s.captured_ns = steadyNowNs();
+      const bool whole = present == cameras_.size();
+      if (whole && screen_sets_learnt_ < kScreenWarmupSets)  // screens are learnt from whole sets
+        learnScreens(s);
+      else if (whole && s.frame_id % kScreenRetrySets == 0)
+        relearnWarnedScreens(s);
       s.keyers = published_keyers_;
-      if (present == cameras_.size()) {  // screens are learnt, and takes recorded, from whole sets
-        if (screen_sets_learnt_ < kScreenWarmupSets)
-          learnScreens(s);
-        else if (s.frame_id % kScreenRetrySets == 0)
-          relearnWarnedScreens(s);
-        s.keyers = published_keyers_;
-        takes_.offer(s.frame_id, s.frames);
-      }
+      if (whole) takes_.offer(s.frame_id, s.frames);  // and takes recorded
       sets_.push(it->second);
       it = assembling.erase(it);
     }

@@ -7,9 +7,9 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <span>
 #include <optional>
 #include <set>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>

@@ -464,14 +464,15 @@ void PoseTracker::Impl::prepareSilhouettes(
   // the wall, its key broken) would carve away every voxel it sees, the actor's too, and the
   // tracker would see nobody: it is left out of this frame's hull, and said once. (An actor
   // outside a camera's view needs no such camera: voxels it cannot see get no vote from it.)
+  const auto seesSomeone = [&](int c) { return dt_box[c][2] >= dt_box[c][0]; };
   int given = 0, with_someone = 0;
   for (int c = 0; c < cameras; ++c) {
     given += present[c];
-    with_someone += present[c] && dt_box[c][2] >= dt_box[c][0];
+    with_someone += present[c] && seesSomeone(c);
   }
   for (int c = 0; c < cameras; ++c) {
     if (!present[c]) continue;
-    if (dt_box[c][2] >= dt_box[c][0]) {
+    if (seesSomeone(c)) {
       told_empty[c] = 0;
     } else if (with_someone >= 3 && 2 * with_someone > given) {
       present[c] = 0;
