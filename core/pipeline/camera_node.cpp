@@ -65,12 +65,30 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
 
   // The refinement's samples: every vertex's offsets along its normal in this node's cameras.
   sampler_cameras_.clear();
+  sampler_camera_index_.clear();
   for (size_t k = 0; k < cameras_.size(); ++k) {
     if (!set->has(k)) continue;
     sampler_cameras_.push_back(
         {&rig_.camera(cameras_[k]), set->frames[k].image.view(), &(*set->keyers)[k], nullptr});
+    sampler_camera_index_.push_back(static_cast<int>(k));
   }
   sampler_.sample(sampler_cameras_, positions_, normals_, body_.rest.triangles, refine_stats_);
+  told_sees_nobody_.resize(cameras_.size());
+  for (size_t i = 0; i < sampler_cameras_.size(); ++i) {
+    const int k = sampler_camera_index_[i];
+    const uint8_t nobody = sampler_.seesNobody()[i];
+    if (nobody == told_sees_nobody_[k]) continue;
+    told_sees_nobody_[k] = nobody;
+    const std::string& camera = rig_.camera(cameras_[k]).name();
+    if (nobody) {
+      spdlog::warn(
+          "node {}: camera {}: sees nobody where the actor is tracked (moved, or its key "
+          "broken?): left out of the refinement",
+          name_, camera);
+    } else {
+      spdlog::info("node {}: camera {}: sees the actor again", name_, camera);
+    }
+  }
   VertexStatisticsData stats;
   stats.vertex_count = static_cast<uint32_t>(refine_stats_.vertex_count);  // with window points
   stats.offset_count = options_.refine.offset_count;

@@ -191,6 +191,8 @@ class CameraNode {
   RefinementStatistics refine_stats_;
   RefinementStatisticsCodec statistics_codec_;  // compresses them for the wire
   std::vector<SamplerCamera> sampler_cameras_;
+  std::vector<int> sampler_camera_index_;  // each sampler camera's index among the node's
+  std::vector<uint8_t> told_sees_nobody_;  // said that the camera is left out (that thread's)
   struct Posed {
     std::shared_ptr<const Set> set;
     Eigen::Matrix3Xf positions, normals;

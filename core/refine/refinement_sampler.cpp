@@ -132,6 +132,53 @@ uint8_t locateEdge(const Key& key, const PixelGrid& grid, const Eigen::Vector2f&
   return uint8_t(1 + std::lround(f * RefinementStatistics::kEdgeLevels));
 }
 
+// A camera's projection in floats, as the sampler's loops use it.
+struct FloatProjection {
+  explicit FloatProjection(const Camera& camera)
+      : R(camera.rotation().cast<float>()),
+        t(camera.translation().cast<float>()),
+        fx(float(camera.intrinsics().fx)),
+        fy(float(camera.intrinsics().fy)),
+        cx(float(camera.intrinsics().cx)),
+        cy(float(camera.intrinsics().cy)),
+        skew(float(camera.intrinsics().skew)),
+        distortion(camera.distortion()),
+        distorted(!distortion.isZero()) {}
+  Eigen::Vector3f toCamera(const Eigen::Vector3f& x) const { return R * x + t; }
+  // A point in camera coordinates (in front of it) to its pixel position.
+  Eigen::Vector2f pixel(const Eigen::Vector3f& c) const {
+    float px = c.x() / c.z(), py = c.y() / c.z();
+    if (distorted) distortion.apply(px, py, px, py);
+    return Eigen::Vector2f(fx * px + skew * py + cx, fy * py + cy);
+  }
+
+  Eigen::Matrix3f R;
+  Eigen::Vector3f t;
+  float fx, fy, cx, cy, skew;
+  const Distortion& distortion;
+  bool distorted;
+};
+
+// Whether a camera keys the posed surface as the actor where the surface lies in its view: every
+// fourth vertex's pixel keyed (about 500 pixels on the generic human, a few microseconds). Too
+// few vertices in view to tell: it does.
+template <typename Key>
+bool seesTheSurface(const SamplerCamera& input, const Key& key, const Eigen::Matrix3Xf& positions) {
+  const FloatProjection projection(*input.camera);
+  const float max_x = float(input.image.width) - 0.5f, max_y = float(input.image.height) - 0.5f;
+  int in_view = 0, seen = 0;
+  for (Eigen::Index v = 0; v < positions.cols(); v += 4) {
+    const Eigen::Vector3f c = projection.toCamera(positions.col(v));
+    if (c.z() <= 0) continue;
+    const Eigen::Vector2f p = projection.pixel(c);
+    if (!(p.x() >= -0.5f && p.y() >= -0.5f && p.x() < max_x && p.y() < max_y)) continue;
+    ++in_view;
+    seen += key.isForeground(input.image, int(p.x() + 0.5f), int(p.y() + 0.5f));
+  }
+  return in_view < RefinementSampler::kMinProbesInView ||
+         float(seen) >= RefinementSampler::kMinSurfaceSeen * float(in_view);
+}
+
 }  // namespace
 
 Eigen::Vector3f windowDirection(const Eigen::Vector3f& normal) {
@@ -172,15 +219,22 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
   offsets_m_.resize(config_.offset_count);
   for (int i = 0; i < config_.offset_count; ++i) offsets_m_[i] = float(config_.offsetAt(i));
   if (depth_maps_.size() < cameras.size()) depth_maps_.resize(cameras.size());
+  sees_nobody_.assign(cameras.size(), 0);
   for (size_t k = 0; k < cameras.size(); ++k) {
     const SamplerCamera& c = cameras[k];
-    depth_maps_[k].render(*c.camera, positions, triangles, config_.depth_map_step);
+    const auto sampleWith = [&](const auto& key) {
+      if (!seesTheSurface(c, key, positions)) {
+        sees_nobody_[k] = 1;
+        return;
+      }
+      depth_maps_[k].render(*c.camera, positions, triangles, config_.depth_map_step);
+      sampleCamera(c, key, depth_maps_[k], *points, *point_normals, out);
+    };
+    static const GreenScreenKeyer kDefaultKeyer;
     if (c.background) {
-      sampleCamera(c, *c.background, depth_maps_[k], *points, *point_normals, out);
+      sampleWith(*c.background);
     } else {
-      static const GreenScreenKeyer kDefaultKeyer;
-      sampleCamera(c, c.green_screen ? *c.green_screen : kDefaultKeyer, depth_maps_[k], *points,
-                   *point_normals, out);
+      sampleWith(c.green_screen ? *c.green_screen : kDefaultKeyer);
     }
   }
   out.dropOutside();
@@ -191,16 +245,9 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
                                      const DepthMap& depth, const Eigen::Matrix3Xf& positions,
                                      const Eigen::Matrix3Xf& normals,
                                      RefinementStatistics& out) const {
-  const Camera& camera = *input.camera;
   const ImageView& image = input.image;
-  const Eigen::Matrix3f R = camera.rotation().cast<float>();
-  const Eigen::Vector3f t = camera.translation().cast<float>();
-  const Eigen::Vector3f centre = camera.centre().cast<float>();
-  const Intrinsics& K = camera.intrinsics();
-  const float fx = float(K.fx), fy = float(K.fy), cx = float(K.cx), cy = float(K.cy),
-              skew = float(K.skew);
-  const Distortion& dist = camera.distortion();
-  const bool distorted = !dist.isZero();
+  const FloatProjection projection(*input.camera);
+  const Eigen::Vector3f centre = input.camera->centre().cast<float>();
   const float max_x = float(image.width) - 0.5f, max_y = float(image.height) - 0.5f;
   const int shift = 8 - config_.colour_bits;
   const int offsets = config_.offset_count;
@@ -209,16 +256,11 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
   const int n = static_cast<int>(positions.cols());
   const int first_window = n / config_.pointsPerVertex();  // the points after the vertices
   const PixelGrid grid(image);
-  // A point in camera coordinates (in front of it) to its pixel position.
-  const auto pixelAt = [&](const Eigen::Vector3f& c) {
-    float px = c.x() / c.z(), py = c.y() / c.z();
-    if (distorted) dist.apply(px, py, px, py);
-    return Eigen::Vector2f(fx * px + skew * py + cx, fy * py + cy);
-  };
+  const auto pixelAt = [&](const Eigen::Vector3f& c) { return projection.pixel(c); };
   for (int v = 0; v < n; ++v) {
     const Eigen::Vector3f x = positions.col(v), nrm = normals.col(v);
     // A line in the world is a line in camera coordinates: c(t) = c0 + t·d.
-    const Eigen::Vector3f c0 = R * x + t, d = R * nrm;
+    const Eigen::Vector3f c0 = projection.toCamera(x), d = projection.R * nrm;
     const Eigen::Vector3f to_camera = centre - x;
     bool visible = nrm.dot(to_camera) > min_cos * to_camera.norm() && c0.z() > 0;
     if (visible) {

@@ -35,8 +35,11 @@ Eigen::Vector3f windowDirection(const Eigen::Vector3f& normal);
 // depth-map lookup) by the cameras that see it (the others count nothing for it, not even outside
 // their silhouettes: a window point serves the colour term only). Segmentation is evaluated only at
 // the sampled pixels; visibility comes from a low-resolution depth map of the posed mesh per
-// camera (a vertex's visibility holds for all its offsets, as in the paper). After the first
-// frame of a size, sample() does not allocate.
+// camera (a vertex's visibility holds for all its offsets, as in the paper). A camera that keys
+// almost none of the posed surface as the actor while the surface lies in its view (knocked toward
+// the wall, its key broken) is left out (seesNobody()): every sample would be outside its
+// silhouette and the hull term would carve the whole mesh away. After the first frame of a size,
+// sample() does not allocate.
 class RefinementSampler {
  public:
   explicit RefinementSampler(const RefineConfig& config) : config_(config) {}
@@ -47,7 +50,12 @@ class RefinementSampler {
               const Eigen::Matrix3Xf& normals, const std::vector<Eigen::Vector3i>& triangles,
               RefinementStatistics& out);
 
-  const DepthMap& depthMap(int k) const { return depth_maps_.at(k); }
+  // Per camera of the last sample() call, in its order: 1 where the camera keyed fewer than
+  // kMinSurfaceSeen of the posed vertices in its view as the actor (at least kMinProbesInView in
+  // view), and was left out.
+  std::span<const uint8_t> seesNobody() const { return sees_nobody_; }
+  static constexpr float kMinSurfaceSeen = 0.05f;
+  static constexpr int kMinProbesInView = 16;
 
  private:
   template <typename Key>
@@ -57,6 +65,7 @@ class RefinementSampler {
 
   RefineConfig config_;
   std::vector<DepthMap> depth_maps_;
+  std::vector<uint8_t> sees_nobody_;
   Eigen::Matrix3Xf window_positions_, window_normals_;  // the vertices and their window points
   std::vector<float> offsets_m_;
 };

@@ -539,6 +539,33 @@ TEST_F(EllipsoidScene, WindowPointsAreSampledAfterTheVertices) {
   EXPECT_FALSE(std::equal(alone.sums.begin(), alone.sums.end(), window.sums.begin() + 6 * samples));
 }
 
+// A camera knocked toward the wall sees only the screen: every sample would lie outside its
+// silhouette, which drops every sample's colours and leaves the mesh to the hull term alone. It is
+// left out, and the statistics are those of the other cameras; a camera that sees the shape is not.
+TEST_F(EllipsoidScene, ACameraThatSeesNobodyIsLeftOut) {
+  const TriangleMesh sphere = testing::icosphere(shape_.centre, 0.27, 2);
+  std::vector<int> all, others;
+  for (int c = 0; c < rig_->cameraCount(); ++c) {
+    all.push_back(c);
+    if (c != 2) others.push_back(c);
+  }
+  Image screen = (*images_)[2];
+  for (size_t p = 0; p + 2 < screen.pixels.size(); p += 3) {
+    screen.pixels[p] = 40, screen.pixels[p + 1] = 150, screen.pixels[p + 2] = 60;
+  }
+  std::vector<SamplerCamera> inputs = cameras(all);
+  inputs[2].image = screen.view();
+  RefinementSampler sampler{RefineConfig{}};
+  RefinementStatistics with_screen, without;
+  sampler.sample(cameras(all), sphere.positions, sphere.normals, sphere.triangles, with_screen);
+  EXPECT_EQ(std::count(sampler.seesNobody().begin(), sampler.seesNobody().end(), 1), 0);
+  sampler.sample(inputs, sphere.positions, sphere.normals, sphere.triangles, with_screen);
+  ASSERT_EQ(sampler.seesNobody().size(), all.size());
+  for (int c : all) EXPECT_EQ(sampler.seesNobody()[c], c == 2) << "camera " << c;
+  sampler.sample(cameras(others), sphere.positions, sphere.normals, sphere.triangles, without);
+  EXPECT_TRUE(with_screen == without);
+}
+
 TEST_F(EllipsoidScene, DistributedCombinationEqualsOneProcess) {
   const TriangleMesh sphere = testing::icosphere(shape_.centre, 0.27, 2);
   RefineConfig config;
