@@ -6,6 +6,8 @@
 #include <QTimer>
 #include <cmath>
 
+#include "core/pipeline/camera_health.h"
+
 namespace lumistage {
 
 CameraGridPanel::CameraGridPanel(QWidget* parent) : QWidget(parent), grid_(new QGridLayout(this)) {
@@ -48,8 +50,10 @@ int CameraGridPanel::camerasWithPictures() const {
 QString CameraGridPanel::state(int camera) const {
   const Tile& t = tiles_.at(camera);
   if (!t.has_frame) return "waiting";
-  const qint64 ms = t.since_frame.elapsed();
-  return ms > 2000 ? "lost" : ms > 500 ? "late" : "streaming";
+  // The thresholds of the camera health panel: the two tabs never disagree about a camera.
+  HealthInput input;
+  input.silent_ms = double(t.since_frame.elapsed());
+  return healthStateName(classifyHealth(input).state);
 }
 
 void CameraGridPanel::showFrame(int camera, const QImage& preview, qint64) {
