@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <opencv2/calib3d.hpp>
@@ -73,8 +74,22 @@ struct BoardCornerError {
 
 }  // namespace
 
+void BoardSpec::check() const {
+  if (cols < 3 || rows < 3)
+    throw Error(fmt::format("board: {}x{} inner corners: at least 3 a side wanted", cols, rows));
+  if ((cols + rows) % 2 == 0)
+    throw Error(fmt::format(
+        "board: {}x{} inner corners: cols + rows must be odd (such a board looks the same turned "
+        "by 180 degrees, so its views cannot be told apart); count the inner corners, not the "
+        "squares, or use a board with one square more or less on a side",
+        cols, rows));
+  if (!(square_m > 0 && std::isfinite(square_m)))
+    throw Error(fmt::format("board: square size {} m: a positive length wanted", square_m));
+}
+
 std::optional<std::vector<Eigen::Vector2d>> detectBoard(const ImageView& image,
                                                         const BoardSpec& board) {
+  board.check();
   const cv::Mat gray = grayOf(image);
   // The sector-based detector (Duda & Frese 2018): more robust to blur, small and oblique boards
   // than the classic one, bounded in time when there is no board, and sub-pixel by itself.
@@ -104,6 +119,7 @@ BoardCalibrationResult calibrateBoards(const BoardSession& session,
   const auto start = std::chrono::steady_clock::now();
   const int n = static_cast<int>(session.camera_names.size());
   const BoardSpec& board = session.board;
+  board.check();
   std::vector<std::vector<int>> views_of(n);
   for (size_t v = 0; v < session.views.size(); ++v) {
     const BoardView& view = session.views[v];
@@ -340,6 +356,7 @@ Image renderBoardView(const Camera& camera, const BoardSpec& board, const Eigen:
 
 SimulatedBoardSession simulateBoardSession(const Rig& rig, const BoardSpec& board, int frames,
                                            uint32_t seed) {
+  board.check();
   SimulatedBoardSession sim;
   sim.session.board = board;
   for (const Camera& c : rig.cameras()) {

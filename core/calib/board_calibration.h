@@ -22,6 +22,10 @@ struct BoardSpec {
     return {square_m * (i % cols), square_m * (i / cols), 0.0};
   }
   int corners() const { return cols * rows; }
+  // Throws Error unless the board can be read unambiguously: at least 3 inner corners a side,
+  // cols + rows odd (an even board looks the same turned by 180 degrees, and half its views would
+  // be read backwards), squares of a positive size.
+  void check() const;
 };
 
 // The inner corners of the board in an image (OpenCV findChessboardCorners, refined by

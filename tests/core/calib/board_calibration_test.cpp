@@ -93,6 +93,28 @@ BoardSession projectedSession(const Rig& rig, const BoardSpec& board, int frames
   return session;
 }
 
+// A board of 8x6 inner corners (9x7 squares, a common one) looks the same turned by 180 degrees:
+// half its views would be read backwards and the rig would come out wrong (12 px RMS, cameras
+// metres off). It is refused before any image is read.
+TEST(BoardCalibration, RefusesABoardThatReadsTheSameTurnedAround) {
+  const std::string message = testing::errorOf([] { BoardSpec{8, 6, 0.1}.check(); });
+  EXPECT_NE(message.find("board: 8x6 inner corners: cols + rows must be odd"), std::string::npos)
+      << message;
+  EXPECT_NE(testing::errorOf([] {
+              BoardSpec{9, 2, 0.1}.check();
+            }).find("at least 3"),
+            std::string::npos);
+  EXPECT_NE(testing::errorOf([] {
+              BoardSpec{9, 6, 0}.check();
+            }).find("square size 0 m"),
+            std::string::npos);
+  EXPECT_NO_THROW(BoardSpec({9, 6, 0.1}).check());
+  BoardSession session = projectedSession(smallRig(), studioBoard(), 12);
+  session.board.cols = 8;
+  EXPECT_NE(testing::errorOf([&] { calibrateBoards(session); }).find("cols + rows must be odd"),
+            std::string::npos);
+}
+
 TEST(BoardCalibration, NamesACameraWithTooFewViews) {
   const Rig truth = smallRig();
   BoardSession session = projectedSession(truth, studioBoard(), 12);
