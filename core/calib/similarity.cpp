@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <cmath>
 
@@ -28,11 +29,27 @@ Rig Similarity::apply(const Rig& rig) const {
   return Rig(std::move(cameras), rig.nodes());
 }
 
+bool nearlyOnALine(const std::vector<Eigen::Vector3d>& points, double ratio) {
+  if (points.size() < 3) return true;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : points) mean += p;
+  mean /= double(points.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& p : points) scatter += (p - mean) * (p - mean).transpose();
+  // Eigenvalues ascending: the squares of the singular values.
+  const Eigen::Vector3d e = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvalues();
+  return !(std::sqrt(std::max(0.0, e[1])) > ratio * std::sqrt(std::max(0.0, e[2])));
+}
+
 Similarity alignPoints(const std::vector<Eigen::Vector3d>& from,
                        const std::vector<Eigen::Vector3d>& to, bool with_scale) {
   if (from.size() != to.size() || from.size() < 3)
     throw Error(fmt::format("alignment needs 3 or more point pairs, got {} and {}", from.size(),
                             to.size()));
+  if (nearlyOnALine(from) || nearlyOnALine(to))
+    throw Error(
+        "alignment failed: the points lie (nearly) on a line, which leaves the rotation about it "
+        "undetermined");
   Eigen::Matrix3Xd a(3, from.size()), b(3, to.size());
   for (size_t i = 0; i < from.size(); ++i) a.col(i) = from[i], b.col(i) = to[i];
   const Eigen::Matrix4d T = Eigen::umeyama(a, b, with_scale);

@@ -21,8 +21,13 @@ struct Similarity {
   Rig apply(const Rig& rig) const;
 };
 
+// Whether points lie (nearly) on a line: the spread across their main direction is below
+// `ratio` of the spread along it (singular values of the centred points). A rotation about that
+// line is then left to noise.
+bool nearlyOnALine(const std::vector<Eigen::Vector3d>& points, double ratio = 0.01);
+
 // Least-squares similarity (Umeyama 1991) taking `from` onto `to` (same length, >= 3 points not
-// all on a line); with_scale = false gives a rigid motion.
+// all on a line: throws Error otherwise); with_scale = false gives a rigid motion.
 Similarity alignPoints(const std::vector<Eigen::Vector3d>& from,
                        const std::vector<Eigen::Vector3d>& to, bool with_scale = true);
 

@@ -367,6 +367,11 @@ void WandSolver::alignGauge(WandCalibrationResult& result) const {
     }
   }
   if (from.size() >= 3) {
+    if (nearlyOnALine(to))
+      throw Error(fmt::format(
+          "the {} floor marks lie (nearly) on a line, which leaves the floor's tilt about it "
+          "undetermined: place at least three that form a wide triangle",
+          to.size()));
     const Similarity f = alignPoints(from, to, !scaled);
     g = Similarity{f.scale * g.scale, f.R, f.t};
     double sum = 0;
