@@ -92,7 +92,14 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
     };
     const std::vector<std::string_view> w = splitWords(line);
     if (w.empty() || w[0][0] == '#') {
-      if (line_number == 1 && line.rfind("# lumistage wand points", 0) == 0) header = true;
+      constexpr std::string_view kHeader = "# lumistage wand points";
+      if (line_number == 1 && line.rfind(kHeader, 0) == 0) {
+        const std::vector<std::string_view> version = splitWords(line.substr(kHeader.size()));
+        if (version.size() != 1 || version[0] != "1")
+          throw fail(fmt::format("wand points version '{}': this build reads version 1",
+                                 line.substr(kHeader.size())));
+        header = true;
+      }
       if (end == text.size()) break;
       continue;
     }
@@ -155,8 +162,8 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
       max_sample = std::max({max_sample, pairs.back().first, pairs.back().second});
     } else if (w[0] == "floor") {
       expect(5, "floor SAMPLE X_M Y_M Z_M");
-      marks.push_back({integer(w[1], "sample"),
-                       {number(w[2], "x_m"), number(w[3], "y_m"), number(w[4], "z_m")}});
+      marks.push_back(
+          {sampleId(w[1]), {number(w[2], "x_m"), number(w[3], "y_m"), number(w[4], "z_m")}});
       max_sample = std::max(max_sample, marks.back().sample);
     } else {
       throw fail(

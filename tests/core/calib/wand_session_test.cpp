@@ -49,7 +49,13 @@ TEST(WandSession, ErrorsNameTheLine) {
             std::string::npos);
   EXPECT_NE(error(head + "pair 0 1000000\n").find("w.txt:3: sample 1000000 is beyond"),
             std::string::npos);
+  EXPECT_NE(error(head + "floor 2147483647 0 1 0\n").find("w.txt:3: sample 2147483647 is beyond"),
+            std::string::npos);
   EXPECT_NE(error(head + "blob 1\n").find("unknown line kind 'blob'"), std::string::npos);
+  // A later version of the format may mean something else by the same lines.
+  EXPECT_NE(error("# lumistage wand points 2\ncamera cam01 640 480\n")
+                .find("w.txt:1: wand points version ' 2': this build reads version 1"),
+            std::string::npos);
   const WandSession ok = parseWandSession(head + "point 3 cam01 10.5 20.25\n", "w.txt");
   EXPECT_EQ(ok.sampleCount(), 4);
   EXPECT_TRUE(ok.has(3, 0));
