@@ -8,11 +8,24 @@
 #include <QLabel>
 #include <QVBoxLayout>
 
+#include "core/calib/calibration_report.h"
 #include "core/geometry/epipolar.h"
 
 namespace lumistage {
 
 QString loadCalibrationReport(const QString& path, ReprojectionErrors& out) {
+  if (path.endsWith(".yaml") || path.endsWith(".yml")) {
+    // What `lumistage calibrate` writes (docs/calibration.md).
+    try {
+      const CalibrationReport report = loadCalibrationReport(path.toStdString());
+      out.clear();
+      for (const CameraCalibrationReport& c : report.cameras)
+        out[QString::fromStdString(c.name)] = c.rms_px;
+    } catch (const std::exception& e) {
+      return QString::fromStdString(e.what());
+    }
+    return {};
+  }
   QFile file(path);
   if (!file.open(QIODevice::ReadOnly)) return QObject::tr("%1: cannot open").arg(path);
   QJsonParseError error;
@@ -45,8 +58,9 @@ CalibrationPanel::CalibrationPanel(QWidget* parent)
   help_->setText(
       tr("Click a point in any camera: its epipolar line appears in every other camera "
          "(red). On a good calibration it passes through the same point of the scene "
-         "there. Reprojection errors come from the rig's calibration report "
-         "(calibration_report.json beside the rig file)."));
+         "there. Reprojection errors come from the rig's calibration report beside the rig "
+         "file (RIG.calibration.yaml, as lumistage calibrate writes it, or "
+         "calibration_report.json)."));
   auto* layout = new QVBoxLayout(this);
   layout->setContentsMargins(2, 2, 2, 2);
   layout->addWidget(help_);

@@ -25,6 +25,7 @@ class CameraOverlayView : public QWidget {
   void setImage(const QImage& image);  // any size: stretched over the camera's pixels
   bool hasImage() const { return !image_.isNull(); }
   void setCaption(const QString& caption);
+  const QString& caption() const { return caption_; }
   void showSilhouette(bool on) {
     silhouette_ = on;
     update();

@@ -15,6 +15,7 @@
 #include <QThread>
 #include <exception>
 
+#include "core/calib/calibration_report.h"
 #include "core/geometry/rig_file.h"
 #include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
@@ -216,8 +217,12 @@ QString MainWindow::openRig(const QString& path) {
   }
   rig_path_ = path;
   showRig(std::move(rig), tr("Rig %1").arg(QFileInfo(path).fileName()));
-  // A calibration report beside the rig gives the calibration check its reprojection errors.
-  const QString report = QFileInfo(path).absolutePath() + "/calibration_report.json";
+  // A calibration report beside the rig gives the calibration check its reprojection errors:
+  // the one `lumistage calibrate` wrote with the rig, or one in the JSON form other tools write.
+  const QFileInfo rig_file(path);
+  QString report = QString::fromStdString(
+      calibrationReportPathFor(rig_file.absoluteFilePath().toStdString()).string());
+  if (!QFileInfo::exists(report)) report = rig_file.absolutePath() + "/calibration_report.json";
   ReprojectionErrors errors;
   // Said with the rig for as long as it is shown (the source's messages would overwrite it).
   report_error_.clear();

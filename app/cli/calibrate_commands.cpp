@@ -116,16 +116,37 @@ BoardSession detectBoardSession(const fs::path& folder, const BoardSpec& board) 
   return session;
 }
 
+// Above this reprojection RMS a solve has gone wrong (a good rig fits to well under a pixel): the
+// rig file it would replace is kept.
+constexpr double kDefaultMaxRmsPx = 3.0;
+
+// The report first (where it cannot be written, the rig file is not touched either; by default
+// beside the rig, where the studio's calibration check finds it), then the rig unless the solve's
+// reprojection RMS is above max_rms_px.
 void writeOutputs(const Rig& rig, const CalibrationReport& report, const std::string& out,
-                  const std::string& report_path, const std::string& truth) {
+                  const std::string& report_path, const std::string& truth, double max_rms_px) {
   fmt::print("{}", summarizeCalibrationReport(report));
+  const std::string report_file =
+      report_path.empty() ? calibrationReportPathFor(out).string() : report_path;
+  saveCalibrationReport(report, report_file);
+  fmt::print("wrote {}\n", report_file);
+  if (!truth.empty()) printTruthComparison(rig, truth);
+  if (!(report.rms_px <= max_rms_px))
+    throw Error(fmt::format(
+        "reprojection RMS {:.2f} px is above --max-rms {:.2f} px: the solve failed, {} was not "
+        "written (see {})",
+        report.rms_px, max_rms_px, out, report_file));
   saveRig(rig, out);
   fmt::print("wrote {} ({} cameras on {} nodes)\n", out, rig.cameraCount(), rig.nodeCount());
-  if (!report_path.empty()) {
-    saveCalibrationReport(report, report_path);
-    fmt::print("wrote {}\n", report_path);
-  }
-  if (!truth.empty()) printTruthComparison(rig, truth);
+}
+
+void addMaxRmsOption(CLI::App* command, double& max_rms_px) {
+  command
+      ->add_option("--max-rms", max_rms_px,
+                   "largest reprojection RMS, pixels, at which the rig file is written (a failed "
+                   "solve leaves the old one)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
 }
 
 }  // namespace
@@ -138,7 +159,7 @@ void addCalibrateCommands(CLI::App& app) {
   // ---- wand ----
   struct WandArgs {
     std::string points, session, out, report, initial_rig, truth, save_points;
-    double wand_length_m = 0, hfov_deg = 60;
+    double wand_length_m = 0, hfov_deg = 60, max_rms_px = kDefaultMaxRmsPx;
     int cameras_per_node = 3, threshold = 160;
     bool refine_principal_point = false;
   };
@@ -155,7 +176,9 @@ void addCalibrateCommands(CLI::App& app) {
                    "with --session: also write the detected points file (add pair and floor lines "
                    "to it for the scale and the floor, then solve it with --points)");
   wand->add_option("-o,--out", w->out, "rig file to write")->required();
-  wand->add_option("--report", w->report, "calibration report to write (YAML)");
+  wand->add_option("--report", w->report,
+                   "calibration report to write (YAML; default: beside the rig, "
+                   "RIG.calibration.yaml, where the studio finds it)");
   wand->add_option("--wand-length", w->wand_length_m,
                    "metres between the wand's two LEDs (the session's pair lines): the scale");
   wand->add_option("--initial-rig", w->initial_rig,
@@ -163,8 +186,12 @@ void addCalibrateCommands(CLI::App& app) {
   wand->add_option("--hfov", w->hfov_deg,
                    "horizontal field of view to start from without "
                    "--initial-rig, degrees")
+      ->check(CLI::Range(1.0, 179.0))
       ->capture_default_str();
-  wand->add_option("--cameras-per-node", w->cameras_per_node)->capture_default_str();
+  wand->add_option("--cameras-per-node", w->cameras_per_node)
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  addMaxRmsOption(wand, w->max_rms_px);
   wand->add_option("--threshold", w->threshold,
                    "detector: intensity above which a pixel is the wand")
       ->capture_default_str();
@@ -197,7 +224,7 @@ void addCalibrateCommands(CLI::App& app) {
     };
     fmt::print(stderr, "{} cameras, {} samples\n", data.cameraCount(), data.sampleCount());
     const WandCalibrationResult result = calibrateWand(data, options);
-    writeOutputs(result.rig, result.report, w->out, w->report, w->truth);
+    writeOutputs(result.rig, result.report, w->out, w->report, w->truth, w->max_rms_px);
   });
 
   // ---- synth-wand ----
@@ -264,6 +291,7 @@ void addCalibrateCommands(CLI::App& app) {
     std::string images, out, report, truth, synth_rig;
     BoardSpec board;
     int floor_frame = -1, cameras_per_node = 3, synth_frames = 0;
+    double max_rms_px = kDefaultMaxRmsPx;
     uint32_t seed = 1;
   };
   auto b = std::make_shared<BoardArgs>();
@@ -282,11 +310,17 @@ void addCalibrateCommands(CLI::App& app) {
   board->add_option("--square", b->board.square_m, "square size, metres")->capture_default_str();
   board->add_option("--floor-frame", b->floor_frame,
                     "frame whose board lies on the floor and defines the world");
-  board->add_option("--cameras-per-node", b->cameras_per_node)->capture_default_str();
+  board->add_option("--cameras-per-node", b->cameras_per_node)
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  addMaxRmsOption(board, b->max_rms_px);
   board->add_option("-o,--out", b->out, "rig file to write")->required();
-  board->add_option("--report", b->report, "calibration report to write (YAML)");
+  board->add_option("--report", b->report,
+                    "calibration report to write (YAML; default: beside the rig, "
+                    "RIG.calibration.yaml, where the studio finds it)");
   board->add_option("--truth", b->truth, "rig file of the truth: print the errors");
   board->callback([b] {
+    b->board.check();
     BoardSession data;
     if (b->synth_frames > 0) {
       const Rig rig = rigOrReference(b->synth_rig);
@@ -302,7 +336,7 @@ void addCalibrateCommands(CLI::App& app) {
     options.floor_frame = b->floor_frame;
     options.cameras_per_node = b->cameras_per_node;
     const BoardCalibrationResult result = calibrateBoards(data, options);
-    writeOutputs(result.rig, result.report, b->out, b->report, b->truth);
+    writeOutputs(result.rig, result.report, b->out, b->report, b->truth, b->max_rms_px);
   });
 }
 

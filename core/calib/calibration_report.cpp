@@ -195,4 +195,10 @@ std::string summarizeCalibrationReport(const CalibrationReport& report) {
   return out;
 }
 
+std::filesystem::path calibrationReportPathFor(const std::filesystem::path& rig_path) {
+  std::filesystem::path report = rig_path;
+  report.replace_extension(".calibration.yaml");
+  return report;
+}
+
 }  // namespace lumistage

@@ -52,6 +52,10 @@ void saveCalibrationReport(const CalibrationReport& report, const std::filesyste
 // malformed.
 CalibrationReport loadCalibrationReport(const std::filesystem::path& path);
 CalibrationReport parseCalibrationReport(std::string_view yaml_text, std::string_view source_name);
+// Where `lumistage calibrate` writes a rig's report unless told otherwise, and where the studio
+// looks for it: beside the rig file, its name the rig's with ".calibration.yaml" for its
+// extension (stage.yaml: stage.calibration.yaml).
+std::filesystem::path calibrationReportPathFor(const std::filesystem::path& rig_path);
 // A table for a terminal.
 std::string summarizeCalibrationReport(const CalibrationReport& report);
 

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
+#include <sstream>
 #include <string>
 
 #include "core/base/atomic_file.h"
@@ -187,6 +188,40 @@ TEST(Cli, CalibrateWandSolvesASimulatedSessionAndWritesRigAndReport) {
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("method: wand"), std::string::npos);
   EXPECT_NE(text.find("coverage_fraction"), std::string::npos);
+
+  // A solve that fits worse than --max-rms keeps the rig it would replace; its report, written
+  // beside the rig where the studio looks for it by default, says why.
+  const std::string kept = readFile(rig);
+  fs::remove(report);
+  r = run(kCli + " calibrate wand --points " + points + " --out " + rig + " --max-rms 0.01");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("is above --max-rms 0.01 px: the solve failed, " + rig +
+                          " was not written (see " + (folder / "rig.calibration.yaml").string()),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(readFile(rig), kept);
+  EXPECT_TRUE(fs::exists(folder / "rig.calibration.yaml"));
+
+  // Floor marks along one line leave the floor's tilt about it to noise: refused.
+  std::ifstream marks_in(points);
+  std::string marks_line, on_a_line;
+  int mark = 0;
+  while (std::getline(marks_in, marks_line)) {
+    if (marks_line.rfind("floor ", 0) == 0) {
+      std::istringstream words(marks_line);
+      std::string kind, sample;
+      words >> kind >> sample;
+      marks_line = "floor " + sample + " " + std::to_string(mark++) + " 0 0";
+    }
+    on_a_line += marks_line + "\n";
+  }
+  ASSERT_GE(mark, 3);
+  std::ofstream(folder / "line.txt") << on_a_line;
+  r = run(kCli + " calibrate wand --points " + (folder / "line.txt").string() + " --out " +
+          (folder / "line.yaml").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("floor marks lie (nearly) on a line"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(folder / "line.yaml"));
 
   // A camera that saw nothing: the error names it, and nothing is written.
   std::ifstream src(points);

@@ -18,6 +18,7 @@
 #include <QTemporaryDir>
 #include <QtTest>
 
+#include "core/calib/calibration_report.h"
 #include "core/capture/session_reader.h"
 #include "core/capture/session_writer.h"
 #include "core/geometry/epipolar.h"
@@ -504,6 +505,24 @@ class MainWindowTest : public QObject {
     QTRY_VERIFY_WITH_TIMEOUT(status->text().contains("cameras on"), 20000);
     QVERIFY2(status->text().contains("Calibration report ignored"), qPrintable(status->text()));
     window.stopSource();
+
+    // The report `lumistage calibrate` writes beside the rig it solved is the one read.
+    lumistage::CalibrationReport solved;
+    solved.method = "wand";
+    solved.cameras.push_back({});
+    solved.cameras.back().name = "cam03";
+    solved.cameras.back().rms_px = 0.31;
+    solved.cameras.back().width = 1024, solved.cameras.back().height = 768;
+    solved.cameras.back().coverage_cols = solved.cameras.back().coverage_rows = 1;
+    solved.cameras.back().coverage = {40};
+    lumistage::saveCalibrationReport(solved, dir.filePath("stage.calibration.yaml").toStdString());
+    MainWindow second;
+    QCOMPARE(second.openRig(dir.filePath("stage.yaml")), QString());
+    QCOMPARE(second.calibration()->cameraView(2)->caption(),
+             QString("cam03: reprojection error 0.31 px"));
+    QCOMPARE(second.calibration()->cameraView(0)->caption(),
+             QString("cam01: reprojection error not measured"));
+    QVERIFY(!second.findChild<QLabel*>("status")->text().contains("ignored"));
   }
 
   void clonesAreAddedDraggedTurnedAndRemoved() {
