@@ -77,4 +77,40 @@ void writeFileAtomically(const std::filesystem::path& path,
   }
 }
 
+AppendOnlyFile::~AppendOnlyFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void AppendOnlyFile::create(const std::filesystem::path& path) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw Error(path.string() + ": cannot create: " + std::strerror(errno));
+  length_ = 0;
+  failed_ = false;
+  error_.clear();
+}
+
+bool AppendOnlyFile::append(std::string_view record) {
+  if (failed_ || fd_ < 0) return false;
+  size_t written = 0;
+  while (written < record.size()) {
+    const ssize_t n = ::write(fd_, record.data() + written, record.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int saved = n < 0 ? errno : ENOSPC;
+      error_ = std::string(std::strerror(saved)) +
+               (saved == ENOSPC || saved == EFBIG ? " (disk full?)" : "");
+      failed_ = true;
+      // Back to the last whole record (a reader would skip a torn last line, but not one that a
+      // later write completed into something else).
+      if (written > 0 && ::ftruncate(fd_, static_cast<off_t>(length_)) != 0)
+        error_ += std::string("; and cutting it back failed: ") + std::strerror(errno);
+      return false;
+    }
+    written += static_cast<size_t>(n);
+  }
+  length_ += static_cast<int64_t>(record.size());
+  return true;
+}
+
 }  // namespace lumistage

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <initializer_list>
 #include <string>
@@ -28,6 +29,30 @@ void writeFileAtomically(const std::filesystem::path& path, std::string_view con
 void writeFileAtomically(const std::filesystem::path& path,
                          std::initializer_list<std::string_view> pieces,
                          const AtomicWriteOptions& options = {});
+
+// A file that grows by whole records (a session's index lines): each append() is written through
+// to the file at once, all or nothing. A short or failed write is cut back to the last whole record
+// and the file takes no more records: nothing left in a buffer can complete a torn line later (an
+// std::ofstream retries its buffer when closed, once a full disk has room again). Not copyable.
+class AppendOnlyFile {
+ public:
+  AppendOnlyFile() = default;
+  AppendOnlyFile(const AppendOnlyFile&) = delete;
+  AppendOnlyFile& operator=(const AppendOnlyFile&) = delete;
+  ~AppendOnlyFile();
+  // Creates or empties the file. Throws Error naming it and the reason.
+  void create(const std::filesystem::path& path);
+  // False (the file cut back to what it held before) on any failure, and ever after one.
+  bool append(std::string_view record);
+  bool failed() const { return failed_; }
+  const std::string& error() const { return error_; }  // the reason of the failure, in words
+
+ private:
+  int fd_ = -1;
+  int64_t length_ = 0;  // bytes of whole records
+  bool failed_ = false;
+  std::string error_;
+};
 
 // Whether a file name is a temporary of writeFileAtomically left by an interrupted write.
 bool isAtomicWriteLeftover(std::string_view file_name);

@@ -85,17 +85,17 @@ SessionWriter::SessionWriter(const fs::path& folder, const Rig& rig, PixelFormat
                   "truth: {}\n",
                   source, fps, pixelFormatName(format_), imageFilesName(files_), cameras,
                   truth ? "true" : "false"));
-  index_.open(folder_ / "index.csv");
-  index_ << "frame,timestamp_ns\n";
+  index_.create(folder_ / "index.csv");
+  if (!index_.append("frame,timestamp_ns\n"))
+    throw Error((folder_ / "index.csv").string() + ": cannot write: " + index_.error());
   if (truth) {
-    joints_.open(folder_ / "truth" / "joints.csv");
-    joints_ << "frame";
-    for (const std::string& name : joint_names_)
-      joints_ << "," << name << "_x," << name << "_y," << name << "_z";
-    joints_ << "\n";
+    joints_.create(folder_ / "truth" / "joints.csv");
+    std::string header = "frame";
+    for (const std::string& name : joint_names_) header += fmt::format(",{0}_x,{0}_y,{0}_z", name);
+    if (!joints_.append(header + "\n"))
+      throw Error((folder_ / "truth" / "joints.csv").string() +
+                  ": cannot write: " + joints_.error());
   }
-  if (!index_ || (truth && !joints_))
-    throw Error(folder_.string() + ": cannot create index.csv or truth/joints.csv");
 }
 
 SessionWriter::~SessionWriter() = default;
@@ -155,15 +155,15 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
     if (truth->surface)
       saveMeshPly(folder_ / "truth" / "surface" / fmt::format("{:06}.ply", frame_id),
                   *truth->surface);
-    joints_ << frame_id;
+    std::string line = std::to_string(frame_id);
     for (const Eigen::Vector3d& j : truth->joints)
-      joints_ << fmt::format(",{},{},{}", j.x(), j.y(), j.z());
-    joints_ << "\n";
-    joints_.flush();
+      line += fmt::format(",{},{},{}", j.x(), j.y(), j.z());
+    line += "\n";
+    if (!joints_.append(line))
+      throw Error(fmt::format("{}: cannot append frame {}: {}; the session ends before it",
+                              (folder_ / "truth" / "joints.csv").string(), frame_id,
+                              joints_.error()));
   }
-  if (truth && !joints_)
-    throw Error(fmt::format("{}: cannot append frame {} (disk full?); the session ends before it",
-                            (folder_ / "truth" / "joints.csv").string(), frame_id));
   appendIndex(frame_id, timestamp_ns, bytes);
 }
 
@@ -184,11 +184,11 @@ void SessionWriter::copyFrame(int64_t frame_id, int64_t timestamp_ns,
 }
 
 void SessionWriter::appendIndex(int64_t frame_id, int64_t timestamp_ns, int64_t bytes) {
-  index_ << frame_id << "," << timestamp_ns << "\n";
-  index_.flush();
-  if (!index_)
-    throw Error(fmt::format("{}: cannot append frame {} (disk full?); the session ends before it",
-                            (folder_ / "index.csv").string(), frame_id));
+  char line[48];
+  const auto end = fmt::format_to_n(line, sizeof line, "{},{}\n", frame_id, timestamp_ns).out;
+  if (!index_.append(std::string_view(line, size_t(end - line))))
+    throw Error(fmt::format("{}: cannot append frame {}: {}; the session ends before it",
+                            (folder_ / "index.csv").string(), frame_id, index_.error()));
   ++frames_;
   bytes_ += bytes;
 }

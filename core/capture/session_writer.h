@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/base/atomic_file.h"
 #include "core/body/skinned_mesh.h"
 #include "core/capture/image.h"
 #include "core/capture/image_files.h"
@@ -59,8 +60,8 @@ class SessionWriter {
   PixelFormat format_;
   ImageFiles files_;
   std::vector<std::string> joint_names_;
-  std::ofstream index_;
-  std::ofstream joints_;
+  AppendOnlyFile index_;
+  AppendOnlyFile joints_;
   int frames_ = 0;
   int64_t bytes_ = 0;
 };

@@ -1,7 +1,10 @@
 #include "core/capture/session_reader.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 
+#include <csignal>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -151,6 +154,61 @@ TEST(SessionReader, TornLastIndexLineIsSkippedWithAWarning) {
   const std::string& w = reader.warnings()[0];
   EXPECT_TRUE(contains(w, "index.csv:6: torn last line '4,1333333")) << w;
   EXPECT_TRUE(contains(w, "the session ends at frame 3")) << w;
+  fs::remove_all(folder);
+}
+
+// The disk fills in the middle of a frame's index line and room comes back before the recording
+// ends (the operator frees some for the next take): the line is cut back, the file takes nothing
+// more, and the session reads whole up to the frame before. (Buffered, the rest of the torn line
+// was written out when the file closed, into a line that made the whole session unreadable.) The
+// disk is filled by a file size limit, in a child process.
+TEST(SessionReader, AFullDiskMidIndexLineLeavesTheFramesBeforeIt) {
+  RingRigSpec spec;
+  spec.cameras = 3;
+  spec.width = 8;
+  spec.height = 6;  // 59-byte PNM images: under the limit that the index reaches
+  const Rig rig = makeRingRig(spec);
+  const fs::path folder = freshFolder("full_index");
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);  // a write past the limit fails with EFBIG instead
+    int code = 0;
+    try {
+      SessionWriter writer(folder, rig, PixelFormat::kMono8, 30.0, "test", {}, ImageFiles::kPnm);
+      const auto write = [&](int64_t f) {
+        writer.writeFrame(f, timestampOf(f), views(frameImages(rig, PixelFormat::kMono8, f)));
+      };
+      for (int f = 0; f < 10; ++f) write(f);
+      rlimit limit{};
+      ::getrlimit(RLIMIT_FSIZE, &limit);
+      const rlim_t hard = limit.rlim_max;
+      limit.rlim_cur = fs::file_size(folder / "index.csv") + 5;  // "10,333333347\n" is 13 bytes
+      ::setrlimit(RLIMIT_FSIZE, &limit);
+      try {
+        write(10);
+        code = 2;
+      } catch (const Error&) {
+      }
+      limit.rlim_cur = hard;  // room again
+      ::setrlimit(RLIMIT_FSIZE, &limit);
+      try {
+        write(11);
+        code = 3;
+      } catch (const Error&) {
+      }
+    } catch (...) {
+      code = 4;
+    }
+    ::_exit(code);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  ASSERT_EQ(WEXITSTATUS(status), 0) << "2: frame 10 written past a full disk, 3: frame 11 after it";
+  const SessionReader reader(folder);
+  EXPECT_TRUE(reader.warnings().empty()) << allWarnings(reader);
+  expectFramesExact(reader, PixelFormat::kMono8, 10);
   fs::remove_all(folder);
 }
 
