@@ -78,6 +78,13 @@ void FrameGrouper::emitUpTo(size_t count) {
     new_batch_ = false;
     FrameSet& set = pending_.front();
     set.missing.clear();
+    if (options_.key == FrameGrouperOptions::Key::kFrameId) {
+      // Each camera stamps its frames by its own clock (a GigE camera's ticks since power-up):
+      // the set takes one camera's, the first present, not whichever arrived first.
+      const auto first = std::find(set.present.begin(), set.present.end(), true);
+      if (first != set.present.end())
+        set.timestamp_ns = set.frames[first - set.present.begin()].timestamp_ns;
+    }
     for (int c = 0; c < cameras_; ++c) {
       if (set.present[c]) continue;
       set.missing.push_back(c);

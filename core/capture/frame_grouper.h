@@ -10,8 +10,10 @@ namespace lumistage {
 
 // The frames of one instant, one slot per camera of the rig.
 struct FrameSet {
-  int64_t frame_id = -1;            // by id: the set's id; by timestamp: its first frame's id
-  int64_t timestamp_ns = 0;         // the set's first frame's timestamp
+  int64_t frame_id = -1;  // by id: the set's id; by timestamp: its first frame's id
+  // By id: the timestamp of its first present camera's frame (cameras' clocks may differ: one
+  // camera's, always the same while it delivers); by timestamp: its first frame's.
+  int64_t timestamp_ns = 0;
   std::vector<CameraFrame> frames;  // indexed by camera; meaningful where present[c]
   std::vector<bool> present;
   std::vector<int> missing;  // cameras without a frame in this set, ascending; empty: complete

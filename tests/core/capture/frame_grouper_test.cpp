@@ -60,6 +60,35 @@ TEST(FrameGrouper, GroupsInterleavedFramesAndReportsMissingAndLateCameras) {
   EXPECT_EQ(grouper.pendingCount(), 0);
 }
 
+// Cameras without a common clock (GigE cameras' ticks since each one's power-up): a set's time is
+// always the first camera's, whichever camera's frame came first, so that a recording's index
+// follows one clock instead of jumping between them.
+TEST(FrameGrouper, ASetsTimeIsOneCamerasClockWhateverArrivesFirst) {
+  FrameGrouper grouper(2);
+  FrameSet set;
+  std::vector<int64_t> times;
+  for (int64_t id = 0; id < 4; ++id) {
+    const int64_t cam0 = 100'000'000'000 + id * 33'333'333,
+                  cam1 = 5'000'000'000'000 + id * 33'333'333;
+    if (id % 2) {
+      push(grouper, 1, id, cam1);
+      push(grouper, 0, id, cam0);
+    } else {
+      push(grouper, 0, id, cam0);
+      push(grouper, 1, id, cam1);
+    }
+    while (grouper.pop(set)) times.push_back(set.timestamp_ns);
+  }
+  ASSERT_EQ(times.size(), 4u);
+  for (int64_t id = 0; id < 4; ++id) EXPECT_EQ(times[id], 100'000'000'000 + id * 33'333'333);
+  // Camera 0 missing from a set: camera 1's clock, the first present.
+  FrameGrouper alone(2, {.max_pending = 1});
+  push(alone, 1, 0, 7);
+  push(alone, 1, 1, 8);
+  ASSERT_TRUE(alone.pop(set));
+  EXPECT_EQ(set.timestamp_ns, 7);
+}
+
 TEST(FrameGrouper, ACameraFarBehindIsNotWaitedOnAndMemoryStaysBounded) {
   FrameGrouperOptions options;
   options.max_pending = 3;
