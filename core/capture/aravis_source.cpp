@@ -75,7 +75,7 @@ struct AravisSource::Device {
   // Counters, guarded by AravisSource::mutex_.
   CameraStats stats;
   std::deque<std::chrono::steady_clock::time_point> recent;  // arrival times, for the frame rate
-  int64_t last_frame_id = -1;
+  DropCounter drops;
   FrameIdUnwrapper unwrap;
 };
 
@@ -205,16 +205,13 @@ void AravisSource::receive(int camera) {
     const void* data = arv_buffer_get_data(buffer, &size);
     std::unique_lock lock(mutex_);
     if (status != ARV_BUFFER_STATUS_SUCCESS || size < bytes) {
-      ++d.stats.dropped;
+      d.stats.dropped += d.drops.broken();
       d.stats.last_error = status != ARV_BUFFER_STATUS_SUCCESS
                                ? statusName(status)
                                : fmt::format("short image: {} bytes, expected {}", size, bytes);
     } else {
       const int64_t frame_id = d.unwrap(static_cast<int64_t>(arv_buffer_get_frame_id(buffer)));
-      // A jump means frames never arrived.
-      if (d.last_frame_id >= 0 && frame_id > d.last_frame_id + 1)
-        d.stats.dropped += frame_id - d.last_frame_id - 1;
-      d.last_frame_id = frame_id;
+      d.stats.dropped += d.drops.whole(frame_id);  // a jump: frames that never arrived
       if (queue_.size() >= capacity_) {  // the consumer fell behind: drop the oldest frame
         ++devices_[queue_.front().camera]->stats.dropped;
         spare_.push_back(std::move(queue_.front().image));

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -46,6 +47,28 @@ class FrameIdUnwrapper {
  private:
   static constexpr int64_t kLargest = 65535;
   int64_t last_raw_ = -1, epoch_ = 0;
+};
+
+// A camera's dropped frames: those it delivered broken (missing packets, a short image) and the
+// ids that never arrived, each counted once (a broken frame's own id, which the buffer may not
+// carry reliably, is not trusted: it is the gap at the next whole frame that it fills).
+class DropCounter {
+ public:
+  int64_t broken() {  // returns the frames newly counted as dropped
+    ++broken_since_whole_;
+    return 1;
+  }
+  int64_t whole(int64_t frame_id) {
+    int64_t gap = 0;
+    if (last_ >= 0 && frame_id > last_ + 1)
+      gap = std::max<int64_t>(0, frame_id - last_ - 1 - broken_since_whole_);
+    last_ = frame_id;
+    broken_since_whole_ = 0;
+    return gap;
+  }
+
+ private:
+  int64_t last_ = -1, broken_since_whole_ = 0;
 };
 
 enum class TriggerMode {

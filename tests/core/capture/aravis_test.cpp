@@ -59,6 +59,25 @@ TEST(Aravis, FrameIdsCountOnAcrossTheSixteenBitWrap) {
   EXPECT_EQ(wide(5), 5);  // after a 64-bit id, no wrap is assumed
 }
 
+// Frame 5 arrives broken (missing packets), 6 whole: one frame dropped, not two; 8 and 9 never
+// arrive: two more.
+TEST(Aravis, ABrokenFrameIsOneDropNotTwo) {
+  DropCounter drops;
+  int64_t dropped = 0;
+  for (int64_t id : {3, 4}) dropped += drops.whole(id);
+  dropped += drops.broken();
+  dropped += drops.whole(6);
+  EXPECT_EQ(dropped, 1);
+  dropped += drops.whole(7);
+  dropped += drops.whole(10);
+  EXPECT_EQ(dropped, 3);
+  // Broken frames beyond the gap (a resent frame delivered broken twice) never make it negative.
+  dropped += drops.broken();
+  dropped += drops.broken();
+  dropped += drops.whole(11);
+  EXPECT_EQ(dropped, 5);
+}
+
 TEST(Aravis, VirtualCamerasStreamTheSyntheticFramesBitExact) {
   const Rig rig = smallRig(2, 320, 240);
   const double fps = 50;
