@@ -12,7 +12,10 @@ namespace lumistage {
 
 namespace {
 
-constexpr uint16_t kUnseen = 0xffff;
+// A voxel's cell in a camera's silhouette, or kUnseen<T> where the camera does not see it: 16 bits
+// a cell while every camera has fewer than 65535 cells (1024x768 at step 4), 32 beyond (1920x1080).
+template <typename T>
+constexpr T kUnseen = std::numeric_limits<T>::max();
 
 // A capsule hung on joint `joint`: the segment from the joint to `b` (rest-aligned offset, turned
 // with the joint) and a radius.
@@ -105,7 +108,9 @@ struct PoseTracker::Impl {
   // Hull grid.
   Eigen::Vector3d lower;
   Eigen::Vector3i dims;
-  std::vector<uint16_t> cell;  // [voxel * cameras + camera]
+  // [voxel * cameras + camera]: cell while every camera's cells fit in 16 bits, else cell_wide.
+  std::vector<uint16_t> cell;
+  std::vector<uint32_t> cell_wide;
   std::vector<uint8_t> occupied;
   std::vector<Eigen::Vector3d> surface_all, hull;
   // Silhouette distance transforms (cells), per camera; present[c] when this frame has one. Each
@@ -190,14 +195,18 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   for (int c = 0; c < cameras; ++c) {
     cell_w.push_back(rig.camera(c).width() / step);
     cell_h.push_back(rig.camera(c).height() / step);
-    if (cell_w.back() * cell_h.back() >= kUnseen)
-      throw std::invalid_argument("PoseTracker: too many silhouette cells for camera " +
-                                  rig.camera(c).name());
   }
+  const bool wide = *std::max_element(cell_w.begin(), cell_w.end()) *
+                        int64_t(*std::max_element(cell_h.begin(), cell_h.end())) >=
+                    kUnseen<uint16_t>;
   lower = opt.stage_lower;
   dims = ((opt.stage_upper - opt.stage_lower) / opt.voxel_m).array().ceil().cast<int>();
   const size_t voxels = size_t(dims.x()) * dims.y() * dims.z();
-  cell.assign(voxels * cameras, kUnseen);
+  if (wide) {
+    cell_wide.assign(voxels * cameras, kUnseen<uint32_t>);
+  } else {
+    cell.assign(voxels * cameras, kUnseen<uint16_t>);
+  }
   occupied.assign(voxels, 0);
   // Projects one z slab at a time (bounded temporary memory).
   const size_t slab = size_t(dims.x()) * dims.y();
@@ -217,8 +226,13 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
         if (depths(i) <= 0) continue;
         const int x = int(std::floor(pixels(0, i) / step)),
                   y = int(std::floor(pixels(1, i) / step));
-        if (x >= 0 && y >= 0 && x < cell_w[c] && y < cell_h[c])
-          cell[(size_t(z) * slab + i) * cameras + c] = uint16_t(y * cell_w[c] + x);
+        if (x < 0 || y < 0 || x >= cell_w[c] || y >= cell_h[c]) continue;
+        const size_t at = (size_t(z) * slab + i) * cameras + c;
+        if (wide) {
+          cell_wide[at] = uint32_t(y * cell_w[c] + x);
+        } else {
+          cell[at] = uint16_t(y * cell_w[c] + x);
+        }
       }
     }
   }
@@ -502,33 +516,40 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
   // The camera that carved the last voxel away is asked first: neighbouring voxels mostly fall
   // outside the same silhouette.
   int first = 0;
-  for (int z = lo.z(); z <= hi.z(); ++z) {
-    for (int y = lo.y(); y <= hi.y(); ++y) {
-      size_t v = z * sz + y * sy + lo.x() * sx;
-      for (int x = lo.x(); x <= hi.x(); ++x, ++v) {
-        const uint16_t* cells = &cell[v * cameras];
-        int seen = 0;
-        bool inside = true;
-        for (int k = 0; k < cameras; ++k) {
-          const int c = k == 0 ? first : (k <= first ? k - 1 : k);
-          if (!present[c] || cells[c] == kUnseen) continue;
-          ++seen;
-          const float d = dt[c][cells[c]];
-          if (d > 0) {
-            inside = false;
-            first = c;
-            break;
+  const auto carveWith = [&]<typename T>(const std::vector<T>& table) {
+    for (int z = lo.z(); z <= hi.z(); ++z) {
+      for (int y = lo.y(); y <= hi.y(); ++y) {
+        size_t v = z * sz + y * sy + lo.x() * sx;
+        for (int x = lo.x(); x <= hi.x(); ++x, ++v) {
+          const T* cells = &table[v * cameras];
+          int seen = 0;
+          bool inside = true;
+          for (int k = 0; k < cameras; ++k) {
+            const int c = k == 0 ? first : (k <= first ? k - 1 : k);
+            if (!present[c] || cells[c] == kUnseen<T>) continue;
+            ++seen;
+            const float d = dt[c][cells[c]];
+            if (d > 0) {
+              inside = false;
+              first = c;
+              break;
+            }
           }
-        }
-        const bool keep = inside && seen >= 2;
-        occupied[v] = keep;
-        if (keep) {
-          ++count;
-          sum += Eigen::Vector3d(x, y, z);
-          top = std::max(top, double(z));
+          const bool keep = inside && seen >= 2;
+          occupied[v] = keep;
+          if (keep) {
+            ++count;
+            sum += Eigen::Vector3d(x, y, z);
+            top = std::max(top, double(z));
+          }
         }
       }
     }
+  };
+  if (cell_wide.empty()) {
+    carveWith(cell);
+  } else {
+    carveWith(cell_wide);
   }
   // Surface voxels: kept, with a 6-neighbour that is not (the region's border and the floor
   // count as empty). The sample moves half a voxel toward its empty neighbours: onto the hull's
