@@ -859,6 +859,10 @@ double PoseTracker::Impl::fitRms(const Pose& p) {
   return hull.empty() ? 1.0 : std::sqrt(sum / hull.size());
 }
 
+// Initialisation calibrates the body's proportions only on a hull that the best template fits
+// within this many times lost_rms_m.
+constexpr double kCalibrateWithin = 2.0;
+
 bool PoseTracker::Impl::initialise(TrackResult& out) {
   Eigen::Vector3d centroid;
   double top_z = 0;
@@ -888,7 +892,14 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
       if (c < best) best = c, best_pose = p;
     }
   }
+  // A hull that no template fits within twice the lost threshold (two people, a prop, a hull
+  // carved by two cameras) is no body whose proportions a search could find: failed at once,
+  // instead of 30 refits a frame (0.4 s a frame while nobody could be tracked).
   const bool calibrating = opt.calibrate_shape && !shape_calibrated;
+  if (calibrating && fitRms(best_pose) > kCalibrateWithin * opt.lost_rms_m) {
+    out.fit_rms_m = fitRms(best_pose);
+    return false;
+  }
   if (calibrating) {
     // Coordinate search over the body's proportions, refitting the pose for every trial.
     constexpr int kParams = 7;
