@@ -162,6 +162,9 @@ struct PoseTracker::Impl {
   // Tracking state.
   bool tracking = false;
   int bad_frames = 0;
+  double last_volume = 0;    // of the hull carved this frame, m³
+  int empty_frames = 0;      // in a row: the hull too small for anyone
+  bool shape_given = false;  // by setShape(): kept whoever walks on
   Pose pose, previous;
   bool has_previous = false;
   Pose prior_pose;
@@ -868,6 +871,7 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
   double top_z = 0;
   const double volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z);
   out.hull_points = int(hull.size());
+  last_volume = volume;
   if (volume < opt.min_volume_m3 || volume > opt.max_volume_m3 || top_z < 1.0) return false;
   if (!shape_calibrated) {
     BodyShape s;
@@ -990,6 +994,7 @@ const BodyShape& PoseTracker::shape() const {
 void PoseTracker::setShape(const BodyShape& shape) {
   impl_->setShape(shape);
   impl_->shape_calibrated = true;
+  impl_->shape_given = true;
   impl_->tracking = false;
 }
 
@@ -998,6 +1003,8 @@ void PoseTracker::reset() {
   impl_->foot_scale = 1.0;
   impl_->shape_calibrated = false;
   impl_->bad_frames = 0;
+  impl_->empty_frames = 0;
+  impl_->shape_given = false;
   result_.state = TrackState::kNoActor;
 }
 
@@ -1044,6 +1051,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
     const Eigen::Vector3i vlo = ((lo - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
     const Eigen::Vector3i vhi = ((hi - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
     const double volume = m.carve(vlo, vhi, nullptr, nullptr);
+    m.last_volume = volume;
     result_.hull_points = int(m.hull.size());
     if (volume < m.opt.min_volume_m3 || volume > m.opt.max_volume_m3) {
       m.tracking = false;
@@ -1067,6 +1075,18 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
       }
       result_.state = m.tracking ? TrackState::kTracking : TrackState::kLost;
     }
+  }
+  // The actor gone for good: whoever walks on next is calibrated anew (a given shape is kept).
+  if (m.last_volume >= m.opt.min_volume_m3) {
+    m.empty_frames = 0;
+  } else if (++m.empty_frames == m.opt.forget_shape_after_empty_frames && m.shape_calibrated &&
+             !m.shape_given) {
+    spdlog::info(
+        "tracker: the stage has been empty for {} frames: the next actor's proportions will be "
+        "calibrated anew",
+        m.empty_frames);
+    m.shape_calibrated = false;
+    m.foot_scale = 1.0;
   }
   if (result_.valid()) {
     result_.pose = m.pose;

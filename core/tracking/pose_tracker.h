@@ -42,9 +42,12 @@ struct PoseTrackerOptions {
   // gone): nobody is tracked, and no time goes into fitting a body to it. One actor's hull is
   // about 0.1 m³ with 12 cameras.
   double max_volume_m3 = 1.0;
-  double lost_rms_m = 0.05;      // hull fit error above this...
-  int lost_frames = 3;           // ...for this many frames in a row: lost, re-initialise
-  bool calibrate_shape = true;   // scale the generic skeleton to the actor at initialisation
+  double lost_rms_m = 0.05;     // hull fit error above this...
+  int lost_frames = 3;          // ...for this many frames in a row: lost, re-initialise
+  bool calibrate_shape = true;  // scale the generic skeleton to the actor at initialisation
+  // An empty stage for this many frames in a row (2 s at 30 fps): the actor has gone, and the
+  // next one who walks on is calibrated anew instead of keeping the first one's proportions.
+  int forget_shape_after_empty_frames = 60;
   bool track_clavicles = false;  // fit the clavicles' angles too (else they stay at rest)
 };
 
@@ -70,7 +73,8 @@ struct TrackResult {
 //
 // Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
 // is fitted from T- and A-pose templates at its centroid in four headings, the best fit wins, and
-// (once per actor) the body shape is calibrated: the generic skeleton's bones scaled to the
+// (once per actor: again after the stage stood empty for forget_shape_after_empty_frames) the
+// body shape is calibrated: the generic skeleton's bones scaled to the
 // height of the hull's top, then the legs' length (with the top held at the hull's), the
 // capsules' girth and the feet's radius (shoes) by a coordinate search that refits the pose for
 // each trial. The arms keep the generic proportions: searching them too lowered the fit's cost

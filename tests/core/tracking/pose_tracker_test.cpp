@@ -167,6 +167,19 @@ TEST(PoseTracker, TracksAnActorFifteenPercentTallerAfterShapeCalibration) {
   EXPECT_LT(e.max_m, 0.08);
 }
 
+// A 15% taller actor performs and leaves; after the stage stood empty, the next actor is
+// calibrated on their own hull instead of being tracked on the first one's skeleton.
+TEST(PoseTracker, TheNextActorAfterAnEmptyStageIsCalibratedAnew) {
+  SyntheticStage tall(kStudio, /*height_scale=*/1.15), next(kStudio);
+  PoseTracker tracker(tall.config.rig, generic());
+  const MotionClip tall_clip = makeBuiltinClip("walk", tall.actor.skeleton, 30.0, 1);
+  expectCalibratedToTheActor(tracker, tall, trackClip(tall, tracker, tall_clip, 0, 10));
+  for (int f = 0; f < PoseTrackerOptions{}.forget_shape_after_empty_frames; ++f)
+    EXPECT_FALSE(tracker.track(tall.render(tall_clip.sample(0), {}, /*absent=*/true)).valid());
+  const MotionClip clip = makeBuiltinClip("walk", next.actor.skeleton, 30.0, 1);
+  expectCalibratedToTheActor(tracker, next, trackClip(next, tracker, clip, 0, 20));
+}
+
 // Something that is no body stands on the stage first (a wide column, a prop of the actor's
 // height): no fit, and its proportions are not kept; the 15% taller actor who then walks on is
 // calibrated on their own hull.
