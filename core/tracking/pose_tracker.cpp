@@ -1054,7 +1054,9 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
     m.last_volume = volume;
     result_.hull_points = int(m.hull.size());
     if (volume < m.opt.min_volume_m3 || volume > m.opt.max_volume_m3) {
-      m.tracking = false;
+      // No hull to fit (the actor gone, or one frame's keys broken: a light flickered, every mask
+      // refused): a bad frame like a poor fit, the pose held, lost after lost_frames of them.
+      if (++m.bad_frames >= m.opt.lost_frames) m.tracking = false;
       result_.state = TrackState::kLost;
     } else {
       m.use_prior = true;

@@ -145,6 +145,19 @@ TEST(PoseTracker, ReinitialisesAfterTheActorLeavesAndReenters) {
   EXPECT_LT(e.mean_m, 0.035);
 }
 
+// One frame without a hull (a light flickered, every key broken) does not lose the actor: the
+// next frame is tracked on from the held pose, not initialised again from a T-pose.
+TEST(PoseTracker, OneFrameWithoutAHullDoesNotLoseTheActor) {
+  SyntheticStage stage(kStudio);
+  PoseTracker tracker(stage.config.rig, generic());
+  const MotionClip clip = makeBuiltinClip("walk", stage.actor.skeleton, 30.0, 1.5);
+  EXPECT_EQ(trackClip(stage, tracker, clip, 0, 10).tracked, 10);
+  EXPECT_FALSE(tracker.track(stage.render(clip.sample(10 / 30.0), {}, /*absent=*/true)).valid());
+  const TrackResult& r = tracker.track(stage.render(clip.sample(11 / 30.0)));
+  EXPECT_EQ(r.state, TrackState::kTracking);
+  EXPECT_LT(mpjpe(r.joints, stage.joints), 0.04);
+}
+
 // The calibrated skeleton against the actor's: the head's and the pelvis' heights, and the
 // clip's frames tracked within 3 cm on average.
 void expectCalibratedToTheActor(const PoseTracker& tracker, const SyntheticStage& stage,
@@ -247,8 +260,11 @@ TEST(PoseTracker, SeesNobodyWhenEveryCellIsForeground) {
     std::fill(s.bits.begin(), s.bits.end(), uint8_t(0xff));
     pointers.push_back(&s);
   }
-  EXPECT_EQ(tracker.track(pointers).state, TrackState::kLost);     // while tracking
-  EXPECT_EQ(tracker.track(pointers).state, TrackState::kNoActor);  // and from then on
+  // While tracking: lost for lost_frames frames (the pose held, as through a glitch); then
+  // nobody, and from then on.
+  for (int f = 0; f < PoseTrackerOptions{}.lost_frames; ++f)
+    EXPECT_EQ(tracker.track(pointers).state, TrackState::kLost);
+  EXPECT_EQ(tracker.track(pointers).state, TrackState::kNoActor);
   EXPECT_EQ(tracker.track(pointers).state, TrackState::kNoActor);
   // The actor back in sight: found again.
   EXPECT_TRUE(tracker.track(stage.render(clip.sample(0.1))).valid());
