@@ -68,7 +68,7 @@ class WandSolver {
   // Re-decides which observations agree with the solution; returns the threshold used.
   double rejectOutliers();
   void alignGauge(WandCalibrationResult& result) const;
-  Rig makeRig() const;
+  Rig makeRig(std::vector<std::string>& notes) const;
 
   const WandSession& s_;
   const WandCalibrationOptions& o_;
@@ -391,7 +391,7 @@ void WandSolver::alignGauge(WandCalibrationResult& result) const {
   for (Eigen::Vector3d& p : result.points_m) p = g.apply(p);
 }
 
-Rig WandSolver::makeRig() const {
+Rig WandSolver::makeRig(std::vector<std::string>& notes) const {
   std::vector<Camera> cameras;
   for (int c = 0; c < n_; ++c) {
     const BundleCamera& k = cams_[c];
@@ -400,20 +400,66 @@ Rig WandSolver::makeRig() const {
                          Intrinsics{k.focal_px, k.focal_px, k.cx, k.cy, 0},
                          Distortion{k.k1, k.k2, 0, 0, 0}, rotationOf(k), k.translation);
   }
-  if (o_.initial_rig && o_.initial_rig->cameraCount() == n_) {
-    // Keep the initial rig's camera order and node assignment when it has the same cameras.
-    std::vector<Camera> ordered;
-    for (const Camera& ic : o_.initial_rig->cameras()) {
-      const std::optional<int> c = s_.findCamera(ic.name());
-      if (!c) break;
-      ordered.push_back(cameras[*c]);
+  if (!o_.initial_rig) return Rig(std::move(cameras), dealCamerasToNodes(n_, o_.cameras_per_node));
+  // The initial rig's camera order and nodes (with their hosts) are kept for the cameras the
+  // session has; its cameras the session lacks are left out, and the session's cameras it lacks
+  // go to new nodes after its own. The report's notes say what changed.
+  const Rig& initial = *o_.initial_rig;
+  std::vector<Camera> ordered;
+  std::vector<int> place(initial.cameraCount(), -1);  // initial index -> index in `ordered`
+  std::vector<uint8_t> placed(n_, 0);
+  std::string missing, fresh_names;
+  for (int i = 0; i < initial.cameraCount(); ++i) {
+    const std::optional<int> c = s_.findCamera(initial.camera(i).name());
+    if (!c) {
+      missing += (missing.empty() ? "" : ", ") + initial.camera(i).name();
+      continue;
     }
-    if (static_cast<int>(ordered.size()) == n_) {
-      std::vector<RigNode> nodes = o_.initial_rig->nodes();
-      return Rig(std::move(ordered), std::move(nodes));
-    }
+    place[i] = static_cast<int>(ordered.size());
+    ordered.push_back(cameras[*c]);
+    placed[*c] = 1;
   }
-  return Rig(std::move(cameras), dealCamerasToNodes(n_, o_.cameras_per_node));
+  std::vector<RigNode> nodes;
+  for (const RigNode& node : initial.nodes()) {
+    RigNode kept{node.name, node.host, {}};
+    for (int i : node.cameras)
+      if (place[i] >= 0) kept.cameras.push_back(place[i]);
+    if (kept.cameras.empty()) {
+      notes.push_back(
+          fmt::format("node {} has none of its cameras in the session: left out", node.name));
+      continue;
+    }
+    nodes.push_back(std::move(kept));
+  }
+  std::vector<int> fresh;
+  for (int c = 0; c < n_; ++c) {
+    if (placed[c]) continue;
+    fresh.push_back(static_cast<int>(ordered.size()));
+    ordered.push_back(cameras[c]);
+    fresh_names += (fresh_names.empty() ? "" : ", ") + cameras[c].name();
+  }
+  if (!fresh.empty()) {
+    std::string new_nodes;
+    int number = 1;
+    for (RigNode& node : dealCamerasToNodes(static_cast<int>(fresh.size()), o_.cameras_per_node)) {
+      const auto taken = [&](const std::string& name) {
+        return std::any_of(nodes.begin(), nodes.end(),
+                           [&](const RigNode& other) { return other.name == name; });
+      };
+      while (taken("node" + std::to_string(number))) ++number;
+      node.name = "node" + std::to_string(number);
+      for (int& c : node.cameras) c = fresh[c];
+      new_nodes += (new_nodes.empty() ? "" : ", ") + node.name;
+      nodes.push_back(std::move(node));
+    }
+    notes.push_back(
+        fmt::format("cameras not in the initial rig ({}) are on new nodes ({}): give them hosts",
+                    fresh_names, new_nodes));
+  }
+  if (!missing.empty())
+    notes.push_back(
+        fmt::format("cameras of the initial rig not in the session are left out: {}", missing));
+  return Rig(std::move(ordered), std::move(nodes));
 }
 
 WandCalibrationResult WandSolver::solve() {
@@ -461,7 +507,8 @@ WandCalibrationResult WandSolver::solve() {
   }
 
   WandCalibrationResult result;
-  result.rig = makeRig();
+  std::vector<std::string> rig_notes;
+  result.rig = makeRig(rig_notes);
   result.points_m = points_;
   result.point_valid = valid_;
   result.inlier = agree_;
@@ -472,6 +519,7 @@ WandCalibrationResult WandSolver::solve() {
   r.method = "wand";
   r.samples = m_;
   for (const std::string& note : notes_) r.notes.push_back(note);
+  for (const std::string& note : rig_notes) r.notes.push_back(note);
   for (const Camera& cam : result.rig.cameras()) {
     const int c = *s_.findCamera(cam.name());
     std::vector<Eigen::Vector2d> observed, residuals;

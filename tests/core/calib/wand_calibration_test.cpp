@@ -119,6 +119,55 @@ TEST(WandCalibration, StartsFromAnInitialRigAndKeepsItsNodes) {
   EXPECT_LT(compareRigs(result.rig, truth).max_centre_m, 0.02);
 }
 
+// The initial rig has a spare camera the session lacks, and the session a camera the initial rig
+// lacks: the nodes keep their hosts and cameras, the spare is left out, the new camera goes to a
+// new node, and the report says both.
+TEST(WandCalibration, KeepsTheInitialRigsNodesWhenTheCamerasDiffer) {
+  const Rig truth = referenceRig();
+  WandSimulationOptions sim;
+  sim.samples = 150;
+  const SimulatedWandSession s = simulateWandSession(truth, sim);
+  // The initial rig: the truth without cam12, plus a spare cam13, with hosts.
+  std::vector<Camera> cameras;
+  std::vector<int> index(truth.cameraCount(), -1);
+  for (int c = 0; c < truth.cameraCount(); ++c) {
+    if (truth.camera(c).name() == "cam12") continue;
+    index[c] = int(cameras.size());
+    cameras.push_back(truth.camera(c));
+  }
+  const Camera& model = truth.camera(0);
+  cameras.emplace_back("cam13", model.width(), model.height(), model.intrinsics(),
+                       model.distortion(), model.rotation(), model.translation());
+  std::vector<RigNode> nodes;
+  for (const RigNode& node : truth.nodes()) {
+    RigNode n{node.name, "10.0.0." + node.name.substr(4), {}};
+    for (int c : node.cameras)
+      if (index[c] >= 0) n.cameras.push_back(index[c]);
+    nodes.push_back(n);
+  }
+  nodes.back().cameras.push_back(int(cameras.size()) - 1);
+  WandCalibrationOptions options;
+  options.initial_rig = Rig(cameras, nodes);
+  const WandCalibrationResult result = calibrateWand(s.session, options);
+  ASSERT_EQ(result.rig.cameraCount(), 12);
+  ASSERT_EQ(result.rig.nodeCount(), 5);
+  for (int n = 0; n < 4; ++n) {
+    EXPECT_EQ(result.rig.nodes()[n].name, truth.nodes()[n].name);
+    EXPECT_EQ(result.rig.nodes()[n].host, "10.0.0." + std::to_string(n + 1));
+  }
+  const RigNode& added = result.rig.nodes()[4];
+  EXPECT_EQ(added.name, "node5");
+  ASSERT_EQ(added.cameras.size(), 1u);
+  EXPECT_EQ(result.rig.camera(added.cameras[0]).name(), "cam12");
+  std::string notes;
+  for (const std::string& n : result.report.notes) notes += n + "\n";
+  EXPECT_NE(notes.find("cameras not in the initial rig (cam12) are on new nodes (node5)"),
+            std::string::npos)
+      << notes;
+  EXPECT_NE(notes.find("not in the session are left out: cam13"), std::string::npos) << notes;
+  EXPECT_LT(compareRigs(result.rig, truth).max_centre_m, 0.02);
+}
+
 TEST(WandCalibration, NamesACameraThatSawNothing) {
   const Rig truth = referenceRig();
   WandSimulationOptions sim;
