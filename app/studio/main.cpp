@@ -35,9 +35,19 @@ bool haveDisplay(int argc, char** argv) {
   return set("DISPLAY") || set("WAYLAND_DISPLAY") || set("QT_QPA_PLATFORM");
 }
 
+// Whether the command line asks for help: answered without a display.
+bool asksForHelp(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view a(argv[i]);
+    if (a == "-h" || a == "--help" || a == "--help-all") return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (asksForHelp(argc, argv)) setenv("QT_QPA_PLATFORM", "offscreen", 1);
   if (!haveDisplay(argc, argv)) {
     std::fprintf(stderr,
                  "lumistage-studio: no display: neither DISPLAY nor WAYLAND_DISPLAY is set.\n"
@@ -79,6 +89,10 @@ int main(int argc, char** argv) {
       "endpoint");
   QCommandLineOption keys_option(
       "keys", "With --listen: the key store the nodes were given (lumistage keys init).", "dir");
+  QCommandLineOption plain_option(
+      "plain",
+      "With --listen: plain TCP, neither encrypted nor authenticated, for a closed lab network "
+      "only; the nodes must be started with --plain too.");
   QCommandLineOption demo_option(
       "demo",
       "The demo: film the virtual studio once (a short session, kept in the cache folder), replay "
@@ -100,6 +114,7 @@ int main(int argc, char** argv) {
   parser.addOption(pipeline_option);
   parser.addOption(listen_option);
   parser.addOption(keys_option);
+  parser.addOption(plain_option);
   parser.addOption(screenshot_option);
   parser.process(app);
 
@@ -144,6 +159,7 @@ int main(int argc, char** argv) {
     options.rig = rig_path.toStdString();
     options.keys = parser.value(keys_option).toStdString();
     options.listen = parser.value(listen_option).toStdString();
+    options.plain = parser.isSet(plain_option);
     window.pipeline()->start(options);
     window.showPipeline();
   }
