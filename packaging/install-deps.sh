@@ -10,10 +10,11 @@ packages=(
   # clang with libFuzzer for the message decoder fuzz test (tests/fuzz)
   clang libclang-rt-14-dev
   # GUI and GL: Qt6 widgets/OpenGL widgets/test, headless EGL through Mesa, GLFW + Dear ImGui
-  qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev libgl-dev libegl-dev libgles-dev
+  qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev libgl-dev libopengl-dev libegl-dev libgles-dev
   libegl-mesa0 libgl1-mesa-dri mesa-utils libglfw3-dev libimgui-dev xvfb xauth
-  # packaging: man pages from --help, desktop entry check
-  help2man desktop-file-utils
+  # packaging: man pages from --help, desktop entry check, file (CPack's Debian generator reads
+  # the binaries' library dependencies with it; not in a minimal Debian)
+  help2man desktop-file-utils file
   # vision, maths, geometry
   libopencv-dev libeigen3-dev libceres-dev libassimp-dev
   # cameras: Aravis (GigE Vision / USB3 Vision) and its tools (fake GigE camera)
