@@ -14,6 +14,7 @@
 #include "core/body/ply_mesh.h"
 #include "core/capture/session_reader.h"
 #include "core/eval/leave_one_out.h"
+#include "core/render/clone_set.h"
 #include "core/render/egl_context.h"
 #include "core/render/frame_inputs.h"
 #include "core/render/lumigraph_renderer.h"
@@ -70,6 +71,7 @@ void addRenderCommand(CLI::App& app) {
   render->add_option("--frames", a->frames, "frames to render (default: the session's)");
   render->add_option("--fps", a->fps, "video rate (default: the session's)");
   render->add_option("--clones", a->clones, "copies of the actor side by side, 1 m apart")
+      ->check(CLI::Range(1, CloneSet::kMaxClones))
       ->capture_default_str();
   render->callback([a] {
     const SessionReader session(a->session);
@@ -84,7 +86,7 @@ void addRenderCommand(CLI::App& app) {
     params.phong_subdivision = a->mesh != "truth";  // the true surface is finely tessellated
     LumigraphRenderer renderer(rig, all, params);
     std::vector<Eigen::Affine3f> clones;
-    for (int i = 0; i < std::max(1, a->clones); ++i) {
+    for (int i = 0; i < a->clones; ++i) {
       Eigen::Affine3f t = Eigen::Affine3f::Identity();
       t.translate(Eigen::Vector3f(float(i - (a->clones - 1) / 2.0), 0, 0));
       clones.push_back(t);

@@ -218,7 +218,20 @@ void LumigraphRenderer::setImage(int own_index, const ImageView& image) {
     uploadImage(own_index, image.width, image.height, staging_.data());
     return;
   }
-  // Bayer (and mono8, as a Bayer image whose every cell is grey): a 2x2 cell's colour a texel.
+  if (image.format == PixelFormat::kMono8) {
+    // Grey, pixel by pixel (read as Bayer cells, an edge between grey pixels took false colour).
+    const size_t n = size_t(image.width) * image.height;
+    staging_.resize(n * 4);
+    for (size_t i = 0; i < n; ++i) {
+      const uint8_t v = image.data[i];
+      staging_[4 * i] = staging_[4 * i + 1] = staging_[4 * i + 2] = v;
+      staging_[4 * i + 3] = 255;
+    }
+    useImageFormat(false);
+    uploadImage(own_index, image.width, image.height, staging_.data());
+    return;
+  }
+  // Bayer: a 2x2 cell's colour a texel.
   staging_.resize(size_t(image.width / 2) * (image.height / 2) * 4);
   bayerCellsToRgba(image, staging_.data());
   useImageFormat(true);
@@ -241,7 +254,12 @@ void LumigraphRenderer::setMask(int own_index, std::span<const uint8_t> mask, in
                 std::to_string(mask.size()) + " bytes");
   glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  if (!masks_ || width != mask_width_ || height != mask_height_) {
+  const Eigen::Vector2i mask_cells(width, height);
+  // One array for every own camera's mask, each in the corner of its layer: sized to the largest
+  // given (cameras of different sizes), grown when a larger one comes (the other layers then read
+  // "all in" until given again: every frame gives them all).
+  if (!masks_ || width > mask_width_ || height > mask_height_) {
+    width = std::max(width, mask_width_), height = std::max(height, mask_height_);
     glDeleteTextures(1, &masks_);
     glGenTextures(1, &masks_);
     glBindTexture(GL_TEXTURE_2D_ARRAY, masks_);
@@ -255,10 +273,13 @@ void LumigraphRenderer::setMask(int own_index, std::span<const uint8_t> mask, in
     glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0, width, height, layers, GL_RED,
                     GL_UNSIGNED_BYTE, all.data());
     mask_width_ = width, mask_height_ = height;
+    mask_sizes_.assign(own_.size(), Eigen::Vector2i::Zero());
+    width = mask_cells.x(), height = mask_cells.y();
   }
   glBindTexture(GL_TEXTURE_2D_ARRAY, masks_);
   glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, width, height, 1, GL_RED,
                   GL_UNSIGNED_BYTE, mask.data());
+  mask_sizes_[own_index] = mask_cells;
 }
 
 void LumigraphRenderer::useImageFormat(bool cells) {
@@ -345,7 +366,18 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform1f(p.uniform("min_facing"), params_.min_facing);
   glUniform1f(p.uniform("max_angle"), params_.max_angle_rad);
   glUniform1f(p.uniform("epsilon"), params_.epsilon_rad);
-  glUniform2f(p.uniform("images_size"), float(images_width_), float(images_height_));
+  // A camera's pixel to its mask's texture coordinate: the mask's cells cover the camera's image.
+  mask_scales_.resize(own_.size());
+  for (size_t j = 0; j < own_.size(); ++j) {
+    const Camera& camera = rig_.camera(own_[j]);
+    const Eigen::Vector2i cells = j < mask_sizes_.size() ? mask_sizes_[j] : Eigen::Vector2i::Zero();
+    mask_scales_[j] =
+        cells.x() > 0 && mask_width_ > 0
+            ? Eigen::Vector2f(float(cells.x()) / float(camera.width()) / float(mask_width_),
+                              float(cells.y()) / float(camera.height()) / float(mask_height_))
+            : Eigen::Vector2f::Zero();  // no mask: its layer reads "all in" everywhere
+  }
+  glUniform2fv(p.uniform("mask_scales"), GLsizei(own_.size()), mask_scales_[0].data());
   // Texel to texture coordinate: a Bayer cell's centre, at texel 2c + 1, is the centre of cell
   // texel c of the half-size array.
   if (cells_) {

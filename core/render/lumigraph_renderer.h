@@ -75,11 +75,11 @@ class LumigraphRenderer {
   void setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                std::span<const Eigen::Vector3i> triangles,
                std::span<const uint16_t> visibility = {});
-  // The image of own camera `own_index` (index into ownCameras()). Bayer and mono8 upload their
+  // The image of own camera `own_index` (index into ownCameras()). Bayer images upload their
   // 2x2 cells' colours (R, the mean of the two G, B; as many bytes as the Bayer image), which the
   // shader samples bilinearly: one filtered texture read a camera and fragment instead of four
-  // gathers; rgb8 is widened to RGBA. All own images must share one format (a renderer's are one
-  // session's or one node's cameras).
+  // gathers; rgb8 is widened to RGBA, mono8 to grey RGBA. All own images must share one kind,
+  // Bayer or not (a renderer's are one session's or one node's cameras).
   void setImage(int own_index, const ImageView& image);
   // RGBA8 (rows top first) as setImage(rgb8) would take it.
   void setImageRgba(int own_index, const uint8_t* rgba, int width, int height);
@@ -87,11 +87,12 @@ class LumigraphRenderer {
   // with that camera inactive.
   void setActive(const std::vector<bool>& active);
   // A low-resolution foreground mask of own camera `own_index`'s current image (one byte a cell,
-  // 0 background, 255 foreground; cells of the camera's size / the mask's, the same for every
-  // own camera). A camera's weight is scaled by the mask (bilinear) where it samples: where the
+  // 0 background, 255 foreground; its cells cover the camera's image, cameras of any sizes). A
+  // camera's weight is scaled by the mask (bilinear) where it samples: where the
   // mesh reaches beyond the actor in that camera, the others colour it; just beyond it in all, the
-  // unmasked colour at a sixteenth of the share; further beyond it in all, nothing (the fragment
-  // is discarded, and what lies behind it shows). Without masks, every pixel counts.
+  // cameras' colours weighted by their masks, at a sixteenth of the share; further beyond it in
+  // all, nothing (the fragment is discarded, and what lies behind it shows). Without masks, every
+  // pixel counts.
   void setMask(int own_index, std::span<const uint8_t> mask, int width, int height);
 
   // Renders the desired camera's view (its size, lens distortion included) of every clone: a
@@ -124,7 +125,11 @@ class LumigraphRenderer {
   GLsizeiptr vertex_capacity_ = 0, index_capacity_ = 0;
   GLuint images_ = 0;  // 2D array texture, one layer per own camera
   GLuint masks_ = 0;   // 2D array texture of the own cameras' foreground masks, once given
-  int mask_width_ = 0, mask_height_ = 0;
+  int mask_width_ = 0, mask_height_ = 0;  // the array's layers: the largest mask given
+  // Each own camera's mask, in the corner of its layer: its cells (0: none, all in), and the
+  // scale from the camera's pixels to the array's texture coordinate (for the shader).
+  std::vector<Eigen::Vector2i> mask_sizes_;
+  std::vector<Eigen::Vector2f> mask_scales_;
   int images_width_ = 0, images_height_ = 0;
   bool cells_ = false;            // the array holds Bayer cells' colours
   GLuint visibility_buffer_ = 0;  // one 16-bit camera mask a vertex (vertex attribute 3)

@@ -153,6 +153,35 @@ TEST_F(LumigraphRendererTest, BayerImagesAreSampledAsTheirCellsColours) {
   }
 }
 
+// A monochrome camera's picture is grey, pixel by pixel: rendered from that camera, every drawn
+// pixel is grey and its level the picture's there (read as a Bayer mosaic, the edges between grey
+// pixels took false colour).
+TEST_F(LumigraphRendererTest, MonochromeImagesStayGrey) {
+  const int c = 5;
+  const Camera& camera = rig().camera(c);
+  auto renderer = makeRenderer({c});
+  Image grey;
+  grey.resize(PixelFormat::kMono8, camera.width(), camera.height());
+  for (size_t i = 0; i < grey.pixels.size(); ++i) {
+    const uint8_t* rgba = &frame_->images[c][4 * i];
+    grey.pixels[i] = uint8_t((rgba[0] + 2 * rgba[1] + rgba[2]) / 4);
+  }
+  renderer->setImage(0, grey.view());
+  std::vector<uint8_t> rendered;
+  renderer->render(camera, rendered);
+  int64_t drawn = 0, coloured = 0, off = 0;
+  for (size_t i = 0; i < grey.pixels.size(); ++i) {
+    const uint8_t* p = &rendered[4 * i];
+    if (p[3] == 0 || !frame_->masks[c][i]) continue;
+    ++drawn;
+    coloured += p[0] != p[1] || p[1] != p[2];
+    off += std::abs(int(p[1]) - int(grey.pixels[i])) > 8;
+  }
+  ASSERT_GT(drawn, 10000);
+  EXPECT_EQ(coloured, 0);
+  EXPECT_LT(off, drawn / 50);
+}
+
 TEST_F(LumigraphRendererTest, NodeWeightsSumToOneAndVanishForCamerasThatDoNotContribute) {
   const Camera desired = desiredView();
   std::vector<std::vector<uint8_t>> partials;
@@ -286,6 +315,8 @@ TEST_F(LumigraphRendererTest, ForegroundMasksTakeAwayWhatIsOffTheActor) {
 // 2.1 m, above the real one's head in every view, as a mis-posed limb or the generic mesh's foot
 // beside the shoe is) is not drawn at all: with the cameras' silhouettes as masks, the view of the
 // actor and the copy is the view of the actor alone, pixel for pixel. Without masks the copy shows.
+// The same with masks of two sizes (cells of 4 pixels for some cameras, 8 for the others, as
+// cameras of different sizes give): each is read where its own camera samples.
 TEST_F(LumigraphRendererTest, WhatEveryCameraSeesClearlyOffTheActorIsNotDrawn) {
   const TriangleMesh& actor = frame_->surface;
   const int n = actor.vertexCount();
@@ -294,28 +325,64 @@ TEST_F(LumigraphRendererTest, WhatEveryCameraSeesClearlyOffTheActorIsNotDrawn) {
   normals << actor.normals, actor.normals;
   std::vector<Eigen::Vector3i> triangles = actor.triangles;
   for (const Eigen::Vector3i& t : actor.triangles) triangles.push_back(t.array() + n);
-  std::vector<uint8_t> alone, with_copy, unmasked;
-  for (const bool masked : {false, true}) {
-    auto renderer = makeRenderer();
-    if (masked) {
-      // Each camera's silhouette in cells of 4x4 pixels, a cell foreground when any pixel is.
-      for (int c = 0; c < rig().cameraCount(); ++c) {
-        const int w = rig().camera(c).width() / 4, h = rig().camera(c).height() / 4;
-        std::vector<uint8_t> cells(size_t(w) * h, 0);
-        for (int y = 0; y < 4 * h; ++y)
-          for (int x = 0; x < 4 * w; ++x)
-            if (frame_->masks[c][size_t(y) * rig().camera(c).width() + x])
-              cells[size_t(y / 4) * w + x / 4] = 255;
-        renderer->setMask(c, cells, w, h);
-      }
-      renderer->render(desiredView(), alone);
+  // Each camera's silhouette in cells of `cell` pixels, a cell foreground when any pixel is.
+  const auto setMasks = [&](LumigraphRenderer& renderer, bool mixed) {
+    for (int c = 0; c < rig().cameraCount(); ++c) {
+      const int cell = mixed && c % 2 ? 8 : 4;
+      const int w = rig().camera(c).width() / cell, h = rig().camera(c).height() / cell;
+      std::vector<uint8_t> cells(size_t(w) * h, 0);
+      for (int y = 0; y < cell * h; ++y)
+        for (int x = 0; x < cell * w; ++x)
+          if (frame_->masks[c][size_t(y) * rig().camera(c).width() + x])
+            cells[size_t(y / cell) * w + x / cell] = 255;
+      renderer.setMask(c, cells, w, h);
     }
+  };
+  std::vector<uint8_t> unmasked;
+  {
+    auto renderer = makeRenderer();
     renderer->setMesh(positions, normals, triangles);
-    renderer->render(desiredView(), masked ? with_copy : unmasked);
+    renderer->render(desiredView(), unmasked);
   }
-  ASSERT_GT(covered(alone), 5000);
-  EXPECT_GT(covered(unmasked), covered(alone) + 1000) << "the copy is not in the view";
-  EXPECT_EQ(with_copy, alone);
+  for (const bool mixed : {false, true}) {
+    std::vector<uint8_t> alone, with_copy;
+    auto renderer = makeRenderer();
+    setMasks(*renderer, mixed);
+    renderer->render(desiredView(), alone);
+    renderer->setMesh(positions, normals, triangles);
+    setMasks(*renderer, mixed);  // as every frame gives them
+    renderer->render(desiredView(), with_copy);
+    ASSERT_GT(covered(alone), 5000) << "mixed " << mixed;
+    EXPECT_GT(covered(unmasked), covered(alone) + 1000) << "the copy is not in the view";
+    EXPECT_EQ(with_copy, alone) << "mixed " << mixed;
+  }
+}
+
+// A camera with no picture this frame (its node zeroes its mask; its texture keeps whatever it
+// held): nothing of it reaches the view, not even in the rim's fallback colour. Its old picture
+// magenta or black, the view is the same.
+TEST_F(LumigraphRendererTest, ACameraWhoseMaskIsAllOffGivesNoColour) {
+  std::vector<std::vector<uint8_t>> views;
+  for (const std::array<uint8_t, 4> old :
+       {std::array<uint8_t, 4>{255, 0, 255, 255}, std::array<uint8_t, 4>{0, 0, 0, 255}}) {
+    auto renderer = makeRenderer({0, 1});
+    const Camera& c0 = rig().camera(0);
+    std::vector<uint8_t> picture(size_t(c0.width()) * c0.height() * 4);
+    for (size_t i = 0; i < picture.size(); i += 4) std::copy(old.begin(), old.end(), &picture[i]);
+    renderer->setImageRgba(0, picture.data(), c0.width(), c0.height());
+    const int w = c0.width() / 4, h = c0.height() / 4;
+    renderer->setMask(0, std::vector<uint8_t>(size_t(w) * h, 0), w, h);
+    const Camera& c1 = rig().camera(1);
+    std::vector<uint8_t> cells(size_t(w) * h, 0);
+    for (int y = 0; y < 4 * h; ++y)
+      for (int x = 0; x < 4 * w; ++x)
+        if (frame_->masks[1][size_t(y) * c1.width() + x]) cells[size_t(y / 4) * w + x / 4] = 255;
+    renderer->setMask(1, cells, w, h);
+    views.emplace_back();
+    renderer->render(desiredView(), views.back());
+  }
+  ASSERT_GT(covered(views[0]), 5000);
+  EXPECT_EQ(views[0], views[1]);
 }
 
 TEST_F(LumigraphRendererTest, SeveralViewsOfOneFrameDoNotDisturbEachOther) {
