@@ -1,5 +1,7 @@
 #include "core/render/render_target.h"
 
+#include <fmt/format.h>
+
 #include <string>
 
 #include "core/base/error.h"
@@ -14,6 +16,15 @@ RenderTarget::~RenderTarget() {
 
 void RenderTarget::bind(int width, int height, const char* owner) {
   if (width != width_ || height != height_) {
+    GLint largest = 0;
+    glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &largest);
+    if (width <= 0 || height <= 0 || width > largest || height > largest) {
+      throw Error(std::string(owner) + ": a view of " + std::to_string(width) + "x" +
+                  std::to_string(height) + " pixels: this OpenGL device draws 1 to " +
+                  std::to_string(largest) + " a side");
+    }
+    while (glGetError() != GL_NO_ERROR) {
+    }  // earlier errors are not this allocation's
     if (!framebuffer_) {
       glGenFramebuffers(1, &framebuffer_);
       glGenRenderbuffers(1, &colour_);
@@ -26,6 +37,15 @@ void RenderTarget::bind(int width, int height, const char* owner) {
     glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, colour_);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_);
+    // Storage refused (out of memory) keeps the old storage attached, complete at the old size:
+    // reading the new size back would read beyond it.
+    if (const GLenum error = glGetError(); error != GL_NO_ERROR) {
+      width_ = height_ = 0;  // the next bind allocates again
+      throw Error(std::string(owner) + ": cannot allocate a view of " + std::to_string(width) +
+                  "x" + std::to_string(height) + " pixels (OpenGL error 0x" +
+                  fmt::format("{:x}", error) +
+                  (error == GL_OUT_OF_MEMORY ? ": out of memory)" : ")"));
+    }
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
       throw Error(std::string(owner) + ": framebuffer of " + std::to_string(width) + "x" +
                   std::to_string(height) + " is incomplete");

@@ -17,6 +17,7 @@
 #include "core/render/partial_image_codec.h"
 #include "core/sim/virtual_studio.h"
 #include "tests/core/refine/refine_test_scene.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -383,6 +384,22 @@ TEST_F(LumigraphRendererTest, ACameraWhoseMaskIsAllOffGivesNoColour) {
   }
   ASSERT_GT(covered(views[0]), 5000);
   EXPECT_EQ(views[0], views[1]);
+}
+
+// A view larger than the device can draw is refused in words, and the renderer draws the next
+// view as before (a refused allocation left the old one attached, read back at the new size).
+TEST_F(LumigraphRendererTest, AViewTooLargeForTheDeviceIsRefused) {
+  auto renderer = makeRenderer();
+  std::vector<uint8_t> before, after;
+  renderer->render(desiredView(), before);
+  const Camera huge("huge", 100000, 10, {400, 400, 49999.5, 4.5, 0}, {},
+                    desiredView().rotation(), desiredView().translation());
+  const std::string message = testing::errorOf([&] { renderer->render(huge, after); });
+  EXPECT_NE(message.find("a view of 100000x10 pixels: this OpenGL device draws 1 to"),
+            std::string::npos)
+      << message;
+  renderer->render(desiredView(), after);
+  EXPECT_EQ(after, before);
 }
 
 TEST_F(LumigraphRendererTest, SeveralViewsOfOneFrameDoNotDisturbEachOther) {
