@@ -50,14 +50,23 @@ void PipelineWorker::startRecording(const QString& file) {
 
 void PipelineWorker::stopRecording() {
   QMutexLocker lock(&mutex_);
-  commands_.push_back([this](LocalPipelineRun& run) {
-    const std::unique_ptr<ViewRecorder> recorder = run.stopRecordingView();
-    if (!recorder) return;
-    emit message(tr("Recorded %1 frames of the view to %2")
+  commands_.push_back([this](LocalPipelineRun& run) { finishRecording(run); });
+}
+
+void PipelineWorker::finishRecording(LocalPipelineRun& run) {
+  const bool failed_before = run.viewRecordingFailed();
+  const std::unique_ptr<ViewRecorder> recorder = run.stopRecordingView();
+  if (!recorder) return;
+  if (!recorder->error().empty()) {
+    emit message(
+        tr("Recording of the view failed: %1").arg(QString::fromStdString(recorder->error())));
+  } else if (recorder->framesWritten() > 0 || !failed_before) {
+    emit message(tr("Recorded %1 frames of the view to %2%3")
                      .arg(recorder->framesWritten())
-                     .arg(QString::fromStdString(recorder->file().string())));
-    emit recordingEnded();
-  });
+                     .arg(QString::fromStdString(recorder->file().string()))
+                     .arg(failed_before ? tr(" (stopped early: see above)") : QString()));
+  }
+  emit recordingEnded();
 }
 
 void PipelineWorker::startTake(const QString& name) {
@@ -142,10 +151,7 @@ void PipelineWorker::run() {
       for (const std::string& name : pipeline.nodeNames()) {
         if (!pipeline.nodeRunning(name)) s.exited << QString::fromStdString(name);
       }
-      if (pipeline.viewRecordingFailed()) {
-        pipeline.stopRecordingView();
-        emit recordingEnded();
-      }
+      if (pipeline.viewRecordingFailed()) finishRecording(pipeline);
       if (const ViewRecorder* recorder = pipeline.viewRecording()) {
         s.recording = QString::fromStdString(recorder->file().string());
         s.recorded_frames = recorder->framesWritten();
@@ -155,7 +161,7 @@ void PipelineWorker::run() {
       s.takes_folder = QString::fromStdString(options_.takes.string());
       emit snapshot(s);
     }
-    // A recording under way is finished with the pipeline; the panel ends it with this worker.
+    finishRecording(pipeline);  // a recording under way ends with the pipeline
   } catch (const std::exception& e) {
     emit message(tr("Pipeline stopped: %1").arg(QString::fromStdString(e.what())));
   }
@@ -183,6 +189,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   qRegisterMetaType<lumistage::PipelineView>();
   summary_->setWordWrap(true);
   summary_->setObjectName("pipeline_summary");
+  table_->setObjectName("pipeline_nodes");
   source_->addItems({tr("Virtual studio (demo session)"), tr("Recorded session..."),
                      tr("Aravis cameras..."), tr("Nodes on the stage's PCs...")});
   source_->setItemData(3,
@@ -354,6 +361,22 @@ void PipelinePanel::stop() {
   take_button_->setEnabled(false);
   take_button_->setText(tr("Record take"));
   emit recordingEnded();  // whatever was recording is finished with its worker
+  // This panel keeps the run's figures in words and clears what was live: the nodes (no longer
+  // streaming), the blended view, a take under way (ended with the nodes).
+  const RunReport& r = last_.report;
+  summary_->setText(notice_.isEmpty()
+                        ? tr("Stopped after %1 frames (%2 fps). Start runs the pipeline again.")
+                              .arg(r.frames)
+                              .arg(r.fps, 0, 'f', 1)
+                        : notice_.toHtmlEscaped());
+  table_->setRowCount(0);
+  stages_->setRowCount(0);
+  view_->clear();
+  view_->setText(tr("the blended view"));
+  if (last_.take_recording)
+    take_status_->setText(tr("Take %1 ended with the pipeline.")
+                              .arg(QString::fromStdString(last_.take.take).toHtmlEscaped()));
+  take_name_->setEnabled(true);
   // The panels forget the pipeline: the viewport its last image and body, the overlay its pose,
   // the camera health its nodes' reports (the source's own figures show again).
   last_ = PipelineSnapshot();

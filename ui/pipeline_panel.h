@@ -84,6 +84,10 @@ class PipelineWorker : public QObject {
   void finished();
 
  private:
+  // Ends the view's recording, if any: closes the video (put in its place once it reads back
+  // whole) and says how it went.
+  void finishRecording(LocalPipelineRun& run);
+
   LocalRunOptions options_;
   std::atomic<bool> stop_{false};
   QMutex mutex_;

@@ -207,9 +207,12 @@ void addRunCommand(CLI::App& app) {
       view.height = height;
       studio.setView(view);
     }
+    // Set by a failure while recording (a full disk); shared, as the pipeline keeps the callback.
+    const auto recording_stopped = std::make_shared<bool>(false);
     if (!a->record_view.empty()) {
-      pipeline.recordView(a->record_view, [](const std::string& error) {
+      pipeline.recordView(a->record_view, [recording_stopped](const std::string& error) {
         fmt::print(stderr, "lumistage run: recording stopped: {}\n", error);
+        *recording_stopped = true;
       });
     }
     // CPU use is measured from the first frame done: the nodes' start-up (loading a session into
@@ -246,10 +249,16 @@ void addRunCommand(CLI::App& app) {
       }
     }
     if (!take.empty() && !studio.take().take.empty()) finishTake(pipeline, a->record_take);
+    bool recording_failed = *recording_stopped;
     if (std::unique_ptr<ViewRecorder> recorder = pipeline.stopRecordingView()) {
-      fmt::print("recorded the view to {}: {} frames of {}x{} at {:g} fps\n",
-                 recorder->file().string(), recorder->framesWritten(), recorder->width(),
-                 recorder->height(), recorder->fps());
+      if (!recorder->error().empty()) {
+        fmt::print(stderr, "lumistage run: recording of the view failed: {}\n", recorder->error());
+        recording_failed = true;
+      } else {
+        fmt::print("recorded the view to {}: {} frames of {}x{} at {:g} fps\n",
+                   recorder->file().string(), recorder->framesWritten(), recorder->width(),
+                   recorder->height(), recorder->fps());
+      }
     }
     const RunReport r = studio.report();
     const double wall_s =
@@ -305,11 +314,13 @@ void addRunCommand(CLI::App& app) {
       if (!cv::imwrite(a->image, bgra)) throw Error(a->image + ": cannot write the image");
       fmt::print("wrote {} (frame {})\n", a->image, image.frame_id);
     }
-    // The figures are printed either way, but a run a node died in did not measure the rig.
+    // The figures are printed either way, but a run a node died in did not measure the rig, and
+    // one whose recording failed did not do what it was asked.
     if (pipeline.nodesFailed() > 0) {
       throw Error(fmt::format("{} node process{} failed during the run (see above)",
                               pipeline.nodesFailed(), pipeline.nodesFailed() > 1 ? "es" : ""));
     }
+    if (recording_failed) throw Error("the view's recording failed (see above)");
   });
 }
 

@@ -1,5 +1,6 @@
 #include "core/render/view_recorder.h"
 
+#include <cctype>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -8,7 +9,8 @@
 namespace lumistage {
 
 struct ViewRecorder::Impl {
-  std::filesystem::path file;
+  std::filesystem::path file, partial;
+  std::string error;
   double fps = 30;
   int max_gap = 30;
   cv::VideoWriter writer;
@@ -23,13 +25,18 @@ ViewRecorder::ViewRecorder(const std::filesystem::path& file, double fps, int ma
   if (!(fps > 0 && fps <= 1000))
     throw Error(file.string() + ": cannot record the view at " + std::to_string(fps) +
                 " frames a second (expected 0 to 1000)");
-  if (file.extension() != ".avi")
+  std::string extension = file.extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (extension != ".avi")
     throw Error(file.string() + ": the view is recorded as Motion-JPEG in an AVI: name it .avi");
   const std::filesystem::path folder = file.has_parent_path() ? file.parent_path() : ".";
   std::error_code error;
   if (!std::filesystem::is_directory(folder, error))
     throw Error(file.string() + ": cannot record the view: no folder " + folder.string());
+  if (std::filesystem::is_directory(file, error))
+    throw Error(file.string() + ": cannot record the view: a folder has that name");
   impl_->file = file;
+  impl_->partial = folder / (file.stem().string() + ".partial.avi");
   impl_->fps = fps;
   impl_->max_gap = std::max(0, max_gap_frames);
 }
@@ -46,7 +53,7 @@ bool ViewRecorder::add(int64_t frame_id, int width, int height, std::span<const 
   if (!r.writer.isOpened()) {
     // Opened with the first image, whose size the video keeps. OpenCV's own MJPEG writer (no
     // FFmpeg): the same on every machine.
-    r.writer.open(r.file.string(), cv::CAP_OPENCV_MJPEG,
+    r.writer.open(r.partial.string(), cv::CAP_OPENCV_MJPEG,
                   cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), r.fps, cv::Size(width, height));
     if (!r.writer.isOpened())
       throw Error(r.file.string() + ": cannot write the view's video there");
@@ -72,14 +79,44 @@ bool ViewRecorder::add(int64_t frame_id, int width, int height, std::span<const 
   frame->copyTo(r.last);
   ++r.written;
   r.last_id = frame_id;
+  // OpenCV's writer drops write errors: the disk's room is watched instead.
+  if (r.written % kFreeCheckFrames == 0) {
+    std::error_code error;
+    const std::filesystem::space_info space = std::filesystem::space(r.partial, error);
+    if (!error && space.available < uint64_t(kMinFreeBytes))
+      throw Error(r.file.string() + ": the disk is full (" + std::to_string(space.available >> 20) +
+                  " MB left): the recording stops here, what it holds is kept");
+  }
   return true;
 }
 
-void ViewRecorder::close() {
+bool ViewRecorder::close() {
   Impl& r = *impl_;
-  if (r.closed) return;
+  if (r.closed) return r.error.empty();
   r.closed = true;
-  if (r.writer.isOpened()) r.writer.release();
+  if (!r.writer.isOpened()) return true;  // nothing recorded: no file
+  r.writer.release();
+  cv::VideoCapture check(r.partial.string(), cv::CAP_OPENCV_MJPEG);
+  const int64_t read_back = check.isOpened() ? int64_t(check.get(cv::CAP_PROP_FRAME_COUNT)) : 0;
+  check.release();
+  if (read_back != r.written) {
+    r.error = r.file.string() + ": the video reads back " + std::to_string(read_back) + " of its " +
+              std::to_string(r.written) + " frames (disk full?); what was written is kept as " +
+              r.partial.string();
+    return false;
+  }
+  std::error_code error;
+  std::filesystem::rename(r.partial, r.file, error);
+  if (error) {
+    r.error = r.file.string() + ": cannot put the video in its place (" + error.message() +
+              "); it is kept as " + r.partial.string();
+    return false;
+  }
+  return true;
+}
+
+const std::string& ViewRecorder::error() const {
+  return impl_->error;
 }
 
 const std::filesystem::path& ViewRecorder::file() const {

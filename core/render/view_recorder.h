@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <memory>
 #include <span>
+#include <string>
 
 namespace lumistage {
 
@@ -13,7 +14,10 @@ namespace lumistage {
 // cameras' rate: frame ids the pipeline skipped (refused on arrival, lost) repeat the image before
 // them, so that the video plays in real time; a gap longer than `max_gap_frames` is not filled (a
 // paused source), and a frame older than the last one written is left out. Images of another size
-// than the first are scaled to it. Not thread-safe; add() reuses its conversion buffers.
+// than the first are scaled to it. The video is written beside its name (`NAME.partial.avi`) and
+// put in its place when closed, once it reads back whole: a full disk or a crash never leaves a
+// torn video under the name, nor replaces an older one with it (the partial file is kept, and
+// error() says why). Not thread-safe; add() reuses its conversion buffers.
 class ViewRecorder {
  public:
   // Throws Error naming the file when it cannot be written (no folder, no rights, not .avi).
@@ -23,10 +27,17 @@ class ViewRecorder {
   ViewRecorder& operator=(const ViewRecorder&) = delete;
 
   // One blended image: RGBA8, rows top first (alpha is dropped: empty pixels are black). False,
-  // writing nothing, when it is older than the last frame written or its size is 0.
+  // writing nothing, when it is older than the last frame written or its size is 0. Throws Error
+  // when the disk holds less than kMinFreeBytes (checked every kFreeCheckFrames frames): the
+  // recording should stop there, what it holds is kept by close().
   bool add(int64_t frame_id, int width, int height, std::span<const uint8_t> rgba);
-  // Writes the index and closes the file; later add() calls write nothing.
-  void close();
+  // Writes the index, closes the file and puts it in its place if it reads back whole; later
+  // add() calls write nothing. False (error() says why) when it does not.
+  bool close();
+  const std::string& error() const;  // empty while all is well
+
+  static constexpr int64_t kMinFreeBytes = 64 << 20;
+  static constexpr int kFreeCheckFrames = 30;
 
   const std::filesystem::path& file() const;
   int64_t framesWritten() const;  // repeats included

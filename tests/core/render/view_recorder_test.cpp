@@ -3,9 +3,14 @@
 #include "core/render/view_recorder.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <csignal>
 #include <opencv2/videoio.hpp>
 
+#include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "tests/test_util.h"
 
@@ -66,6 +71,74 @@ TEST(ViewRecorder, WritesEveryFrameAtTheCamerasRate) {
       }
     }
   }
+}
+
+// The video is made beside its name and put in its place only once it reads back whole: an older
+// video under the name stays until then, and is replaced by the whole new one.
+TEST(ViewRecorder, ReplacesAnOlderVideoOnlyWhenWhole) {
+  const std::filesystem::path dir = testFolder("view_recorder_replace");
+  const std::filesystem::path file = dir / "take.avi";
+  std::filesystem::remove(file);
+  const auto red = solid(64, 48, 220, 20, 20);
+  {
+    ViewRecorder old(file, 30);
+    for (int f = 0; f < 3; ++f) old.add(f, 64, 48, red);
+  }
+  ViewRecorder recorder(file, 30);
+  for (int f = 0; f < 5; ++f) recorder.add(f, 64, 48, red);
+  EXPECT_TRUE(std::filesystem::exists(dir / "take.partial.avi"));
+  cv::Size size;
+  EXPECT_EQ(readBack(file, &size).size(), 3u);  // the older video, untouched while recording
+  EXPECT_TRUE(recorder.close());
+  EXPECT_EQ(recorder.error(), "");
+  EXPECT_EQ(readBack(file, &size).size(), 5u);
+  EXPECT_FALSE(std::filesystem::exists(dir / "take.partial.avi"));
+}
+
+// The disk fills while recording (a file size limit, in a child process): OpenCV's writer drops
+// its write errors, the video reads back short, and close() says so; the older video under the
+// name is left as it was and what was written is kept beside it.
+TEST(ViewRecorder, AFullDiskLeavesTheOlderVideoAndSaysSo) {
+  const std::filesystem::path dir = testFolder("view_recorder_full");
+  const std::filesystem::path file = dir / "take.avi";
+  std::filesystem::remove(file);
+  {
+    ViewRecorder old(file, 30);
+    for (int f = 0; f < 3; ++f) old.add(f, 64, 48, solid(64, 48, 220, 20, 20));
+  }
+  const std::string before = readFile(file);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);
+    rlimit limit{};
+    ::getrlimit(RLIMIT_FSIZE, &limit);
+    limit.rlim_cur = 200'000;
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    int code = 0;
+    try {
+      ViewRecorder recorder(file, 30);
+      std::vector<uint8_t> noise(size_t(640) * 480 * 4);
+      uint32_t x = 1;
+      for (int f = 0; f < 60; ++f) {
+        for (uint8_t& v : noise) v = uint8_t((x = x * 1664525u + 1013904223u) >> 24);
+        recorder.add(f, 640, 480, noise);
+      }
+      if (recorder.close())
+        code = 2;
+      else if (recorder.error().find("the video reads back") == std::string::npos)
+        code = 3;
+    } catch (...) {
+      code = 4;
+    }
+    ::_exit(code);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "2: a torn video taken for whole, 3: not said, 4: threw";
+  EXPECT_EQ(readFile(file), before);
+  EXPECT_TRUE(std::filesystem::exists(dir / "take.partial.avi"));
 }
 
 TEST(ViewRecorder, RefusesWhatItCannotWriteByName) {
