@@ -415,13 +415,24 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
   connect(record_, &QPushButton::clicked, this, [this](bool on) {
     QString file;
     if (on) {
-      file = QFileDialog::getSaveFileName(this, tr("Record the view"), "view.avi",
-                                          tr("Motion-JPEG video (*.avi)"));
+      // The suffix is added by the dialog, before it asks whether to replace a file of that name.
+      QFileDialog dialog(this, tr("Record the view"), "view.avi", tr("Motion-JPEG video (*.avi)"));
+      dialog.setAcceptMode(QFileDialog::AcceptSave);
+      dialog.setDefaultSuffix("avi");
+      if (dialog.exec() == QDialog::Accepted && !dialog.selectedFiles().isEmpty())
+        file = dialog.selectedFiles().front();
+      if (!file.isEmpty() && QFileInfo(file).suffix().compare("avi", Qt::CaseInsensitive) != 0) {
+        file += ".avi";  // another suffix typed: a name the dialog did not check
+        if (QFileInfo::exists(file) &&
+            QMessageBox::question(this, tr("Record the view"),
+                                  tr("%1 already exists. Replace it?").arg(file)) !=
+                QMessageBox::Yes)
+          file.clear();
+      }
       if (file.isEmpty()) {
         record_->setChecked(false);
         return;
       }
-      if (!file.endsWith(".avi")) file += ".avi";
     }
     record(on, file);
   });
@@ -445,12 +456,15 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
   timeline_->setRange(0, static_cast<int>(kTimelineLength_s * 10));
   play_->setCheckable(true);
   play_->setObjectName("play_path");
+  timeline_->setObjectName("timeline");
   connect(key, &QPushButton::clicked, this, &ViewportPanel::addKey);
   connect(unkey, &QPushButton::clicked, this, &ViewportPanel::removeKey);
   connect(play_, &QPushButton::toggled, this, &ViewportPanel::play);
-  connect(timeline_, &QSlider::sliderMoved, this, [this](int v) { setTime(v / 10.0); });
+  // Any move of the handle (dragged, a click in the groove, keys, the wheel) moves the time;
+  // refreshTimeline() sets it without a signal.
+  connect(timeline_, &QSlider::valueChanged, this, [this](int v) { setTime(v / 10.0); });
   connect(player_, &QTimer::timeout, this, [this] {
-    const double next = time_s_ + player_->interval() / 1000.0;
+    const double next = played_from_s_ + played_.elapsed() / 1000.0;
     if (next >= path_.duration()) {
       setTime(path_.duration());  // ends exactly on the last key
       play(false);
@@ -539,6 +553,8 @@ bool ViewportPanel::playing() const {
 void ViewportPanel::play(bool on) {
   if (on && path_.keys().size() >= 2) {
     if (time_s_ >= path_.duration()) setTime(0);
+    played_from_s_ = time_s_;
+    played_.start();
     player_->start(40);
   } else {
     player_->stop();

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <QElapsedTimer>
 #include <QImage>
 #include <QPoint>
 #include <QWidget>
@@ -152,6 +153,8 @@ class ViewportPanel : public QWidget {
   QPushButton* play_;
   QPushButton* record_;
   QTimer* player_;
+  QElapsedTimer played_;      // since Play path started: the path follows the clock, not the ticks
+  double played_from_s_ = 0;  // the path's time when it started
   CameraPath path_;
   double time_s_ = 0;
   Rig rig_;

@@ -14,8 +14,10 @@
 #include <QMouseEvent>
 #include <QPushButton>
 #include <QSettings>
+#include <QSlider>
 #include <QTableWidget>
 #include <QTemporaryDir>
+#include <QThread>
 #include <QtTest>
 
 #include "core/calib/calibration_report.h"
@@ -317,6 +319,12 @@ class MainWindowTest : public QObject {
     QVERIFY(!window.pipeline()->running());
     QVERIFY(!viewport->recording());
     QVERIFY(QFileInfo(dir.filePath("last.avi")).size() > 1000);
+    // The panel says how the recording ended, and no node is shown streaming any more.
+    auto* summary_label = window.pipeline()->findChild<QLabel*>("pipeline_summary");
+    QTRY_VERIFY_WITH_TIMEOUT(
+        summary_label->text().contains("Recorded") && summary_label->text().contains("last.avi"),
+        2000);
+    QCOMPARE(window.pipeline()->findChild<QTableWidget*>("pipeline_nodes")->rowCount(), 0);
     // The viewport forgets the stopped pipeline's last image and body.
     QVERIFY(viewport->viewport()->snapshot().view.isNull());
     QVERIFY(!viewport->viewport()->snapshot().mesh);
@@ -448,6 +456,20 @@ class MainWindowTest : public QObject {
     QVERIFY(panel->playing());
     QTRY_VERIFY_WITH_TIMEOUT(!panel->playing(), 3000);  // stops at the last key
     QVERIFY((panel->viewport()->view().eye() - window.rig()->camera(9).centre()).norm() < 1e-6);
+    // The path follows the clock, not the timer's ticks: a second of the path takes a second
+    // even when ticks come late (here the event loop held up for 0.6 s: one tick).
+    panel->setTime(0);
+    panel->play(true);
+    QThread::msleep(600);
+    QCoreApplication::processEvents();
+    QVERIFY2(panel->time() > 0.5, qPrintable(QString::number(panel->time())));
+    panel->play(false);
+    // A click in the timeline's groove (a page step), as a drag does, moves the time.
+    auto* timeline = panel->findChild<QSlider*>("timeline");
+    panel->setTime(0);
+    timeline->triggerAction(QAbstractSlider::SliderPageStepAdd);
+    QVERIFY(timeline->value() > 0);
+    QCOMPARE(panel->time(), timeline->value() / 10.0);
     panel->setTime(1.0);
     QVERIFY(panel->removeKey());
     QCOMPARE(panel->path().keys().size(), size_t(1));
