@@ -29,10 +29,14 @@ void CameraGridPanel::setRig(const Rig& rig) {
     tile.name = QString::fromStdString(rig.camera(c).name() + " (" + rig.camera(c).node() + ")");
     tile.picture = new QLabel(this);
     tile.picture->setMinimumSize(160, 120);
+    // The picture follows the tile, not the other way round (a label sizes itself to its pixmap:
+    // the grid then held the window 1800 pixels wide).
+    tile.picture->setSizePolicy(QSizePolicy::Ignored, QSizePolicy::Ignored);
     tile.picture->setAlignment(Qt::AlignCenter);
     tile.picture->setStyleSheet("background: #111; color: #aaa;");
     tile.picture->setText(tr("waiting for frames"));
     tile.caption = new QLabel(this);
+    tile.caption->setWordWrap(true);
     const int row = 2 * (c / columns), column = c % columns;
     grid_->addWidget(tile.picture, row, column);
     grid_->addWidget(tile.caption, row + 1, column);

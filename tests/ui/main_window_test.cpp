@@ -433,6 +433,19 @@ class MainWindowTest : public QObject {
     QVERIFY(viewport->view().distance() < distance);
   }
 
+  // The README's screen (1600x1000) holds the whole window with the reference rig's 12 cameras
+  // (their tiles and captions held it 1800 pixels wide).
+  void theWindowFitsA1600PixelWideScreen() {
+    MainWindow window;
+    QCOMPARE(window.openRig(reference_), QString());
+    window.resetLayout();
+    window.resize(1600, 1000);
+    window.show();
+    QVERIFY2(window.minimumSizeHint().width() <= 1600,
+             qPrintable(QString::number(window.minimumSizeHint().width())));
+    QCOMPARE(window.width(), 1600);
+  }
+
   void viewportSnapsToACameraAndPlaysAPath() {
     MainWindow window;
     QCOMPARE(window.openRig(reference_), QString());
