@@ -1,9 +1,13 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -51,6 +55,34 @@ std::string errorOf(Call&& call) {
   }
   ADD_FAILURE() << "no Error thrown";
   return "no error";
+}
+
+// Runs `body` in a child process (fork) and returns its result, or -1 when the child did not end
+// normally: for what may not be done to the test process itself (limitFileSize()).
+inline int inChildProcess(const std::function<int()>& body) {
+  const pid_t child = ::fork();
+  if (child < 0) return -1;
+  if (child == 0) {
+    int code = 100;
+    try {
+      code = body();
+    } catch (...) {
+    }
+    ::_exit(code);
+  }
+  int status = 0;
+  if (::waitpid(child, &status, 0) != child || !WIFEXITED(status)) return -1;
+  return WEXITSTATUS(status);
+}
+
+// A full disk, as far as this process's writes go: no file grows beyond `bytes` (a write past it
+// fails with EFBIG instead of the signal); the largest the system allows when `bytes` is 0.
+inline void limitFileSize(rlim_t bytes) {
+  ::signal(SIGXFSZ, SIG_IGN);
+  rlimit limit{};
+  ::getrlimit(RLIMIT_FSIZE, &limit);
+  limit.rlim_cur = bytes > 0 ? bytes : limit.rlim_max;
+  ::setrlimit(RLIMIT_FSIZE, &limit);
 }
 
 }  // namespace lumistage::testing

@@ -1,15 +1,13 @@
 #include "core/capture/session_reader.h"
 
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
 
-#include <csignal>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/base/error.h"
 #include "tests/core/capture/capture_test_util.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -169,43 +167,24 @@ TEST(SessionReader, AFullDiskMidIndexLineLeavesTheFramesBeforeIt) {
   spec.height = 6;  // 59-byte PNM images: under the limit that the index reaches
   const Rig rig = makeRingRig(spec);
   const fs::path folder = freshFolder("full_index");
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    ::signal(SIGXFSZ, SIG_IGN);  // a write past the limit fails with EFBIG instead
-    int code = 0;
-    try {
-      SessionWriter writer(folder, rig, PixelFormat::kMono8, 30.0, "test", {}, ImageFiles::kPnm);
-      const auto write = [&](int64_t f) {
+  const int result = testing::inChildProcess([&] {
+    SessionWriter writer(folder, rig, PixelFormat::kMono8, 30.0, "test", {}, ImageFiles::kPnm);
+    const auto write = [&](int64_t f) {
+      try {
         writer.writeFrame(f, timestampOf(f), views(frameImages(rig, PixelFormat::kMono8, f)));
-      };
-      for (int f = 0; f < 10; ++f) write(f);
-      rlimit limit{};
-      ::getrlimit(RLIMIT_FSIZE, &limit);
-      const rlim_t hard = limit.rlim_max;
-      limit.rlim_cur = fs::file_size(folder / "index.csv") + 5;  // "10,333333347\n" is 13 bytes
-      ::setrlimit(RLIMIT_FSIZE, &limit);
-      try {
-        write(10);
-        code = 2;
+        return true;
       } catch (const Error&) {
+        return false;
       }
-      limit.rlim_cur = hard;  // room again
-      ::setrlimit(RLIMIT_FSIZE, &limit);
-      try {
-        write(11);
-        code = 3;
-      } catch (const Error&) {
-      }
-    } catch (...) {
-      code = 4;
-    }
-    ::_exit(code);
-  }
-  int status = 0;
-  ASSERT_EQ(::waitpid(child, &status, 0), child);
-  ASSERT_TRUE(WIFEXITED(status));
-  ASSERT_EQ(WEXITSTATUS(status), 0) << "2: frame 10 written past a full disk, 3: frame 11 after it";
+    };
+    for (int f = 0; f < 10; ++f) write(f);
+    testing::limitFileSize(fs::file_size(folder / "index.csv") + 5);  // "10,333333347\n": 13
+    if (write(10)) return 2;
+    testing::limitFileSize(0);  // room again
+    if (write(11)) return 3;
+    return 0;
+  });
+  ASSERT_EQ(result, 0) << "2: frame 10 written past a full disk, 3: frame 11 after it";
   const SessionReader reader(folder);
   EXPECT_TRUE(reader.warnings().empty()) << allWarnings(reader);
   expectFramesExact(reader, PixelFormat::kMono8, 10);

@@ -3,11 +3,7 @@
 #include "core/render/view_recorder.h"
 
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <csignal>
 #include <opencv2/videoio.hpp>
 
 #include "core/base/atomic_file.h"
@@ -107,36 +103,19 @@ TEST(ViewRecorder, AFullDiskLeavesTheOlderVideoAndSaysSo) {
     for (int f = 0; f < 3; ++f) old.add(f, 64, 48, solid(64, 48, 220, 20, 20));
   }
   const std::string before = readFile(file);
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    ::signal(SIGXFSZ, SIG_IGN);
-    rlimit limit{};
-    ::getrlimit(RLIMIT_FSIZE, &limit);
-    limit.rlim_cur = 200'000;
-    ::setrlimit(RLIMIT_FSIZE, &limit);
-    int code = 0;
-    try {
-      ViewRecorder recorder(file, 30);
-      std::vector<uint8_t> noise(size_t(640) * 480 * 4);
-      uint32_t x = 1;
-      for (int f = 0; f < 60; ++f) {
-        for (uint8_t& v : noise) v = uint8_t((x = x * 1664525u + 1013904223u) >> 24);
-        recorder.add(f, 640, 480, noise);
-      }
-      if (recorder.close())
-        code = 2;
-      else if (recorder.error().find("the video reads back") == std::string::npos)
-        code = 3;
-    } catch (...) {
-      code = 4;
+  const int result = testing::inChildProcess([&] {
+    testing::limitFileSize(200'000);
+    ViewRecorder recorder(file, 30);
+    std::vector<uint8_t> noise(size_t(640) * 480 * 4);
+    uint32_t x = 1;
+    for (int f = 0; f < 60; ++f) {
+      for (uint8_t& v : noise) v = uint8_t((x = x * 1664525u + 1013904223u) >> 24);
+      recorder.add(f, 640, 480, noise);
     }
-    ::_exit(code);
-  }
-  int status = 0;
-  ASSERT_EQ(::waitpid(child, &status, 0), child);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0) << "2: a torn video taken for whole, 3: not said, 4: threw";
+    if (recorder.close()) return 2;
+    return recorder.error().find("the video reads back") == std::string::npos ? 3 : 0;
+  });
+  EXPECT_EQ(result, 0) << "2: a torn video taken for whole, 3: not said, 100: threw";
   EXPECT_EQ(readFile(file), before);
   EXPECT_TRUE(std::filesystem::exists(dir / "take.partial.avi"));
 }
