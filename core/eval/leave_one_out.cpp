@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <limits>
+
 #include "core/body/ply_mesh.h"
 #include "core/render/frame_inputs.h"
 
@@ -9,15 +12,35 @@ namespace lumistage {
 
 namespace {
 
-// Adds `weight` x a score's figures to a mean, and its pixels to the sum.
-void addScore(ViewScore& mean, const ViewScore& s, double weight) {
-  mean.psnr_db += weight * s.psnr_db;
-  mean.ssim += weight * s.ssim;
-  mean.matte_psnr_db += weight * s.matte_psnr_db;
-  mean.missed_pct += weight * s.missed_pct;
-  mean.beyond_pct += weight * s.beyond_pct;
-  mean.pixels += s.pixels;
-}
+// The mean of scores, figure by figure over those measured (a view without the actor has none
+// over the mask: NaN, left out rather than averaged as 0), NaN where none is; pixels summed.
+class ScoreMean {
+ public:
+  void add(const ViewScore& s) {
+    const double v[kFigures] = {s.psnr_db, s.ssim, s.matte_psnr_db, s.missed_pct, s.beyond_pct};
+    for (int k = 0; k < kFigures; ++k) {
+      if (!std::isfinite(v[k])) continue;
+      sum_[k] += v[k];
+      ++count_[k];
+    }
+    pixels_ += s.pixels;
+  }
+  ViewScore mean() const {
+    double m[kFigures];
+    for (int k = 0; k < kFigures; ++k)
+      m[k] = count_[k] > 0 ? sum_[k] / count_[k] : std::numeric_limits<double>::quiet_NaN();
+    ViewScore s;
+    s.psnr_db = m[0], s.ssim = m[1], s.matte_psnr_db = m[2], s.missed_pct = m[3],
+    s.beyond_pct = m[4], s.pixels = pixels_;
+    return s;
+  }
+
+ private:
+  static constexpr int kFigures = 5;
+  double sum_[kFigures] = {};
+  int count_[kFigures] = {};
+  int64_t pixels_ = 0;
+};
 
 }  // namespace
 
@@ -35,7 +58,7 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
   for (int c = 0; c < n; ++c) all[c] = c;
   LumigraphRenderer renderer(rig, all, params);
   LeaveOneOutSummary summary;
-  summary.per_camera.resize(n);
+  std::vector<ScoreMean> per_camera(n);
   std::vector<CameraFrame> images;
   std::vector<std::vector<uint8_t>> truth(n), masks(n);
   FrameInputs inputs;  // images and foreground masks, as the nodes give theirs
@@ -58,10 +81,16 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
         scores.push_back(leaveOneOut(renderer, rig, truth, masks, c));
       }
     }
-    for (int c = 0; c < n; ++c) addScore(summary.per_camera[c], scores[c], 1.0 / frames.size());
+    for (int c = 0; c < n; ++c) per_camera[c].add(scores[c]);
     ++summary.frames;
   }
-  for (const ViewScore& s : summary.per_camera) addScore(summary.mean, s, 1.0 / n);
+  // Each camera's mean over its frames, then their mean (no frame scored: every figure NaN).
+  ScoreMean mean;
+  for (const ScoreMean& c : per_camera) {
+    summary.per_camera.push_back(c.mean());
+    mean.add(summary.per_camera.back());
+  }
+  summary.mean = mean.mean();
   return summary;
 }
 

@@ -10,9 +10,11 @@
 namespace lumistage {
 
 // Leave-one-camera-out over frames of a recorded virtual-studio session (it needs truth masks).
+// Means over the figures measured: a view without the actor (an empty mask) scores nothing over
+// the mask and is left out of them; a figure nobody measured is NaN (null in the report).
 struct LeaveOneOutSummary {
   std::vector<ViewScore> per_camera;  // mean over the frames (pixels: their sum)
-  ViewScore mean;                     // over cameras and frames (pixels: their sum)
+  ViewScore mean;                     // over the cameras' means (pixels: their sum)
   int frames = 0;
 };
 

@@ -6,6 +6,7 @@
 #include <ctime>
 
 #include "core/base/error.h"
+#include "core/eval/percentile.h"
 #include "core/imaging/keyer.h"
 #include "core/pipeline/silhouettes.h"
 
@@ -111,9 +112,7 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
         section, "mpjpe_mm_max",
         errors_mm.empty() ? std::nan("") : *std::max_element(errors_mm.begin(), errors_mm.end()));
     std::vector<double> sorted = errors_mm;
-    std::sort(sorted.begin(), sorted.end());
-    report.set(section, "mpjpe_mm_p95",
-               sorted.empty() ? std::nan("") : sorted[size_t(0.95 * (sorted.size() - 1))]);
+    report.set(section, "mpjpe_mm_p95", nearestRankPercentile(sorted, 0.95));  // as the surface's
   }
   report.set(section, "pose_ms", mean(times_ms));
   report.set(section, "pose_ms_max",
@@ -122,7 +121,8 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   report.set(
       section, "init_ms",
       search_ms.empty() ? std::nan("") : *std::max_element(search_ms.begin(), search_ms.end()));
-  report.set(section, "actor_height_m", tracker.shape().height_m);
+  // The calibrated height; the default shape is no measure when nobody was tracked.
+  report.set(section, "actor_height_m", tracked > 0 ? tracker.shape().height_m : std::nan(""));
   return result;
 }
 

@@ -1,6 +1,7 @@
 #include "core/eval/segmentation_eval.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/imaging/keyer.h"
 
@@ -40,6 +41,8 @@ SegmentationScore evaluateSegmentation(const SessionReader& session,
   if (actor > 0) {
     score.missed_pct = 100.0 * double(missed) / double(actor);
     score.extra_pct = 100.0 * double(extra) / double(actor);
+  } else {
+    score.missed_pct = score.extra_pct = std::nan("");  // no actor in the frames: not measured
   }
   return score;
 }

@@ -12,6 +12,7 @@
 #include "core/body/joint_pose_fit.h"
 #include "core/body/ply_mesh.h"
 #include "core/capture/session_reader.h"
+#include "core/eval/percentile.h"
 #include "core/refine/frame_refiner.h"
 
 namespace lumistage {
@@ -160,10 +161,8 @@ SurfaceError poolSurfaceErrors(const std::vector<std::vector<double>>& distances
   double sum = 0;
   for (double d : all) sum += d;
   e.mean_mm = sum / double(all.size());
-  const size_t k = std::min(all.size() - 1, size_t(std::ceil(0.95 * double(all.size()))) - 1);
-  std::nth_element(all.begin(), all.begin() + k, all.end());
-  e.p95_mm = all[k];
   e.max_mm = *std::max_element(all.begin(), all.end());
+  e.p95_mm = nearestRankPercentile(all, 0.95);
   return e;
 }
 
@@ -243,7 +242,7 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
   result.unrefined = poolSurfaceErrors(before);
   result.refined = poolSurfaceErrors(after);
   result.joint_fit_rms_mm = 1000.0 * fit_rms / result.frames;
-  result.offset_change_mm = changes > 0 ? change_sum / changes : 0.0;
+  result.offset_change_mm = changes > 0 ? change_sum / changes : std::nan("");  // one frame: none
   result.statistics_bytes_per_node = bytes / (double(result.frames) * rig.nodeCount());
   return result;
 }

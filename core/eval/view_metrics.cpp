@@ -1,6 +1,7 @@
 #include "core/eval/view_metrics.h"
 
 #include <cmath>
+#include <limits>
 
 #include "core/base/error.h"
 #include "core/imaging/keyer.h"
@@ -70,11 +71,18 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
       squared += d * d;
     }
   }
-  if (score.pixels == 0) return score;
   const auto psnr = [](double squared, int64_t pixels) {
     const double mse = squared / (3.0 * pixels);
     return mse > 0 ? 10 * std::log10(255.0 * 255.0 / mse) : 100.0;
   };
+  if (score.pixels == 0) {
+    // No actor in this view: nothing to score over the mask (not 0 dB, which an average would
+    // take for a figure); the matte still charges what was drawn.
+    constexpr double kUnmeasured = std::numeric_limits<double>::quiet_NaN();
+    score.psnr_db = score.ssim = score.missed_pct = score.beyond_pct = kUnmeasured;
+    score.matte_psnr_db = beyond > 0 ? psnr(matte_squared, beyond) : kUnmeasured;
+    return score;
+  }
   score.psnr_db = psnr(squared, score.pixels);
   score.matte_psnr_db = psnr(matte_squared, score.pixels + beyond);
   score.missed_pct = 100.0 * missed / score.pixels;

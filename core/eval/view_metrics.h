@@ -25,6 +25,7 @@ struct ViewScore {
 
 // `rendered` and `truth` RGBA8 (psnr_db and ssim ignore alpha: a pixel the renderer left empty is
 // black and counts as an error), `mask` one byte a pixel (non-zero: the actor), all width x height.
+// An empty mask (no actor in the view) scores NaN over the mask, the matte over what was drawn.
 ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uint8_t> truth,
                           std::span<const uint8_t> mask, int width, int height);
 

@@ -1,6 +1,7 @@
 // The command-line tools run as a user runs them: real processes, real files.
 #include <arpa/inet.h>
 #include <assimp/scene.h>
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -16,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <sstream>
 #include <string>
@@ -516,6 +518,22 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
   EXPECT_GT(reportNumber(text, "loo_missed_pct_unrefined"), reportNumber(text, "loo_missed_pct"))
       << text;
   EXPECT_GT(reportNumber(text, "loo_beyond_pct"), 0.0) << text;
+
+  // A camera whose view holds no actor (its truth masks empty) has nothing to score over the
+  // mask: null, and the means are the other cameras' (not pulled down by a 0 dB).
+  for (const auto& entry : fs::directory_iterator(session / "truth" / "masks" / "cam08")) {
+    cv::Mat mask = cv::imread(entry.path().string(), cv::IMREAD_GRAYSCALE);
+    mask.setTo(0);
+    ASSERT_TRUE(cv::imwrite(entry.path().string(), mask));
+  }
+  const Result again = run(kCli + " eval --session " + session.string() +
+                           " --loo-frames 1 --json " + json.string() + " --quiet");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  const std::string without = readFile(json);
+  EXPECT_NE(without.find("\"loo_psnr_db_cam08\": null"), std::string::npos) << without;
+  double others = 0;
+  for (int c = 1; c <= 7; ++c) others += reportNumber(text, fmt::format("loo_psnr_db_cam{:02}", c));
+  EXPECT_NEAR(reportNumber(without, "loo_psnr_db"), others / 7, 1e-3) << without;
   fs::remove_all(folder);
 }
 

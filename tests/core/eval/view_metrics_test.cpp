@@ -49,6 +49,21 @@ TEST(ViewMetrics, MatteScoreCountsPixelsDrawnBeyondTheActorAndLeftUndrawn) {
   EXPECT_LT(score.matte_psnr_db, score.psnr_db);
 }
 
+// No actor in the view (an empty mask): nothing over the mask is measured (NaN, which the means
+// leave out, not 0 dB); the matte still charges the pixels drawn.
+TEST(ViewMetrics, AViewWithoutTheActorIsNotScoredOverTheMask) {
+  const std::vector<uint8_t> mask(4, 0), truth(16, 0);
+  std::vector<uint8_t> rendered(16, 0);
+  ViewScore score = compareOverMask(rendered, truth, mask, 4, 1);
+  EXPECT_EQ(score.pixels, 0);
+  EXPECT_TRUE(std::isnan(score.psnr_db));
+  EXPECT_TRUE(std::isnan(score.ssim));
+  EXPECT_TRUE(std::isnan(score.matte_psnr_db));  // nothing drawn either
+  rendered[0] = 255, rendered[3] = 255;          // one red pixel drawn
+  score = compareOverMask(rendered, truth, mask, 4, 1);
+  EXPECT_NEAR(score.matte_psnr_db, psnr(255.0 * 255.0, 3), 1e-9);
+}
+
 TEST(ViewMetrics, RefusesImagesOfAnotherSize) {
   const std::vector<uint8_t> mask(4, 1), image(16, 0), small(12, 0);
   EXPECT_THROW(compareOverMask(small, image, mask, 4, 1), Error);
