@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
   app.add_option("--session", session, "serve this node's cameras of a recorded session");
   app.add_option("--replay", replay,
                  "session pace: rate (as recorded, looping) or memory (decoded up front)")
+      ->check(CLI::IsMember({"rate", "memory"}))
       ->capture_default_str();
   app.add_option("--address", address,
                  "live Aravis cameras: camera i of the rig at ADDRESS+i (as lumistage stream and "
@@ -161,13 +162,16 @@ int main(int argc, char** argv) {
       // The node works on its own threads; the window lives on this one (GLFW wants the main
       // thread). Closing the window stops the node.
       std::thread worker([&camera_node] { camera_node.run(g_stop); });
+      bool monitor_failed = false;
       try {
         lumistage::runNodeMonitor(camera_node, rig, node.name, g_stop, monitor_screenshot);
       } catch (const std::exception& e) {
         fmt::print(stderr, "lumistage-node: {}\n", e.what());
+        monitor_failed = true;
       }
       g_stop = true;
       worker.join();
+      if (monitor_failed) return 2;  // as asked it could not run (no display): not a clean stop
     } else {
       camera_node.run(g_stop);
     }

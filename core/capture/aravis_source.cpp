@@ -275,6 +275,10 @@ CameraStats AravisSource::stats(int camera) const {
   {
     std::lock_guard lock(mutex_);
     out = d.stats;
+    // The rate is measured as frames arrive: a camera that stopped has none, not its last one.
+    if (d.recent.empty() ||
+        std::chrono::steady_clock::now() - d.recent.back() > std::chrono::seconds(2))
+      out.frame_rate_hz = 0;
   }
   if (d.stream && ARV_IS_GV_STREAM(d.stream)) {
     out.resends =

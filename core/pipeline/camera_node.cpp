@@ -22,6 +22,7 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
                        NodeEndpointConfig endpoint, SkinnedMesh body, CameraNodeOptions options)
     : rig_(rig),
       name_(name),
+      studio_address_(endpoint.connect),
       source_(std::move(source)),
       endpoint_(std::move(endpoint)),
       body_(std::move(body)),
@@ -182,6 +183,11 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   std::vector<uint8_t> told_silent(cameras_.size(), 0);
   int64_t newest = -1, first = -1;
   CameraFrame frame;
+  // Every camera silent (no set goes out, so the per-camera warning below never comes): said once
+  // after kAllSilent, and again when frames come back.
+  constexpr auto kAllSilent = std::chrono::seconds(2);
+  auto last_frame_at = std::chrono::steady_clock::now();
+  bool told_all_silent = false;
   while (!stop) {
     bool got = false;
     {
@@ -189,7 +195,23 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       if (source_->finished()) break;
       got = source_->next(frame, std::chrono::milliseconds(5));
     }
-    if (!got) continue;
+    const auto now = std::chrono::steady_clock::now();
+    if (!got) {
+      if (!told_all_silent && now - last_frame_at > kAllSilent) {
+        told_all_silent = true;
+        spdlog::warn(
+            "node {}: none of its {} cameras has delivered a frame for {} s (powered? "
+            "cabled? acquisition stopped?)",
+            name_, cameras_.size(),
+            std::chrono::duration_cast<std::chrono::seconds>(now - last_frame_at).count());
+      }
+      continue;
+    }
+    last_frame_at = now;
+    if (told_all_silent) {
+      told_all_silent = false;
+      spdlog::info("node {}: frames again", name_);
+    }
     const auto k = std::find(cameras_.begin(), cameras_.end(), frame.camera) - cameras_.begin();
     if (k >= static_cast<long>(cameras_.size())) continue;
     if (first < 0 || frame.frame_id < newest - 300) {  // the first frame, or the cameras restarted
@@ -475,6 +497,12 @@ void CameraNode::run(const std::atomic<bool>& stop) {
   std::thread statistics([&] { statisticsLoop(stop_workers); });
   auto last_heartbeat = std::chrono::steady_clock::now() - options_.heartbeat;
   auto last_from_studio = std::chrono::steady_clock::now();
+  // Whether the studio has answered (it does once it hears the node): until then the node says,
+  // every kNoAnswerEvery, that it has not, and what to check.
+  constexpr auto kNoAnswerEvery = std::chrono::seconds(10);
+  bool studio_answered = false;
+  const auto started = std::chrono::steady_clock::now();
+  auto told_no_answer = started;
   while (!stop && !source_finished_) {
     outbox_ready_.clear();
     while (std::optional<Message> out = outbox_.pop(std::chrono::milliseconds(0)))
@@ -483,7 +511,11 @@ void CameraNode::run(const std::atomic<bool>& stop) {
     // the stop flag).
     if (std::optional<DecodeResult> received =
             endpoint_.receive(std::chrono::milliseconds(10), outbox_ready_.fd())) {
-      if (received->ok()) last_from_studio = std::chrono::steady_clock::now();
+      if (received->ok()) {
+        last_from_studio = std::chrono::steady_clock::now();
+        if (!studio_answered) spdlog::info("node {}: the studio answered", name_);
+        studio_answered = true;
+      }
       if (received->ok() && std::holds_alternative<PoseData>(received->message->body)) {
         poses_.push(std::move(*received->message));
         studio_work_.notify();
@@ -499,6 +531,15 @@ void CameraNode::run(const std::atomic<bool>& stop) {
       }
     }
     const auto now = std::chrono::steady_clock::now();
+    if (!studio_answered && now - told_no_answer >= kNoAnswerEvery) {
+      told_no_answer = now;
+      spdlog::warn(
+          "node {}: no answer from the studio at {} for {} s: is it running and listening there, "
+          "is the TCP port open, and (unless --plain on both) is this node's key in the studio's "
+          "key store?",
+          name_, studio_address_,
+          std::chrono::duration_cast<std::chrono::seconds>(now - started).count());
+    }
     if (now - last_heartbeat >= options_.heartbeat) {
       last_heartbeat = now;
       HeartbeatData heartbeat;

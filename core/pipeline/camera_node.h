@@ -136,7 +136,8 @@ class CameraNode {
 
   Rig rig_;
   std::string name_;
-  std::vector<int> cameras_;  // rig indices of this node's cameras
+  std::string studio_address_;  // where the node connects to the studio, for its messages
+  std::vector<int> cameras_;    // rig indices of this node's cameras
   std::unique_ptr<FrameSource> source_;
   std::mutex source_mutex_;  // next() on the capture thread, stats() on the network thread
   // Per own camera, what learning its green screen found wrong (empty: nothing); under

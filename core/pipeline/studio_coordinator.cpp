@@ -140,6 +140,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   if (node.report.lost) {
     node.report.lost = false;
     spdlog::info("node {} is streaming", node.report.name);
+    sendTake(node);  // the take under way, if any: and the node's word that it reached the studio
   }
   if (!received.result.ok()) {
     ++node.report.bad_messages;

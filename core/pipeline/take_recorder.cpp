@@ -45,6 +45,7 @@ void TakeRecorder::command(const RecordData& record) {
     close();
     counted_ = nullptr;
     status_ = {};
+    told_failed_ = false;
     status_.take = record.take;
     closed_ = record.take.empty();
     if (!record.take.empty() && folder_.empty()) {
@@ -105,6 +106,16 @@ void TakeRecorder::offer(int64_t frame_id, const std::vector<CameraFrame>& frame
   if (recorder_->push(frame_id, frames.front().timestamp_ns - first_timestamp_ns_,
                       std::move(images_)))
     images_.clear();
+  if (!told_failed_) {
+    // Said here too, not only in the studio's health: the node's own log is where a technician
+    // looks for its disk.
+    const RecorderStats stats = recorder_->stats();
+    if (stats.failed) {
+      told_failed_ = true;
+      spdlog::error("node {}: take {}: recording stopped: {} (the sets written before are kept)",
+                    node_, wanted_.take, stats.last_error);
+    }
+  }
 }
 
 TakeStatusData TakeRecorder::status() const {

@@ -69,7 +69,8 @@ class TakeRecorder {
   std::vector<Image> images_;                  // the set being queued, reused
   const SessionRecorder* counted_ = nullptr;   // the recorder of status_.take (open or closing)
   int64_t first_timestamp_ns_ = 0;
-  bool closed_ = true;  // the take in status_ takes no more sets (none asked for yet)
+  bool closed_ = true;        // the take in status_ takes no more sets (none asked for yet)
+  bool told_failed_ = false;  // said in the node's log that the take's writing failed
 
   // The closed take, writing its queue out.
   std::unique_ptr<SessionRecorder> closing_;

@@ -117,6 +117,18 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
 
 // A node that sends silhouettes at another step (an older version: step 8) is counted as sending
 // bad messages, its frames still get a pose, and silhouettes of the right size count as before.
+// A node the studio hears from for the first time is answered at once (the take under way, none
+// here), nobody being on stage yet: its word that it reached the studio, which it logs.
+TEST(StudioCoordinator, ANodeHeardForTheFirstTimeIsAnswered) {
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(2, {});
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint());
+  ASSERT_TRUE(node.send(-1, HeartbeatData{}));
+  const std::optional<Message> answer = node.await<RecordData>(studio);
+  ASSERT_TRUE(answer);
+  EXPECT_TRUE(std::get<RecordData>(answer->body).take.empty());
+}
+
 TEST(StudioCoordinator, SilhouettesOfAnotherStepAreRefusedAndCounted) {
   const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(2, {});
   StudioCoordinator& studio = *made;
