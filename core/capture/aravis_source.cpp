@@ -2,6 +2,7 @@
 
 #include <arv.h>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <cmath>
 #include <cstring>
@@ -67,17 +68,113 @@ std::vector<AravisDeviceInfo> discoverAravisCameras() {
 struct AravisSource::Device {
   std::string name;  // "cam01 (127.0.1.1)"
   AravisCameraConfig config;
+  // Opened, replaced and closed by the camera's receiving thread (and the constructor before it
+  // starts); read by trigger() and stats() under `objects`.
   ArvCamera* camera = nullptr;
   ArvStream* stream = nullptr;
+  mutable std::mutex objects;
   int width = 0, height = 0;
   guint payload = 0;  // bytes of a frame, as the camera says
   std::thread thread;
+  std::atomic<bool> control_lost{false};  // Aravis lost the camera's control channel
   // Counters, guarded by AravisSource::mutex_.
   CameraStats stats;
   std::deque<std::chrono::steady_clock::time_point> recent;  // arrival times, for the frame rate
   DropCounter drops;
   FrameIdUnwrapper unwrap;
+  // Added to the camera's frame ids: 0, or after a reconnection (the camera counts from 1 again)
+  // what lines its ids up with the other cameras' (the newest id any of them delivered).
+  int64_t id_offset = 0;
+  bool realign = false;  // the next whole frame sets id_offset
 };
+
+namespace {
+
+void onControlLost(ArvDevice*, gpointer device) {
+  static_cast<std::atomic<bool>*>(device)->store(true);
+}
+
+}  // namespace
+
+void AravisSource::openCamera(Device& d) {
+  GError* error = nullptr;
+  auto check = [&](std::string_view step) { throwIfFailed(error, d.name, step); };
+  ArvCamera* camera = arv_camera_new(d.config.device.c_str(), &error);
+  if (!camera) {
+    throw Error(
+        fmt::format("camera {}: cannot open: {} (for GigE Vision, is the camera powered, on this "
+                    "subnet, and not opened by another program?)",
+                    d.name, takeError(error)));
+  }
+  {
+    std::lock_guard lock(d.objects);
+    d.camera = camera;
+  }
+  arv_camera_set_pixel_format(d.camera, toAravis(d.config.pixel_format), &error);
+  check(fmt::format("pixel format {}", pixelFormatName(d.config.pixel_format)).c_str());
+  arv_camera_set_region(d.camera, 0, 0, d.width, d.height, &error);
+  check("image size");
+  int x = 0, y = 0, w = 0, h = 0;
+  arv_camera_get_region(d.camera, &x, &y, &w, &h, &error);
+  check("image size");
+  if (w != d.width || h != d.height) {
+    throw Error(fmt::format("camera {}: delivers {}x{} images, the rig says {}x{}", d.name, w, h,
+                            d.width, d.height));
+  }
+  if (d.config.trigger == TriggerMode::kFreeRunning) {
+    arv_camera_clear_triggers(d.camera, &error);
+    check("free running (no trigger)");
+    arv_camera_set_frame_rate(d.camera, d.config.frame_rate_hz, &error);
+    check(fmt::format("frame rate {} Hz", d.config.frame_rate_hz).c_str());
+  } else {
+    const std::string source =
+        d.config.trigger == TriggerMode::kSoftware ? "Software" : d.config.trigger_line;
+    arv_camera_set_trigger(d.camera, source.c_str(), &error);
+    check(fmt::format("trigger on {}", source).c_str());
+  }
+  if (!std::isnan(d.config.exposure_us)) {
+    arv_camera_set_exposure_time(d.camera, d.config.exposure_us, &error);
+    check("exposure time");
+  }
+  if (!std::isnan(d.config.gain_db)) {
+    arv_camera_set_gain(d.camera, d.config.gain_db, &error);
+    check("gain");
+  }
+  if (arv_camera_is_gv_device(d.camera)) {
+    arv_camera_gv_auto_packet_size(d.camera, &error);
+    g_clear_error(&error);  // not every camera negotiates; the default packet size works
+  }
+  ArvStream* stream = arv_camera_create_stream(d.camera, nullptr, nullptr, &error);
+  if (!stream)
+    throw Error(fmt::format("camera {}: cannot open its stream: {}", d.name, takeError(error)));
+  {
+    std::lock_guard lock(d.objects);
+    d.stream = stream;
+  }
+  d.payload = arv_camera_get_payload(d.camera, &error);
+  check("payload size");
+  d.control_lost = false;
+  g_signal_connect(arv_camera_get_device(d.camera), "control-lost", G_CALLBACK(onControlLost),
+                   &d.control_lost);
+}
+
+void AravisSource::startCamera(Device& d) {
+  for (int b = 0; b < d.config.buffer_count; ++b)
+    arv_stream_push_buffer(d.stream, arv_buffer_new(d.payload, nullptr));
+  GError* error = nullptr;
+  arv_camera_start_acquisition(d.camera, &error);
+  throwIfFailed(error, d.name, "start of acquisition");
+}
+
+void AravisSource::closeCamera(Device& d) {
+  if (d.camera) {
+    g_signal_handlers_disconnect_by_data(arv_camera_get_device(d.camera), &d.control_lost);
+    arv_camera_stop_acquisition(d.camera, nullptr);
+  }
+  std::lock_guard lock(d.objects);
+  g_clear_object(&d.stream);
+  g_clear_object(&d.camera);
+}
 
 AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
     : rig_(std::move(rig)), capacity_(4 * std::max<size_t>(1, cameras.size())) {
@@ -94,90 +191,50 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
     device->stats.temperature_c = std::numeric_limits<double>::quiet_NaN();
     devices_.push_back(std::move(device));
   }
-  int opened = 0;
-  for (const auto& d : devices_) opened += !d->config.device.empty();
-  if (opened == 0) throw Error("Aravis source: no camera to open (every device is empty)");
-  try {
-    for (auto& d : devices_) {
-      if (d->config.device.empty()) continue;  // another node's camera
-      GError* error = nullptr;
-      auto check = [&](std::string_view step) { throwIfFailed(error, d->name, step); };
-      d->camera = arv_camera_new(d->config.device.c_str(), &error);
-      if (!d->camera) {
-        throw Error(fmt::format(
-            "camera {}: cannot open: {} (for GigE Vision, is the camera powered, on this "
-            "subnet, and not opened by another program?)",
-            d->name, takeError(error)));
-      }
-      arv_camera_set_pixel_format(d->camera, toAravis(d->config.pixel_format), &error);
-      check(fmt::format("pixel format {}", pixelFormatName(d->config.pixel_format)).c_str());
-      arv_camera_set_region(d->camera, 0, 0, d->width, d->height, &error);
-      check("image size");
-      int x = 0, y = 0, w = 0, h = 0;
-      arv_camera_get_region(d->camera, &x, &y, &w, &h, &error);
-      check("image size");
-      if (w != d->width || h != d->height) {
-        throw Error(fmt::format("camera {}: delivers {}x{} images, the rig says {}x{}", d->name, w,
-                                h, d->width, d->height));
-      }
-      if (d->config.trigger == TriggerMode::kFreeRunning) {
-        arv_camera_clear_triggers(d->camera, &error);
-        check("free running (no trigger)");
-        arv_camera_set_frame_rate(d->camera, d->config.frame_rate_hz, &error);
-        check(fmt::format("frame rate {} Hz", d->config.frame_rate_hz).c_str());
-      } else {
-        const std::string source =
-            d->config.trigger == TriggerMode::kSoftware ? "Software" : d->config.trigger_line;
-        arv_camera_set_trigger(d->camera, source.c_str(), &error);
-        check(fmt::format("trigger on {}", source).c_str());
-      }
-      if (!std::isnan(d->config.exposure_us)) {
-        arv_camera_set_exposure_time(d->camera, d->config.exposure_us, &error);
-        check("exposure time");
-      }
-      if (!std::isnan(d->config.gain_db)) {
-        arv_camera_set_gain(d->camera, d->config.gain_db, &error);
-        check("gain");
-      }
-      if (arv_camera_is_gv_device(d->camera)) {
-        arv_camera_gv_auto_packet_size(d->camera, &error);
-        g_clear_error(&error);  // not every camera negotiates; the default packet size works
-      }
-      d->stream = arv_camera_create_stream(d->camera, nullptr, nullptr, &error);
-      if (!d->stream)
-        throw Error(
-            fmt::format("camera {}: cannot open its stream: {}", d->name, takeError(error)));
-      d->payload = arv_camera_get_payload(d->camera, &error);
-      check("payload size");
+  int asked = 0;
+  for (const auto& d : devices_) asked += !d->config.device.empty();
+  if (asked == 0) throw Error("Aravis source: no camera to open (every device is empty)");
+  // A camera that cannot be opened does not keep the others from serving: it is tried again
+  // every kRetryOpen by its thread, its error in its stats meanwhile. None opened: an error.
+  std::vector<std::string> failures;
+  for (auto& d : devices_) {
+    if (d->config.device.empty()) continue;  // another node's camera
+    try {
+      openCamera(*d);
+    } catch (const Error& e) {
+      closeCamera(*d);
+      failures.push_back(e.what());
+      d->stats.last_error = std::string(e.what()) + " (trying again)";
     }
-    // Every stream exists before any camera sends, and the streams get their buffers only then:
-    // Aravis's packet-socket receiver binds to the interface before it filters by address, so a
-    // stream opened while another camera streams takes in that camera's packets for an instant,
-    // and with buffers waiting could assemble them into a whole frame under the wrong camera's
-    // name: the virtual cameras' frame ids agree, so their packets fit (the likely cause of the
-    // wrong frame Aravis.VirtualCamerasStreamTheSyntheticFramesBitExact once saw under load).
-    for (auto& d : devices_) {
-      if (!d->stream) continue;
-      for (int b = 0; b < d->config.buffer_count; ++b)
-        arv_stream_push_buffer(d->stream, arv_buffer_new(d->payload, nullptr));
-    }
-    for (auto& d : devices_) {
-      if (!d->camera) continue;
-      GError* error = nullptr;
-      arv_camera_start_acquisition(d->camera, &error);
-      throwIfFailed(error, d->name, "start of acquisition");
-    }
-  } catch (...) {
-    running_ = false;
-    for (auto& d : devices_) {
-      if (d->camera) arv_camera_stop_acquisition(d->camera, nullptr);
-      g_clear_object(&d->stream);
-      g_clear_object(&d->camera);
-    }
-    throw;
   }
+  // Every stream exists before any camera sends, and the streams get their buffers only then:
+  // Aravis's packet-socket receiver binds to the interface before it filters by address, so a
+  // stream opened while another camera streams takes in that camera's packets for an instant,
+  // and with buffers waiting could assemble them into a whole frame under the wrong camera's
+  // name: the virtual cameras' frame ids agree, so their packets fit (the likely cause of the
+  // wrong frame Aravis.VirtualCamerasStreamTheSyntheticFramesBitExact once saw under load).
+  for (auto& d : devices_) {
+    if (!d->stream) continue;
+    try {
+      startCamera(*d);
+    } catch (const Error& e) {
+      closeCamera(*d);
+      failures.push_back(e.what());
+      d->stats.last_error = std::string(e.what()) + " (trying again)";
+    }
+  }
+  if (failures.size() == size_t(asked)) {
+    running_ = false;
+    std::string all;
+    for (const std::string& f : failures) all += (all.empty() ? "" : "; ") + f;
+    throw Error(all);
+  }
+  for (const std::string& f : failures)
+    spdlog::warn("{}; the other cameras are served, this one is tried again every {} s", f,
+                 std::chrono::duration_cast<std::chrono::seconds>(kRetryOpen).count());
   for (int c = 0; c < rig_.cameraCount(); ++c) {
-    if (devices_[c]->camera) devices_[c]->thread = std::thread(&AravisSource::receive, this, c);
+    if (!devices_[c]->config.device.empty())
+      devices_[c]->thread = std::thread(&AravisSource::receive, this, c);
   }
 }
 
@@ -186,20 +243,61 @@ AravisSource::~AravisSource() {
   for (auto& d : devices_) {
     if (d->thread.joinable()) d->thread.join();
   }
-  for (auto& d : devices_) {
-    if (d->camera) arv_camera_stop_acquisition(d->camera, nullptr);
-    g_clear_object(&d->stream);
-    g_clear_object(&d->camera);
-  }
+  for (auto& d : devices_) closeCamera(*d);
 }
 
 void AravisSource::receive(int camera) {
   Device& d = *devices_[camera];
   const size_t bytes = size_t(d.width) * d.height * bytesPerPixel(d.config.pixel_format);
   auto last_temperature = std::chrono::steady_clock::now();
+  auto next_open = std::chrono::steady_clock::now() + kRetryOpen;
+  auto last_buffer = std::chrono::steady_clock::now();
   while (running_) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!d.stream) {
+      // Not open (it failed to, or was lost): tried again every kRetryOpen.
+      if (now < next_open) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        continue;
+      }
+      next_open = now + kRetryOpen;
+      try {
+        openCamera(d);
+        // As at the start: the stream filters by address before it has buffers to fill.
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        startCamera(d);
+      } catch (const Error& e) {
+        closeCamera(d);
+        std::lock_guard lock(mutex_);
+        d.stats.last_error = std::string(e.what()) + " (trying again)";
+        continue;
+      }
+      spdlog::info("camera {}: open, streaming", d.name);
+      std::lock_guard lock(mutex_);
+      d.stats.last_error.clear();
+      d.unwrap = FrameIdUnwrapper();
+      d.drops = DropCounter();
+      d.realign = true;
+      last_buffer = now;
+      continue;
+    }
     ArvBuffer* buffer = arv_stream_timeout_pop_buffer(d.stream, 100000);  // 100 ms, to notice stop
+    // Lost: Aravis lost its control channel (GigE Vision heartbeats unanswered: unplugged, powered
+    // off), or a free-running camera sent nothing for kLostAfter. Closed, and opened again.
+    const bool silent = d.config.trigger == TriggerMode::kFreeRunning &&
+                        std::chrono::steady_clock::now() - last_buffer > kLostAfter;
+    if (!buffer && (d.control_lost || silent)) {
+      spdlog::warn("camera {}: lost ({}): opening it again every {} s", d.name,
+                   d.control_lost ? "no answer on its control channel" : "no frames",
+                   std::chrono::duration_cast<std::chrono::seconds>(kRetryOpen).count());
+      closeCamera(d);
+      std::lock_guard lock(mutex_);
+      d.stats.last_error = "lost: reconnecting";
+      next_open = std::chrono::steady_clock::now();
+      continue;
+    }
     if (!buffer) continue;
+    last_buffer = std::chrono::steady_clock::now();
     const ArvBufferStatus status = arv_buffer_get_status(buffer);
     size_t size = 0;
     const void* data = arv_buffer_get_data(buffer, &size);
@@ -210,7 +308,18 @@ void AravisSource::receive(int camera) {
                                ? statusName(status)
                                : fmt::format("short image: {} bytes, expected {}", size, bytes);
     } else {
-      const int64_t frame_id = d.unwrap(static_cast<int64_t>(arv_buffer_get_frame_id(buffer)));
+      int64_t frame_id = d.unwrap(static_cast<int64_t>(arv_buffer_get_frame_id(buffer)));
+      if (d.realign) {
+        // Opened again, the camera counts from the start: its ids follow on from the newest
+        // any camera delivered, so that its frames group with the others' again (exact for
+        // triggered cameras, within a frame or so for free-running ones).
+        d.realign = false;
+        int64_t newest = -1;
+        for (const auto& other : devices_)
+          if (other.get() != &d) newest = std::max(newest, other->drops.last());
+        d.id_offset = newest >= 0 ? newest + 1 - frame_id : 0;
+      }
+      frame_id += d.id_offset;
       d.stats.dropped += d.drops.whole(frame_id);  // a jump: frames that never arrived
       if (queue_.size() >= capacity_) {  // the consumer fell behind: drop the oldest frame
         ++devices_[queue_.front().camera]->stats.dropped;
@@ -243,9 +352,8 @@ void AravisSource::receive(int camera) {
     lock.unlock();
     arv_stream_push_buffer(d.stream, buffer);
     // Temperature, where the camera reports it: a register read, once in a while.
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last_temperature > std::chrono::seconds(5)) {
-      last_temperature = now;
+    if (last_buffer - last_temperature > std::chrono::seconds(5)) {
+      last_temperature = last_buffer;
       GError* error = nullptr;
       if (arv_camera_is_feature_available(d.camera, "DeviceTemperature", &error)) {
         const double t = arv_camera_get_float(d.camera, "DeviceTemperature", &error);
@@ -280,6 +388,7 @@ CameraStats AravisSource::stats(int camera) const {
         std::chrono::steady_clock::now() - d.recent.back() > std::chrono::seconds(2))
       out.frame_rate_hz = 0;
   }
+  std::lock_guard lock(d.objects);  // the receiving thread may be opening it again
   if (d.stream && ARV_IS_GV_STREAM(d.stream)) {
     out.resends =
         static_cast<int64_t>(arv_stream_get_info_uint64_by_name(d.stream, "n_resend_requests"));
@@ -289,6 +398,7 @@ CameraStats AravisSource::stats(int camera) const {
 
 void AravisSource::trigger() {
   for (auto& d : devices_) {
+    std::lock_guard objects(d->objects);
     if (!d->camera || d->config.trigger != TriggerMode::kSoftware) continue;
     GError* error = nullptr;
     arv_camera_software_trigger(d->camera, &error);

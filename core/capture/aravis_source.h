@@ -66,6 +66,7 @@ class DropCounter {
     broken_since_whole_ = 0;
     return gap;
   }
+  int64_t last() const { return last_; }  // the newest whole frame's id, -1 before one
 
  private:
   int64_t last_ = -1, broken_since_whole_ = 0;
@@ -94,8 +95,12 @@ struct AravisCameraConfig {
 // counted, when the consumer falls behind) and hands the buffer straight back to the camera's pool.
 class AravisSource : public FrameSource {
  public:
-  // Opens and configures every camera, then starts streaming. Throws Error naming the camera
-  // (rig name and device) and what failed: not found, image size or pixel format not supported...
+  // Opens and configures every camera, then starts streaming. A camera that cannot be opened
+  // (not found, image size or pixel format not supported...) is left out, its error in its
+  // stats(), and tried again every kRetryOpen; one lost while streaming (unplugged, powered off:
+  // its control channel unanswered, or a free-running camera silent for kLostAfter) is closed
+  // and opened again the same way, its frame ids lined up with the other cameras'. Throws Error
+  // naming the cameras (rig name and device) and what failed when none can be opened.
   AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras);
   ~AravisSource() override;
 
@@ -107,7 +112,14 @@ class AravisSource : public FrameSource {
 
  private:
   struct Device;
+  // A camera that cannot be opened, or is lost while streaming, is opened again this often.
+  static constexpr std::chrono::seconds kRetryOpen{5};
+  // A free-running camera that sends nothing for this long is taken for lost.
+  static constexpr std::chrono::seconds kLostAfter{5};
   void receive(int camera);
+  void openCamera(Device& d);   // camera configured and its stream made, no buffers yet
+  void startCamera(Device& d);  // buffers given, acquisition started
+  void closeCamera(Device& d);
 
   Rig rig_;
   std::vector<std::unique_ptr<Device>> devices_;

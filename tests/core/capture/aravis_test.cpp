@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <map>
 #include <random>
 #include <thread>
@@ -241,6 +242,73 @@ TEST(Aravis, DiscoveryListsTheInProcessFakeInterface) {
   bool fake = false;
   for (const AravisDeviceInfo& d : devices) fake = fake || d.protocol == "Fake";
   EXPECT_TRUE(fake);
+}
+
+// Frames of each camera that arrive within `seconds`.
+std::array<int, 2> framesWithin(AravisSource& source, double seconds) {
+  std::array<int, 2> received{0, 0};
+  CameraFrame frame;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < deadline)
+    if (source.next(frame, std::chrono::milliseconds(100)) && frame.camera >= 0 && frame.camera < 2)
+      ++received[frame.camera];
+  return received;
+}
+
+// A node's camera that cannot be opened (not powered, wrong address) leaves the others streaming:
+// it is named in its stats and tried again, not the end of the node.
+TEST(Aravis, ACameraThatCannotBeOpenedLeavesTheOthersStreaming) {
+  const Rig rig = smallRig(2, 160, 120);
+  auto loop = randomLoop(rig, 3, 25, PixelFormat::kMono8);
+  VirtualGigeCameras server(rig, loop, PixelFormat::kMono8, "127.0.1.12");
+  std::vector<AravisCameraConfig> configs(2);
+  configs[0].device = server.addresses()[0];
+  configs[1].device = "127.0.1.78";  // nobody serves there
+  for (AravisCameraConfig& c : configs) c.pixel_format = PixelFormat::kMono8;
+  AravisSource source(rig, configs);
+  const std::array<int, 2> received = framesWithin(source, 2.0);
+  EXPECT_GT(received[0], 10);
+  EXPECT_EQ(received[1], 0);
+  EXPECT_NE(source.stats(1).last_error.find("camera cam02 (127.0.1.78): cannot open"),
+            std::string::npos)
+      << source.stats(1).last_error;
+}
+
+// The cameras go away (powered off, unplugged) and come back: each is opened again by itself and
+// streams again, its frame ids lined up with the others'.
+TEST(Aravis, CamerasThatComeBackStreamAgain) {
+  const Rig rig = smallRig(2, 160, 120);
+  auto loop = randomLoop(rig, 3, 25, PixelFormat::kMono8);
+  std::vector<AravisCameraConfig> configs(2);
+  auto server = std::make_unique<VirtualGigeCameras>(rig, loop, PixelFormat::kMono8, "127.0.1.14");
+  for (int c = 0; c < 2; ++c) {
+    configs[c].device = server->addresses()[c];
+    configs[c].pixel_format = PixelFormat::kMono8;
+  }
+  AravisSource source(rig, configs);
+  std::array<int, 2> received = framesWithin(source, 1.5);
+  ASSERT_GT(received[0], 5);
+  ASSERT_GT(received[1], 5);
+  server.reset();             // gone
+  framesWithin(source, 7.0);  // long enough to be taken for lost
+  EXPECT_EQ(source.stats(0).frame_rate_hz, 0.0);
+  server = std::make_unique<VirtualGigeCameras>(rig, loop, PixelFormat::kMono8, "127.0.1.14");
+  // Back within a retry or two; from then on, frames of one instant share their id again.
+  std::map<int64_t, int> cameras_of_id;
+  CameraFrame frame;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  received = {0, 0};
+  while (std::chrono::steady_clock::now() < deadline && (received[0] < 30 || received[1] < 30)) {
+    if (!source.next(frame, std::chrono::milliseconds(100))) continue;
+    ++received[frame.camera];
+    ++cameras_of_id[frame.frame_id];
+  }
+  EXPECT_GE(received[0], 30);
+  EXPECT_GE(received[1], 30);
+  int shared = 0;
+  for (const auto& [id, n] : cameras_of_id) shared += n == 2;
+  EXPECT_GT(shared, 10) << "the cameras' ids no longer meet";
+  EXPECT_EQ(source.stats(0).last_error, "");
 }
 
 TEST(Aravis, ClearErrorsNameTheCameraAndAddress) {
