@@ -197,15 +197,17 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
   // A camera that cannot be opened does not keep the others from serving: it is tried again
   // every kRetryOpen by its thread, its error in its stats meanwhile. None opened: an error.
   std::vector<std::string> failures;
-  for (auto& d : devices_) {
-    if (d->config.device.empty()) continue;  // another node's camera
+  const auto attempt = [&](Device& d, void (AravisSource::*step)(Device&)) {
     try {
-      openCamera(*d);
+      (this->*step)(d);
     } catch (const Error& e) {
-      closeCamera(*d);
+      closeCamera(d);
       failures.push_back(e.what());
-      d->stats.last_error = std::string(e.what()) + " (trying again)";
+      d.stats.last_error = std::string(e.what()) + " (trying again)";
     }
+  };
+  for (auto& d : devices_) {
+    if (!d->config.device.empty()) attempt(*d, &AravisSource::openCamera);  // else another node's
   }
   // Every stream exists before any camera sends, and the streams get their buffers only then:
   // Aravis's packet-socket receiver binds to the interface before it filters by address, so a
@@ -214,14 +216,7 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
   // name: the virtual cameras' frame ids agree, so their packets fit (the likely cause of the
   // wrong frame Aravis.VirtualCamerasStreamTheSyntheticFramesBitExact once saw under load).
   for (auto& d : devices_) {
-    if (!d->stream) continue;
-    try {
-      startCamera(*d);
-    } catch (const Error& e) {
-      closeCamera(*d);
-      failures.push_back(e.what());
-      d->stats.last_error = std::string(e.what()) + " (trying again)";
-    }
+    if (d->stream) attempt(*d, &AravisSource::startCamera);
   }
   if (failures.size() == size_t(asked)) {
     running_ = false;
