@@ -216,7 +216,6 @@ QString MainWindow::openRig(const QString& path) {
     return QString::fromStdString(e.what());
   }
   rig_path_ = path;
-  showRig(std::move(rig), tr("Rig %1").arg(QFileInfo(path).fileName()));
   // A calibration report beside the rig gives the calibration check its reprojection errors:
   // the one `lumistage calibrate` wrote with the rig, or one in the JSON form other tools write.
   const QFileInfo rig_file(path);
@@ -224,14 +223,14 @@ QString MainWindow::openRig(const QString& path) {
       calibrationReportPathFor(rig_file.absoluteFilePath().toStdString()).string());
   if (!QFileInfo::exists(report)) report = rig_file.absolutePath() + "/calibration_report.json";
   ReprojectionErrors errors;
-  // Said with the rig for as long as it is shown (the source's messages would overwrite it).
+  // Said with the rig (showRig) for as long as it is shown (the source's messages would
+  // overwrite it).
   report_error_.clear();
   if (QFileInfo::exists(report)) {
-    if (const QString error = loadCalibrationReport(report, errors); !error.isEmpty()) {
+    if (const QString error = loadCalibrationReport(report, errors); !error.isEmpty())
       report_error_ = tr("Calibration report ignored: %1").arg(error);
-      status_->setText(status_->text() + " · " + report_error_);
-    }
   }
+  showRig(std::move(rig), tr("Rig %1").arg(rig_file.fileName()));
   calibration_panel_->setReprojectionErrors(errors);
   return {};
 }

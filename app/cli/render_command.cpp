@@ -18,6 +18,7 @@
 #include "core/render/egl_context.h"
 #include "core/render/frame_inputs.h"
 #include "core/render/lumigraph_renderer.h"
+#include "core/render/view_recorder.h"
 
 namespace lumistage {
 
@@ -96,8 +97,7 @@ void addRenderCommand(CLI::App& app) {
     // renamed over it once it reads back whole: a failed frame, a full disk or an interrupted
     // render never replaces a good video with a torn one.
     const std::filesystem::path out(a->out);
-    const std::filesystem::path partial =
-        out.parent_path() / (out.stem().string() + ".partial" + out.extension().string());
+    const std::filesystem::path partial = partialVideoPath(out);
     cv::VideoWriter video(partial.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'),
                           a->fps > 0 ? a->fps : session.fps(),
                           cv::Size(first.width(), first.height()));
@@ -138,15 +138,11 @@ void addRenderCommand(CLI::App& app) {
       printProgress("render", i + 1, frames, ms);
     }
     video.release();
-    cv::VideoCapture check(partial.string());
-    const int read_back = check.isOpened() ? int(check.get(cv::CAP_PROP_FRAME_COUNT)) : 0;
-    check.release();
-    if (read_back != frames) {
-      throw Error(fmt::format(
-          "{}: the video read back {} of its {} frames (disk full?); {}", a->out, read_back, frames,
-          std::filesystem::exists(out) ? "the old file is left as it was" : "nothing written"));
+    if (const std::string error = finishPartialVideo(partial, out, frames); !error.empty()) {
+      throw Error(
+          error + "; " +
+          (std::filesystem::exists(out) ? "the old file is left as it was" : "nothing written"));
     }
-    std::filesystem::rename(partial, out);
     remove_partial.keep = true;
     fmt::print("wrote {}\n", a->out);
   });

@@ -207,12 +207,9 @@ void addRunCommand(CLI::App& app) {
       view.height = height;
       studio.setView(view);
     }
-    // Set by a failure while recording (a full disk); shared, as the pipeline keeps the callback.
-    const auto recording_stopped = std::make_shared<bool>(false);
     if (!a->record_view.empty()) {
-      pipeline.recordView(a->record_view, [recording_stopped](const std::string& error) {
+      pipeline.recordView(a->record_view, [](const std::string& error) {
         fmt::print(stderr, "lumistage run: recording stopped: {}\n", error);
-        *recording_stopped = true;
       });
     }
     // CPU use is measured from the first frame done: the nodes' start-up (loading a session into
@@ -249,7 +246,7 @@ void addRunCommand(CLI::App& app) {
       }
     }
     if (!take.empty() && !studio.take().take.empty()) finishTake(pipeline, a->record_take);
-    bool recording_failed = *recording_stopped;
+    bool recording_failed = pipeline.viewRecordingFailed();  // stopped by a failure (a full disk)
     if (std::unique_ptr<ViewRecorder> recorder = pipeline.stopRecordingView()) {
       if (!recorder->error().empty()) {
         fmt::print(stderr, "lumistage run: recording of the view failed: {}\n", recorder->error());

@@ -27,6 +27,32 @@ std::string readFile(const std::filesystem::path& path) {
   return buffer.str();
 }
 
+namespace {
+
+// Writes all of `data` to `fd`, again where interrupted. False (errno set; `written`: what went
+// out) on a failure, or when nothing more goes out (ENOSPC).
+bool writeAll(int fd, std::string_view data, size_t& written) {
+  written = 0;
+  while (written < data.size()) {
+    const ssize_t n = ::write(fd, data.data() + written, data.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (n == 0) errno = ENOSPC;
+      return false;
+    }
+    written += static_cast<size_t>(n);
+  }
+  return true;
+}
+
+// A failed write's errno in words, a full disk said as such.
+std::string writeErrorText(int error) {
+  return std::string(std::strerror(error)) +
+         (error == ENOSPC || error == EFBIG ? " (disk full?)" : "");
+}
+
+}  // namespace
+
 bool isAtomicWriteLeftover(std::string_view file_name) {
   const size_t at = file_name.rfind(".tmp-");
   return at != std::string_view::npos && file_name.size() - at == 11;
@@ -49,20 +75,11 @@ void writeFileAtomically(const std::filesystem::path& path,
     const int saved = errno;
     ::close(fd);
     ::unlink(temp.c_str());
-    throw Error(target + ": " + step + " failed: " + std::strerror(saved) +
-                (saved == ENOSPC || saved == EFBIG ? " (disk full?)" : ""));
+    throw Error(target + ": " + step + " failed: " + writeErrorText(saved));
   };
-  for (const std::string_view contents : pieces) {
-    size_t written = 0;
-    while (written < contents.size()) {
-      const ssize_t n = ::write(fd, contents.data() + written, contents.size() - written);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        fail("write");
-      }
-      written += static_cast<size_t>(n);
-    }
-  }
+  size_t written = 0;
+  for (const std::string_view contents : pieces)
+    if (!writeAll(fd, contents, written)) fail("write");
   if (::fchmod(fd, static_cast<mode_t>(options.mode)) != 0) fail("chmod");
   if (options.sync && ::fsync(fd) != 0) fail("fsync");
   if (::close(fd) != 0) {
@@ -83,6 +100,7 @@ AppendOnlyFile::~AppendOnlyFile() {
 
 void AppendOnlyFile::create(const std::filesystem::path& path) {
   if (fd_ >= 0) ::close(fd_);
+  path_ = path;
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0) throw Error(path.string() + ": cannot create: " + std::strerror(errno));
   length_ = 0;
@@ -93,21 +111,14 @@ void AppendOnlyFile::create(const std::filesystem::path& path) {
 bool AppendOnlyFile::append(std::string_view record) {
   if (failed_ || fd_ < 0) return false;
   size_t written = 0;
-  while (written < record.size()) {
-    const ssize_t n = ::write(fd_, record.data() + written, record.size() - written);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int saved = n < 0 ? errno : ENOSPC;
-      error_ = std::string(std::strerror(saved)) +
-               (saved == ENOSPC || saved == EFBIG ? " (disk full?)" : "");
-      failed_ = true;
-      // Back to the last whole record (a reader would skip a torn last line, but not one that a
-      // later write completed into something else).
-      if (written > 0 && ::ftruncate(fd_, static_cast<off_t>(length_)) != 0)
-        error_ += std::string("; and cutting it back failed: ") + std::strerror(errno);
-      return false;
-    }
-    written += static_cast<size_t>(n);
+  if (!writeAll(fd_, record, written)) {
+    error_ = writeErrorText(errno);
+    failed_ = true;
+    // Back to the last whole record (a reader would skip a torn last line, but not one that a
+    // later write completed into something else).
+    if (written > 0 && ::ftruncate(fd_, static_cast<off_t>(length_)) != 0)
+      error_ += std::string("; and cutting it back failed: ") + std::strerror(errno);
+    return false;
   }
   length_ += static_cast<int64_t>(record.size());
   return true;

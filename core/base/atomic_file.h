@@ -45,9 +45,11 @@ class AppendOnlyFile {
   // False (the file cut back to what it held before) on any failure, and ever after one.
   bool append(std::string_view record);
   bool failed() const { return failed_; }
+  const std::filesystem::path& path() const { return path_; }
   const std::string& error() const { return error_; }  // the reason of the failure, in words
 
  private:
+  std::filesystem::path path_;
   int fd_ = -1;
   int64_t length_ = 0;  // bytes of whole records
   bool failed_ = false;

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -166,6 +167,18 @@ void AravisSource::startCamera(Device& d) {
   throwIfFailed(error, d.name, "start of acquisition");
 }
 
+std::optional<std::string> AravisSource::tryStep(Device& d, void (AravisSource::*step)(Device&)) {
+  try {
+    (this->*step)(d);
+    return std::nullopt;
+  } catch (const Error& e) {
+    closeCamera(d);
+    std::lock_guard lock(mutex_);
+    d.stats.last_error = std::string(e.what()) + " (trying again)";
+    return std::string(e.what());
+  }
+}
+
 void AravisSource::closeCamera(Device& d) {
   if (d.camera) {
     g_signal_handlers_disconnect_by_data(arv_camera_get_device(d.camera), &d.control_lost);
@@ -198,13 +211,7 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
   // every kRetryOpen by its thread, its error in its stats meanwhile. None opened: an error.
   std::vector<std::string> failures;
   const auto attempt = [&](Device& d, void (AravisSource::*step)(Device&)) {
-    try {
-      (this->*step)(d);
-    } catch (const Error& e) {
-      closeCamera(d);
-      failures.push_back(e.what());
-      d.stats.last_error = std::string(e.what()) + " (trying again)";
-    }
+    if (std::optional<std::string> error = tryStep(d, step)) failures.push_back(std::move(*error));
   };
   for (auto& d : devices_) {
     if (!d->config.device.empty()) attempt(*d, &AravisSource::openCamera);  // else another node's
@@ -248,25 +255,18 @@ void AravisSource::receive(int camera) {
   auto next_open = std::chrono::steady_clock::now() + kRetryOpen;
   auto last_buffer = std::chrono::steady_clock::now();
   while (running_) {
-    const auto now = std::chrono::steady_clock::now();
     if (!d.stream) {
+      const auto now = std::chrono::steady_clock::now();
       // Not open (it failed to, or was lost): tried again every kRetryOpen.
       if (now < next_open) {
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
         continue;
       }
       next_open = now + kRetryOpen;
-      try {
-        openCamera(d);
-        // As at the start: the stream filters by address before it has buffers to fill.
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
-        startCamera(d);
-      } catch (const Error& e) {
-        closeCamera(d);
-        std::lock_guard lock(mutex_);
-        d.stats.last_error = std::string(e.what()) + " (trying again)";
-        continue;
-      }
+      if (tryStep(d, &AravisSource::openCamera)) continue;
+      // As at the start: the stream filters by address before it has buffers to fill.
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      if (tryStep(d, &AravisSource::startCamera)) continue;
       spdlog::info("camera {}: open, streaming", d.name);
       std::lock_guard lock(mutex_);
       d.stats.last_error.clear();
@@ -277,10 +277,11 @@ void AravisSource::receive(int camera) {
       continue;
     }
     ArvBuffer* buffer = arv_stream_timeout_pop_buffer(d.stream, 100000);  // 100 ms, to notice stop
+    const auto now = std::chrono::steady_clock::now();
     // Lost: Aravis lost its control channel (GigE Vision heartbeats unanswered: unplugged, powered
     // off), or a free-running camera sent nothing for kLostAfter. Closed, and opened again.
-    const bool silent = d.config.trigger == TriggerMode::kFreeRunning &&
-                        std::chrono::steady_clock::now() - last_buffer > kLostAfter;
+    const bool silent =
+        d.config.trigger == TriggerMode::kFreeRunning && now - last_buffer > kLostAfter;
     if (!buffer && (d.control_lost || silent)) {
       spdlog::warn("camera {}: lost ({}): opening it again every {} s", d.name,
                    d.control_lost ? "no answer on its control channel" : "no frames",
@@ -288,11 +289,11 @@ void AravisSource::receive(int camera) {
       closeCamera(d);
       std::lock_guard lock(mutex_);
       d.stats.last_error = "lost: reconnecting";
-      next_open = std::chrono::steady_clock::now();
+      next_open = now;
       continue;
     }
     if (!buffer) continue;
-    last_buffer = std::chrono::steady_clock::now();
+    last_buffer = now;
     const ArvBufferStatus status = arv_buffer_get_status(buffer);
     size_t size = 0;
     const void* data = arv_buffer_get_data(buffer, &size);
@@ -333,7 +334,6 @@ void AravisSource::receive(int camera) {
       std::memcpy(frame.image.pixels.data(), data, bytes);
       queue_.push_back(std::move(frame));
       ++d.stats.frames;
-      const auto now = std::chrono::steady_clock::now();
       d.recent.push_back(now);
       while (d.recent.size() > 1 && now - d.recent.front() > std::chrono::seconds(2))
         d.recent.pop_front();

@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -120,6 +121,8 @@ class AravisSource : public FrameSource {
   void openCamera(Device& d);   // camera configured and its stream made, no buffers yet
   void startCamera(Device& d);  // buffers given, acquisition started
   void closeCamera(Device& d);
+  // One of the steps above; on an Error the camera is closed, the error (returned) in its stats.
+  std::optional<std::string> tryStep(Device& d, void (AravisSource::*step)(Device&));
 
   Rig rig_;
   std::vector<std::unique_ptr<Device>> devices_;

@@ -87,14 +87,13 @@ SessionWriter::SessionWriter(const fs::path& folder, const Rig& rig, PixelFormat
                   truth ? "true" : "false"));
   index_.create(folder_ / "index.csv");
   if (!index_.append("frame,timestamp_ns\n"))
-    throw Error((folder_ / "index.csv").string() + ": cannot write: " + index_.error());
+    throw Error(index_.path().string() + ": cannot write: " + index_.error());
   if (truth) {
     joints_.create(folder_ / "truth" / "joints.csv");
     std::string header = "frame";
     for (const std::string& name : joint_names_) header += fmt::format(",{0}_x,{0}_y,{0}_z", name);
     if (!joints_.append(header + "\n"))
-      throw Error((folder_ / "truth" / "joints.csv").string() +
-                  ": cannot write: " + joints_.error());
+      throw Error(joints_.path().string() + ": cannot write: " + joints_.error());
   }
 }
 
@@ -161,8 +160,7 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
     line += "\n";
     if (!joints_.append(line))
       throw Error(fmt::format("{}: cannot append frame {}: {}; the session ends before it",
-                              (folder_ / "truth" / "joints.csv").string(), frame_id,
-                              joints_.error()));
+                              joints_.path().string(), frame_id, joints_.error()));
   }
   appendIndex(frame_id, timestamp_ns, bytes);
 }
@@ -188,7 +186,7 @@ void SessionWriter::appendIndex(int64_t frame_id, int64_t timestamp_ns, int64_t 
   const auto end = fmt::format_to_n(line, sizeof line, "{},{}\n", frame_id, timestamp_ns).out;
   if (!index_.append(std::string_view(line, size_t(end - line))))
     throw Error(fmt::format("{}: cannot append frame {}: {}; the session ends before it",
-                            (folder_ / "index.csv").string(), frame_id, index_.error()));
+                            index_.path().string(), frame_id, index_.error()));
   ++frames_;
   bytes_ += bytes;
 }

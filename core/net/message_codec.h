@@ -156,6 +156,11 @@ using MessageBody =
     std::variant<HelloData, HeartbeatData, SilhouettesData, PoseData, VertexStatisticsData,
                  OffsetsData, PartialImageData, FrameTimestampsData, ViewData, RecordData>;
 
+// The frame ids of a rig's cameras move together, a frame at a time: an id this far or further
+// from the newest is a restart (the cameras, the session) or a message not to trust, for the nodes
+// and the studio alike.
+constexpr int64_t kFrameIdWindow = 300;
+
 struct Message {
   uint16_t version = kProtocolVersion;
   std::string sender;

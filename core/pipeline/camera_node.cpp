@@ -180,7 +180,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   constexpr int64_t kSilentFrames = 4, kStartFrames = 60;
   std::map<int64_t, std::shared_ptr<Set>> assembling;
   std::vector<int64_t> last_id(cameras_.size(), -1);
-  std::vector<uint8_t> told_silent(cameras_.size(), 0);
+  std::vector<uint8_t> told_silent(cameras_.size(), 0), live(cameras_.size(), 0);
   int64_t newest = -1, first = -1;
   CameraFrame frame;
   // Every camera silent (no set goes out, so the per-camera warning below never comes): said once
@@ -214,7 +214,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     }
     const auto k = std::find(cameras_.begin(), cameras_.end(), frame.camera) - cameras_.begin();
     if (k >= static_cast<long>(cameras_.size())) continue;
-    if (first < 0 || frame.frame_id < newest - 300) {  // the first frame, or the cameras restarted
+    if (first < 0 || frame.frame_id < newest - kFrameIdWindow) {  // first, or cameras restarted
       first = newest = frame.frame_id;
       std::fill(last_id.begin(), last_id.end(), -1);
     }
@@ -228,15 +228,17 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     frame_pool_->take(frame);  // buffers of a set let go, for the next frame
     last_id[k] = std::max(last_id[k], set->frame_id);
     newest = std::max(newest, set->frame_id);
+    // Which cameras a set waits for: those that deliver (or are not heard from yet, at first).
+    for (size_t c = 0; c < cameras_.size(); ++c)
+      live[c] =
+          last_id[c] >= 0 ? last_id[c] >= newest - kSilentFrames : newest - first < kStartFrames;
     for (auto it = assembling.begin(); it != assembling.end();) {
       Set& s = *it->second;
       size_t present = 0;
       bool waiting = false;
       for (size_t c = 0; c < cameras_.size(); ++c) {
         present += s.has(c);
-        const bool live =
-            last_id[c] >= 0 ? last_id[c] >= newest - kSilentFrames : newest - first < kStartFrames;
-        waiting = waiting || (!s.has(c) && live);
+        waiting = waiting || (!s.has(c) && live[c]);
       }
       if (waiting) {
         ++it;

@@ -204,12 +204,11 @@ class StudioCoordinator {
     int64_t newest_frame = -1;          // the frame id of its newest silhouettes
   };
   // The cameras' frame ids move together, a frame at a time. A node's silhouettes whose frame id
-  // lies more than kFrameIdWindow from the newest the studio has seen (a corrupt or hostile
-  // message, a node replaying another session, cameras restarted on one node alone) are refused
-  // and counted, instead of ending every frame in flight or leaving every later frame "done"
-  // already; when most live nodes' ids move together (the cameras or the session restarted), the
-  // studio follows them. False: refuse the message.
-  static constexpr int64_t kFrameIdWindow = 300;
+  // lies more than kFrameIdWindow (message_codec.h) from the newest the studio has seen (a corrupt
+  // or hostile message, a node replaying another session, cameras restarted on one node alone) are
+  // refused and counted, instead of ending every frame in flight or leaving every later frame
+  // "done" already; when most live nodes' ids move together (the cameras or the session restarted),
+  // the studio follows them. False: refuse the message.
   bool acceptFrameId(NodeState& node, int64_t frame_id);
 
   // The frame's state, a spare one when it is new.

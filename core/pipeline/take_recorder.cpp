@@ -104,11 +104,14 @@ void TakeRecorder::offer(int64_t frame_id, const std::vector<CameraFrame>& frame
   for (size_t k = 0; k < frames.size(); ++k) images_[k] = frames[k].image;  // reuses the buffers
   // Queued: moved from. Dropped (the queue is full): kept for the next set.
   if (recorder_->push(frame_id, frames.front().timestamp_ns - first_timestamp_ns_,
-                      std::move(images_)))
+                      std::move(images_))) {
     images_.clear();
+    return;
+  }
+  // Refused: the queue is full, or the writing failed (a failed recorder refuses every set). The
+  // failure is said here too, not only in the studio's health: the node's own log is where a
+  // technician looks for its disk.
   if (!told_failed_) {
-    // Said here too, not only in the studio's health: the node's own log is where a technician
-    // looks for its disk.
     const RecorderStats stats = recorder_->stats();
     if (stats.failed) {
       told_failed_ = true;

@@ -160,20 +160,19 @@ struct FloatProjection {
 };
 
 // Whether a camera keys the posed surface as the actor where the surface lies in its view: every
-// fourth vertex's pixel keyed (about 500 pixels on the generic human, a few microseconds). Too
-// few vertices in view to tell: it does.
+// fourth vertex's pixel keyed (about 500 pixels on the generic human, a few microseconds), at the
+// projections its depth map made. Too few vertices in view to tell: it does.
 template <typename Key>
-bool seesTheSurface(const SamplerCamera& input, const Key& key, const Eigen::Matrix3Xf& positions) {
-  const FloatProjection projection(*input.camera);
+bool seesTheSurface(const SamplerCamera& input, const Key& key, const DepthMap& depth) {
+  const Eigen::Matrix2Xf& pixels = depth.vertexPixels();
   const float max_x = float(input.image.width) - 0.5f, max_y = float(input.image.height) - 0.5f;
   int in_view = 0, seen = 0;
-  for (Eigen::Index v = 0; v < positions.cols(); v += 4) {
-    const Eigen::Vector3f c = projection.toCamera(positions.col(v));
-    if (c.z() <= 0) continue;
-    const Eigen::Vector2f p = projection.pixel(c);
-    if (!(p.x() >= -0.5f && p.y() >= -0.5f && p.x() < max_x && p.y() < max_y)) continue;
+  for (Eigen::Index v = 0; v < pixels.cols(); v += 4) {
+    const float x = pixels(0, v), y = pixels(1, v);
+    if (!(depth.vertexDepths()(v) > 0 && x >= -0.5f && y >= -0.5f && x < max_x && y < max_y))
+      continue;
     ++in_view;
-    seen += key.isForeground(input.image, int(p.x() + 0.5f), int(p.y() + 0.5f));
+    seen += key.isForeground(input.image, int(x + 0.5f), int(y + 0.5f));
   }
   return in_view < RefinementSampler::kMinProbesInView ||
          float(seen) >= RefinementSampler::kMinSurfaceSeen * float(in_view);
@@ -222,12 +221,12 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
   sees_nobody_.assign(cameras.size(), 0);
   for (size_t k = 0; k < cameras.size(); ++k) {
     const SamplerCamera& c = cameras[k];
+    depth_maps_[k].render(*c.camera, positions, triangles, config_.depth_map_step);
     const auto sampleWith = [&](const auto& key) {
-      if (!seesTheSurface(c, key, positions)) {
+      if (!seesTheSurface(c, key, depth_maps_[k])) {
         sees_nobody_[k] = 1;
         return;
       }
-      depth_maps_[k].render(*c.camera, positions, triangles, config_.depth_map_step);
       sampleCamera(c, key, depth_maps_[k], *points, *point_normals, out);
     };
     static const GreenScreenKeyer kDefaultKeyer;
@@ -256,7 +255,6 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
   const int n = static_cast<int>(positions.cols());
   const int first_window = n / config_.pointsPerVertex();  // the points after the vertices
   const PixelGrid grid(image);
-  const auto pixelAt = [&](const Eigen::Vector3f& c) { return projection.pixel(c); };
   for (int v = 0; v < n; ++v) {
     const Eigen::Vector3f x = positions.col(v), nrm = normals.col(v);
     // A line in the world is a line in camera coordinates: c(t) = c0 + t·d.
@@ -264,7 +262,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
     const Eigen::Vector3f to_camera = centre - x;
     bool visible = nrm.dot(to_camera) > min_cos * to_camera.norm() && c0.z() > 0;
     if (visible) {
-      const Eigen::Vector2f p = pixelAt(c0);
+      const Eigen::Vector2f p = projection.pixel(c0);
       visible = depth.visible(p.x(), p.y(), c0.z(), tolerance);
     }
     // A window point serves the colour term only: the cameras that do not see it say nothing
@@ -286,8 +284,8 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
     const bool curve = offsets >= 3 && t_end > 0 && c_in.z() > 0 && c_out.z() > 0 && c0.z() > 0;
     Eigen::Vector2f p_mid = Eigen::Vector2f::Zero(), slope = p_mid, bend = p_mid;
     if (curve) {
-      const Eigen::Vector2f p_in = pixelAt(c_in), p_out = pixelAt(c_out);
-      p_mid = pixelAt(c0);
+      const Eigen::Vector2f p_in = projection.pixel(c_in), p_out = projection.pixel(c_out);
+      p_mid = projection.pixel(c0);
       slope = (p_out - p_in) / (2 * t_end);
       bend = (p_out + p_in - 2 * p_mid) / (2 * t_end * t_end);
     }
@@ -303,7 +301,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
           previous_inside = false;
           continue;
         }
-        const Eigen::Vector2f p = pixelAt(c);
+        const Eigen::Vector2f p = projection.pixel(c);
         u = p.x(), w = p.y();
       }
       if (!(u >= -0.5f && w >= -0.5f && u < max_x && w < max_y)) {

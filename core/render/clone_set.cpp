@@ -3,7 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/net/message_codec.h"
+
 namespace lumistage {
+
+// The studio's clone editor holds no more clones than the nodes take in a view.
+static_assert(CloneSet::kMaxClones == MessageLimits{}.max_clones);
 
 Eigen::Affine3d Clone::transform(const Eigen::Vector3d& pivot) const {
   return Eigen::Translation3d(pivot + Eigen::Vector3d(offset_m.x(), offset_m.y(), 0)) *

@@ -8,6 +8,25 @@
 
 namespace lumistage {
 
+std::filesystem::path partialVideoPath(const std::filesystem::path& file) {
+  return file.parent_path() / (file.stem().string() + ".partial" + file.extension().string());
+}
+
+std::string finishPartialVideo(const std::filesystem::path& partial,
+                               const std::filesystem::path& file, int64_t frames, int api) {
+  cv::VideoCapture check(partial.string(), api);
+  const int64_t read_back = check.isOpened() ? int64_t(check.get(cv::CAP_PROP_FRAME_COUNT)) : 0;
+  check.release();
+  if (read_back != frames) {
+    return file.string() + ": the video reads back " + std::to_string(read_back) + " of its " +
+           std::to_string(frames) + " frames (disk full?)";
+  }
+  std::error_code error;
+  std::filesystem::rename(partial, file, error);
+  if (error) return file.string() + ": cannot put the video in its place (" + error.message() + ")";
+  return {};
+}
+
 struct ViewRecorder::Impl {
   std::filesystem::path file, partial;
   std::string error;
@@ -36,7 +55,7 @@ ViewRecorder::ViewRecorder(const std::filesystem::path& file, double fps, int ma
   if (std::filesystem::is_directory(file, error))
     throw Error(file.string() + ": cannot record the view: a folder has that name");
   impl_->file = file;
-  impl_->partial = folder / (file.stem().string() + ".partial.avi");
+  impl_->partial = partialVideoPath(file);
   impl_->fps = fps;
   impl_->max_gap = std::max(0, max_gap_frames);
 }
@@ -96,23 +115,9 @@ bool ViewRecorder::close() {
   r.closed = true;
   if (!r.writer.isOpened()) return true;  // nothing recorded: no file
   r.writer.release();
-  cv::VideoCapture check(r.partial.string(), cv::CAP_OPENCV_MJPEG);
-  const int64_t read_back = check.isOpened() ? int64_t(check.get(cv::CAP_PROP_FRAME_COUNT)) : 0;
-  check.release();
-  if (read_back != r.written) {
-    r.error = r.file.string() + ": the video reads back " + std::to_string(read_back) + " of its " +
-              std::to_string(r.written) + " frames (disk full?); what was written is kept as " +
-              r.partial.string();
-    return false;
-  }
-  std::error_code error;
-  std::filesystem::rename(r.partial, r.file, error);
-  if (error) {
-    r.error = r.file.string() + ": cannot put the video in its place (" + error.message() +
-              "); it is kept as " + r.partial.string();
-    return false;
-  }
-  return true;
+  r.error = finishPartialVideo(r.partial, r.file, r.written, cv::CAP_OPENCV_MJPEG);
+  if (!r.error.empty()) r.error += "; what was written is kept as " + r.partial.string();
+  return r.error.empty();
 }
 
 const std::string& ViewRecorder::error() const {

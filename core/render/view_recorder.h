@@ -8,6 +8,14 @@
 
 namespace lumistage {
 
+// Where a video is made until it is whole: NAME.partial.EXT beside NAME.EXT.
+std::filesystem::path partialVideoPath(const std::filesystem::path& file);
+// Puts the closed video `partial` in `file`'s place if it reads back `frames` frames (through
+// OpenCV's reader `api`, 0: any); otherwise leaves both as they are. Empty when done, else why,
+// naming `file` (the caller says what became of the partial file).
+std::string finishPartialVideo(const std::filesystem::path& partial,
+                               const std::filesystem::path& file, int64_t frames, int api = 0);
+
 // Records a stream of the studio's blended images (one virtual camera) to a video as they are
 // made: every frame the pipeline finishes, not the few a second a window shows. Motion-JPEG in an
 // AVI, OpenCV's own encoder (nothing to install; 2.2 ms a 640x480 frame, render_bench), at the

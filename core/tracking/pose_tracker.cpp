@@ -162,7 +162,6 @@ struct PoseTracker::Impl {
   // Tracking state.
   bool tracking = false;
   int bad_frames = 0;
-  double last_volume = 0;    // of the hull carved this frame, m³
   int empty_frames = 0;      // in a row: the hull too small for anyone
   bool shape_given = false;  // by setShape(): kept whoever walks on
   Pose pose, previous;
@@ -187,7 +186,13 @@ struct PoseTracker::Impl {
   double fit(Pose& p, int iterations);
   double fitRms(const Pose& p);
   void apply(Pose& p, const Eigen::VectorXd& delta) const;
-  bool initialise(TrackResult& out);
+  // `volume`: the stage's hull carved for it, m³.
+  bool initialise(TrackResult& out, double& volume);
+  // The calibrated proportions forgotten: the next initialisation calibrates anew.
+  void forgetShape() {
+    shape_calibrated = false;
+    foot_scale = 1.0;
+  }
 };
 
 PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTrackerOptions& o)
@@ -866,12 +871,11 @@ double PoseTracker::Impl::fitRms(const Pose& p) {
 // within this many times lost_rms_m.
 constexpr double kCalibrateWithin = 2.0;
 
-bool PoseTracker::Impl::initialise(TrackResult& out) {
+bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   Eigen::Vector3d centroid;
   double top_z = 0;
-  const double volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z);
+  volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z);
   out.hull_points = int(hull.size());
-  last_volume = volume;
   if (volume < opt.min_volume_m3 || volume > opt.max_volume_m3 || top_z < 1.0) return false;
   if (!shape_calibrated) {
     BodyShape s;
@@ -900,8 +904,9 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
   // carved by two cameras) is no body whose proportions a search could find: failed at once,
   // instead of 30 refits a frame (0.4 s a frame while nobody could be tracked).
   const bool calibrating = opt.calibrate_shape && !shape_calibrated;
-  if (calibrating && fitRms(best_pose) > kCalibrateWithin * opt.lost_rms_m) {
-    out.fit_rms_m = fitRms(best_pose);
+  double rms = fitRms(best_pose);
+  if (calibrating && rms > kCalibrateWithin * opt.lost_rms_m) {
+    out.fit_rms_m = rms;
     return false;
   }
   if (calibrating) {
@@ -960,8 +965,8 @@ bool PoseTracker::Impl::initialise(TrackResult& out) {
     }
     setShape(make(k));
     best = fit(best_pose, opt.init_iterations);
+    rms = fitRms(best_pose);
   }
-  const double rms = fitRms(best_pose);
   out.fit_rms_m = rms;
   if (rms > opt.lost_rms_m) {
     // A hull no body fits (a prop, someone half inside the stage, a hull carved by some cameras
@@ -1000,8 +1005,7 @@ void PoseTracker::setShape(const BodyShape& shape) {
 
 void PoseTracker::reset() {
   impl_->tracking = false;
-  impl_->foot_scale = 1.0;
-  impl_->shape_calibrated = false;
+  impl_->forgetShape();
   impl_->bad_frames = 0;
   impl_->empty_frames = 0;
   impl_->shape_given = false;
@@ -1012,8 +1016,9 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
   Impl& m = *impl_;
   m.prepareSilhouettes(silhouettes);
   result_.hull_points = 0;
+  double volume = 0;  // of the hull carved this frame, m³
   if (!m.tracking) {
-    if (m.initialise(result_)) {
+    if (m.initialise(result_, volume)) {
       m.tracking = true;
       m.bad_frames = 0;
       result_.state = TrackState::kInitialised;
@@ -1050,8 +1055,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
     lo.z() = m.lower.z();
     const Eigen::Vector3i vlo = ((lo - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
     const Eigen::Vector3i vhi = ((hi - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
-    const double volume = m.carve(vlo, vhi, nullptr, nullptr);
-    m.last_volume = volume;
+    volume = m.carve(vlo, vhi, nullptr, nullptr);
     result_.hull_points = int(m.hull.size());
     if (volume < m.opt.min_volume_m3 || volume > m.opt.max_volume_m3) {
       // No hull to fit (the actor gone, or one frame's keys broken: a light flickered, every mask
@@ -1079,7 +1083,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
     }
   }
   // The actor gone for good: whoever walks on next is calibrated anew (a given shape is kept).
-  if (m.last_volume >= m.opt.min_volume_m3) {
+  if (volume >= m.opt.min_volume_m3) {
     m.empty_frames = 0;
   } else if (++m.empty_frames == m.opt.forget_shape_after_empty_frames && m.shape_calibrated &&
              !m.shape_given) {
@@ -1087,8 +1091,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
         "tracker: the stage has been empty for {} frames: the next actor's proportions will be "
         "calibrated anew",
         m.empty_frames);
-    m.shape_calibrated = false;
-    m.foot_scale = 1.0;
+    m.forgetShape();
   }
   if (result_.valid()) {
     result_.pose = m.pose;

@@ -16,9 +16,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -204,37 +206,39 @@ TEST(Cli, CalibrateWandSolvesASimulatedSessionAndWritesRigAndReport) {
   EXPECT_EQ(readFile(rig), kept);
   EXPECT_TRUE(fs::exists(folder / "rig.calibration.yaml"));
 
+  // The points file with each line rewritten (none: left out), solved into NAME.yaml.
+  const auto solveRewritten =
+      [&](const std::string& name,
+          const std::function<std::optional<std::string>(const std::string&)>& rewrite) {
+        std::ifstream in(points);
+        std::string line, text;
+        while (std::getline(in, line))
+          if (const std::optional<std::string> kept = rewrite(line)) text += *kept + "\n";
+        std::ofstream(folder / (name + ".txt")) << text;
+        return run(kCli + " calibrate wand --points " + (folder / (name + ".txt")).string() +
+                   " --out " + (folder / (name + ".yaml")).string());
+      };
+
   // Floor marks along one line leave the floor's tilt about it to noise: refused.
-  std::ifstream marks_in(points);
-  std::string marks_line, on_a_line;
   int mark = 0;
-  while (std::getline(marks_in, marks_line)) {
-    if (marks_line.rfind("floor ", 0) == 0) {
-      std::istringstream words(marks_line);
-      std::string kind, sample;
-      words >> kind >> sample;
-      marks_line = "floor " + sample + " " + std::to_string(mark++) + " 0 0";
-    }
-    on_a_line += marks_line + "\n";
-  }
+  r = solveRewritten("line", [&](const std::string& line) -> std::optional<std::string> {
+    if (line.rfind("floor ", 0) != 0) return line;
+    std::istringstream words(line);
+    std::string kind, sample;
+    words >> kind >> sample;
+    return "floor " + sample + " " + std::to_string(mark++) + " 0 0";
+  });
   ASSERT_GE(mark, 3);
-  std::ofstream(folder / "line.txt") << on_a_line;
-  r = run(kCli + " calibrate wand --points " + (folder / "line.txt").string() + " --out " +
-          (folder / "line.yaml").string());
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("floor marks lie (nearly) on a line"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(folder / "line.yaml"));
 
   // A camera that saw nothing: the error names it, and nothing is written.
-  std::ifstream src(points);
-  std::string line, without;
-  while (std::getline(src, line)) {
-    if (line.rfind("point ", 0) == 0 && line.find(" cam07 ") != std::string::npos) continue;
-    without += line + "\n";
-  }
-  std::ofstream(folder / "dark.txt") << without;
-  r = run(kCli + " calibrate wand --points " + (folder / "dark.txt").string() + " --out " +
-          (folder / "dark.yaml").string());
+  r = solveRewritten("dark", [](const std::string& line) -> std::optional<std::string> {
+    if (line.rfind("point ", 0) == 0 && line.find(" cam07 ") != std::string::npos)
+      return std::nullopt;
+    return line;
+  });
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("camera cam07 saw nothing"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(folder / "dark.yaml"));
