@@ -6,6 +6,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/geometry/stage_volume.h"
+
 namespace lumistage {
 
 StagePlanView::StagePlanView(QWidget* parent) : QWidget(parent) {
@@ -15,13 +17,8 @@ StagePlanView::StagePlanView(QWidget* parent) : QWidget(parent) {
 
 void StagePlanView::setRig(const Rig* rig) {
   rig_ = rig;
+  stage_ = rig ? stageVolume(*rig) : StageBox{};
   highlighted_ = -1;
-  update();
-}
-
-void StagePlanView::setStageSize(double width_m, double depth_m) {
-  stage_width_m_ = width_m;
-  stage_depth_m_ = depth_m;
   update();
 }
 
@@ -43,7 +40,9 @@ void StagePlanView::paintEvent(QPaintEvent*) {
   p.fillRect(rect(), QColor(0x1e, 0x20, 0x24));
 
   // World extent to show: the stage and every camera, with a margin for labels.
-  double half_x = stage_width_m_ / 2, half_y = stage_depth_m_ / 2;
+  const Eigen::Vector3d& lo = stage_.lower;
+  const Eigen::Vector3d& hi = stage_.upper;
+  double half_x = std::max(-lo.x(), hi.x()), half_y = std::max(-lo.y(), hi.y());
   if (rig_) {
     for (const Camera& c : rig_->cameras()) {
       half_x = std::max(half_x, std::abs(c.centre().x()));
@@ -58,16 +57,15 @@ void StagePlanView::paintEvent(QPaintEvent*) {
     return QPointF(width() / 2.0 + x * scale, height() / 2.0 - y * scale);
   };
 
-  // Floor: green screen stage with a half-metre grid.
-  const QRectF stage(toScreen(-stage_width_m_ / 2, stage_depth_m_ / 2),
-                     toScreen(stage_width_m_ / 2, -stage_depth_m_ / 2));
+  // Floor: the stage the actor is tracked on, with a half-metre grid.
+  const QRectF stage(toScreen(lo.x(), hi.y()), toScreen(hi.x(), lo.y()));
   p.fillRect(stage, QColor(0x2f, 0x7d, 0x3a));
   p.setPen(QPen(QColor(255, 255, 255, 40), 1));
-  for (double x = -stage_width_m_ / 2; x <= stage_width_m_ / 2 + 1e-9; x += 0.5) {
-    p.drawLine(toScreen(x, -stage_depth_m_ / 2), toScreen(x, stage_depth_m_ / 2));
+  for (double x = lo.x(); x <= hi.x() + 1e-9; x += 0.5) {
+    p.drawLine(toScreen(x, lo.y()), toScreen(x, hi.y()));
   }
-  for (double y = -stage_depth_m_ / 2; y <= stage_depth_m_ / 2 + 1e-9; y += 0.5) {
-    p.drawLine(toScreen(-stage_width_m_ / 2, y), toScreen(stage_width_m_ / 2, y));
+  for (double y = lo.y(); y <= hi.y() + 1e-9; y += 0.5) {
+    p.drawLine(toScreen(lo.x(), y), toScreen(hi.x(), y));
   }
   p.setPen(QPen(QColor(255, 255, 255, 160), 1.5));
   p.drawRect(stage);

@@ -15,8 +15,8 @@ class StagePlanView : public QWidget {
  public:
   explicit StagePlanView(QWidget* parent = nullptr);
 
-  void setRig(const Rig* rig);  // not owned; nullptr for none
-  void setStageSize(double width_m, double depth_m);
+  // Not owned; nullptr for none. The stage drawn is the rig's (stageVolume).
+  void setRig(const Rig* rig);
   void setHighlightedCamera(int camera_index);  // -1 for none
 
   QSize sizeHint() const override { return {640, 560}; }
@@ -28,8 +28,7 @@ class StagePlanView : public QWidget {
 
  private:
   const Rig* rig_ = nullptr;
-  double stage_width_m_ = 3.0;
-  double stage_depth_m_ = 3.0;
+  StageBox stage_;
   int highlighted_ = -1;
 };
 

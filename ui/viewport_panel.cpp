@@ -22,6 +22,7 @@
 #include <cmath>
 
 #include "core/base/atomic_file.h"
+#include "core/geometry/stage_volume.h"
 #include "ui/stage_plan_view.h"
 
 namespace lumistage {
@@ -206,6 +207,12 @@ void ViewportWidget::showView(const PipelineView& view) {
   refresh();
 }
 
+void ViewportWidget::setRig(const Rig& rig) {
+  rig_ = rig;
+  stage_ = stageVolume(rig);
+  refresh();
+}
+
 void ViewportWidget::paintScene(QPainter& painter, int w, int h) {
   painter.setRenderHint(QPainter::Antialiasing);
   painter.setRenderHint(QPainter::SmoothPixmapTransform);
@@ -213,14 +220,19 @@ void ViewportWidget::paintScene(QPainter& painter, int w, int h) {
   painter.fillRect(area, QColor(24, 26, 30));
   const Camera camera = view_.camera(std::max(1, w), std::max(1, h));
   if (layers_.floor) {
+    // Half-metre lines over at least 6 x 6 m, and over the whole stage.
     painter.setPen(QPen(QColor(90, 96, 104), 1));
-    for (int i = -6; i <= 6; ++i) {
-      const double s = 0.5 * i;
-      drawSegment(painter, camera, {s, -3, 0}, {s, 3, 0});
-      drawSegment(painter, camera, {-3, s, 0}, {3, s, 0});
-    }
-    painter.setPen(QPen(QColor(40, 180, 90), 2));  // the 3x3 m stage
-    const Eigen::Vector3d c[4] = {{-1.5, -1.5, 0}, {1.5, -1.5, 0}, {1.5, 1.5, 0}, {-1.5, 1.5, 0}};
+    const Eigen::Array2d lo = (2 * stage_.lower.head<2>().array()).floor().min(-6.0) / 2,
+                         hi = (2 * stage_.upper.head<2>().array()).ceil().max(6.0) / 2;
+    for (double x = lo.x(); x <= hi.x() + 1e-9; x += 0.5)
+      drawSegment(painter, camera, {x, lo.y(), 0}, {x, hi.y(), 0});
+    for (double y = lo.y(); y <= hi.y() + 1e-9; y += 0.5)
+      drawSegment(painter, camera, {lo.x(), y, 0}, {hi.x(), y, 0});
+    painter.setPen(QPen(QColor(40, 180, 90), 2));  // the stage the actor is tracked on
+    const Eigen::Vector3d& a = stage_.lower;
+    const Eigen::Vector3d& b = stage_.upper;
+    const Eigen::Vector3d c[4] = {
+        {a.x(), a.y(), 0}, {b.x(), a.y(), 0}, {b.x(), b.y(), 0}, {a.x(), b.y(), 0}};
     for (int k = 0; k < 4; ++k) drawSegment(painter, camera, c[k], c[(k + 1) % 4]);
   }
   if (layers_.image && !snapshot_.view.isNull()) {

@@ -53,10 +53,7 @@ class ViewportWidget : public QWidget {
   const OrbitView& view() const { return view_; }
   void setView(const OrbitView& view);
   ViewportLayers& layers() { return layers_; }
-  void setRig(const Rig& rig) {
-    rig_ = rig;
-    refresh();
-  }
+  void setRig(const Rig& rig);
   void showSnapshot(const PipelineSnapshot& snapshot);
   // A new blended frame and the body placed for it (every frame, between snapshots).
   void showView(const PipelineView& view);
@@ -95,6 +92,7 @@ class ViewportWidget : public QWidget {
   OrbitView view_ = OrbitView::studioDefault();
   ViewportLayers layers_;
   Rig rig_;
+  StageBox stage_;  // the rig's (stageVolume), outlined on the floor
   PipelineSnapshot snapshot_;
   int64_t views_shown_ = 0;  // new blended frames drawn
   int render_width_ = 640;

@@ -9,13 +9,15 @@
 #include "core/geometry/rig_file.h"
 #include "core/geometry/rig_import.h"
 #include "core/geometry/ring_rig.h"
+#include "core/geometry/stage_volume.h"
 
 namespace lumistage {
 
 namespace {
 
 void printRig(const Rig& rig, const std::string& source) {
-  fmt::print("{}: {} cameras on {} nodes\n\n", source, rig.cameraCount(), rig.nodeCount());
+  fmt::print("{}: {} cameras on {} nodes\n", source, rig.cameraCount(), rig.nodeCount());
+  fmt::print("stage: {}\n\n", chooseStage(rig).how);
   for (const RigNode& node : rig.nodes()) {
     std::string names;
     for (int c : node.cameras) names += (names.empty() ? "" : ", ") + rig.camera(c).name();

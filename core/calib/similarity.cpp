@@ -26,6 +26,7 @@ Camera Similarity::apply(const Camera& c) const {
 Rig Similarity::apply(const Rig& rig) const {
   std::vector<Camera> cameras;
   for (const Camera& c : rig.cameras()) cameras.push_back(apply(c));
+  // A stage box of the old world is not one of the new: the caller decides (setStage).
   return Rig(std::move(cameras), rig.nodes());
 }
 

@@ -388,6 +388,9 @@ void WandSolver::alignGauge(WandCalibrationResult& result) const {
   }
   result.report.metric = scaled;
   result.rig = g.apply(result.rig);
+  // Floor marks put the world where the initial rig had it, so its stage box still holds;
+  // without them the world is a camera's and the box is left to the cameras' views.
+  if (from.size() >= 3 && o_.initial_rig) result.rig.setStage(o_.initial_rig->stage());
   for (Eigen::Vector3d& p : result.points_m) p = g.apply(p);
 }
 

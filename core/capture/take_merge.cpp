@@ -120,6 +120,7 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
     merged_rig = *rig;
   } else {
     merged_rig = Rig(std::move(cameras), std::move(nodes));
+    merged_rig.setStage(first.rig().stage());  // every node records the rig's stage
   }
 
   // Per group, every frame its parts hold: frame id -> (part, frame in the part). A part's

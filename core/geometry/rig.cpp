@@ -1,5 +1,7 @@
 #include "core/geometry/rig.h"
 
+#include <fmt/format.h>
+
 #include <stdexcept>
 #include <unordered_set>
 
@@ -47,6 +49,25 @@ Rig::Rig(std::vector<Camera> cameras, std::vector<RigNode> nodes)
   }
 }
 
+void Rig::setStage(std::optional<StageBox> stage) {
+  if (stage) {
+    const auto box = [&] {
+      return fmt::format("[{}, {}, {}] to [{}, {}, {}]", stage->lower.x(), stage->lower.y(),
+                         stage->lower.z(), stage->upper.x(), stage->upper.y(), stage->upper.z());
+    };
+    if (!stage->lower.allFinite() || !stage->upper.allFinite())
+      throw std::invalid_argument("the stage box " + box() + ": expected finite numbers");
+    if ((stage->lower.array() >= stage->upper.array()).any())
+      throw std::invalid_argument("the stage box " + box() +
+                                  ": expected the lower corner below the upper one in x, y and z");
+    if (stage->lower.z() > 0.5)
+      throw std::invalid_argument("the stage box " + box() +
+                                  ": expected the box to reach down to the floor (lower z at most "
+                                  "0.5 m); the actor stands on z = 0");
+  }
+  stage_ = std::move(stage);
+}
+
 std::optional<int> Rig::findCamera(std::string_view name) const {
   for (int i = 0; i < cameraCount(); ++i) {
     if (cameras_[i].name() == name) return i;
@@ -86,7 +107,9 @@ Rig nodeRig(const Rig& rig, std::string_view node) {
     cameras.push_back(rig.camera(c));
     c = static_cast<int>(cameras.size()) - 1;
   }
-  return Rig(std::move(cameras), {std::move(part)});
+  Rig out(std::move(cameras), {std::move(part)});
+  out.setStage(rig.stage());
+  return out;
 }
 
 }  // namespace lumistage

@@ -18,6 +18,17 @@ struct RigNode {
   bool operator==(const RigNode&) const = default;
 };
 
+// The capture volume: an axis-aligned box of the world frame, metres (z up, the floor at z = 0).
+// The tracker carves the visual hull inside it and looks for an actor nowhere else.
+struct StageBox {
+  Eigen::Vector3d lower = {-1.5, -1.5, 0.0}, upper = {1.5, 1.5, 2.2};
+  Eigen::Vector3d size() const { return upper - lower; }
+  bool contains(const Eigen::Vector3d& p) const {
+    return (p.array() >= lower.array()).all() && (p.array() <= upper.array()).all();
+  }
+  bool operator==(const StageBox&) const = default;
+};
+
 // The calibrated cameras of a stage and the nodes that own them. Every camera belongs to exactly
 // one node; names are unique.
 class Rig {
@@ -37,10 +48,18 @@ class Rig {
   std::optional<int> findNode(std::string_view name) const;
   int nodeOfCamera(int camera_index) const { return node_of_camera_.at(camera_index); }
 
+  // The stage box the rig file gives (docs/rig-file.md), if it gives one; stageVolume() in
+  // core/geometry/stage_volume.h is what to use. setStage throws std::invalid_argument for a box
+  // that is not finite, whose lower corner is not below its upper one in every axis, or whose floor
+  // (lower z) is above 0.5 m.
+  const std::optional<StageBox>& stage() const { return stage_; }
+  void setStage(std::optional<StageBox> stage);
+
   bool operator==(const Rig&) const = default;
 
  private:
   std::vector<Camera> cameras_;
+  std::optional<StageBox> stage_;
   std::vector<RigNode> nodes_;
   std::vector<int> node_of_camera_;
 };

@@ -108,13 +108,29 @@ Camera parseCamera(const YamlReader& in, const YAML::Node& map, const std::strin
   }
 }
 
+// `stage: {lower: [x, y, z], upper: [x, y, z]}`, metres.
+StageBox parseStage(const YamlReader& in, const YAML::Node& map) {
+  const std::string key = "stage";
+  in.requireMap(map, key);
+  in.checkKeys(map, key, {"lower", "upper"});
+  StageBox box;
+  for (const char* corner : {"lower", "upper"}) {
+    const std::string c_key = YamlReader::child(key, corner);
+    const YAML::Node v = in.required(map, key, corner, "[x, y, z] in metres");
+    in.requireSequence(v, c_key, 3);
+    Eigen::Vector3d& p = std::string_view(corner) == "lower" ? box.lower : box.upper;
+    for (int k = 0; k < 3; ++k) p[k] = in.number(v[k], YamlReader::item(c_key, k));
+  }
+  return box;
+}
+
 }  // namespace
 
 Rig parseRig(std::string_view yaml_text, std::string_view source_name) {
   const YamlReader in{std::string(source_name)};
   const YAML::Node root = in.parseDocument(yaml_text);
   in.requireMap(root, "");
-  in.checkKeys(root, "", {"format", "version", "nodes", "cameras"});
+  in.checkKeys(root, "", {"format", "version", "stage", "nodes", "cameras"});
 
   const YAML::Node format = in.required(root, "", "format", std::string("'") + kFormat + "'");
   if (in.string(format, "format") != kFormat) {
@@ -213,7 +229,15 @@ Rig parseRig(std::string_view yaml_text, std::string_view source_name) {
               "camera '" + cameras[c].name() + "' belongs to no node; list it under one node");
     }
   }
-  return Rig(std::move(cameras), std::move(nodes));
+  Rig rig(std::move(cameras), std::move(nodes));
+  if (const YAML::Node stage = root["stage"]) {
+    try {
+      rig.setStage(parseStage(in, stage));
+    } catch (const std::invalid_argument& e) {
+      in.fail(stage, "stage", e.what());
+    }
+  }
+  return rig;
 }
 
 Rig loadRig(const std::filesystem::path& path) {
@@ -233,6 +257,13 @@ std::string formatRig(const Rig& rig) {
   out += "# World frame: metres, z up, stage floor at z = 0. Camera frame: x right, y down, z\n";
   out += "# forward; x_cam = rotation * x_world + translation. Pixel (0,0): centre of top-left.\n";
   out += fmt::format("format: {}\nversion: {}\n", kFormat, kVersion);
+  if (const std::optional<StageBox>& stage = rig.stage()) {
+    out += "stage:  # the capture volume the tracker searches, metres\n";
+    out += fmt::format("  lower: [{}, {}, {}]\n", tidy(stage->lower.x()), tidy(stage->lower.y()),
+                       tidy(stage->lower.z()));
+    out += fmt::format("  upper: [{}, {}, {}]\n", tidy(stage->upper.x()), tidy(stage->upper.y()),
+                       tidy(stage->upper.z()));
+  }
   out += "nodes:\n";
   for (const RigNode& node : rig.nodes()) {
     out += fmt::format("  - name: {}\n", node.name);

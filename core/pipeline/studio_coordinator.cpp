@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/body/human_model.h"
+#include "core/geometry/stage_volume.h"
 #include "core/pipeline/posed_body.h"
 #include "core/render/lumigraph_renderer.h"
 #include "core/render/partial_image_codec.h"
@@ -19,15 +20,22 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
     : rig_(rig),
       endpoint_(std::move(endpoint)),
       options_(options),
-      locator_(rig, options.silhouette_step),
+      stage_(chooseStage(rig)),
+      locator_(rig, options.silhouette_step, 0.06, stage_.box),
       joints_(body_joint_count) {
   if (body_joint_count == kHumanJointCount) {
     // The nodes pose the generic human: the tracker fits (a calibrated copy of) its skeleton.
     const SkinnedMesh generic = loadGenericHuman();
     PoseTrackerOptions tracking;
     tracking.silhouette_step = options.silhouette_step;
+    tracking.stage = stage_.box;
     tracker_ = std::make_unique<PoseTracker>(rig, generic, tracking);
     generic_skeleton_ = generic.skeleton;
+  }
+  if (stage_.guessed) {
+    spdlog::warn("stage: {}", stage_.how);
+  } else {
+    spdlog::info("stage: {}", stage_.how);
   }
   for (const RigNode& node : rig_.nodes()) nodes_[node.name].report.name = node.name;
   timeline_.reserve(4096);

@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/geometry/stage_volume.h"
 #include "core/net/transport.h"
 #include "core/pipeline/bounded_queue.h"
 #include "core/pipeline/pipeline.h"
@@ -261,6 +262,7 @@ class StudioCoordinator {
   Rig rig_;
   StudioEndpoint endpoint_;
   StudioCoordinatorOptions options_;
+  StageChoice stage_;                     // the box the actor is looked for in
   VisualHullLocator locator_;             // places the generic human while nobody is tracked
   std::unique_ptr<PoseTracker> tracker_;  // the human skeleton's mocap (null for another body)
   // The motion capture module runs on a thread of its own (it alone uses locator_ and tracker_):

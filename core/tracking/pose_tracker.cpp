@@ -1,5 +1,6 @@
 #include "core/tracking/pose_tracker.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <Eigen/Cholesky>
@@ -7,6 +8,8 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+
+#include "core/geometry/stage_volume.h"
 
 namespace lumistage {
 
@@ -106,6 +109,7 @@ struct PoseTracker::Impl {
   int cameras = 0;
   std::vector<int> cell_w, cell_h;
   // Hull grid.
+  StageBox stage;
   Eigen::Vector3d lower;
   Eigen::Vector3i dims;
   // [voxel * cameras + camera]: cell while every camera's cells fit in 16 bits, else cell_wide.
@@ -207,9 +211,17 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   const bool wide = *std::max_element(cell_w.begin(), cell_w.end()) *
                         int64_t(*std::max_element(cell_h.begin(), cell_h.end())) >=
                     kUnseen<uint16_t>;
-  lower = opt.stage_lower;
-  dims = ((opt.stage_upper - opt.stage_lower) / opt.voxel_m).array().ceil().cast<int>();
+  stage = opt.stage ? *opt.stage : stageVolume(rig);
+  lower = stage.lower;
+  dims = (stage.size() / opt.voxel_m).array().ceil().cast<int>();
   const size_t voxels = size_t(dims.x()) * dims.y() * dims.z();
+  const size_t table_bytes = voxels * cameras * (wide ? 4 : 2);
+  if (table_bytes > kMaxTableBytes) {
+    throw std::invalid_argument(fmt::format(
+        "the stage box ({}) at {} cm voxels needs {} MB of the tracker's tables for {} cameras, "
+        "more than {} MB: give the rig file a smaller `stage` (docs/rig-file.md)",
+        describeStage(stage), 100 * opt.voxel_m, table_bytes >> 20, cameras, kMaxTableBytes >> 20));
+  }
   if (wide) {
     cell_wide.assign(voxels * cameras, kUnseen<uint32_t>);
   } else {
@@ -987,6 +999,10 @@ PoseTracker::PoseTracker(const Rig& rig, const SkinnedMesh& generic, PoseTracker
 
 PoseTracker::~PoseTracker() {
   delete impl_;
+}
+
+const StageBox& PoseTracker::stage() const {
+  return impl_->stage;
 }
 
 const Skeleton& PoseTracker::skeleton() const {

@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <optional>
 #include <vector>
 
 #include "core/body/human_skeleton.h"
@@ -22,7 +23,11 @@ struct PoseTrackerOptions {
   // girth stopped lengthening the capsules.)
   int silhouette_step = 4;
   double voxel_m = 0.02;
-  Eigen::Vector3d stage_lower{-1.5, -1.5, 0.0}, stage_upper{1.5, 1.5, 2.2};
+  // The box carved for the actor: empty, the rig's (stageVolume: the rig file's stage, else the
+  // floor the cameras cover). Its lookup tables take 2 bytes a voxel and camera (4 for cameras of
+  // a megapixel and more): 59 MB for the reference rig's 3 x 3 x 2.2 m; a box that needs more than
+  // kMaxTableBytes is refused.
+  std::optional<StageBox> stage;
   int iterations = 10;         // Levenberg-Marquardt iterations per tracked frame
   double velocity_gain = 0.8;  // of the constant-velocity prediction (0: the previous pose)
   int init_iterations = 20;    // per initialisation hypothesis
@@ -85,7 +90,10 @@ struct TrackResult {
 class PoseTracker {
  public:
   // `generic`: the generic human (makeHumanSkeleton's joints), whose mesh gives the bones' radii.
+  // Throws std::invalid_argument for a stage box whose tables would pass kMaxTableBytes.
   PoseTracker(const Rig& rig, const SkinnedMesh& generic, PoseTrackerOptions options = {});
+  static constexpr size_t kMaxTableBytes = size_t(1) << 30;
+  const StageBox& stage() const;  // the box it carves
   ~PoseTracker();
   PoseTracker(const PoseTracker&) = delete;
   PoseTracker& operator=(const PoseTracker&) = delete;

@@ -2,12 +2,16 @@
 
 #include <cmath>
 
+#include "core/geometry/stage_volume.h"
+
 namespace lumistage {
 
 VisualHullLocator::VisualHullLocator(const Rig& rig, int silhouette_step, double voxel_m,
-                                     Eigen::Vector3d stage_lower, Eigen::Vector3d stage_upper)
-    : cameras_(rig.cameraCount()), step_(silhouette_step), voxel_m_(voxel_m), lower_(stage_lower) {
-  dims_ = ((stage_upper - stage_lower) / voxel_m).array().ceil().cast<int>();
+                                     std::optional<StageBox> stage)
+    : cameras_(rig.cameraCount()), step_(silhouette_step), voxel_m_(voxel_m) {
+  const StageBox box = stage ? *stage : stageVolume(rig);
+  lower_ = box.lower;
+  dims_ = (box.size() / voxel_m).array().ceil().cast<int>();
   const size_t voxels = size_t(dims_.x()) * dims_.y() * dims_.z();
   cell_.assign(voxels * cameras_, -1);
   Eigen::Matrix3Xd centres(3, voxels);

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 #include "core/geometry/rig.h"
@@ -24,10 +25,10 @@ struct ActorLocation {
 
 class VisualHullLocator {
  public:
-  // Precomputes every voxel's cell in every camera (the rig does not move).
+  // Precomputes every voxel's cell in every camera (the rig does not move). `stage`: the box
+  // searched; empty, the rig's (stageVolume).
   VisualHullLocator(const Rig& rig, int silhouette_step, double voxel_m = 0.06,
-                    Eigen::Vector3d stage_lower = {-1.5, -1.5, 0.0},
-                    Eigen::Vector3d stage_upper = {1.5, 1.5, 2.2});
+                    std::optional<StageBox> stage = {});
 
   // `silhouettes` may hold any subset of the cameras (a late node's are missing): cameras without
   // one do not carve. At least two cameras are needed to find anything.

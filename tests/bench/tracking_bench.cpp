@@ -42,4 +42,22 @@ void trackWalkingActor(benchmark::State& state) {
 }
 BENCHMARK(trackWalkingActor)->Arg(12)->Arg(6)->Unit(benchmark::kMillisecond);
 
+// A frame of an empty stage: the whole stage box is carved to look for someone who walks on.
+// Argument 1: the rig's own box (stageVolume: 4.0 x 3.8 x 2.4 m for the reference rig); 0: the
+// 3 x 3 x 2.2 m box the tracker searched before the box came from the rig.
+void emptyStage(benchmark::State& state) {
+  using namespace lumistage;
+  testing::SyntheticStage stage(resourcePath("studio/reference.yaml").string());
+  const std::vector<const LowResSilhouette*>& empty =
+      stage.render(Pose::rest(stage.actor.skeleton.jointCount()), {}, true);
+  PoseTrackerOptions options;
+  if (state.range(0) == 0) options.stage = StageBox{};
+  PoseTracker tracker(stage.config.rig, makeHumanModel({}), options);
+  for (auto _ : state) {
+    const TrackResult& r = tracker.track(empty);
+    benchmark::DoNotOptimize(r.state);
+  }
+}
+BENCHMARK(emptyStage)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+
 }  // namespace

@@ -24,6 +24,7 @@
 #include "core/capture/session_reader.h"
 #include "core/capture/session_writer.h"
 #include "core/geometry/epipolar.h"
+#include "core/geometry/rig_file.h"
 #include "core/geometry/ring_rig.h"
 #include "core/sim/virtual_studio.h"
 #include "ui/calibration_panel.h"
@@ -139,6 +140,26 @@ class MainWindowTest : public QObject {
       QVERIFY2(pixelsNear(plan, lumistage::StagePlanView::nodeColour(node)) > 100,
                qPrintable(QString("node %1 not drawn").arg(node)));
     }
+  }
+
+  // The green floor is the rig's stage box: the floor its cameras cover, or the rig file's box.
+  void stagePlanDrawsTheRigsStage() {
+    MainWindow window;
+    window.resize(1000, 800);
+    window.show();
+    const QColor floor(0x2f, 0x7d, 0x3a);
+    QCOMPARE(window.openRig(reference_), QString());
+    const int covered = pixelsNear(window.stagePlan()->grab().toImage(), floor);
+    QTemporaryDir dir;
+    lumistage::Rig small = lumistage::loadRig(reference_.toStdString());
+    small.setStage(lumistage::StageBox{{-1, -1, 0}, {1, 1, 2.4}});
+    const QString path = dir.filePath("small.yaml");
+    lumistage::saveRig(small, path.toStdString());
+    QCOMPARE(window.openRig(path), QString());
+    const int given = pixelsNear(window.stagePlan()->grab().toImage(), floor);
+    // 2 x 2 m against 4.0 x 3.8 m at the same scale (the cameras set the plan's extent).
+    QVERIFY2(given > 0 && std::abs(double(given) / covered - 4.0 / 15.2) < 0.05,
+             qPrintable(QString("floor pixels %1 against %2").arg(given).arg(covered)));
   }
 
   void selectingACameraHighlightsIt() {

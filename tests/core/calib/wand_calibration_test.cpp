@@ -107,8 +107,9 @@ TEST(WandCalibration, ScaleFromTheWandLength) {
   EXPECT_LT(cmp.max_centre_m, 0.01);
 }
 
-TEST(WandCalibration, StartsFromAnInitialRigAndKeepsItsNodes) {
-  const Rig truth = referenceRig();
+TEST(WandCalibration, StartsFromAnInitialRigAndKeepsItsNodesAndStage) {
+  Rig truth = referenceRig();
+  truth.setStage(StageBox{{-1.8, -1.6, 0}, {1.7, 1.6, 2.5}});
   WandSimulationOptions sim;
   sim.samples = 150;
   const SimulatedWandSession s = simulateWandSession(truth, sim);
@@ -116,6 +117,7 @@ TEST(WandCalibration, StartsFromAnInitialRigAndKeepsItsNodes) {
   options.initial_rig = truth;
   const WandCalibrationResult result = calibrateWand(s.session, options);
   EXPECT_EQ(result.rig.nodes(), truth.nodes());
+  EXPECT_TRUE(result.rig.stage() == truth.stage());  // the floor marks keep the world
   EXPECT_LT(compareRigs(result.rig, truth).max_centre_m, 0.02);
 }
 

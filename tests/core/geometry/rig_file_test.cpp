@@ -76,7 +76,8 @@ TEST(RigFile, SaveThenLoadGivesExactlyTheSameRig) {
   }
   std::vector<RigNode> nodes = dealCamerasToNodes(7, 3);
   nodes[1].host = "stage-pc-2.local";
-  const Rig rig(cameras, nodes);
+  Rig rig(cameras, nodes);
+  rig.setStage(StageBox{{-2.05, -1.7, 0}, {1.95, 2.3, 2.45}});
 
   const std::filesystem::path path =
       std::filesystem::temp_directory_path() /
@@ -86,6 +87,36 @@ TEST(RigFile, SaveThenLoadGivesExactlyTheSameRig) {
   EXPECT_TRUE(loaded == rig);  // every double bit for bit
   EXPECT_EQ(formatRig(loaded), readFile(path));
   std::filesystem::remove(path);
+}
+
+TEST(RigFile, TheStageBoxIsOptional) {
+  EXPECT_FALSE(parseRig(kGood, "good.yaml").stage());
+  const Rig rig = parseRig(
+      replaced(kGood, "nodes:", "stage: {lower: [-2, -1.5, 0], upper: [2, 1.5, 2.4]}\nnodes:"),
+      "good.yaml");
+  ASSERT_TRUE(rig.stage());
+  EXPECT_EQ(rig.stage()->lower, Eigen::Vector3d(-2, -1.5, 0));
+  EXPECT_EQ(rig.stage()->upper, Eigen::Vector3d(2, 1.5, 2.4));
+  EXPECT_TRUE(nodeRig(rig, "node1").stage() == rig.stage());  // what a node records
+}
+
+TEST(RigFile, AStageBoxThatIsNoBoxIsRejected) {
+  const auto withStage = [](const std::string& stage) {
+    return errorOf(replaced(kGood, "nodes:", "stage: " + stage + "\nnodes:"));
+  };
+  std::string e = withStage("{lower: [2, -1.5, 0], upper: [-2, 1.5, 2.4]}");
+  EXPECT_NE(e.find("bad.yaml:3: stage: the stage box [2, -1.5, 0] to [-2, 1.5, 2.4]: expected the "
+                   "lower corner below the upper one"),
+            std::string::npos)
+      << e;
+  e = withStage("{lower: [-2, -1.5, 1], upper: [2, 1.5, 2.4]}");
+  EXPECT_NE(e.find("expected the box to reach down to the floor"), std::string::npos) << e;
+  e = withStage("{lower: [-2, -1.5], upper: [2, 1.5, 2.4]}");
+  EXPECT_NE(e.find("bad.yaml:3: stage.lower:"), std::string::npos) << e;
+  e = withStage("{lower: [-2, -1.5, 0], upper: [2, 1.5, 2.4], centre: [0, 0, 0]}");
+  EXPECT_NE(e.find("stage.centre"), std::string::npos) << e;
+  e = withStage("{lower: [-2, -1.5, 0]}");
+  EXPECT_NE(e.find("stage.upper: missing key 'upper'"), std::string::npos) << e;
 }
 
 TEST(RigFile, MissingFieldNamesKeyAndLine) {

@@ -11,6 +11,7 @@
 
 #include "core/body/motion_library.h"
 #include "core/geometry/ring_rig.h"
+#include "core/geometry/stage_volume.h"
 #include "tests/core/tracking/synthetic_stage.h"
 
 namespace lumistage {
@@ -85,6 +86,45 @@ TEST(PoseTracker, TracksOnFullHdCameras) {
   const ClipErrors e = trackClip(stage, tracker, clip, 0, 12);
   EXPECT_EQ(e.tracked, e.frames);
   EXPECT_LT(e.mean_m, 0.03);
+}
+
+// A wider ring (5.5 m, wider lenses) and an actor walking 2.3 m off centre, beyond the 3 x 3 m the
+// tracker used to search whatever the rig: the rig's own stage holds him.
+TEST(PoseTracker, TracksAnActorAnywhereOnTheRigsStage) {
+  SyntheticStage stage(kStudio);
+  RingRigSpec spec;
+  spec.radius_m = 5.5;
+  spec.vertical_fov_deg = 60;
+  stage.config.rig = makeRingRig(spec);
+  PoseTracker tracker(stage.config.rig, generic());
+  EXPECT_TRUE(tracker.stage().contains({2.5, -0.5, 2.3})) << describeStage(tracker.stage());
+  const MotionClip clip = makeBuiltinClip("walk", stage.actor.skeleton, 30.0, 2.5);
+  ClipErrors e;
+  for (int f = 0; f < 20; ++f) {
+    Pose pose = clip.sample(f / 30.0);
+    pose.root_translation_m += Eigen::Vector3d(2.3, 0, 0);
+    const TrackResult& r = tracker.track(stage.render(pose));
+    ++e.frames;
+    if (!r.valid()) continue;
+    ++e.tracked;
+    e.max_m = std::max(e.max_m, mpjpe(r.joints, stage.joints));
+  }
+  EXPECT_EQ(e.tracked, e.frames);
+  EXPECT_LT(e.max_m, 0.06);
+}
+
+// A stage box whose lookup tables would not fit is refused in words, not by the allocator.
+TEST(PoseTracker, RefusesAStageTooLargeForItsTables) {
+  PoseTrackerOptions options;
+  options.stage = StageBox{{-15, -15, 0}, {15, 15, 3}};
+  const Rig rig = makeRingRig({});
+  try {
+    PoseTracker tracker(rig, generic(), options);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("give the rig file a smaller `stage`"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(PoseTracker, RecoversARandomPose) {
