@@ -56,11 +56,11 @@ CalibrationPanel::CalibrationPanel(QWidget* parent)
     : QWidget(parent), grid_(new QGridLayout), help_(new QLabel(this)) {
   help_->setWordWrap(true);
   help_->setText(
-      tr("Click a point in any camera: its epipolar line appears in every other camera "
-         "(red). On a good calibration it passes through the same point of the scene "
-         "there. Reprojection errors come from the rig's calibration report beside the rig "
-         "file (RIG.calibration.yaml, as lumistage calibrate writes it, or "
-         "calibration_report.json)."));
+      tr("Click a point in a camera: its epipolar line (red) in the others passes through the "
+         "same point on a good calibration. Errors: from RIG.calibration.yaml beside the rig."));
+  help_->setToolTip(
+      tr("Reprojection errors come from the rig's calibration report beside the rig file "
+         "(RIG.calibration.yaml, as lumistage calibrate writes it, or calibration_report.json)."));
   auto* layout = new QVBoxLayout(this);
   layout->setContentsMargins(2, 2, 2, 2);
   layout->addWidget(help_);

@@ -28,7 +28,7 @@ void CameraGridPanel::setRig(const Rig& rig) {
     Tile tile;
     tile.name = QString::fromStdString(rig.camera(c).name() + " (" + rig.camera(c).node() + ")");
     tile.picture = new QLabel(this);
-    tile.picture->setMinimumSize(160, 120);
+    tile.picture->setMinimumSize(96, 72);  // 12 tiles in a 1366x768 laptop's window
     // The picture follows the tile, not the other way round (a label sizes itself to its pixmap:
     // the grid then held the window 1800 pixels wide).
     tile.picture->setSizePolicy(QSizePolicy::Ignored, QSizePolicy::Ignored);

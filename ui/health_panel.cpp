@@ -33,7 +33,7 @@ enum Column { kCamera, kState, kProblem, kFps, kDropped, kAnswer, kBytes, kExpos
 
 HistoryPlot::HistoryPlot(const HealthHistory* history, QWidget* parent)
     : QWidget(parent), history_(history) {
-  setMinimumHeight(90);
+  setMinimumHeight(60);  // the window fits a 1366x768 laptop screen
 }
 
 void HistoryPlot::setCamera(const QString& camera) {

@@ -238,7 +238,9 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   row->addWidget(table_, 1);
   row->addWidget(stages_);
   row->addWidget(view_);
-  view_->setFixedSize(240, 180);
+  // 240x180 where there is room, down to 160x120 on a laptop's screen.
+  view_->setMinimumSize(160, 120);
+  view_->setMaximumSize(240, 180);
   view_->setAlignment(Qt::AlignCenter);
   view_->setStyleSheet("background: #202020; color: #aaa;");
   view_->setText(tr("the blended view"));

@@ -1,13 +1,13 @@
 #include "ui/viewport_panel.h"
 
 #include <QBuffer>
-#include <QCheckBox>
 #include <QComboBox>
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QGuiApplication>
 #include <QHBoxLayout>
 #include <QLabel>
+#include <QMenu>
 #include <QMessageBox>
 #include <QMouseEvent>
 #include <QOpenGLWidget>
@@ -16,6 +16,7 @@
 #include <QPushButton>
 #include <QSlider>
 #include <QTimer>
+#include <QToolButton>
 #include <QVBoxLayout>
 #include <QWheelEvent>
 #include <algorithm>
@@ -129,7 +130,7 @@ ViewportWidget::ViewportWidget(CloneSet* clones, QWidget* parent)
              qEnvironmentVariableIsEmpty("LUMISTAGE_VIEWPORT_RASTER");
   canvas_ = uses_gl_ ? static_cast<QWidget*>(new GlCanvas(this)) : new RasterCanvas(this);
   canvas_->setAttribute(Qt::WA_TransparentForMouseEvents);
-  setMinimumSize(320, 240);
+  setMinimumSize(320, 180);  // the window fits a 1366x768 laptop screen
   setMouseTracking(false);
   setFocusPolicy(Qt::StrongFocus);
   setToolTip(
@@ -380,14 +381,24 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
       record_(new QPushButton(tr("Record"), this)),
       player_(new QTimer(this)) {
   auto* layers = new QHBoxLayout;
+  // What the viewport draws, in one menu (six check boxes made the window 1555 px wide at least).
+  auto* layer_button = new QToolButton(this);
+  layer_button->setText(tr("Layers"));
+  layer_button->setObjectName("layers");
+  layer_button->setToolTip(tr("What the viewport draws over the view"));
+  layer_button->setPopupMode(QToolButton::InstantPopup);
+  layer_button->setToolButtonStyle(Qt::ToolButtonTextOnly);
+  auto* layer_menu = new QMenu(layer_button);
+  layer_button->setMenu(layer_menu);
+  layers->addWidget(layer_button);
   auto toggle = [&](const QString& name, bool ViewportLayers::*layer) {
-    auto* box = new QCheckBox(name, this);
-    box->setChecked(viewport_->layers().*layer);
-    connect(box, &QCheckBox::toggled, this, [this, layer](bool on) {
+    QAction* action = layer_menu->addAction(name);
+    action->setCheckable(true);
+    action->setChecked(viewport_->layers().*layer);
+    connect(action, &QAction::toggled, this, [this, layer](bool on) {
       viewport_->layers().*layer = on;
       viewport_->refresh();
     });
-    layers->addWidget(box);
   };
   toggle(tr("Image"), &ViewportLayers::image);
   toggle(tr("Mesh"), &ViewportLayers::mesh);
