@@ -95,6 +95,8 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   stats.offset_count = options_.refine.offset_count;
   statistics_codec_.encode(refine_stats_, stats.packed);
   // Kept until the studio's offsets for the frame arrive.
+  if (!posed_.empty() && message.frame_id < posed_.rbegin()->first - kFrameIdWindow)
+    releasePosedUpTo(posed_.rbegin()->first);  // the cameras restarted: as kept_
   Posed& posed = keepPosed(message.frame_id);
   posed.set = set;
   posed.positions = positions_;
@@ -217,6 +219,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     if (first < 0 || frame.frame_id < newest - kFrameIdWindow) {  // first, or cameras restarted
       first = newest = frame.frame_id;
       std::fill(last_id.begin(), last_id.end(), -1);
+      assembling.clear();  // the old ids' sets would outlast every new one (lowest go first)
     }
     std::shared_ptr<Set>& set = assembling[frame.frame_id];
     if (!set) {
@@ -353,6 +356,9 @@ void CameraNode::silhouetteLoop(const std::atomic<bool>& stop) {
     if (!set) continue;
     {
       std::lock_guard lock(kept_mutex_);
+      // The cameras restarted (ids from near 0 again): the old sets go, or they would outlast every
+      // new one (the lowest ids go first) and no pose would find its set again.
+      if (!kept_.empty() && (*set)->frame_id < kept_.rbegin()->first - kFrameIdWindow) kept_.clear();
       kept_[(*set)->frame_id] = *set;
       while (static_cast<int>(kept_.size()) > options_.frames_kept) kept_.erase(kept_.begin());
     }

@@ -19,21 +19,24 @@ using std::chrono::milliseconds;
 
 // The frames of a node's cameras, every camera of every frame in turn (a screen-green image), a
 // frame every 5 ms; from frame `dies_at` on, camera `dead` delivers nothing (unplugged); before
-// frame `dark_until` every image is black (lens caps on).
+// frame `dark_until` every image is black (lens caps on); after `restart_at` frames the cameras
+// count from 0 again (all of them reopened after a power cut).
 class ScriptedSource : public FrameSource {
  public:
   ScriptedSource(Rig rig, std::vector<int> cameras, int dead, int64_t dies_at,
-                 int64_t dark_until = 0)
+                 int64_t dark_until = 0, int64_t restart_at = -1)
       : rig_(std::move(rig)),
         cameras_(std::move(cameras)),
         dead_(dead),
         dies_at_(dies_at),
-        dark_until_(dark_until) {}
+        dark_until_(dark_until),
+        restart_at_(restart_at) {}
   const Rig& rig() const override { return rig_; }
   bool next(CameraFrame& frame, milliseconds) override {
     for (;;) {
       const int camera = cameras_[next_ % cameras_.size()];
-      const int64_t id = int64_t(next_ / cameras_.size());
+      int64_t id = int64_t(next_ / cameras_.size());
+      if (restart_at_ >= 0 && id >= restart_at_) id -= restart_at_;
       ++next_;
       if (camera == dead_ && id >= dies_at_) continue;
       if (next_ % cameras_.size() == 0) std::this_thread::sleep_for(milliseconds(5));
@@ -57,7 +60,7 @@ class ScriptedSource : public FrameSource {
   Rig rig_;
   std::vector<int> cameras_;
   int dead_;
-  int64_t dies_at_, dark_until_;
+  int64_t dies_at_, dark_until_, restart_at_;
   size_t next_ = 0;
 };
 
@@ -127,6 +130,34 @@ TEST(CameraNode, ACameraThatStopsDeliveringDoesNotSilenceItsNode) {
   EXPECT_TRUE(reached) << "the node's silhouettes stopped after frame " << newest;
   EXPECT_EQ(masks_before, t.cameras.size());
   EXPECT_EQ(masks_after, t.cameras.size() - 1);
+}
+
+// Every camera of the node reopened after a power cut counts from 0 again: the node keeps answering
+// the studio's poses with its statistics for the new frames. (It kept the old frames' sets, whose
+// ids were higher, and dropped each new one as it came: no statistics ever again.)
+TEST(CameraNode, CamerasThatCountFromZeroAgainAreFollowed) {
+  static constexpr int64_t kRestartAt = 2 * kFrameIdWindow;
+  NodeUnderTest t([](const Rig& rig, std::vector<int> cameras) {
+    return std::make_unique<ScriptedSource>(rig, std::move(cameras), -1, 0, 0, kRestartAt);
+  });
+  PoseData pose;
+  pose.angles.assign(3 * kHumanJointCount, 0.0f);
+  int64_t newest = -1;
+  bool restarted = false;
+  const bool answered = t.receiveUntil([&](const Message& m) {
+    if (std::get_if<SilhouettesData>(&m.body)) {
+      restarted = restarted || m.frame_id < newest - kFrameIdWindow;
+      newest = std::max(newest, m.frame_id);
+      Message answer;
+      answer.frame_id = m.frame_id;
+      answer.body = pose;
+      t.studio.send(t.rig.nodes().front().name, answer, milliseconds(100));
+      return false;
+    }
+    return restarted && std::get_if<VertexStatisticsData>(&m.body) && m.frame_id < kRestartAt / 2;
+  });
+  EXPECT_TRUE(restarted) << "the cameras never counted from 0 again";
+  EXPECT_TRUE(answered) << "no statistics for a frame after the cameras counted from 0 again";
 }
 
 // Lens caps on while the node learns the screens: every camera is said to see no screen; the
