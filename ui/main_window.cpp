@@ -9,6 +9,7 @@
 #include <QLabel>
 #include <QMenuBar>
 #include <QMessageBox>
+#include <QScreen>
 #include <QSettings>
 #include <QStatusBar>
 #include <QTabWidget>
@@ -135,7 +136,11 @@ MainWindow::MainWindow(QWidget* parent)
   QSettings settings("Lumistage", "Studio");
   restoreGeometry(settings.value("window/geometry").toByteArray());
   restoreState(settings.value("window/state").toByteArray(), kLayoutVersion);
-  if (!settings.contains("window/geometry")) resize(1600, 1000);
+  if (!settings.contains("window/geometry")) {
+    // 1600x1000, or the screen less room for the window's frame on a smaller one (a laptop's).
+    const QSize room = screen()->availableGeometry().size() - QSize(16, 48);
+    resize(QSize(1600, 1000).boundedTo(room).expandedTo(minimumSizeHint()));
+  }
   QComboBox* size = viewport_panel_->sizeChoice();
   const int chosen = size->findData(
       settings.value("viewport/render_width", viewport_panel_->viewport()->renderWidth()).toInt());

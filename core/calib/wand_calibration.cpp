@@ -390,7 +390,15 @@ void WandSolver::alignGauge(WandCalibrationResult& result) const {
   result.rig = g.apply(result.rig);
   // Floor marks put the world where the initial rig had it, so its stage box still holds;
   // without them the world is a camera's and the box is left to the cameras' views.
-  if (from.size() >= 3 && o_.initial_rig) result.rig.setStage(o_.initial_rig->stage());
+  if (o_.initial_rig && o_.initial_rig->stage()) {
+    if (from.size() >= 3) {
+      result.rig.setStage(o_.initial_rig->stage());
+    } else {
+      result.report.notes.push_back(
+          "the initial rig's stage box is left out: without 3 floor marks the world is not the "
+          "stage's; give the new rig file its `stage` again");
+    }
+  }
   for (Eigen::Vector3d& p : result.points_m) p = g.apply(p);
 }
 

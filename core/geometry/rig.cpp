@@ -60,10 +60,17 @@ void Rig::setStage(std::optional<StageBox> stage) {
     if ((stage->lower.array() >= stage->upper.array()).any())
       throw std::invalid_argument("the stage box " + box() +
                                   ": expected the lower corner below the upper one in x, y and z");
-    if (stage->lower.z() > 0.5)
+    if (stage->lower.z() > 0.1 || stage->lower.z() < -0.5)
       throw std::invalid_argument("the stage box " + box() +
-                                  ": expected the box to reach down to the floor (lower z at most "
-                                  "0.5 m); the actor stands on z = 0");
+                                  ": expected its floor at the stage's (lower z between -0.5 and "
+                                  "0.1 m): the actor stands on z = 0");
+    if (stage->upper.z() < 1.5 || stage->upper.z() > 5)
+      throw std::invalid_argument("the stage box " + box() +
+                                  ": expected it 1.5 to 5 m high (upper z): an actor must fit");
+    const Eigen::Vector3d size = stage->upper - stage->lower;
+    if (size.x() > 20 || size.y() > 20)
+      throw std::invalid_argument("the stage box " + box() +
+                                  ": expected at most 20 m a side (metres: a rig in centimetres?)");
   }
   stage_ = std::move(stage);
 }

@@ -21,7 +21,7 @@ struct RigNode {
 // The capture volume: an axis-aligned box of the world frame, metres (z up, the floor at z = 0).
 // The tracker carves the visual hull inside it and looks for an actor nowhere else.
 struct StageBox {
-  Eigen::Vector3d lower = {-1.5, -1.5, 0.0}, upper = {1.5, 1.5, 2.2};
+  Eigen::Vector3d lower = {-1.5, -1.5, 0.0}, upper = {1.5, 1.5, 2.4};
   Eigen::Vector3d size() const { return upper - lower; }
   bool contains(const Eigen::Vector3d& p) const {
     return (p.array() >= lower.array()).all() && (p.array() <= upper.array()).all();
@@ -50,8 +50,9 @@ class Rig {
 
   // The stage box the rig file gives (docs/rig-file.md), if it gives one; stageVolume() in
   // core/geometry/stage_volume.h is what to use. setStage throws std::invalid_argument for a box
-  // that is not finite, whose lower corner is not below its upper one in every axis, or whose floor
-  // (lower z) is above 0.5 m.
+  // that is not finite, whose lower corner is not below its upper one in every axis, whose floor
+  // (lower z) is not between -0.5 and 0.1 m, whose top is not 1.5 to 5 m high, or that is more
+  // than 20 m a side.
   const std::optional<StageBox>& stage() const { return stage_; }
   void setStage(std::optional<StageBox> stage);
 

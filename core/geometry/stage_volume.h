@@ -19,12 +19,15 @@ inline StageBox stageVolume(const Rig& rig) {
   return chooseStage(rig).box;
 }
 
-// The box of floor the cameras see an actor on whole, from the floor to kCoveredTop_m: every
-// column of the stage (its floor point and the point kCoveredTop_m above it) lies inside the
-// images of at least minViewsForStage() of the cameras, as the visual hull needs to be carved
-// tight. The box bounds those columns (searched on a 5 cm grid, rounded out to 10 cm); std::nullopt
-// when no column is seen so (cameras that share no view of the floor).
+// The box of floor the cameras see an actor on whole, from the floor to kCoveredTop_m: it bounds
+// every column of the floor (its floor point and the point kCoveredTop_m above it) that lies
+// inside the images of at least minViewsForStage() of the cameras, as the visual hull needs to be
+// carved tight (searched on a grid of 5 cm, coarser for rings wider than 3.3 m; rounded out to
+// 10 cm). It holds at least the default StageBox's floor and is at most kMaxCoveredSide_m a side
+// (about its centre); std::nullopt when no column is seen so (cameras that share no view of the
+// floor).
 inline constexpr double kCoveredTop_m = 2.4;
+inline constexpr double kMaxCoveredSide_m = 5.0;
 std::optional<StageBox> coveredStage(const Rig& rig);
 // Three quarters of the cameras (all of them up to 4): 9 of the reference rig's 12.
 int minViewsForStage(int cameras);

@@ -25,8 +25,8 @@ struct PoseTrackerOptions {
   double voxel_m = 0.02;
   // The box carved for the actor: empty, the rig's (stageVolume: the rig file's stage, else the
   // floor the cameras cover). Its lookup tables take 2 bytes a voxel and camera (4 for cameras of
-  // a megapixel and more): 59 MB for the reference rig's 3 x 3 x 2.2 m; a box that needs more than
-  // kMaxTableBytes is refused.
+  // a megapixel and more): 110 MB for the reference rig's 4.0 x 4.0 x 2.4 m; a box that needs more
+  // than kMaxTableBytes is refused.
   std::optional<StageBox> stage;
   int iterations = 10;         // Levenberg-Marquardt iterations per tracked frame
   double velocity_gain = 0.8;  // of the constant-velocity prediction (0: the previous pose)

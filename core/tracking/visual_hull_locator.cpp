@@ -1,6 +1,9 @@
 #include "core/tracking/visual_hull_locator.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
+#include <stdexcept>
 
 #include "core/geometry/stage_volume.h"
 
@@ -13,6 +16,15 @@ VisualHullLocator::VisualHullLocator(const Rig& rig, int silhouette_step, double
   lower_ = box.lower;
   dims_ = (box.size() / voxel_m).array().ceil().cast<int>();
   const size_t voxels = size_t(dims_.x()) * dims_.y() * dims_.z();
+  // Its cells and the voxels' centres (projected a camera at a time, for all voxels at once).
+  const size_t bytes = voxels * (cameras_ * sizeof(int32_t) + 3 * sizeof(double) +
+                                 2 * sizeof(double) + sizeof(double));
+  if (bytes > kMaxBytes) {
+    throw std::invalid_argument(fmt::format(
+        "the stage box ({}) at {} cm voxels needs {} MB to locate the actor with {} cameras, more "
+        "than {} MB: give the rig file a smaller `stage` (docs/rig-file.md)",
+        describeStage(box), 100 * voxel_m, bytes >> 20, cameras_, kMaxBytes >> 20));
+  }
   cell_.assign(voxels * cameras_, -1);
   Eigen::Matrix3Xd centres(3, voxels);
   for (int z = 0; z < dims_.z(); ++z) {

@@ -26,9 +26,11 @@ struct ActorLocation {
 class VisualHullLocator {
  public:
   // Precomputes every voxel's cell in every camera (the rig does not move). `stage`: the box
-  // searched; empty, the rig's (stageVolume).
+  // searched; empty, the rig's (stageVolume). Throws std::invalid_argument, naming the box, when
+  // that needs more than kMaxBytes.
   VisualHullLocator(const Rig& rig, int silhouette_step, double voxel_m = 0.06,
                     std::optional<StageBox> stage = {});
+  static constexpr size_t kMaxBytes = size_t(256) << 20;
 
   // `silhouettes` may hold any subset of the cameras (a late node's are missing): cameras without
   // one do not carve. At least two cameras are needed to find anything.

@@ -159,8 +159,8 @@ class MainWindowTest : public QObject {
     lumistage::saveRig(small, path.toStdString());
     QCOMPARE(window.openRig(path), QString());
     const int given = pixelsNear(window.stagePlan()->grab().toImage(), floor);
-    // 2 x 2 m against 4.0 x 3.8 m at the same scale (the cameras set the plan's extent).
-    QVERIFY2(given > 0 && std::abs(double(given) / covered - 4.0 / 15.2) < 0.05,
+    // 2 x 2 m against 4.0 x 4.0 m at the same scale (the cameras set the plan's extent).
+    QVERIFY2(given > 0 && std::abs(double(given) / covered - 4.0 / 16.0) < 0.05,
              qPrintable(QString("floor pixels %1 against %2").arg(given).arg(covered)));
   }
 

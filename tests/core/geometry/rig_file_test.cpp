@@ -110,7 +110,11 @@ TEST(RigFile, AStageBoxThatIsNoBoxIsRejected) {
             std::string::npos)
       << e;
   e = withStage("{lower: [-2, -1.5, 1], upper: [2, 1.5, 2.4]}");
-  EXPECT_NE(e.find("expected the box to reach down to the floor"), std::string::npos) << e;
+  EXPECT_NE(e.find("expected its floor at the stage's"), std::string::npos) << e;
+  e = withStage("{lower: [-200, -150, 0], upper: [200, 150, 2.4]}");  // centimetres
+  EXPECT_NE(e.find("expected at most 20 m a side"), std::string::npos) << e;
+  e = withStage("{lower: [-2, -1.5, 0], upper: [2, 1.5, 0.9]}");  // nobody fits
+  EXPECT_NE(e.find("expected it 1.5 to 5 m high"), std::string::npos) << e;
   e = withStage("{lower: [-2, -1.5], upper: [2, 1.5, 2.4]}");
   EXPECT_NE(e.find("bad.yaml:3: stage.lower:"), std::string::npos) << e;
   e = withStage("{lower: [-2, -1.5, 0], upper: [2, 1.5, 2.4], centre: [0, 0, 0]}");

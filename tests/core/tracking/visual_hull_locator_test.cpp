@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "core/body/human_skeleton.h"
+#include "core/geometry/ring_rig.h"
 #include "core/sim/virtual_studio.h"
 #include "tests/core/sim/reference_studio.h"
 
@@ -102,6 +103,19 @@ TEST(VisualHullLocator, SilhouetteBitsAreTheKeyAtCellCentres) {
   silhouetteMask(s, mask);
   ASSERT_EQ(mask.size(), 32u);
   for (int i = 0; i < 32; ++i) EXPECT_EQ(mask[i], s.at(i % 8, i / 8) ? 255 : 0) << i;
+}
+
+// A 20 x 20 m box (the largest a rig file may give) is refused in words before anything is
+// allocated for it: the studio builds the locator first, before the tracker checks its tables.
+TEST(VisualHullLocator, RefusesABoxTooLargeForItsTables) {
+  const Rig rig = makeRingRig({});
+  try {
+    const VisualHullLocator locator(rig, 4, 0.06, StageBox{{-10, -10, 0}, {10, 10, 5}});
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("give the rig file a smaller `stage`"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
