@@ -18,7 +18,8 @@ struct Rgb {
 };
 
 // The colour at a pixel: RGB8 directly; Bayer from the 2x2 cell that holds it (R, the mean of the
-// two G, B); Mono8 as grey.
+// two G, B), the last column or row of an odd-sized mosaic from the cell before it; Mono8 as grey.
+// Bayer images are at least 2x2.
 inline Rgb colourAt(const ImageView& image, int x, int y) {
   const uint8_t* p = image.data;
   switch (image.format) {
@@ -31,7 +32,10 @@ inline Rgb colourAt(const ImageView& image, int x, int y) {
     case PixelFormat::kBayerGbrg8:
     case PixelFormat::kBayerBggr8: {
       const BayerLayout l = bayerLayout(image.format);
-      const size_t x0 = size_t(x) & ~size_t(1), y0 = size_t(y) & ~size_t(1);
+      // A cell a pair of columns and rows: an odd width's or height's last pixel has no pair of its
+      // own (read past the row, or past the image, before).
+      const size_t x0 = std::min(size_t(x), size_t(image.width - 2)) & ~size_t(1),
+                   y0 = std::min(size_t(y), size_t(image.height - 2)) & ~size_t(1);
       const uint8_t* cell = p + y0 * image.width + x0;
       const size_t w = image.width;
       const int red = cell[l.red_y * w + l.red_x], blue = cell[(1 - l.red_y) * w + 1 - l.red_x];

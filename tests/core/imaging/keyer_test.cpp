@@ -162,5 +162,26 @@ TEST(Keyer, ColourOfABayerPixelComesFromItsCell) {
   }
 }
 
+// An odd-sized mosaic (a sensor read out at 1023x767): the last column and row take the cell
+// before them. They read the next row's first pixel, and past the image, before. The image sits in
+// a buffer followed by bytes of another colour, which a read past its end would take.
+TEST(Keyer, TheLastColumnAndRowOfAnOddSizedMosaicAreReadInsideIt) {
+  const int w = 5, h = 3;
+  std::vector<uint8_t> buffer(size_t(w) * h + 64, 255);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x)
+      buffer[size_t(y) * w + x] = y % 2 == 0 ? (x % 2 == 0 ? 10 : 20) : (x % 2 == 0 ? 30 : 40);
+  }
+  const ImageView view{PixelFormat::kBayerRggb8, w, h, buffer.data()};
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const Rgb c = colourAt(view, x, y);
+      EXPECT_EQ(c.r, 10) << x << ", " << y;
+      EXPECT_EQ(c.g, 25) << x << ", " << y;
+      EXPECT_EQ(c.b, 40) << x << ", " << y;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace lumistage
