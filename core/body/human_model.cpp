@@ -4,6 +4,7 @@
 #include <cmath>
 #include <set>
 
+#include "core/base/error.h"
 #include "core/base/resource_path.h"
 #include "core/body/mesh_io.h"
 #include "core/body/surface_nets.h"
@@ -215,7 +216,14 @@ SkinnedMesh makeHumanModel(const HumanModelSpec& spec) {
 }
 
 SkinnedMesh loadGenericHuman() {
-  return loadSkinnedMesh(resourcePath("body/generic_human.glb"));
+  const std::filesystem::path path = resourcePath("body/generic_human.glb");
+  SkinnedMesh mesh = loadSkinnedMesh(path);
+  try {
+    checkHumanJointOrder(mesh.skeleton, path.string());
+  } catch (const std::invalid_argument& e) {
+    throw Error(e.what());
+  }
+  return mesh;
 }
 
 }  // namespace lumistage

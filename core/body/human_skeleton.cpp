@@ -1,5 +1,7 @@
 #include "core/body/human_skeleton.h"
 
+#include <fmt/format.h>
+
 namespace lumistage {
 
 namespace {
@@ -56,6 +58,22 @@ Skeleton makeHumanSkeleton(const BodyShape& shape) {
     j[leg_base + 3] = {std::string(name) + "foot", leg_base + 2, V(0, 0.14 * s, -0.06 * s), none};
   }
   return Skeleton(std::move(j));
+}
+
+void checkHumanJointOrder(const Skeleton& skeleton, std::string_view source) {
+  static const Skeleton human = makeHumanSkeleton();
+  if (skeleton.jointCount() != human.jointCount()) {
+    throw std::invalid_argument(fmt::format("{}: {} joints, the human skeleton has {}", source,
+                                            skeleton.jointCount(), human.jointCount()));
+  }
+  for (int j = 0; j < human.jointCount(); ++j) {
+    if (skeleton.joint(j).name == human.joint(j).name) continue;
+    throw std::invalid_argument(fmt::format(
+        "{}: joint {} is '{}' where the human skeleton has '{}': its joints must come in the "
+        "human skeleton's order (pelvis, spine1..3, neck, head, then the right arm, the left arm, "
+        "the right leg, the left leg)",
+        source, j, skeleton.joint(j).name, human.joint(j).name));
+  }
 }
 
 }  // namespace lumistage

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <string_view>
+
 #include "core/body/skeleton.h"
 
 namespace lumistage {
@@ -48,5 +50,11 @@ enum HumanJoint : int {
 // hands and feet are end joints (no freedom). Joint names: pelvis, spine1..3, neck, head,
 // {right,left}_{clavicle,shoulder,elbow,wrist,hand,hip,knee,ankle,foot}.
 Skeleton makeHumanSkeleton(const BodyShape& shape = {});
+
+// Throws std::invalid_argument, naming `source` and the first joint out of place, unless `skeleton`
+// has the human skeleton's joints in its order (HumanJoint): the tracker and the nodes' posed body
+// index joints by that order, and a file that lists them otherwise (another exporter's order of a
+// node's children) would pose a contorted body without a word.
+void checkHumanJointOrder(const Skeleton& skeleton, std::string_view source);
 
 }  // namespace lumistage

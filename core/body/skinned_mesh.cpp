@@ -39,6 +39,18 @@ void SkinnedMesh::validate() const {
     throw std::invalid_argument("skinned mesh: materials do not match the vertex count");
   }
   for (size_t v = 0; v < n; ++v) {
+    // A NaN or an absurd coordinate (a broken export) would reach the tracker's calibration and
+    // the nodes' depth maps.
+    const Eigen::Vector3f p = rest.positions.col(Eigen::Index(v));
+    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 100.0f) {
+      throw std::invalid_argument("skinned mesh: vertex " + std::to_string(v) + " is at (" +
+                                  std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " +
+                                  std::to_string(p.z()) + "): expected metres within 100 m");
+    }
+    if (!rest.normals.col(Eigen::Index(v)).allFinite()) {
+      throw std::invalid_argument("skinned mesh: vertex " + std::to_string(v) +
+                                  " has a normal that is not a number");
+    }
     float sum = 0;
     for (int k = 0; k < kMaxInfluences; ++k) {
       if (skin.joints[v][k] >= skeleton.jointCount()) {
@@ -46,9 +58,10 @@ void SkinnedMesh::validate() const {
                                     " refers to joint " + std::to_string(skin.joints[v][k]) +
                                     " of " + std::to_string(skeleton.jointCount()));
       }
-      if (!(skin.weights[v][k] >= 0)) {
+      if (!(skin.weights[v][k] >= 0) || !std::isfinite(skin.weights[v][k])) {
         throw std::invalid_argument("skinned mesh: vertex " + std::to_string(v) +
-                                    " has a negative weight");
+                                    " has a weight of " + std::to_string(skin.weights[v][k]) +
+                                    ": expected a number from 0 to 1");
       }
       sum += skin.weights[v][k];
     }

@@ -410,7 +410,21 @@ void StudioCoordinator::mocapLoop() {
     const int64_t start = steadyNowNs();
     all.clear();
     for (const LowResSilhouette& s : job.silhouettes) all.push_back(&s);
-    const TrackResult* tracked = tracker_ ? &tracker_->track(all) : nullptr;
+    const TrackResult* tracked = nullptr;
+    if (tracker_) {
+      // A fit that throws (a body model it cannot use, numbers gone bad) must not end the thread,
+      // and with it the studio: the frame goes on with the placed generic human, the tracker
+      // starts again, and the log says why (once for each new reason).
+      try {
+        tracked = &tracker_->track(all);
+      } catch (const std::exception& e) {
+        if (mocap_error_ != e.what()) {
+          mocap_error_ = e.what();
+          spdlog::error("motion capture: {}; the actor is looked for again", mocap_error_);
+        }
+        tracker_->reset();
+      }
+    }
     if (tracked && tracked->valid()) {
       // The tracked angles on the nodes' generic human, scaled to the actor (posed_body.h).
       job.pose =

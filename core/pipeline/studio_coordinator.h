@@ -275,6 +275,7 @@ class StudioCoordinator {
   std::vector<MocapJob> spare_jobs_;      // this thread's, their buffers kept
   Wakeup mocap_ready_;                    // a pose is done
   std::thread mocap_thread_;  // started by the constructor's last line, joined by the destructor
+  std::string mocap_error_;   // the motion capture's last error, said once
   std::optional<Skeleton> generic_skeleton_;  // the nodes' generic human's (with tracker_)
   std::unique_ptr<MeshRefiner> refiner_;      // made for the first statistics' vertex count
   // The refined mesh of the frame being sent, and which cameras see its vertices (reused).

@@ -201,8 +201,7 @@ struct PoseTracker::Impl {
 
 PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTrackerOptions& o)
     : opt(o), rig(r), cameras(r.cameraCount()), generic(mesh.skeleton) {
-  if (generic.jointCount() != kHumanJointCount)
-    throw std::invalid_argument("PoseTracker: the generic skeleton must be the human skeleton");
+  checkHumanJointOrder(generic, "PoseTracker: the generic skeleton");
   const int step = opt.silhouette_step;
   for (int c = 0; c < cameras; ++c) {
     cell_w.push_back(rig.camera(c).width() / step);

@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <numbers>
 #include <random>
+
+#include "core/geometry/ring_rig.h"
+#include "core/tracking/pose_tracker.h"
 
 namespace lumistage {
 namespace {
@@ -114,6 +118,55 @@ TEST(HumanModel, ShippedGenericHumanIsTheGeneratedOne) {
     worst = std::max(worst, std::sqrt((b.colwise() - a.col(v)).colwise().squaredNorm().minCoeff()));
   }
   EXPECT_LT(worst, 1e-4f);
+}
+
+// A generic human whose file lists the hips' children in another order (another exporter): the
+// tracker and the nodes index joints by the human order, and posed a contorted body from it
+// (MPJPE 17 -> 298 mm, without a word). It is refused, naming the joint.
+TEST(HumanModel, JointsOutOfTheHumanOrderAreRefusedByName) {
+  const SkinnedMesh generic = makeHumanModel();
+  EXPECT_NO_THROW(checkHumanJointOrder(generic.skeleton, "generic"));
+  std::vector<Joint> joints = generic.skeleton.joints();
+  std::swap(joints[kRightHip].name, joints[kLeftHip].name);
+  const Skeleton swapped(joints);
+  try {
+    checkHumanJointOrder(swapped, "other.glb");
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("other.glb: joint 16 is 'left_hip' where the human "
+                                         "skeleton has 'right_hip'"),
+              std::string::npos)
+        << e.what();
+  }
+  SkinnedMesh wrong = generic;
+  wrong.skeleton = swapped;
+  EXPECT_THROW(PoseTracker(makeRingRig({}), wrong), std::invalid_argument);
+}
+
+// A broken export's NaN or absurd vertex is refused with the vertex, before it reaches the
+// tracker's calibration (which threw about a joint's offset, in the studio's motion-capture
+// thread).
+TEST(HumanModel, AVertexThatIsNotANumberIsRefused) {
+  SkinnedMesh mesh = makeHumanModel();
+  mesh.rest.positions(1, 7) = std::numeric_limits<float>::quiet_NaN();
+  try {
+    mesh.validate();
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 7 is at"), std::string::npos) << e.what();
+  }
+  mesh = makeHumanModel();
+  mesh.rest.positions(2, 9) = 1e30f;
+  EXPECT_THROW(mesh.validate(), std::invalid_argument);
+  mesh = makeHumanModel();
+  mesh.skin.weights[3][0] = std::numeric_limits<float>::infinity();
+  try {
+    mesh.validate();
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 3 has a weight of inf"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
