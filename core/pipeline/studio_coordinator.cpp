@@ -139,6 +139,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   NodeState& node = node_it->second;
   node.peer = received.peer;
   node.last_ns = steadyNowNs();
+  if (node.heard_ns == 0 || node.report.lost) node.heard_ns = node.last_ns;
   if (first_message_ns_ == 0) first_message_ns_ = node.last_ns;
   if (!counting_) {
     bool all = true;
@@ -182,6 +183,11 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       return;
     }
     newest_seen_ = std::max(newest_seen_, message.frame_id);  // where the cameras are (takes)
+    node.silhouettes_ns = node.last_ns;
+    if (node.told_no_frames) {
+      node.told_no_frames = false;
+      spdlog::info("node {}: its silhouettes are used again", node.report.name);
+    }
   }
   if (message.frame_id <= newest_done_) return;  // a frame already done or given up
   if (std::find(refused_.begin(), refused_.end(), message.frame_id) != refused_.end())
@@ -222,7 +228,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     }
     frame.silhouette_nodes.insert(node.report.name);
     int live = 0;
-    for (const auto& [name, n] : nodes_) live += !n.report.lost;
+    for (const auto& [name, n] : nodes_) live += awaited(n, node.last_ns);
     if (!frame.mocap_begun && static_cast<int>(frame.silhouette_nodes.size()) >= live)
       beginMocap(message.frame_id, frame);
   } else if (const auto* stats = std::get_if<VertexStatisticsData>(&message.body)) {
@@ -301,10 +307,12 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
     node.told_frame_id = false;
     return true;
   }
+  // The nodes that vote: those frames wait for, and this one (whose silhouettes, refused, no longer
+  // make it one of them after a while: two nodes, one silent, could then never move).
   int live = 0, with_it = 0;
   int64_t oldest_with_it = frame_id;
   for (const auto& [name, n] : nodes_) {
-    if (n.report.lost || n.last_ns == 0) continue;
+    if (&n != &node && !awaited(n, node.last_ns)) continue;
     ++live;
     if (n.newest_frame >= 0 && near(n.newest_frame, frame_id)) {
       ++with_it;
@@ -481,8 +489,9 @@ void StudioCoordinator::sendPose(int64_t frame_id, FrameState& frame) {
   message.sent_ns = steadyNowNs();
   message.body = frame.pose;
   const std::span<const uint8_t> bytes = encoder_.encode(message);
+  const int64_t now = steadyNowNs();
   for (auto& [name, node] : nodes_) {
-    if (node.report.lost || node.peer.empty()) continue;
+    if (!awaited(node, now) || node.peer.empty()) continue;
     bool sent = true;
     for (const std::span<const uint8_t> v : view_bytes_)
       sent = sent && endpoint_.send(node.peer, v, std::chrono::milliseconds(5));
@@ -609,9 +618,22 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   newest_done_ = frame_id;
 }
 
+bool StudioCoordinator::awaited(const NodeState& node, int64_t now_ns) const {
+  if (node.report.lost || node.last_ns == 0) return false;
+  const int64_t since = node.silhouettes_ns > node.heard_ns ? node.silhouettes_ns : node.heard_ns;
+  return now_ns - since <= std::chrono::nanoseconds(options_.lost_after).count();
+}
+
 void StudioCoordinator::checkDeadlines(int64_t now_ns) {
   const int64_t deadline = std::chrono::nanoseconds(options_.deadline).count();
   for (auto& [name, node] : nodes_) {
+    if (!node.report.lost && !node.told_no_frames && node.last_ns > 0 && !awaited(node, now_ns)) {
+      node.told_no_frames = true;
+      spdlog::warn(
+          "node {} is heard but none of its silhouettes was used for {} ms (cameras? frame ids "
+          "far from the others'? another version?): frames go on without it",
+          name, options_.lost_after.count());
+    }
     if (!node.report.lost && node.last_ns > 0 &&
         now_ns - node.last_ns > std::chrono::nanoseconds(options_.lost_after).count()) {
       node.report.lost = true;

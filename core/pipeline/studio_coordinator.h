@@ -203,7 +203,15 @@ class StudioCoordinator {
     bool told_statistics = false;       // warned once that its statistics do not fit
     bool told_frame_id = false;         // warned that its frame ids are far from the others'
     int64_t newest_frame = -1;          // the frame id of its newest silhouettes
+    int64_t heard_ns = 0;               // when it was first heard (again, after being lost)
+    int64_t silhouettes_ns = 0;         // when its silhouettes were last used
+    bool told_no_frames = false;        // warned that it is heard but sends no usable silhouettes
   };
+  // Whether frames wait for the node: for its silhouettes, and for its answer to their poses. It is
+  // heard, and its silhouettes were used within lost_after (or it was first heard less than that
+  // ago: starting). A node that is heard but whose silhouettes are not used (its cameras
+  // unplugged, its frame ids or its protocol another's) made every frame wait out two deadlines.
+  bool awaited(const NodeState& node, int64_t now_ns) const;
   // The cameras' frame ids move together, a frame at a time. A node's silhouettes whose frame id
   // lies more than kFrameIdWindow (message_codec.h) from the newest the studio has seen (a corrupt
   // or hostile message, a node replaying another session, cameras restarted on one node alone) are

@@ -321,6 +321,41 @@ TEST(StudioCoordinator, SilhouettesOfAFrameFarFromTheOthersAreRefusedAndFramesGo
   EXPECT_EQ(badMessagesOf(two.studio, "node2"), 0);
 }
 
+// A node that is heard (heartbeats) but sends no silhouettes (its cameras unplugged) holds no
+// frame once lost_after has passed: the next frame's pose goes out without waiting for its
+// silhouettes (the deadline is 5 s, the wait for the pose 3 s) and is not sent to it, whose
+// statistics would never come. Every frame waited out two deadlines before.
+TEST(StudioCoordinator, ANodeHeardWithoutSilhouettesHoldsNoFrame) {
+  TwoNodeStudio two(milliseconds(5000));
+  for (int k = 0; k < 15; ++k) {  // 1.5 s of heartbeats only
+    ASSERT_TRUE(two.node2.send(0, HeartbeatData{}));
+    two.studio.runFor(milliseconds(100));
+  }
+  ASSERT_TRUE(two.node1.send(2, SilhouettesData{}));
+  EXPECT_EQ(nextPoseFrame(two.node1, two.studio, 2), 2);
+  EXPECT_EQ(nextPoseFrame(two.node2, two.studio, 2), std::nullopt);
+  EXPECT_EQ(two.studio.report().nodes.size(), 2u);
+}
+
+// Two nodes, one heard but without silhouettes; the other's cameras restart (frame ids near 0):
+// the studio follows it, instead of waiting forever for a majority the silent node never joins.
+TEST(StudioCoordinator, ANodeWithoutSilhouettesDoesNotVoteOnTheFrameIds) {
+  TwoNodeStudio two(milliseconds(50), 5000);
+  for (int k = 0; k < 15; ++k) {
+    ASSERT_TRUE(two.node2.send(0, HeartbeatData{}));
+    ASSERT_TRUE(two.node1.send(5001 + k, SilhouettesData{}));
+    two.studio.runFor(milliseconds(100));
+  }
+  ASSERT_TRUE(two.node1.send(3, SilhouettesData{}));
+  bool posed = false;
+  for (int k = 0; k < 20 && !posed; ++k) {  // past the poses of the frames before
+    const std::optional<Message> pose = two.node1.await<PoseData>(two.studio);
+    if (!pose) break;
+    posed = pose->frame_id == 3;
+  }
+  EXPECT_TRUE(posed) << "no pose for frame 3 after the cameras restarted";
+}
+
 // When most nodes' frame ids move together (the cameras restarted, or the session), forward or
 // back, the studio follows them; a node alone is not followed.
 TEST(StudioCoordinator, WhenMostNodesFrameIdsMoveTogetherTheStudioFollows) {
