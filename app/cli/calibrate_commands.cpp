@@ -11,6 +11,7 @@
 
 #include "app/cli/progress.h"
 #include "core/base/error.h"
+#include "core/base/output_path.h"
 #include "core/calib/board_calibration.h"
 #include "core/calib/multicamselfcal_files.h"
 #include "core/calib/similarity.h"
@@ -201,6 +202,12 @@ void addCalibrateCommands(CLI::App& app) {
   wand->add_option("--truth", w->truth, "rig file of the truth (simulations): print the errors");
   wand->callback([w] {
     if (w->points.empty() && w->session.empty()) throw Error("give --points FILE or --session DIR");
+    // The rig may replace --initial-rig (a recalibration); it must not replace what it is solved
+    // from.
+    for (const auto& [option, path] : {std::pair<const char*, const std::string&>{"--out", w->out},
+                                       {"--report", w->report},
+                                       {"--save-points", w->save_points}})
+      refuseOutputOverInputs(option, path, {{"--points", w->points}, {"--session", w->session}});
     WandSession data;
     if (!w->points.empty()) {
       data = loadWandSession(w->points);
@@ -321,6 +328,8 @@ void addCalibrateCommands(CLI::App& app) {
   board->add_option("--truth", b->truth, "rig file of the truth: print the errors");
   board->callback([b] {
     b->board.check();
+    refuseOutputOverInputs("--out", b->out, {{"--images", b->images}});
+    refuseOutputOverInputs("--report", b->report, {{"--images", b->images}});
     BoardSession data;
     if (b->synth_frames > 0) {
       const Rig rig = rigOrReference(b->synth_rig);

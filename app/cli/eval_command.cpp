@@ -6,6 +6,7 @@
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/base/output_path.h"
 #include "core/body/human_model.h"
 #include "core/capture/session_reader.h"
 #include "core/eval/eval_report.h"
@@ -167,6 +168,7 @@ void addEvalCommand(CLI::App& app) {
       ->capture_default_str();
   eval->add_flag("--quiet", args->quiet, "no report on standard output");
   eval->callback([args] {
+    refuseOutputOverInputs("--json", args->json, {{"--session", args->session}});
     const SessionReader session(args->session);
     if (!session.hasTruth())
       throw Error(args->session + ": no ground truth (truth/) to evaluate against");

@@ -7,6 +7,7 @@
 
 #include "app/cli/progress.h"
 #include "core/base/error.h"
+#include "core/base/output_path.h"
 #include "core/body/bvh.h"
 #include "core/body/human_model.h"
 #include "core/body/mesh_sequence_io.h"
@@ -46,6 +47,7 @@ void addExportCommand(CLI::App& app) {
                 "the posed generic mesh as it is, without the refinement from the images");
   exp->callback([args] {
     if (!args->bvh && !args->glb && !args->ply && !args->obj) args->bvh = args->glb = true;
+    refuseOutputOverInputs("--out", args->out, {{"--session", args->session}});
     const SessionReader session(args->session);
     const fs::path out(args->out);
     std::error_code ec;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -11,6 +12,7 @@
 
 #include "app/cli/progress.h"
 #include "core/base/error.h"
+#include "core/base/output_path.h"
 #include "core/body/ply_mesh.h"
 #include "core/capture/session_reader.h"
 #include "core/eval/leave_one_out.h"
@@ -75,6 +77,7 @@ void addRenderCommand(CLI::App& app) {
       ->check(CLI::Range(1, CloneSet::kMaxClones))
       ->capture_default_str();
   render->callback([a] {
+    refuseOutputOverInputs("--out", a->out, {{"--session", a->session}});
     const SessionReader session(a->session);
     const Rig& rig = session.rig();
     const int frames =
@@ -97,6 +100,12 @@ void addRenderCommand(CLI::App& app) {
     // renamed over it once it reads back whole: a failed frame, a full disk or an interrupted
     // render never replaces a good video with a torn one.
     const std::filesystem::path out(a->out);
+    std::string extension = out.extension().string();
+    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (extension != ".mp4" && extension != ".avi")
+      throw Error(a->out + ": expected a video file ending in .mp4 or .avi (MPEG-4)");
+    if (!out.parent_path().empty() && !std::filesystem::is_directory(out.parent_path()))
+      throw Error(a->out + ": no folder " + out.parent_path().string() + " to write it into");
     const std::filesystem::path partial = partialVideoPath(out);
     cv::VideoWriter video(partial.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'),
                           a->fps > 0 ? a->fps : session.fps(),

@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "core/base/output_path.h"
 #include "core/geometry/rig_file.h"
 #include "core/geometry/rig_import.h"
 #include "core/geometry/ring_rig.h"
@@ -80,7 +81,9 @@ void addRigCommands(CLI::App& app) {
       ->capture_default_str();
   import->add_option("-o,--out", args->out, "rig file to write")->required();
   import->callback([args, import] {
-    RigImportOptions options;
+    refuseOutputOverInputs("--out", args->out,
+                           {{"--svoboda", args->svoboda}, {"--opencv", args->opencv}});
+  RigImportOptions options;
   options.cameras_per_node = args->cameras_per_node;
   if (!args->image_size.empty()) {
     char x = 0;

@@ -14,6 +14,7 @@
 #include "app/cli/run_plot.h"
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/base/output_path.h"
 #include "core/pipeline/local_run.h"
 #include "core/render/view_recorder.h"
 
@@ -166,6 +167,14 @@ void addRunCommand(CLI::App& app) {
       throw CLI::ValidationError("--session",
                                  "give either --session DIR, or --rig FILE with --address A");
     }
+    // Nothing the run writes goes over, or into, the session it replays or the rig it reads.
+    for (const auto& [option, path] :
+         {std::pair<const char*, const std::string&>{"--json", a->json},
+          {"--image", a->image},
+          {"--plot", a->plot},
+          {"--record-view", a->record_view},
+          {"--record-take", a->record_take}})
+      refuseOutputOverInputs(option, path, {{"--session", a->session}, {"--rig", a->rig}});
     LocalRunOptions options;
     options.session = a->session;
     options.rig = a->rig;

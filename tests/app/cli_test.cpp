@@ -205,6 +205,15 @@ TEST(Cli, CalibrateWandSolvesASimulatedSessionAndWritesRigAndReport) {
       << r.output;
   EXPECT_EQ(readFile(rig), kept);
   EXPECT_TRUE(fs::exists(folder / "rig.calibration.yaml"));
+  // The rig or the report over the points it is solved from (the file one edits by hand): refused
+  // before the solve, the points whole.
+  const std::string wand_points = readFile(points);
+  for (const std::string& outputs : {" --out " + points, " --out " + rig + " --report " + points}) {
+    r = run(kCli + " calibrate wand --points " + points + outputs);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("it is --points " + points), std::string::npos) << r.output;
+  }
+  EXPECT_EQ(readFile(points), wand_points);
 
   // The points file with each line rewritten (none: left out), solved into NAME.yaml.
   const auto solveRewritten =
@@ -575,6 +584,27 @@ TEST(Cli, RenderWritesAVideoAndAFailedRenderReplacesNothing) {
   EXPECT_EQ(frames(), 3);
   for (const auto& entry : fs::directory_iterator(folder))
     EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  // Outputs over or inside the inputs are refused before any work, and the inputs are whole: a
+  // render over one of the session's images, eval's report over its session.yaml (written over
+  // it, exit 0, before).
+  const std::string yaml = readFile(session / "session.yaml");
+  const fs::path image = session / "cam01" / "000000.png";
+  const uintmax_t image_bytes = fs::file_size(image);
+  r = run(kCli + " render --session " + session.string() + " --out " + image.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("inside --session"), std::string::npos) << r.output;
+  r = run(kCli + " render --session " + session.string() + " --out " + (folder / "x.png").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("expected a video file ending in .mp4 or .avi"), std::string::npos)
+      << r.output;
+  r = run(kCli + " eval --session " + session.string() + " --loo-frames 0 --quiet --json " +
+          (session / "session.yaml").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--json " + (session / "session.yaml").string() + ": inside --session"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(readFile(session / "session.yaml"), yaml);
+  EXPECT_EQ(fs::file_size(image), image_bytes);
   fs::remove_all(folder);
 }
 

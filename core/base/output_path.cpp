@@ -1,0 +1,34 @@
+#include "core/base/output_path.h"
+
+#include <algorithm>
+
+#include "core/base/error.h"
+
+namespace lumistage {
+
+namespace fs = std::filesystem;
+
+void refuseOutputOverInputs(std::string_view option, const fs::path& output,
+                            std::initializer_list<CommandInput> inputs) {
+  if (output.empty()) return;
+  std::error_code error;
+  fs::path out = fs::weakly_canonical(fs::absolute(output), error);
+  if (error) return;  // a path the command's own open will name in its error
+  if (!out.has_filename()) out = out.parent_path();
+  for (const CommandInput& input : inputs) {
+    if (input.path.empty()) continue;
+    fs::path in = fs::weakly_canonical(fs::absolute(input.path), error);
+    if (error) continue;
+    if (!in.has_filename()) in = in.parent_path();  // "session/" as "session"
+    const std::string what = std::string(option) + " " + output.string();
+    const std::string of = std::string(input.option) + " " + input.path.string();
+    if (out == in)
+      throw Error(what + ": it is " + of + ", which the command reads; write it elsewhere");
+    // Inside the input folder: every component of the input's path begins the output's.
+    const auto [end_in, end_out] = std::mismatch(in.begin(), in.end(), out.begin(), out.end());
+    if (end_in == in.end() && fs::is_directory(in, error))
+      throw Error(what + ": inside " + of + ", which the command reads; write it elsewhere");
+  }
+}
+
+}  // namespace lumistage

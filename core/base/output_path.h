@@ -1,0 +1,24 @@
+#pragma once
+
+#include <filesystem>
+#include <initializer_list>
+#include <string_view>
+
+namespace lumistage {
+
+// One of a command's inputs: the option that names it and the file or folder it reads.
+struct CommandInput {
+  std::string_view option;
+  std::filesystem::path path;
+};
+
+// Throws Error when a command's output (`option`, `output`) is one of its inputs, or lies inside an
+// input folder (a recorded session): "--json /s/session.yaml: inside --session /s, which it reads;
+// write it elsewhere". Commands wrote over their own inputs without a word (eval's report over the
+// session's session.yaml, a rig over the wand points it was solved from). Inputs or an output left
+// empty are skipped; paths are compared once made absolute and free of . and .. (and of symbolic
+// links, where they exist).
+void refuseOutputOverInputs(std::string_view option, const std::filesystem::path& output,
+                            std::initializer_list<CommandInput> inputs);
+
+}  // namespace lumistage
