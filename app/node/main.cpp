@@ -114,6 +114,26 @@ int main(int argc, char** argv) {
       // Every node shows the same recorded instant at the same time, as triggered cameras do.
       options.synchronized = true;
       auto replay_source = std::make_unique<lumistage::SessionSource>(session, options);
+      // The session's cameras are taken by their place in --rig: the same place must hold the same
+      // camera (a take merged without --rig lists its cameras part after part), or the node keys
+      // one camera's pictures with another's calibration.
+      const lumistage::Rig& recorded = replay_source->reader().rig();
+      for (int c : node.cameras) {
+        const lumistage::Camera& want = rig.camera(c);
+        const bool same = c < recorded.cameraCount() && recorded.camera(c).name() == want.name() &&
+                          recorded.camera(c).width() == want.width() &&
+                          recorded.camera(c).height() == want.height();
+        if (same) continue;
+        throw std::runtime_error(fmt::format(
+            "--session {}: camera {} of --rig {} is {} ({}x{}), the session's is {}: replay a "
+            "session recorded with this rig (lumistage session merge --rig {})",
+            session, c, rig_path, want.name(), want.width(), want.height(),
+            c < recorded.cameraCount()
+                ? fmt::format("{} ({}x{})", recorded.camera(c).name(), recorded.camera(c).width(),
+                              recorded.camera(c).height())
+                : "missing",
+            rig_path));
+      }
       node_options.fps = replay_source->reader().fps();
       source = std::move(replay_source);
     } else if (!address.empty() || !devices.empty()) {

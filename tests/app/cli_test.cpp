@@ -293,6 +293,28 @@ TEST(Cli, NodeChecksItsPlaceInTheRig) {
 // A node process that dies during a run (killed here, as by a crash): the run says which, still
 // prints its figures, and exits with a failure, so that no script takes a run without that node
 // for a measurement of the rig.
+// A node replays a session whose cameras are not where --rig has them (cam01 and cam02 swapped):
+// refused, naming both, instead of keying one camera's pictures with another's calibration.
+TEST(Cli, ANodeRefusesASessionWhoseCamerasAreNotWhereItsRigHasThem) {
+  const fs::path folder = tempPath("node_session_rig");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 160 --height 120",
+                               "actor:\n  vertices: 2000\n", "--frames 1"));
+  std::string text = readFile(folder / "session" / "rig.yaml");
+  for (size_t at = 0; (at = text.find("cam0", at)) != std::string::npos; at += 5) {
+    if (text[at + 4] == '1' || text[at + 4] == '2') text[at + 4] = text[at + 4] == '1' ? '2' : '1';
+  }
+  const fs::path swapped = folder / "swapped.yaml";
+  writeFileAtomically(swapped, text);
+  const Result r = run(kNode + " --rig " + swapped.string() + " --node node1 --session " +
+                       (folder / "session").string() + " --studio tcp://127.0.0.1:9 --plain");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("camera 0 of --rig " + swapped.string() +
+                          " is cam02 (160x120), the session's is cam01 (160x120)"),
+            std::string::npos)
+      << r.output;
+  fs::remove_all(folder);
+}
+
 TEST(Cli, RunFailsWhenANodeProcessDies) {
   const fs::path folder = tempPath("node_dies");
   ASSERT_TRUE(synthRingSession(folder, "--cameras 2 --cameras-per-node 1 --width 320 --height 240",
