@@ -196,16 +196,23 @@ void addRunCommand(CLI::App& app) {
       options.coordinator.max_frames = 0;
     }
     options.coordinator.max_frames_in_flight = a->max_in_flight;
+    // The view's size, checked before the nodes start: at most what a node's message may carry
+    // (the nodes dropped every view message beyond it, and rendered nothing).
+    int width = 0, height = 0;
+    if (!a->view_size.empty()) {
+      char x = 0;
+      std::istringstream in(a->view_size);
+      const int most = MessageLimits{}.max_image_pixels;
+      if (!(in >> width >> x >> height) || x != 'x' || !(in >> std::ws).eof() || width < 16 ||
+          height < 16 || width > 7680 || height > 4320 || int64_t(width) * height > most)
+        throw CLI::ValidationError(
+            "--view-size", fmt::format("expected WxH from 16x16 to 7680x4320 and at most {} pixels "
+                                       "(4096x4096), e.g. 640x480, got {}",
+                                       most, a->view_size));
+    }
     LocalPipelineRun pipeline(options);
     StudioCoordinator& studio = pipeline.studio();
     if (!a->view_size.empty()) {
-      int width = 0, height = 0;
-      char x = 0;
-      std::istringstream in(a->view_size);
-      if (!(in >> width >> x >> height) || x != 'x' || width < 16 || height < 16 || width > 7680 ||
-          height > 4320)
-        throw CLI::ValidationError("--view-size",
-                                   "expected WxH, e.g. 640x480, got " + a->view_size);
       ViewData view = studio.view();
       const float scale = float(width) / view.width;
       view.fx *= scale;
