@@ -5,6 +5,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "core/base/error.h"
+#include "core/net/message_codec.h"
 
 namespace lumistage {
 
@@ -68,7 +69,12 @@ bool ViewRecorder::add(int64_t frame_id, int width, int height, std::span<const 
   Impl& r = *impl_;
   if (r.closed || width <= 0 || height <= 0 || rgba.size() < size_t(width) * height * 4)
     return false;
-  if (r.last_id >= 0 && frame_id <= r.last_id) return false;
+  // Older than the last: left out; but far older (kFrameIdWindow), the cameras restarted and the
+  // studio followed their ids back: the recording goes on from there (it stopped for good).
+  if (r.last_id >= 0 && frame_id <= r.last_id) {
+    if (frame_id >= r.last_id - kFrameIdWindow) return false;
+    r.last_id = -1;
+  }
   if (!r.writer.isOpened()) {
     // Opened with the first image, whose size the video keeps. OpenCV's own MJPEG writer (no
     // FFmpeg): the same on every machine.

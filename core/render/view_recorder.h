@@ -21,11 +21,12 @@ std::string finishPartialVideo(const std::filesystem::path& partial,
 // AVI, OpenCV's own encoder (nothing to install; 2.2 ms a 640x480 frame, render_bench), at the
 // cameras' rate: frame ids the pipeline skipped (refused on arrival, lost) repeat the image before
 // them, so that the video plays in real time; a gap longer than `max_gap_frames` is not filled (a
-// paused source), and a frame older than the last one written is left out. Images of another size
-// than the first are scaled to it. The video is written beside its name (`NAME.partial.avi`) and
-// put in its place when closed, once it reads back whole: a full disk or a crash never leaves a
-// torn video under the name, nor replaces an older one with it (the partial file is kept, and
-// error() says why). Not thread-safe; add() reuses its conversion buffers.
+// paused source), and a frame older than the last one written is left out, unless it is
+// kFrameIdWindow or more older (the cameras restarted: the recording goes on from it). Images of
+// another size than the first are scaled to it. The video is written beside its name
+// (`NAME.partial.avi`) and put in its place when closed, once it reads back whole: a full disk or a
+// crash never leaves a torn video under the name, nor replaces an older one with it (the partial
+// file is kept, and error() says why). Not thread-safe; add() reuses its conversion buffers.
 class ViewRecorder {
  public:
   // Throws Error naming the file when it cannot be written (no folder, no rights, not .avi).

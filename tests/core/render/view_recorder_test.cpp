@@ -8,6 +8,7 @@
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/net/message_codec.h"
 #include "tests/test_util.h"
 
 namespace lumistage {
@@ -50,15 +51,20 @@ TEST(ViewRecorder, WritesEveryFrameAtTheCamerasRate) {
     EXPECT_TRUE(recorder.add(14, 64, 48, blue));  // 12 and 13 were skipped: green twice more
     EXPECT_FALSE(recorder.add(13, 64, 48, red));  // older than the last: left out
     EXPECT_TRUE(recorder.add(30, 32, 24, solid(32, 24, 220, 20, 20)));  // a gap of 15: not filled
-    EXPECT_EQ(recorder.framesWritten(), 6);
+    // The cameras restarted, the studio followed their ids back from 1000 to 2: recorded from
+    // there (it stopped until the ids passed 1000 again).
+    EXPECT_TRUE(recorder.add(1000, 64, 48, blue));
+    EXPECT_TRUE(recorder.add(2, 64, 48, green));
+    static_assert(1000 - 2 > kFrameIdWindow);
+    EXPECT_EQ(recorder.framesWritten(), 8);
     EXPECT_EQ(recorder.width(), 64);
   }
   cv::Size size;
   const std::vector<cv::Scalar> means = readBack(file, &size);
-  ASSERT_EQ(means.size(), 6u);
-  EXPECT_EQ(size, cv::Size(64, 48));           // the smaller image was scaled to the video's size
-  const int expected[6] = {2, 1, 1, 1, 0, 2};  // the dominant channel, B G R order
-  for (int i = 0; i < 6; ++i) {
+  ASSERT_EQ(means.size(), 8u);
+  EXPECT_EQ(size, cv::Size(64, 48));  // the smaller image was scaled to the video's size
+  const int expected[8] = {2, 1, 1, 1, 0, 2, 0, 1};  // the dominant channel, B G R order
+  for (int i = 0; i < 8; ++i) {
     for (int c = 0; c < 3; ++c) {
       if (c == expected[i]) {
         EXPECT_GT(means[i][c], 180) << "frame " << i;
