@@ -200,7 +200,16 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     }
     frame.captured_ns = std::min(frame.captured_ns, message.sent_ns);
     for (const SilhouetteMaskData& mask : silhouettes->masks) {
-      if (mask.camera < 0 || mask.camera >= rig_.cameraCount()) continue;
+      // Only the node's own cameras, once a frame: a node with another rig file (other cameras at
+      // its places) would otherwise carve the hull with masks of the wrong cameras, the last one
+      // to arrive winning.
+      const bool own = mask.camera >= 0 && mask.camera < rig_.cameraCount() &&
+                       rig_.nodes()[rig_.nodeOfCamera(mask.camera)].name == node.report.name;
+      if (!own || std::any_of(frame.silhouettes.begin(), frame.silhouettes.end(),
+                              [&](const LowResSilhouette& s) { return s.camera == mask.camera; })) {
+        ++node.report.bad_messages;
+        continue;
+      }
       // The tracker indexes cells by the camera's size: a mask of another size (a node of an
       // older version, at another step) is not used, and said once.
       const Camera& camera = rig_.camera(mask.camera);

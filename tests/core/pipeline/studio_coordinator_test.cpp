@@ -321,6 +321,22 @@ TEST(StudioCoordinator, SilhouettesOfAFrameFarFromTheOthersAreRefusedAndFramesGo
   EXPECT_EQ(badMessagesOf(two.studio, "node2"), 0);
 }
 
+// A node's masks of a camera that is not its own (a node started with another rig file), or of
+// one of its cameras twice, are refused and counted: they carved the hull, the last one to arrive
+// winning.
+TEST(StudioCoordinator, MasksOfAnotherNodesCameraOrTwiceOfOneAreRefused) {
+  TwoNodeStudio two(milliseconds(50));
+  const int step = StudioCoordinatorOptions{}.silhouette_step, w = 160 / step, h = 120 / step;
+  const auto mask = [&](int camera) {
+    return SilhouetteMaskData{camera, w, h, std::vector<uint8_t>(size_t(w * h + 7) / 8, 0)};
+  };
+  ASSERT_TRUE(two.node1.send(2, SilhouettesData{{mask(0), mask(1), mask(0)}}));
+  ASSERT_TRUE(two.node2.send(2, SilhouettesData{{mask(1)}}));
+  EXPECT_EQ(nextPoseFrame(two.node1, two.studio, 2), 2);
+  EXPECT_EQ(badMessagesOf(two.studio, "node1"), 2);
+  EXPECT_EQ(badMessagesOf(two.studio, "node2"), 0);
+}
+
 // A node that is heard (heartbeats) but sends no silhouettes (its cameras unplugged) holds no
 // frame once lost_after has passed: the next frame's pose goes out without waiting for its
 // silhouettes (the deadline is 5 s, the wait for the pose 3 s) and is not sent to it, whose
