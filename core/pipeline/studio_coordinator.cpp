@@ -390,8 +390,16 @@ std::map<int64_t, StudioCoordinator::FrameState>::iterator StudioCoordinator::re
 
 void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
   int begun = 0;
-  for (const auto& [id, f] : frames_) begun += f.mocap_begun;
-  if (options_.max_frames_in_flight > 0 && begun >= options_.max_frames_in_flight) {
+  bool newer_begun = false;
+  for (const auto& [id, f] : frames_) {
+    begun += f.mocap_begun;
+    newer_begun = newer_begun || (id > frame_id && f.mocap_begun);
+  }
+  // A frame whose deadline came after a newer frame began (it waited for a late node) is dropped:
+  // fitted after the newer one, it would run the tracker's prediction backwards, or push the
+  // newer one out of the tracker's queue.
+  if (newer_begun ||
+      (options_.max_frames_in_flight > 0 && begun >= options_.max_frames_in_flight)) {
     if (counting_) ++frames_dropped_, ++frames_refused_;
     retireFrame(frames_.find(frame_id));                     // the callers hold no iterator to it
     refused_[next_refused_++ % refused_.size()] = frame_id;  // its late silhouettes are ignored

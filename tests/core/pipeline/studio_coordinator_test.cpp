@@ -337,6 +337,22 @@ TEST(StudioCoordinator, MasksOfAnotherNodesCameraOrTwiceOfOneAreRefused) {
   EXPECT_EQ(badMessagesOf(two.studio, "node2"), 0);
 }
 
+// Frame 10 waits for a late node while frame 11 comes whole and begins: at 10's deadline it is
+// dropped, not fitted after 11 (the tracker's prediction run backwards, or 11 pushed out of its
+// queue).
+TEST(StudioCoordinator, AFrameLateAfterANewerOneBeganIsDropped) {
+  TwoNodeStudio two(milliseconds(300));
+  ASSERT_TRUE(two.node1.send(10, SilhouettesData{}));
+  ASSERT_TRUE(two.both(11));
+  std::vector<int64_t> posed;
+  for (int k = 0; k < 2; ++k) {  // up to 3 s after 11: well past frame 10's deadline
+    const std::optional<Message> pose = two.node1.await<PoseData>(two.studio);
+    if (pose) posed.push_back(pose->frame_id);
+  }
+  EXPECT_NE(std::find(posed.begin(), posed.end(), 11), posed.end());
+  EXPECT_EQ(std::find(posed.begin(), posed.end(), 10), posed.end()) << "frame 10 posed after 11";
+}
+
 // A node that is heard (heartbeats) but sends no silhouettes (its cameras unplugged) holds no
 // frame once lost_after has passed: the next frame's pose goes out without waiting for its
 // silhouettes (the deadline is 5 s, the wait for the pose 3 s) and is not sent to it, whose
