@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 
+#include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/capture/session_recorder.h"
 
@@ -41,7 +43,21 @@ void TakeRecorder::close() {
 
 void TakeRecorder::command(const RecordData& record) {
   std::lock_guard lock(mutex_);
-  if (record.take != wanted_.take) {
+  if (!record.take.empty() && record.take == wanted_.take &&
+      record.first_frame != wanted_.first_frame) {
+    // Another take under the same name (the studio restarted and offered its first name again):
+    // written into this one's part it would join it in the merge, so nothing is written and the
+    // studio hears why.
+    close();
+    counted_ = nullptr;
+    status_ = {};
+    status_.take = record.take;
+    status_.error = fmt::format(
+        "a take named {} was recorded already from frame {}: this one (from frame {}) needs "
+        "another name",
+        record.take, wanted_.first_frame, record.first_frame);
+    spdlog::error("node {}: {}", node_, status_.error);
+  } else if (record.take != wanted_.take) {
     close();
     counted_ = nullptr;
     status_ = {};
@@ -73,12 +89,31 @@ void TakeRecorder::open(int64_t frame_id, const std::vector<CameraFrame>& frames
   std::error_code ec;
   for (int k = 2; k < 100 && std::filesystem::exists(part / "session.yaml", ec); ++k)
     part = folder_ / wanted_.take / (node_ + "-" + std::to_string(k));
+  // The take's first frame beside the node's parts (<node>.first_frame, which the merge passes
+  // over): parts there of another take of the same name (the studio restarted and offered its
+  // first name again) are not continued, which would join both takes in the merge.
+  const std::filesystem::path marker = folder_ / wanted_.take / (node_ + ".first_frame");
+  if (std::filesystem::exists(marker, ec)) {
+    int64_t recorded = -1;
+    std::ifstream(marker) >> recorded;
+    if (recorded != wanted_.first_frame) {
+      status_.error = fmt::format(
+          "{}: a take named {} was recorded there already from frame {}: this one (from frame "
+          "{}) needs another name",
+          (folder_ / wanted_.take).string(), wanted_.take, recorded, wanted_.first_frame);
+      closed_ = true;
+      spdlog::error("node {}: {}", node_, status_.error);
+      return;
+    }
+  }
   try {
     // A second of sets queued: a disk's hiccup loses nothing (the reference node: 70 MB).
     const int queue = std::max(8, static_cast<int>(std::ceil(fps_)));
     recorder_ = std::make_unique<SessionRecorder>(part, rig_, frames.front().image.format, fps_,
                                                   "lumistage-node " + node_, queue, files_);
     counted_ = recorder_.get();
+    if (!std::filesystem::exists(marker, ec))
+      writeFileAtomically(marker, std::to_string(wanted_.first_frame) + "\n");
     first_timestamp_ns_ = frames.front().timestamp_ns;
     spdlog::info("node {}: recording take {} from frame {} into {}", node_, wanted_.take, frame_id,
                  part.string());

@@ -171,6 +171,31 @@ TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
   recorder.offer(6, nodeSet(rig, 1, 6));
   EXPECT_EQ(SessionReader(folder / "takes" / "a" / "node2").frameCount(), 4);
   EXPECT_EQ(SessionReader(folder / "takes" / "b" / "node2").frameCount(), 2);
+
+  // The studio restarted and asks for a take of the same name again (from another frame): nothing
+  // is written into the earlier take, and the node says why, whether it still knows the name (it
+  // showed the earlier take as done and wrote nothing, without a word) or finds it on its disk
+  // (node restarted too: a second part was written beside the first, and the merge joined them).
+  TakeRecorder third(folder / "takes", rig, "node3", 30.0);
+  third.command({"c", 0, 2});  // stopped after frame 2, as the studio stops a take
+  for (int64_t f = 0; f < 4; ++f) third.offer(f, nodeSet(rig, 2, f));
+  EXPECT_TRUE(finished(third).error.empty());
+  for (int restarted = 0; restarted < 2; ++restarted) {
+    SCOPED_TRACE(restarted);
+    TakeRecorder fresh(folder / "takes", rig, "node3", 30.0);
+    TakeRecorder& node = restarted ? fresh : third;
+    node.command({"c", 100});
+    for (int64_t f = 100; f < 103; ++f) node.offer(f, nodeSet(rig, 2, f));
+    const TakeStatusData again = finished(node);
+    EXPECT_NE(again.error.find("a take named c was recorded"), std::string::npos) << again.error;
+    EXPECT_NE(again.error.find("from frame 0: this one (from frame 100) needs another name"),
+              std::string::npos)
+        << again.error;
+    EXPECT_EQ(again.written, 0);
+    EXPECT_EQ(again.first_frame, 100);
+  }
+  EXPECT_EQ(SessionReader(folder / "takes" / "c" / "node3").frameCount(), 3);
+  EXPECT_FALSE(fs::exists(folder / "takes" / "c" / "node3-2"));
 }
 
 TEST(Take, PartsThatDoNotBelongTogetherAreRefusedByName) {
