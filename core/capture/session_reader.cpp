@@ -305,6 +305,21 @@ void SessionReader::readIndex() {
                          fmt::format("frame {} after frame {}: frame numbers must increase",
                                      entry.id, frames_.back().id)));
     }
+    // Times from the recording's start: a replay at the recorded rate waits for them (one going
+    // back replayed the rest at once, an absurd one waited for ever or overflowed the clock).
+    constexpr int64_t kTenDaysNs = int64_t(10) * 24 * 3600 * 1'000'000'000;
+    if (entry.timestamp_ns < 0 || entry.timestamp_ns > kTenDaysNs) {
+      throw Error(locate(file, line_number, "",
+                         fmt::format("expected a time from 0 to 10 days in nanoseconds, got {}",
+                                     entry.timestamp_ns)));
+    }
+    if (!frames_.empty() && entry.timestamp_ns < frames_.back().timestamp_ns) {
+      throw Error(locate(file, line_number, "",
+                         fmt::format("frame {} at {} ns, before frame {} at {} ns: times must not "
+                                     "go back",
+                                     entry.id, entry.timestamp_ns, frames_.back().id,
+                                     frames_.back().timestamp_ns)));
+    }
     frames_.push_back(entry);
   }
   if (!lines.torn.empty()) {
