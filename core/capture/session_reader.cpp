@@ -335,24 +335,43 @@ void SessionReader::readIndex() {
 
 void SessionReader::checkImages() {
   const int channels = bytesPerPixel(format_);
+  // Each frame's first bad image, if any: a run of them at the end is where the recording stopped
+  // (a crash, a full disk) and ends the session; one before a whole frame (a damaged file) leaves
+  // that frame out, not every frame after it.
+  std::vector<std::string> problems(frames_.size());
+  size_t whole_end = 0;  // one past the last whole frame
   for (size_t i = 0; i < frames_.size(); ++i) {
-    for (int c = 0; c < rig_.cameraCount(); ++c) {
+    for (int c = 0; c < rig_.cameraCount() && problems[i].empty(); ++c) {
       const Camera& camera = rig_.camera(c);
       const fs::path path = imagePath(c, int(i));
       const std::string problem = files_ == ImageFiles::kPnm
                                       ? checkPnm(path, camera.width(), camera.height(), channels)
                                       : checkPng(path, camera.width(), camera.height(), channels);
-      if (problem.empty()) continue;
-      warnings_.push_back(fmt::format(
-          "{}: frame {} is listed in index.csv but its image {}; the session ends {}{}",
-          path.string(), frames_[i].id, problem,
-          i == 0 ? "before its first frame" : fmt::format("at frame {}", frames_[i - 1].id),
-          i + 1 < frames_.size() ? fmt::format(", {} later frames ignored", frames_.size() - i - 1)
-                                 : ""));
-      frames_.resize(i);
-      break;
+      if (!problem.empty())
+        problems[i] = path.string() + ": frame " + std::to_string(frames_[i].id) +
+                      " is listed in index.csv but its image " + problem;
+    }
+    if (problems[i].empty()) whole_end = i + 1;
+  }
+  if (whole_end < frames_.size()) {
+    warnings_.push_back(
+        fmt::format("{}; the session ends {}{}", problems[whole_end],
+                    whole_end == 0 ? "before its first frame"
+                                   : fmt::format("at frame {}", frames_[whole_end - 1].id),
+                    whole_end + 1 < frames_.size()
+                        ? fmt::format(", {} later frames ignored", frames_.size() - whole_end - 1)
+                        : ""));
+  }
+  std::vector<FrameEntry> kept;
+  kept.reserve(whole_end);
+  for (size_t i = 0; i < whole_end; ++i) {
+    if (problems[i].empty()) {
+      kept.push_back(frames_[i]);
+    } else {
+      warnings_.push_back(problems[i] + "; that frame is left out, the frames after it are whole");
     }
   }
+  frames_ = std::move(kept);
   // Left-overs of a write that never completed: harmless, but worth knowing about.
   for (const Camera& camera : rig_.cameras()) {
     std::error_code ec;

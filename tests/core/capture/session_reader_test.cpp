@@ -95,7 +95,7 @@ TEST(SessionReader, ReadsBackPnmFilesBitExactInEveryPixelFormat) {
 TEST(SessionReader, APnmCutShortOrWrongEndsTheSessionThere) {
   const Rig rig = smallRig();
   const fs::path folder = freshFolder("pnm_torn");
-  writeSession(folder, rig, PixelFormat::kBayerRggb8, 4, 1, ImageFiles::kPnm);
+  writeSession(folder, rig, PixelFormat::kBayerRggb8, 3, 1, ImageFiles::kPnm);  // 2 is the last
   const fs::path pgm = folder / "cam03" / "000002.pgm";
   const std::string whole = readFile(pgm);
   auto firstWarning = [&] {
@@ -109,7 +109,7 @@ TEST(SessionReader, APnmCutShortOrWrongEndsTheSessionThere) {
                               std::to_string(whole.size() - 1) + " bytes, expected " +
                               std::to_string(whole.size()) +
                               " (its header and 64x48 pixels): "
-                              "truncated; the session ends at frame 1, 1 later frames ignored"))
+                              "truncated; the session ends at frame 1"))
       << w;
   std::ofstream(pgm, std::ios::binary | std::ios::trunc) << "P5\n32 48\n255\n"
                                                          << std::string(32 * 48, 'x');
@@ -126,7 +126,7 @@ TEST(SessionReader, APnmCutShortOrWrongEndsTheSessionThere) {
   // Whole when opened, cut afterwards: the frame's read says so.
   std::ofstream(pgm, std::ios::binary | std::ios::trunc) << whole;
   const SessionReader reader(folder);
-  ASSERT_EQ(reader.frameCount(), 4);
+  ASSERT_EQ(reader.frameCount(), 3);
   truncateFile(pgm, whole.size() / 2);
   std::vector<CameraFrame> frames;
   try {
@@ -211,26 +211,45 @@ TEST(SessionReader, TruncatedLastImageAndLeftoverPartialFileEndTheSessionBeforeT
   fs::remove_all(folder);
 }
 
-TEST(SessionReader, MissingOrWrongImageEndsTheSessionThere) {
+// A bad image at the end (a crash, a full disk) ends the session there; one before whole frames (a
+// damaged file) leaves its frame out. It ended the session too, and a merged take lost every frame
+// after it.
+TEST(SessionReader, AMissingOrWrongImageLeavesItsFrameOutOrEndsTheSession) {
   const Rig rig = smallRig();
   const fs::path folder = freshFolder("missing_image");
   writeSession(folder, rig, PixelFormat::kMono8, 5);
+  fs::remove(folder / "cam03" / "000004.png");
+  {
+    const SessionReader reader(folder);
+    expectFramesExact(reader, PixelFormat::kMono8, 4);
+    ASSERT_EQ(reader.warnings().size(), 1u);
+    EXPECT_TRUE(contains(reader.warnings()[0],
+                         "000004.png: frame 4 is listed in index.csv but its "
+                         "image is missing; the session ends at frame 3"))
+        << reader.warnings()[0];
+  }
   fs::remove(folder / "cam03" / "000002.png");
   {
     const SessionReader reader(folder);
-    expectFramesExact(reader, PixelFormat::kMono8, 2);
-    ASSERT_EQ(reader.warnings().size(), 1u);
-    EXPECT_TRUE(contains(reader.warnings()[0],
-                         "000002.png: frame 2 is listed in index.csv but its "
-                         "image is missing; the session ends at frame 1, 2 "
-                         "later frames ignored"))
-        << reader.warnings()[0];
+    ASSERT_EQ(reader.frameCount(), 3);
+    EXPECT_EQ(reader.frameId(0), 0);
+    EXPECT_EQ(reader.frameId(1), 1);
+    EXPECT_EQ(reader.frameId(2), 3);
+    std::vector<CameraFrame> frames;
+    reader.readFrame(2, frames);
+    EXPECT_TRUE(frames[2].image.pixels == frameImages(rig, PixelFormat::kMono8, 3)[2].pixels);
+    EXPECT_EQ(reader.timestampNs(2), timestampOf(3));
+    ASSERT_EQ(reader.warnings().size(), 2u);
+    EXPECT_TRUE(contains(allWarnings(reader),
+                         "000002.png: frame 2 is listed in index.csv but its image is missing; "
+                         "that frame is left out, the frames after it are whole"))
+        << allWarnings(reader);
   }
   // An image of the wrong size, and one of the wrong channel count.
   cv::imwrite((folder / "cam03" / "000002.png").string(), cv::Mat(24, 32, CV_8UC1, cv::Scalar(0)));
-  EXPECT_TRUE(contains(SessionReader(folder).warnings()[0], "is a 32x24 image, expected 64x48"));
+  EXPECT_TRUE(contains(allWarnings(SessionReader(folder)), "is a 32x24 image, expected 64x48"));
   cv::imwrite((folder / "cam03" / "000002.png").string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(0)));
-  EXPECT_TRUE(contains(SessionReader(folder).warnings()[0],
+  EXPECT_TRUE(contains(allWarnings(SessionReader(folder)),
                        "PNG colour type 2, expected 8-bit grey (type 0)"));
   fs::remove_all(folder);
 }
