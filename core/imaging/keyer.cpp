@@ -18,6 +18,14 @@ int GreenScreenKeyer::learnScreen(const ImageView& screen, int step, int minimum
     screen_excess_ = 0;
     return threshold_;
   }
+  // The screen is most of the view: its samples are those near the median's excess or above.
+  // Neutral things in view (a black suit, grey truss, an unlit floor) have an excess of a few
+  // levels from noise; more than a percent of the view of them held the 1st percentile, and the
+  // threshold fell to its minimum (the screen "too dim", the actor's edges keyed as screen).
+  const size_t middle = excess.size() / 2;
+  std::nth_element(excess.begin(), excess.begin() + middle, excess.end());
+  const int least = std::max(kMinScreenSampleExcess, excess[middle] / 3);
+  std::erase_if(excess, [&](int e) { return e < least; });
   const size_t at = excess.size() / 100;
   std::nth_element(excess.begin(), excess.begin() + at, excess.end());
   screen_excess_ = excess[at];

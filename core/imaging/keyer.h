@@ -75,10 +75,11 @@ class GreenScreenKeyer {
   static int greenExcess(const Rgb& c) { return c.g - (c.r > c.b ? c.r : c.b); }
   // Learns from a frame of the empty stage, or of the stage with the actor (a person rarely fills
   // the view): sets the threshold at three quarters of the 1st percentile of the screen's green
-  // excess, and at least `minimum`. Returns the threshold. At half of it, the actor's edges that
-  // the screen's green light spills on (dark hair, skin at a grazing angle) fell below it: 0.64%
-  // of the reference actor's pixels keyed as screen, against 0.10% now, none of the screen keyed
-  // as the actor either way.
+  // excess, and at least `minimum`. The screen's samples: those whose excess is at least a third of
+  // the median's (of the samples with any excess), and kMinScreenSampleExcess. Returns the
+  // threshold. At half of it, the actor's edges that the screen's green light spills on (dark hair,
+  // skin at a grazing angle) fell below it: 0.64% of the reference actor's pixels keyed as screen,
+  // against 0.10% now, none of the screen keyed as the actor either way.
   int learnScreen(const ImageView& screen, int step = 8, int minimum = 12);
   int threshold() const { return threshold_; }
   // The learnt screen's darkest green excess (its 1st percentile, 8-bit levels); 0 before
@@ -89,6 +90,7 @@ class GreenScreenKeyer {
   // the key and the tracker lost the actor (MPJPE over 400 mm); lit as it is (65 levels), 0.1%,
   // and tracked.
   static constexpr int kDimScreenExcess = 40;
+  static constexpr int kMinScreenSampleExcess = 8;  // a grey's noise stays below
 
  private:
   int threshold_;
