@@ -358,7 +358,8 @@ void CameraNode::silhouetteLoop(const std::atomic<bool>& stop) {
       std::lock_guard lock(kept_mutex_);
       // The cameras restarted (ids from near 0 again): the old sets go, or they would outlast every
       // new one (the lowest ids go first) and no pose would find its set again.
-      if (!kept_.empty() && (*set)->frame_id < kept_.rbegin()->first - kFrameIdWindow) kept_.clear();
+      if (!kept_.empty() && (*set)->frame_id < kept_.rbegin()->first - kFrameIdWindow)
+        kept_.clear();
       kept_[(*set)->frame_id] = *set;
       while (static_cast<int>(kept_.size()) > options_.frames_kept) kept_.erase(kept_.begin());
     }
@@ -473,12 +474,47 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
   }
   releasePosedUpTo(message.frame_id);  // this frame and older ones are done with
   if (!fits || !set) return {};
-  std::vector<ViewData> views;
   {
     std::lock_guard lock(view_mutex_);
-    for (const auto& [id, view] : views_) views.push_back(view);
+    const auto frame = frame_views_.find(message.frame_id);
+    if (frame != frame_views_.end()) {
+      render_views_ = frame->second;  // assigned: the vectors keep their memory
+    } else {  // none came with this frame's pose (a studio of an older version): the latest
+      render_views_.clear();
+      for (const auto& [id, view] : views_) render_views_.push_back(view);
+    }
   }
-  return partialImagesFor(*set, message.frame_id, views, pivot, offsets.visibility);
+  return partialImagesFor(*set, message.frame_id, render_views_, pivot, offsets.visibility);
+}
+
+void CameraNode::keepView(int64_t frame_id, const ViewData& view) {
+  // Ids far below the newest kept: the cameras restarted, and the old frames' views go.
+  if (!frame_views_.empty() && frame_id < frame_views_.rbegin()->first - kFrameIdWindow) {
+    while (!frame_views_.empty())
+      spare_frame_views_.push_back(frame_views_.extract(frame_views_.begin()));
+  }
+  auto it = frame_views_.find(frame_id);
+  if (it == frame_views_.end()) {
+    if (spare_frame_views_.empty()) {
+      it = frame_views_.emplace(frame_id, std::vector<ViewData>()).first;
+    } else {
+      auto node = std::move(spare_frame_views_.back());
+      spare_frame_views_.pop_back();
+      node.key() = frame_id;
+      node.mapped().clear();
+      it = frame_views_.insert(std::move(node)).position;
+    }
+  }
+  std::vector<ViewData>& views = it->second;
+  const auto same = std::find_if(views.begin(), views.end(),
+                                 [&](const ViewData& v) { return v.view == view.view; });
+  if (same != views.end()) {
+    *same = view;
+  } else {
+    views.push_back(view);
+  }
+  while (static_cast<int>(frame_views_.size()) > 2 * options_.frames_kept)
+    spare_frame_views_.push_back(frame_views_.extract(frame_views_.begin()));
 }
 
 void CameraNode::post(Message message) {
@@ -534,6 +570,7 @@ void CameraNode::run(const std::atomic<bool>& stop) {
         std::lock_guard lock(view_mutex_);
         const ViewData& view = std::get<ViewData>(received->message->body);
         views_[view.view] = view;
+        keepView(received->message->frame_id, view);
       } else if (received->ok() && std::holds_alternative<RecordData>(received->message->body)) {
         takes_.command(std::get<RecordData>(received->message->body));
       }

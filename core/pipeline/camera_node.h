@@ -174,6 +174,15 @@ class CameraNode {
   Wakeup outbox_ready_;  // wakes the main thread, which sends the outbox, from its poll
   std::mutex view_mutex_;
   std::map<int, ViewData> views_;  // the latest of each desired view from the studio
+  // The views the studio sent with each recent frame's pose (it sends every view it wants, just
+  // before each pose): a frame is rendered with its own, not with the next frame's that came
+  // while it was refined (the nodes' images of one frame, drawn from different views, blended
+  // into doubled edges while a director dragged the view), and a view the studio stopped asking
+  // for is rendered no more. Map nodes reused: no allocation once warm.
+  std::map<int64_t, std::vector<ViewData>> frame_views_;
+  std::vector<std::map<int64_t, std::vector<ViewData>>::node_type> spare_frame_views_;
+  void keepView(int64_t frame_id, const ViewData& view);  // under view_mutex_
+  std::vector<ViewData> render_views_;  // the frame's views, for the statistics thread
   // The statistics thread's alone: its OpenGL context and renderer (none when no context).
   std::unique_ptr<EglContext> gl_;
   std::unique_ptr<LumigraphRenderer> renderer_;

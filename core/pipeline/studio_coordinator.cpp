@@ -92,8 +92,8 @@ void StudioCoordinator::maybeFinish(int64_t frame_id, FrameState& frame) {
   if (frame.offsets_sent_ns == 0) return;
   // Every view's image from every node whose statistics were refined (a node whose statistics
   // came late still renders and is blended, but is not waited for, nor counts for one that is).
-  for (const ViewData& view : views_) {
-    const auto it = frame.image_nodes.find(view.view);
+  for (const auto& [view, width, height] : frame.views) {
+    const auto it = frame.image_nodes.find(view);
     if (it == frame.image_nodes.end()) return;
     for (const std::string& node : frame.statistics_nodes)
       if (!it->second.count(node)) return;
@@ -277,11 +277,10 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   } else if (const auto* image = std::get_if<PartialImageData>(&message.body)) {
     const auto it = frames_.find(message.frame_id);
     if (it == frames_.end() || it->second.pose_sent_ns == 0) return;
-    const auto view = std::find_if(views_.begin(), views_.end(),
-                                   [&](const ViewData& v) { return v.view == image->view; });
-    if (view == views_.end() || image->width != view->width || image->height != view->height)
-      return;  // a view no longer asked for, or resized since
     FrameState& frame = it->second;
+    const std::array<int, 3> asked{image->view, image->width, image->height};
+    if (std::find(frame.views.begin(), frame.views.end(), asked) == frame.views.end())
+      return;  // not a view (of that size) sent with the frame's pose
     // Once a node and view: a repeated image would be blended twice.
     if (frame.image_nodes[image->view].count(node.report.name)) return;
     const size_t pixels = size_t(image->width) * image->height;
@@ -355,6 +354,7 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
 
 void StudioCoordinator::FrameState::clearForReuse() {
   first_ns = captured_ns = pose_sent_ns = offsets_sent_ns = offsets_out_ns = 0;
+  views.clear();
   mocap_begun = false;
   silhouettes.clear();
   silhouette_nodes.clear();
@@ -506,6 +506,8 @@ void StudioCoordinator::sendPose(int64_t frame_id, FrameState& frame) {
   message.sent_ns = steadyNowNs();
   message.body = frame.pose;
   const std::span<const uint8_t> bytes = encoder_.encode(message);
+  frame.views.clear();
+  for (const ViewData& view : views_) frame.views.push_back({view.view, view.width, view.height});
   const int64_t now = steadyNowNs();
   for (auto& [name, node] : nodes_) {
     if (!awaited(node, now) || node.peer.empty()) continue;

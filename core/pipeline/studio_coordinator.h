@@ -189,6 +189,9 @@ class StudioCoordinator {
     int64_t offsets_out_ns = 0;       // the offsets went out to the nodes
     std::map<int, std::set<std::string>> image_nodes;  // per view
     std::map<int, PartialImageBlender> blends;         // per view
+    // The views sent with its pose (id, width, height): the nodes render it with those, and its
+    // images are taken and waited for by them, not by a view changed or added since.
+    std::vector<std::array<int, 3>> views;
 
     // Empties it for another frame, keeping its buffers (the statistics' half a megabyte, a
     // blend's five at 640x480), which a fresh frame would allocate and fault in again.

@@ -160,6 +160,62 @@ TEST(CameraNode, CamerasThatCountFromZeroAgainAreFollowed) {
   EXPECT_TRUE(answered) << "no statistics for a frame after the cameras counted from 0 again";
 }
 
+// A view looking at the stage's centre from 4 m, `width` x `height`.
+ViewData viewOfSize(int width, int height) {
+  ViewData view{0,  width, height, 0.8f * width, 0.8f * width, 0.5f * width, 0.5f * height,
+                {}, {},    {}};
+  view.rotation = {0, 1, 0, 0, 0, -1, -1, 0, 0};  // looking along -x, z up
+  view.translation = {0, 1, 4};
+  return view;
+}
+
+// The view changes (a director drags it) while a frame is refined: the frame is rendered with the
+// view that came with its pose, not with the next frame's. The nodes' images of one frame were
+// drawn from different views, which the studio blended into doubled edges, or refused for their
+// size.
+TEST(CameraNode, AFrameIsRenderedWithTheViewThatCameWithItsPose) {
+  NodeUnderTest t([](const Rig& rig, std::vector<int> cameras) {
+    return std::make_unique<ScriptedSource>(rig, std::move(cameras), -1, 0);
+  });
+  const std::string node = t.rig.nodes().front().name;
+  const auto sendTo = [&](int64_t frame_id, MessageBody body) {
+    Message m;
+    m.frame_id = frame_id;
+    m.body = std::move(body);
+    return t.studio.send(node, m, milliseconds(100));
+  };
+  int64_t frame = -1;
+  ASSERT_TRUE(t.receiveUntil([&](const Message& m) {
+    if (!std::get_if<SilhouettesData>(&m.body) || m.frame_id < 40) return false;
+    frame = m.frame_id;  // past the screens' learning
+    return true;
+  }));
+  PoseData pose;
+  pose.angles.assign(3 * kHumanJointCount, 0.0f);
+  ASSERT_TRUE(sendTo(frame, viewOfSize(160, 120)));
+  ASSERT_TRUE(sendTo(frame, pose));
+  ASSERT_TRUE(t.receiveUntil([&](const Message& m) {
+    return std::get_if<VertexStatisticsData>(&m.body) && m.frame_id == frame;
+  }));
+  // The next frame's view (larger) and pose reach the node before this frame's offsets.
+  ASSERT_TRUE(sendTo(frame + 1, viewOfSize(320, 240)));
+  ASSERT_TRUE(sendTo(frame + 1, pose));
+  const RefineConfig refine;
+  OffsetsData offsets;
+  offsets.offset_count = refine.offsetLevels();
+  offsets.offsets.assign(size_t(loadGenericHuman().rest.vertexCount()),
+                         uint8_t(refine.zeroLevel()));
+  ASSERT_TRUE(sendTo(frame, offsets));
+  int width = 0;
+  ASSERT_TRUE(t.receiveUntil([&](const Message& m) {
+    const auto* image = std::get_if<PartialImageData>(&m.body);
+    if (!image || m.frame_id != frame) return false;
+    width = image->width;
+    return true;
+  }));
+  EXPECT_EQ(width, 160);
+}
+
 // Lens caps on while the node learns the screens: every camera is said to see no screen; the
 // caps off, the screens are learnt after all and the warnings go from the cameras' health.
 TEST(CameraNode, AScreenThatCouldNotBeLearntIsLearntWhenItShows) {

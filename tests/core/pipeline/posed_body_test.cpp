@@ -9,7 +9,8 @@ namespace lumistage {
 namespace {
 
 // Mean distance between two sets of joints, metres.
-double meanJointError(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+double meanJointError(const std::vector<Eigen::Vector3d>& a,
+                      const std::vector<Eigen::Vector3d>& b) {
   double sum = 0;
   for (size_t j = 0; j < a.size(); ++j) sum += (a[j] - b[j]).norm();
   return sum / double(a.size());
@@ -27,8 +28,8 @@ std::vector<Eigen::Vector3d> posedJoints(const Skeleton& generic, const PoseData
 // reference actor), tracked in the middle of a crouch.
 struct CrouchingActor {
   Skeleton generic = makeHumanSkeleton();
-  Skeleton calibrated = makeHumanSkeleton(
-      {.height_m = 1.82, .arm_length_scale = 0.97, .leg_length_scale = 1.04});
+  Skeleton calibrated =
+      makeHumanSkeleton({.height_m = 1.82, .arm_length_scale = 0.97, .leg_length_scale = 1.04});
   Pose tracked;
   std::vector<Eigen::Vector3d> joints;
   CrouchingActor() {
@@ -48,12 +49,11 @@ TEST(PoseMessage, PutsTheGenericJointsOnTheTrackedOnesWhateverTheActorsProportio
   // The tracked angles on the generic skeleton, scaled by the pelvis heights (the message before
   // 2026-12-02): the joints land centimetres off.
   PoseData angles;
-  angles.scale = float(actor.calibrated.restPositions()[0].z() /
-                       actor.generic.restPositions()[0].z());
-  const Eigen::Vector3d root = (actor.calibrated.restPositions()[0] +
-                                actor.tracked.root_translation_m) /
-                                   angles.scale -
-                               actor.generic.restPositions()[0];
+  angles.scale =
+      float(actor.calibrated.restPositions()[0].z() / actor.generic.restPositions()[0].z());
+  const Eigen::Vector3d root =
+      (actor.calibrated.restPositions()[0] + actor.tracked.root_translation_m) / angles.scale -
+      actor.generic.restPositions()[0];
   for (int k = 0; k < 3; ++k) angles.root[k] = float(root[k]);
   for (const Eigen::Vector3d& a : actor.tracked.angles_rad)
     angles.angles.insert(angles.angles.end(), {float(a.x()), float(a.y()), float(a.z())});

@@ -115,6 +115,36 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
   EXPECT_EQ(studio.lastImage(0).rgba[0], 200);
 }
 
+// The director resizes the view while a frame is refined: the frame's image, drawn at the size sent
+// with its pose, is taken and the frame done (it was refused for its size, and the frame dropped).
+TEST(StudioCoordinator, AFramesImagesAreTakenByTheViewSentWithItsPose) {
+  StudioCoordinatorOptions options;
+  options.deadline = milliseconds(2000);
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(2, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint());
+  ASSERT_TRUE(node.send(1, SilhouettesData{}));
+  ASSERT_TRUE(node.await<PoseData>(studio));
+  const StudioCoordinatorOptions defaults;
+  RefinementStatistics stats;
+  stats.reset(10, defaults.refine.offset_count, defaults.refine.colour_bits);
+  ASSERT_TRUE(node.send(1, statisticsMessage(stats, defaults.refine)));
+  ASSERT_TRUE(node.await<OffsetsData>(studio));
+  const ViewData asked = studio.view();
+  ViewData resized = asked;
+  resized.width /= 2, resized.height /= 2;
+  studio.setView(resized);
+  PartialImageData image{asked.view, asked.width, asked.height, ImageEncoding::kRawRgba,
+                         std::vector<uint8_t>(size_t(asked.width) * asked.height * 4, 0)};
+  image.data[0] = 200, image.data[3] = 255;
+  ASSERT_TRUE(node.send(1, image));
+  for (int slice = 0; slice < 100 && studio.framesDone() == 0; ++slice)
+    studio.runFor(milliseconds(10));  // 1 s, half the deadline
+  EXPECT_EQ(studio.framesDone(), 1);
+  ASSERT_FALSE(studio.lastImage(0).rgba.empty());
+  EXPECT_EQ(studio.lastImage(0).width, asked.width);
+}
+
 // A node that sends silhouettes at another step (an older version: step 8) is counted as sending
 // bad messages, its frames still get a pose, and silhouettes of the right size count as before.
 // A node the studio hears from for the first time is answered at once (the take under way, none
