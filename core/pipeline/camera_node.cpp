@@ -256,7 +256,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
         else
           spdlog::info("node {}: camera {} delivers again", name_, rig_.camera(cameras_[c]).name());
       }
-      s.captured_ns = steadyNowNs();
+      s.captured_ns = wallNowNs();  // the studio's latency counts from it, maybe on another PC
       const bool whole = present == cameras_.size();
       if (whole && screen_sets_learnt_ < kScreenWarmupSets)  // screens are learnt from whole sets
         learnScreens(s);

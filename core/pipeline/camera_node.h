@@ -87,7 +87,7 @@ class CameraNode {
  private:
   struct Set {
     int64_t frame_id = -1;
-    int64_t captured_ns = 0;
+    int64_t captured_ns = 0;          // wall clock (wallNowNs)
     std::vector<CameraFrame> frames;  // per own camera; has(k) when camera k's frame is in it
     bool has(size_t k) const { return frames[k].frame_id == frame_id; }
     // Per own camera, the green-screen key of the refinement's samples and the renderer's masks

@@ -10,6 +10,12 @@ int64_t steadyNowNs() {
       .count();
 }
 
+int64_t wallNowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
 double quantile(std::vector<double>& values, double q) {
   if (values.empty()) return 0;
   const size_t at = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));

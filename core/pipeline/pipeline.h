@@ -42,6 +42,10 @@ struct PipelineStats {
 };
 
 int64_t steadyNowNs();
+// The wall clock (CLOCK_REALTIME), in nanoseconds: what a node's capture time and the studio's
+// latency are measured on, since the node and the studio may be different PCs, whose steady
+// clocks count from their own boots; a stage's PCs keep their wall clocks in step (chrony, PTP).
+int64_t wallNowNs();
 
 // The latest samples of a measurement (a ring of fixed size), so that figures follow the recent
 // past and memory stays bounded on a run of hours.

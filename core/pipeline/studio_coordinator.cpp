@@ -619,9 +619,20 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     blend_ms_.add((steadyNowNs() - combined) / 1e6);
     if (frame.pose_sent_ns > 0) statistics_wait_ms_.add((now - frame.pose_sent_ns) / 1e6);
     if (seen_vertices > 0) hull_agreement_sum_ += double(agreeing) / seen_vertices;
-    latencies_ms_.add((now - frame.captured_ns) / 1e6);
-    if (timeline_.size() < kTimelineFrames)
-      timeline_.emplace_back(now, float((now - frame.captured_ns) / 1e6));
+    // From the capture to the image shown, both on the wall clock (the nodes may be other PCs).
+    // Beyond a minute either way the clocks are not in step: the latency is not measured, and the
+    // log says why once.
+    const double latency_ms = (wallNowNs() - frame.captured_ns) / 1e6;
+    if (latency_ms >= 0 && latency_ms < 60'000) {
+      latencies_ms_.add(latency_ms);
+      if (timeline_.size() < kTimelineFrames) timeline_.emplace_back(now, float(latency_ms));
+    } else if (!told_clocks_) {
+      told_clocks_ = true;
+      spdlog::warn(
+          "frame {}: captured {:.0f} s from the studio's clock: the nodes' PCs and the studio's do "
+          "not keep the same time (run chrony or PTP on them); the latency is not measured",
+          frame_id, -latency_ms / 1000);
+    }
     ++frames_done_;
     if (start_ns_ == 0) start_ns_ = now;
     last_done_ns_ = now;

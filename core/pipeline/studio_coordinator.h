@@ -178,7 +178,7 @@ class StudioCoordinator {
  private:
   struct FrameState {
     int64_t first_ns = 0;     // steady clock, when the first node's silhouettes arrived
-    int64_t captured_ns = 0;  // the earliest node capture time
+    int64_t captured_ns = 0;  // the earliest node capture time (wall clock: wallNowNs)
     std::vector<LowResSilhouette> silhouettes;
     std::set<std::string> silhouette_nodes, pose_nodes, statistics_nodes;
     bool mocap_begun = false;  // handed to the motion capture thread
@@ -286,6 +286,7 @@ class StudioCoordinator {
   std::vector<MocapJob> spare_jobs_;      // this thread's, their buffers kept
   Wakeup mocap_ready_;                    // a pose is done
   std::thread mocap_thread_;  // started by the constructor's last line, joined by the destructor
+  bool told_clocks_ = false;  // warned that a node's clock is far from the studio's
   std::string mocap_error_;   // the motion capture's last error, said once
   std::optional<Skeleton> generic_skeleton_;  // the nodes' generic human's (with tracker_)
   std::unique_ptr<MeshRefiner> refiner_;      // made for the first statistics' vertex count

@@ -29,11 +29,12 @@ class ScriptedNode {
           return config;
         }()) {}
 
-  bool send(int64_t frame_id, MessageBody body) {
+  // `sent_ns`: the node's clock at capture (0: now).
+  bool send(int64_t frame_id, MessageBody body, int64_t sent_ns = 0) {
     Message m;
     m.sender = name_;
     m.frame_id = frame_id;
-    m.sent_ns = steadyNowNs();
+    m.sent_ns = sent_ns != 0 ? sent_ns : wallNowNs();
     m.body = std::move(body);
     return endpoint_.send(m, milliseconds(3000));
   }
@@ -113,6 +114,38 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
   EXPECT_EQ(studio.report().frames_dropped, 1);
   ASSERT_FALSE(studio.lastImage(0).rgba.empty());
   EXPECT_EQ(studio.lastImage(0).rgba[0], 200);
+}
+
+// A frame's latency runs from its capture to its image on the wall clock, which the node's PC
+// and the studio's keep in step; a node whose clock is days off is not averaged in (its steady
+// clock, counted from its own boot, put the latency hours off or below zero).
+TEST(StudioCoordinator, LatencyIsMeasuredOnTheWallClockAndOnlyWhenTheClocksAgree) {
+  StudioCoordinatorOptions options;
+  options.deadline = milliseconds(2000);
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(2, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint());
+  const StudioCoordinatorOptions defaults;
+  RefinementStatistics stats;
+  stats.reset(10, defaults.refine.offset_count, defaults.refine.colour_bits);
+  const ViewData& view = studio.view();
+  PartialImageData image{view.view, view.width, view.height, ImageEncoding::kRawRgba,
+                         std::vector<uint8_t>(size_t(view.width) * view.height * 4, 0)};
+  image.data[3] = 255;
+  const int64_t ten_days_ns = int64_t(10) * 24 * 3600 * 1'000'000'000;
+  for (int64_t frame = 1; frame <= 2; ++frame) {
+    ASSERT_TRUE(node.send(frame, SilhouettesData{}, frame == 1 ? wallNowNs() - ten_days_ns : 0));
+    ASSERT_TRUE(node.await<PoseData>(studio));
+    ASSERT_TRUE(node.send(frame, statisticsMessage(stats, defaults.refine)));
+    ASSERT_TRUE(node.await<OffsetsData>(studio));
+    ASSERT_TRUE(node.send(frame, image));
+    for (int slice = 0; slice < 100 && studio.framesDone() < frame; ++slice)
+      studio.runFor(milliseconds(10));
+    ASSERT_EQ(studio.framesDone(), frame);
+  }
+  const RunReport report = studio.report();
+  EXPECT_GT(report.latency_ms_p95, 0);
+  EXPECT_LT(report.latency_ms_p95, 5000);
 }
 
 // The director resizes the view while a frame is refined: the frame's image, drawn at the size sent
