@@ -259,6 +259,21 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       }
       return;
     }
+    // Of the body's vertices (alone, or with their window points), where the studio knows the
+    // body: otherwise the first node to answer, with another mesh, set the sum's sizes and every
+    // node with the right one was refused.
+    if (options_.body && !bodyFits(refinedVertices(int(stats->vertex_count)))) {
+      ++node.report.bad_messages;
+      if (!node.told_statistics) {
+        node.told_statistics = true;
+        spdlog::warn(
+            "node {}: frame {}: refinement statistics of {} points, not of the body's {} vertices: "
+            "not used; does the node pose another body?",
+            node.report.name, message.frame_id, stats->vertex_count,
+            options_.body->rest.vertexCount());
+      }
+      return;
+    }
     if (frame.refine_sum.vertex_count == 0)
       frame.refine_sum.reset(int(stats->vertex_count), stats->offset_count, colour_bits);
     // Integer sums of every node's cameras add up exactly, in any order.
