@@ -4,6 +4,7 @@
 
 #include <memory>
 
+#include "app/cli/checks.h"
 #include "core/body/human_model.h"
 #include "core/body/mesh_io.h"
 
@@ -18,7 +19,9 @@ void addBodyCommands(CLI::App& app) {
   CLI::App* generate = body->add_subcommand(
       "generate", "Write the generic human (closed, manifold, skinned, T-pose) as glTF 2.0");
   generate->add_option("-o,--out", *out, "file to write (.glb or .gltf)")->required();
-  generate->add_option("--vertices", *vertices, "about this many vertices")->capture_default_str();
+  generate->add_option("--vertices", *vertices, "about this many vertices")
+      ->check(within(200, 200000))
+      ->capture_default_str();
   generate->callback([out, vertices] {
     HumanModelSpec spec;
     spec.target_vertices = *vertices;

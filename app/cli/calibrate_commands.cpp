@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "app/cli/checks.h"
 #include "app/cli/progress.h"
 #include "core/base/error.h"
 #include "core/base/output_path.h"
@@ -146,7 +147,7 @@ void addMaxRmsOption(CLI::App* command, double& max_rms_px) {
       ->add_option("--max-rms", max_rms_px,
                    "largest reprojection RMS, pixels, at which the rig file is written (a failed "
                    "solve leaves the old one)")
-      ->check(CLI::PositiveNumber)
+      ->check(within(0.01, 1000))
       ->capture_default_str();
 }
 
@@ -181,7 +182,8 @@ void addCalibrateCommands(CLI::App& app) {
                    "calibration report to write (YAML; default: beside the rig, "
                    "RIG.calibration.yaml, where the studio finds it)");
   wand->add_option("--wand-length", w->wand_length_m,
-                   "metres between the wand's two LEDs (the session's pair lines): the scale");
+                   "metres between the wand's two LEDs (the session's pair lines): the scale")
+      ->check(within(0.01, 10));
   wand->add_option("--initial-rig", w->initial_rig,
                    "rig file whose intrinsics start the solve (and whose nodes are kept)");
   wand->add_option("--hfov", w->hfov_deg,
@@ -195,6 +197,7 @@ void addCalibrateCommands(CLI::App& app) {
   addMaxRmsOption(wand, w->max_rms_px);
   wand->add_option("--threshold", w->threshold,
                    "detector: intensity above which a pixel is the wand")
+      ->check(within(1, 254))
       ->capture_default_str();
   wand->add_flag("--refine-principal-point", w->refine_principal_point,
                  "refine the principal points too (weakly determined: needs thousands of samples); "
@@ -243,13 +246,22 @@ void addCalibrateCommands(CLI::App& app) {
   CLI::App* synth_wand = calibrate->add_subcommand(
       "synth-wand", "Simulate a wand session through a known rig (the truth) and write its points");
   synth_wand->add_option("--rig", sw->rig, "the true rig (default: the reference ring rig)");
-  synth_wand->add_option("--samples", sw->sim.samples)->capture_default_str();
-  synth_wand->add_option("--noise-px", sw->sim.noise_px)->capture_default_str();
-  synth_wand->add_option("--outliers", sw->sim.outlier_fraction, "fraction of observations")
+  synth_wand->add_option("--samples", sw->sim.samples)
+      ->check(within(10, 1e6))
       ->capture_default_str();
-  synth_wand->add_option("--dropout", sw->sim.dropout)->capture_default_str();
-  synth_wand->add_option("--wand-length", sw->sim.wand_length_m,
-                         "> 0: a two-LED wand of this length (pairs of samples)");
+  synth_wand->add_option("--noise-px", sw->sim.noise_px)
+      ->check(within(0, 20))
+      ->capture_default_str();
+  synth_wand->add_option("--outliers", sw->sim.outlier_fraction, "fraction of observations")
+      ->check(within(0, 0.5))
+      ->capture_default_str();
+  synth_wand->add_option("--dropout", sw->sim.dropout)
+      ->check(within(0, 0.9))
+      ->capture_default_str();
+  synth_wand
+      ->add_option("--wand-length", sw->sim.wand_length_m,
+                   "> 0: a two-LED wand of this length (pairs of samples)")
+      ->check(within(0, 10));
   synth_wand->add_option("--seed", sw->sim.seed)->capture_default_str();
   synth_wand->add_option("-o,--out", sw->out, "wand points file to write")->required();
   synth_wand->add_option("--session", sw->session,

@@ -10,6 +10,7 @@
 #include <memory>
 #include <thread>
 
+#include "app/cli/checks.h"
 #include "app/cli/progress.h"
 #include "core/base/error.h"
 #include "core/capture/aravis_source.h"
@@ -84,7 +85,8 @@ void addCameraCommands(CLI::App& app) {
       ->check(CLI::Range(1, 100000));
   serve->add_option("--address", v->address, "address of the first camera")->capture_default_str();
   serve->add_option("--pixel-format", v->pixel_format, pixelFormatNames())->capture_default_str();
-  serve->add_option("--seconds", v->seconds, "stop after this long (default: until interrupted)");
+  serve->add_option("--seconds", v->seconds, "stop after this long (default: until interrupted)")
+      ->check(within(0.1, 1e7));
   serve->callback([v] {
     PixelFormat format = pixelFormatOption(v->pixel_format);
     auto loop = std::make_shared<FrameLoop>();
@@ -147,11 +149,15 @@ void addCameraCommands(CLI::App& app) {
   stream->add_option("--device", s->devices,
                      "camera devices in rig order (address, serial or id), instead of --address");
   stream->add_option("--pixel-format", s->pixel_format, pixelFormatNames())->capture_default_str();
-  stream->add_option("--fps", s->fps, "frame rate asked of the cameras")->capture_default_str();
+  stream->add_option("--fps", s->fps, "frame rate asked of the cameras")
+      ->check(within(0.1, 1000))
+      ->capture_default_str();
   stream->add_option("--session", s->session, "replay this recorded session instead of cameras");
   stream->add_option("--replay", s->replay, "replay pace: rate (as recorded), fast, memory")
       ->capture_default_str();
-  stream->add_option("--seconds", s->seconds, "how long")->capture_default_str();
+  stream->add_option("--seconds", s->seconds, "how long")
+      ->check(within(0.1, 1e7))
+      ->capture_default_str();
   stream->add_option("--record", s->record,
                      "record complete frame sets into this new session folder");
   stream

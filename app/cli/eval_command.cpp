@@ -4,6 +4,7 @@
 
 #include <optional>
 
+#include "app/cli/checks.h"
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/base/output_path.h"
@@ -158,8 +159,10 @@ void addEvalCommand(CLI::App& app) {
       ->required();
   eval->add_option("--json", args->json, "write the report as JSON (docs/eval-report.md)");
   eval->add_option("--cameras", args->cameras,
-                   "use this many of the rig's cameras, evenly spread (default: all)");
-  eval->add_option("--frames", args->frames, "only the first N frames (default: all)");
+                   "use this many of the rig's cameras, evenly spread (default: all)")
+      ->check(within(2, 1000));
+  eval->add_option("--frames", args->frames, "only the first N frames (default: all)")
+      ->check(within(1, 1e9));
   eval->add_option("--config", args->config,
                    "studio config whose `refine:` section sets the refinement (default: built in)");
   eval->add_option("--loo-frames", args->loo_frames,
@@ -187,6 +190,9 @@ void addEvalCommand(CLI::App& app) {
     report.set("segment", "key_screen_excess_min", key.dimmest_screen);
 
     MocapEvalOptions mocap;
+    if (args->cameras > session.rig().cameraCount())
+      throw Error(fmt::format("--cameras {}: the session's rig has {} cameras", args->cameras,
+                              session.rig().cameraCount()));
     mocap.camera_count = args->cameras;
     mocap.max_frames = args->frames;
     const SkinnedMesh generic = loadGenericHuman();

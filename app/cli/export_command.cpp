@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "app/cli/checks.h"
 #include "app/cli/progress.h"
 #include "core/base/error.h"
 #include "core/base/output_path.h"
@@ -38,7 +39,8 @@ void addExportCommand(CLI::App& app) {
       "an animated glTF and per-frame PLY/OBJ (default: --bvh --glb)");
   exp->add_option("--session", args->session, "the recorded session")->required();
   exp->add_option("-o,--out", args->out, "folder to write into (created)")->required();
-  exp->add_option("--frames", args->frames, "only the first N frames (default: all)");
+  exp->add_option("--frames", args->frames, "only the first N frames (default: all)")
+      ->check(within(1, 1e9));
   exp->add_flag("--bvh", args->bvh, "skeleton.bvh: the tracked motion, the actor's bone lengths");
   exp->add_flag("--glb", args->glb, "surface.glb: the surface of every frame, animated");
   exp->add_flag("--ply", args->ply, "meshes/NNNNNN.ply: the surface of each frame");

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "app/cli/checks.h"
 #include "app/cli/progress.h"
 #include "core/base/error.h"
 #include "core/base/output_path.h"
@@ -69,10 +70,12 @@ void addRenderCommand(CLI::App& app) {
       ->add_option("--mesh", a->mesh,
                    "geometry: truth (the session's truth/surface) or a folder of NNNNNN.ply")
       ->capture_default_str();
-  render->add_option("--width", a->width)->capture_default_str();
-  render->add_option("--height", a->height)->capture_default_str();
-  render->add_option("--frames", a->frames, "frames to render (default: the session's)");
-  render->add_option("--fps", a->fps, "video rate (default: the session's)");
+  render->add_option("--width", a->width)->check(within(16, 7680))->capture_default_str();
+  render->add_option("--height", a->height)->check(within(16, 4320))->capture_default_str();
+  render->add_option("--frames", a->frames, "frames to render (default: the session's)")
+      ->check(within(1, 1e9));
+  render->add_option("--fps", a->fps, "video rate (default: the session's)")
+      ->check(within(1, 1000));
   render->add_option("--clones", a->clones, "copies of the actor side by side, 1 m apart")
       ->check(CLI::Range(1, CloneSet::kMaxClones))
       ->capture_default_str();

@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "app/cli/checks.h"
 #include "core/base/output_path.h"
 #include "core/geometry/rig_file.h"
 #include "core/geometry/rig_import.h"
@@ -106,13 +107,20 @@ auto spec = std::make_shared<RingRigSpec>();
 auto ring_out = std::make_shared<std::string>();
 CLI::App* ring = rig->add_subcommand(
     "ring", "Write a ring of cameras around the stage (defaults: the reference rig)");
-ring->add_option("--cameras", spec->cameras, "number of cameras")->capture_default_str();
-ring->add_option("--cameras-per-node", spec->cameras_per_node)->capture_default_str();
-ring->add_option("--width", spec->width)->capture_default_str();
-ring->add_option("--height", spec->height)->capture_default_str();
-ring->add_option("--radius", spec->radius_m, "distance from the stage centre (m)")
+ring->add_option("--cameras", spec->cameras, "number of cameras")
+    ->check(within(1, 256))
     ->capture_default_str();
-ring->add_option("--vertical-fov", spec->vertical_fov_deg, "degrees")->capture_default_str();
+ring->add_option("--cameras-per-node", spec->cameras_per_node)
+    ->check(within(1, 64))
+    ->capture_default_str();
+ring->add_option("--width", spec->width)->check(within(16, 16384))->capture_default_str();
+ring->add_option("--height", spec->height)->check(within(16, 16384))->capture_default_str();
+ring->add_option("--radius", spec->radius_m, "distance from the stage centre (m)")
+    ->check(within(0.5, 100))
+    ->capture_default_str();
+ring->add_option("--vertical-fov", spec->vertical_fov_deg, "degrees")
+    ->check(within(1, 179))
+    ->capture_default_str();
 ring->add_option("-o,--out", *ring_out, "rig file to write")->required();
 ring->callback([spec, ring_out] {
   const Rig rig = makeRingRig(*spec);

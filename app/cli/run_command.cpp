@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "app/cli/checks.h"
 #include "app/cli/machine_info.h"
 #include "app/cli/run_plot.h"
 #include "core/base/atomic_file.h"
@@ -130,10 +131,14 @@ void addRunCommand(CLI::App& app) {
   run->add_option("--listen", a->listen,
                   "or nodes on the stage's PCs: listen for them here (e.g. tcp://*:5570), with "
                   "--rig and --keys; no node process is started on this machine");
-  run->add_option("--nodes", a->nodes, "how many of the rig's nodes to start (default: all)");
+  run->add_option("--nodes", a->nodes, "how many of the rig's nodes to start (default: all)")
+      ->check(within(1, 1000));
   run->add_option("--frames", a->frames, "stop after this many complete frames")
+      ->check(within(1, 1e12))
       ->capture_default_str();
-  run->add_option("--seconds", a->seconds, "or after this long")->capture_default_str();
+  run->add_option("--seconds", a->seconds, "or after this long")
+      ->check(within(0.1, 1e7))
+      ->capture_default_str();
   run->add_option("--max-in-flight", a->max_in_flight,
                   "frames between motion capture and done at once; a newer frame is dropped "
                   "before any work (0: no limit, frames queue)")

@@ -315,6 +315,31 @@ TEST(Cli, ANodeRefusesASessionWhoseCamerasAreNotWhereItsRigHasThem) {
   fs::remove_all(folder);
 }
 
+// Numbers out of range, or not numbers, are refused by option before any work: a run of 0 or NaN
+// seconds exited 0 having done nothing, eval --cameras 1 tracked nobody, rig ring --cameras
+// 2147483647 grew past a gigabyte, --max-rms nan failed a good solve.
+TEST(Cli, NumbersOutOfRangeAreRefusedByTheirOption) {
+  const struct {
+    std::string command, message;
+  } cases[] = {
+      {" run --session /nonexistent --seconds nan",
+       "--seconds: expected a number from 0.1 to 10000000, got nan"},
+      {" stream --session /nonexistent --seconds 0", "--seconds: expected a number from 0.1"},
+      {" eval --session /nonexistent --cameras 1", "--cameras: expected a number from 2 to 1000"},
+      {" rig ring --cameras 2147483647 --out /nonexistent/r.yaml",
+       "--cameras: expected a number from 1 to 256, got 2147483647"},
+      {" calibrate wand --points /nonexistent --out /nonexistent/r.yaml --max-rms nan",
+       "--max-rms: expected a number from 0.01 to 1000, got nan"},
+      {" body generate --vertices 0 --out /nonexistent/b.glb",
+       "--vertices: expected a number from 200 to 200000, got 0"},
+  };
+  for (const auto& c : cases) {
+    const Result r = run(kCli + c.command);
+    EXPECT_NE(r.exit_code, 0) << c.command;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.command << "\n" << r.output;
+  }
+}
+
 TEST(Cli, RunFailsWhenANodeProcessDies) {
   const fs::path folder = tempPath("node_dies");
   ASSERT_TRUE(synthRingSession(folder, "--cameras 2 --cameras-per-node 1 --width 320 --height 240",
