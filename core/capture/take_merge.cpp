@@ -170,7 +170,26 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
 
   const ImageFiles out_files = files.value_or(first.imageFiles());
   const bool copy = out_files == first.imageFiles();
-  SessionWriter writer(out, merged_rig, first.pixelFormat(), first.fps(),
+  // Written beside `out` and put in its place once whole: a merge cut short (a full disk, an
+  // interrupted run) left a shorter session under the name that opened without a word.
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_empty(out, ec))
+    throw Error(out.string() +
+                ": already exists and is not empty; a session is never written "
+                "over another");
+  fs::path partial = out;
+  partial += ".partial";
+  if (fs::exists(partial, ec))
+    throw Error(partial.string() + ": left by a merge that did not finish; remove it first");
+  struct RemovePartial {
+    const fs::path& path;
+    bool done = false;
+    ~RemovePartial() {
+      std::error_code ignored;
+      if (!done) fs::remove_all(path, ignored);  // the parts are whole: nothing is lost
+    }
+  } remove_partial{partial};
+  SessionWriter writer(partial, merged_rig, first.pixelFormat(), first.fps(),
                        fmt::format("take of {} parts", parts.size()), {}, out_files);
   std::vector<fs::path> paths(merged_rig.cameraCount());
   std::vector<std::vector<CameraFrame>> decoded(groups.size());  // per group, when not copying
@@ -206,6 +225,12 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
   }
   report.frames = writer.framesWritten();
   report.bytes = writer.bytesWritten();
+  if (fs::exists(out, ec)) fs::remove(out, ec);  // empty, checked above
+  fs::rename(partial, out, ec);
+  if (ec)
+    throw Error(fmt::format("{}: the merged session could not be put in place: {}", out.string(),
+                            ec.message()));
+  remove_partial.done = true;
   return report;
 }
 

@@ -31,9 +31,10 @@ struct TakeMergeReport {
 // on at the session's rate. Cameras and nodes in the order of `rig` when given (its cameras must be
 // exactly the parts'), else part after part. The images are copied as they are, or, with `files`
 // other than the parts' (a take recorded as PNM, kept as PNG), decoded and written in those.
-// `progress(done, total)` after each frame. Throws Error
-// naming the part and the reason: parts of different pixel formats or rates, a camera in two parts,
-// no frame in common, `out` not empty.
+// `progress(done, total)` after each frame. The session is written as `out`.partial and renamed
+// to `out` once whole: a merge that fails (a full disk) leaves nothing under the name, and removes
+// what it wrote (the parts are untouched). Throws Error naming the part and the reason: parts of
+// different pixel formats or rates, a camera in two parts, no frame in common, `out` not empty.
 TakeMergeReport mergeTake(const std::vector<std::filesystem::path>& parts,
                           const std::filesystem::path& out, const std::optional<Rig>& rig = {},
                           std::optional<ImageFiles> files = {},

@@ -198,6 +198,39 @@ TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
   EXPECT_FALSE(fs::exists(folder / "takes" / "c" / "node3-2"));
 }
 
+// A merge cut short (here a full disk, as far as the merge's writes go) leaves nothing under its
+// name, where a shorter session used to open without a word; the parts stay whole, and the merge
+// done again puts the session in place.
+TEST(Take, AMergeCutShortLeavesNothingUnderItsName) {
+  const Rig rig = takeRig();
+  const fs::path folder = testing::testFolder("take_cut");
+  std::vector<std::unique_ptr<TakeRecorder>> nodes;
+  for (const RigNode& node : rig.nodes())
+    nodes.push_back(std::make_unique<TakeRecorder>(folder / "takes", rig, node.name, 30.0));
+  for (auto& node : nodes) node->command({"t", 0, 4});
+  for (int64_t f = 0; f < 6; ++f)
+    for (int n = 0; n < 3; ++n) nodes[n]->offer(f, nodeSet(rig, n, f));
+  for (auto& node : nodes) ASSERT_TRUE(finished(*node).error.empty());
+  std::vector<fs::path> parts;
+  for (const RigNode& node : rig.nodes()) parts.push_back(folder / "takes" / "t" / node.name);
+  const fs::path out = folder / "merged";
+  const int code = testing::inChildProcess([&] {
+    testing::limitFileSize(2000);  // less than an image
+    try {
+      mergeTake(parts, out);
+    } catch (const Error&) {
+      return 1;
+    }
+    return 0;
+  });
+  EXPECT_EQ(code, 1);
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(folder / "merged.partial"));
+  EXPECT_EQ(mergeTake(parts, out).frames, 5);
+  EXPECT_EQ(SessionReader(out).frameCount(), 5);
+  fs::remove_all(folder);
+}
+
 TEST(Take, PartsThatDoNotBelongTogetherAreRefusedByName) {
   const Rig rig = takeRig();
   const fs::path folder = testing::testFolder("take");
