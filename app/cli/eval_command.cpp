@@ -172,6 +172,7 @@ void addEvalCommand(CLI::App& app) {
   eval->add_flag("--quiet", args->quiet, "no report on standard output");
   eval->callback([args] {
     refuseOutputOverInputs("--json", args->json, {{"--session", args->session}});
+    requireOutputFolder("--json", args->json);
     const SessionReader session(args->session);
     if (!session.hasTruth())
       throw Error(args->session + ": no ground truth (truth/) to evaluate against");

@@ -4,11 +4,13 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <string_view>
 
 #include "app/cli/checks.h"
 #include "app/cli/machine_info.h"
@@ -165,9 +167,12 @@ void addRunCommand(CLI::App& app) {
                   "DIR joins them)");
   run->callback([a] {
     if (!a->listen.empty()) {
-      if (a->rig.empty() || !a->session.empty() || !a->address.empty())
-        throw CLI::ValidationError("--listen",
-                                   "give --rig FILE (the nodes bring their own cameras)");
+      if (!a->session.empty() || !a->address.empty())
+        throw CLI::ValidationError(
+            "--listen",
+            "the nodes on the stage's PCs bring their own cameras: no --session or "
+            "--address with it");
+      if (a->rig.empty()) throw CLI::ValidationError("--listen", "give --rig FILE");
     } else if (a->session.empty() == (a->rig.empty() || a->address.empty())) {
       throw CLI::ValidationError("--session",
                                  "give either --session DIR, or --rig FILE with --address A");
@@ -178,8 +183,18 @@ void addRunCommand(CLI::App& app) {
           {"--image", a->image},
           {"--plot", a->plot},
           {"--record-view", a->record_view},
-          {"--record-take", a->record_take}})
+          {"--record-take", a->record_take}}) {
       refuseOutputOverInputs(option, path, {{"--session", a->session}, {"--rig", a->rig}});
+      // A take makes its own folder.
+      if (std::string_view(option) != "--record-take") requireOutputFolder(option, path);
+    }
+    for (const auto& [option, path] :
+         {std::pair<const char*, const std::string&>{"--image", a->image}, {"--plot", a->plot}}) {
+      std::string extension = std::filesystem::path(path).extension().string();
+      for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+      if (!path.empty() && extension != ".png" && extension != ".jpg" && extension != ".jpeg")
+        throw Error(std::string(option) + " " + path + ": expected a .png or .jpg file");
+    }
     LocalRunOptions options;
     options.session = a->session;
     options.rig = a->rig;

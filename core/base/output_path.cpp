@@ -31,4 +31,13 @@ void refuseOutputOverInputs(std::string_view option, const fs::path& output,
   }
 }
 
+void requireOutputFolder(std::string_view option, const fs::path& output) {
+  if (output.empty()) return;
+  const fs::path folder = fs::absolute(output).parent_path();
+  std::error_code error;
+  if (!fs::is_directory(folder, error))
+    throw Error(std::string(option) + " " + output.string() + ": no folder " + folder.string() +
+                " to write it into");
+}
+
 }  // namespace lumistage

@@ -21,4 +21,9 @@ struct CommandInput {
 void refuseOutputOverInputs(std::string_view option, const std::filesystem::path& output,
                             std::initializer_list<CommandInput> inputs);
 
+// Throws Error when the folder `output` would be written into does not exist ("--json nodir/r.json:
+// no folder nodir to write it into"): checked before a command's work, not after a minute's run.
+// An empty output is skipped.
+void requireOutputFolder(std::string_view option, const std::filesystem::path& output);
+
 }  // namespace lumistage

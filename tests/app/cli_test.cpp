@@ -332,6 +332,9 @@ TEST(Cli, NumbersOutOfRangeAreRefusedByTheirOption) {
        "--max-rms: expected a number from 0.01 to 1000, got nan"},
       {" body generate --vertices 0 --out /nonexistent/b.glb",
        "--vertices: expected a number from 200 to 200000, got 0"},
+      // Where a run would write, checked before it starts, not after its minute.
+      {" run --session /nonexistent/session --json /nonexistent/r.json",
+       "--json /nonexistent/r.json: no folder /nonexistent to write it into"},
   };
   for (const auto& c : cases) {
     const Result r = run(kCli + c.command);

@@ -45,6 +45,17 @@ TEST(OutputPath, AnOutputOverOrInsideAnInputIsRefused) {
   EXPECT_EQ(errorOf("", {{"--session", session}}), "no error");
   // A file input is no folder: an output "inside" it is not refused here (its open fails).
   EXPECT_EQ(errorOf(points / "x", {{"--points", points}}), "no error");
+  // A folder to write into: checked before the work.
+  EXPECT_NO_THROW(requireOutputFolder("--json", dir / "r.json"));
+  EXPECT_NO_THROW(requireOutputFolder("--json", ""));
+  try {
+    requireOutputFolder("--json", dir / "nodir" / "r.json");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no folder " + (dir / "nodir").string()),
+              std::string::npos)
+        << e.what();
+  }
   fs::remove_all(dir);
 }
 
