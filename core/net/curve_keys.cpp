@@ -175,7 +175,11 @@ fs::path KeyStore::authorizedPath(const std::string& name) const {
 }
 
 void KeyStore::init(const std::vector<std::string>& nodes, bool replace) {
-  for (const std::string& name : nodes) requireNodeName(name);
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    requireNodeName(nodes[i]);
+    if (std::find(nodes.begin(), nodes.begin() + i, nodes[i]) != nodes.begin() + i)
+      throw Error("node '" + nodes[i] + "' is named twice");
+  }
   std::error_code ec;
   if (!replace && fs::exists(studioKeyPath(), ec)) {
     throw Error(studioKeyPath().string() +
@@ -199,6 +203,13 @@ void KeyStore::init(const std::vector<std::string>& nodes, bool replace) {
 
 CurveKeyPair KeyStore::addNode(const std::string& name) {
   std::error_code ec;
+  // A node's key is only of use to the studio whose key is here: without it, a folder of node keys
+  // that no studio admits.
+  if (!fs::exists(studioKeyPath(), ec)) {
+    throw Error(studioKeyPath().string() +
+                ": no studio key here; create the keys with 'lumistage keys init' first (or give "
+                "--dir the studio's key folder)");
+  }
   if (fs::exists(nodeKeyPath(name), ec) || fs::exists(authorizedPath(name), ec)) {
     throw Error(nodeKeyPath(name).string() + ": node '" + name + "' has a key already");
   }

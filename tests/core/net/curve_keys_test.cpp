@@ -75,6 +75,16 @@ TEST_F(CurveKeysTest, InitWritesStudioAndNodeKeysWithSecretsPrivate) {
   EXPECT_NE(errorOf([&] { store.addNode("node3"); }).find("has a key already"), std::string::npos);
   EXPECT_NE(errorOf([&] { store.addNode("../evil"); }).find("expected 1 to 64 letters"),
             std::string::npos);
+  // A node's key where there is no studio key (a mistyped --dir): refused, nothing written. The
+  // store made then held node keys that no studio admits.
+  KeyStore elsewhere(dir_ / "elsewhere");
+  EXPECT_NE(errorOf([&] { elsewhere.addNode("node4"); }).find("no studio key here"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(dir_ / "elsewhere"));
+  EXPECT_NE(errorOf([&] {
+              elsewhere.init({"n1", "n1"});
+            }).find("node 'n1' is named twice"),
+            std::string::npos);
 }
 
 TEST_F(CurveKeysTest, BadKeyFilesNameFileLineAndKey) {
