@@ -117,6 +117,13 @@ int main(int argc, char** argv) {
   parser.addOption(plain_option);
   parser.addOption(screenshot_option);
   parser.process(app);
+  if (parser.isSet(pipeline_option) && parser.isSet(listen_option)) {
+    // One pipeline at a time: both started the pipeline panel twice, the second replacing the
+    // first.
+    std::fprintf(stderr,
+                 "lumistage-studio: give --pipeline SESSION or --listen ADDRESS, not both\n");
+    return 2;
+  }
 
   QString rig_path = parser.value(rig_option);
   if (rig_path.isEmpty()) {
