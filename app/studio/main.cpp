@@ -117,11 +117,12 @@ int main(int argc, char** argv) {
   parser.addOption(plain_option);
   parser.addOption(screenshot_option);
   parser.process(app);
-  if (parser.isSet(pipeline_option) && parser.isSet(listen_option)) {
-    // One pipeline at a time: both started the pipeline panel twice, the second replacing the
-    // first.
+  if (int(parser.isSet(pipeline_option)) + int(parser.isSet(listen_option)) +
+          int(parser.isSet(demo_option)) >
+      1) {
+    // One pipeline at a time: each started the pipeline panel, the last replacing the others.
     std::fprintf(stderr,
-                 "lumistage-studio: give --pipeline SESSION or --listen ADDRESS, not both\n");
+                 "lumistage-studio: give one of --demo, --pipeline SESSION and --listen ADDRESS\n");
     return 2;
   }
 

@@ -285,6 +285,8 @@ void SessionReader::readIndex() {
         file, 1, "",
         "expected the header 'frame,timestamp_ns', got '" + std::string(lines.complete[0]) + "'"));
   }
+  int bad_times = 0;
+  std::string first_bad_time;
   for (size_t l = 1; l < lines.complete.size(); ++l) {
     const std::string_view line = lines.complete[l];
     const int line_number = int(l) + 1;
@@ -305,22 +307,28 @@ void SessionReader::readIndex() {
                          fmt::format("frame {} after frame {}: frame numbers must increase",
                                      entry.id, frames_.back().id)));
     }
-    // Times from the recording's start: a replay at the recorded rate waits for them (one going
-    // back replayed the rest at once, an absurd one waited for ever or overflowed the clock).
+    // Times from the recording's start: a replay at the recorded rate waits for them. One going
+    // back (a camera rebooted mid-take restarts its clock), below 0 or beyond 10 days is taken as
+    // the frame before's (it replayed the rest at once, or waited for ever, or overflowed the
+    // clock), and said once; the frames are kept.
     constexpr int64_t kTenDaysNs = int64_t(10) * 24 * 3600 * 1'000'000'000;
-    if (entry.timestamp_ns < 0 || entry.timestamp_ns > kTenDaysNs) {
-      throw Error(locate(file, line_number, "",
-                         fmt::format("expected a time from 0 to 10 days in nanoseconds, got {}",
-                                     entry.timestamp_ns)));
-    }
-    if (!frames_.empty() && entry.timestamp_ns < frames_.back().timestamp_ns) {
-      throw Error(locate(file, line_number, "",
-                         fmt::format("frame {} at {} ns, before frame {} at {} ns: times must not "
-                                     "go back",
-                                     entry.id, entry.timestamp_ns, frames_.back().id,
-                                     frames_.back().timestamp_ns)));
+    const int64_t before = frames_.empty() ? 0 : frames_.back().timestamp_ns;
+    if (entry.timestamp_ns < before || entry.timestamp_ns > kTenDaysNs) {
+      if (bad_times == 0) {
+        first_bad_time = locate(
+            file, line_number, "",
+            fmt::format("frame {} at {} ns, after {} ns", entry.id, entry.timestamp_ns, before));
+      }
+      ++bad_times;
+      entry.timestamp_ns = before;
     }
     frames_.push_back(entry);
+  }
+  if (bad_times > 0) {
+    warnings_.push_back(fmt::format(
+        "{}: {} time{} going back, below 0 or beyond 10 days, each taken as the frame before's "
+        "(a camera whose clock restarted?)",
+        first_bad_time, bad_times, bad_times == 1 ? "" : "s"));
   }
   if (!lines.torn.empty()) {
     warnings_.push_back(locate(

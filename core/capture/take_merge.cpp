@@ -177,18 +177,30 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
     throw Error(out.string() +
                 ": already exists and is not empty; a session is never written "
                 "over another");
-  fs::path partial = out;
-  partial += ".partial";
-  if (fs::exists(partial, ec))
+  // An empty folder given (a mount point, a folder made for it): written in place, and emptied
+  // again if the merge fails; else beside it ("out/" taken as "out").
+  const bool in_place = fs::is_directory(out, ec);
+  fs::path named = out.lexically_normal();
+  if (!named.has_filename()) named = named.parent_path();
+  const fs::path partial =
+      in_place ? out : named.parent_path() / (named.filename().string() + ".partial");
+  if (!in_place && fs::exists(partial, ec))
     throw Error(partial.string() + ": left by a merge that did not finish; remove it first");
   struct RemovePartial {
     const fs::path& path;
+    bool keep_folder;
     bool done = false;
     ~RemovePartial() {
-      std::error_code ignored;
-      if (!done) fs::remove_all(path, ignored);  // the parts are whole: nothing is lost
+      if (done) return;
+      std::error_code ignored;  // the parts are whole: nothing is lost
+      if (!keep_folder) {
+        fs::remove_all(path, ignored);
+        return;
+      }
+      for (const fs::directory_entry& entry : fs::directory_iterator(path, ignored))
+        fs::remove_all(entry.path(), ignored);
     }
-  } remove_partial{partial};
+  } remove_partial{partial, in_place};
   SessionWriter writer(partial, merged_rig, first.pixelFormat(), first.fps(),
                        fmt::format("take of {} parts", parts.size()), {}, out_files);
   std::vector<fs::path> paths(merged_rig.cameraCount());
@@ -225,11 +237,12 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
   }
   report.frames = writer.framesWritten();
   report.bytes = writer.bytesWritten();
-  if (fs::exists(out, ec)) fs::remove(out, ec);  // empty, checked above
-  fs::rename(partial, out, ec);
-  if (ec)
-    throw Error(fmt::format("{}: the merged session could not be put in place: {}", out.string(),
-                            ec.message()));
+  if (!in_place) {
+    fs::rename(partial, named, ec);
+    if (ec)
+      throw Error(fmt::format("{}: the merged session could not be put in place: {}",
+                              named.string(), ec.message()));
+  }
   remove_partial.done = true;
   return report;
 }

@@ -26,6 +26,10 @@ int GreenScreenKeyer::learnScreen(const ImageView& screen, int step, int minimum
   std::nth_element(excess.begin(), excess.begin() + middle, excess.end());
   const int least = std::max(kMinScreenSampleExcess, excess[middle] / 3);
   std::erase_if(excess, [&](int e) { return e < least; });
+  if (excess.empty()) {  // nothing green enough to be a screen (lights off, a lens cap)
+    screen_excess_ = 0;
+    return threshold_;
+  }
   const size_t at = excess.size() / 100;
   std::nth_element(excess.begin(), excess.begin() + at, excess.end());
   screen_excess_ = excess[at];

@@ -184,6 +184,12 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     }
     newest_seen_ = std::max(newest_seen_, message.frame_id);  // where the cameras are (takes)
     node.silhouettes_ns = node.last_ns;
+    // Silhouettes flowing again after none for lost_after (the start, cameras back): every node is
+    // given lost_after from here.
+    if (node.last_ns - newest_silhouettes_ns_ >
+        std::chrono::nanoseconds(options_.lost_after).count())
+      silhouettes_began_ns_ = node.last_ns;
+    newest_silhouettes_ns_ = node.last_ns;
     if (node.told_no_frames) {
       node.told_no_frames = false;
       spdlog::info("node {}: its silhouettes are used again", node.report.name);
@@ -237,7 +243,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     }
     frame.silhouette_nodes.insert(node.report.name);
     int live = 0;
-    for (const auto& [name, n] : nodes_) live += awaited(n, node.last_ns);
+    for (const auto& [name, n] : nodes_) live += awaited(n);
     if (!frame.mocap_begun && static_cast<int>(frame.silhouette_nodes.size()) >= live)
       beginMocap(message.frame_id, frame);
   } else if (const auto* stats = std::get_if<VertexStatisticsData>(&message.body)) {
@@ -335,7 +341,7 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
   int live = 0, with_it = 0;
   int64_t oldest_with_it = frame_id;
   for (const auto& [name, n] : nodes_) {
-    if (&n != &node && !awaited(n, node.last_ns)) continue;
+    if (&n != &node && !awaited(n)) continue;
     ++live;
     if (n.newest_frame >= 0 && near(n.newest_frame, frame_id)) {
       ++with_it;
@@ -523,9 +529,8 @@ void StudioCoordinator::sendPose(int64_t frame_id, FrameState& frame) {
   const std::span<const uint8_t> bytes = encoder_.encode(message);
   frame.views.clear();
   for (const ViewData& view : views_) frame.views.push_back({view.view, view.width, view.height});
-  const int64_t now = steadyNowNs();
   for (auto& [name, node] : nodes_) {
-    if (!awaited(node, now) || node.peer.empty()) continue;
+    if (!awaited(node) || node.peer.empty()) continue;
     bool sent = true;
     for (const std::span<const uint8_t> v : view_bytes_)
       sent = sent && endpoint_.send(node.peer, v, std::chrono::milliseconds(5));
@@ -663,16 +668,19 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   newest_done_ = frame_id;
 }
 
-bool StudioCoordinator::awaited(const NodeState& node, int64_t now_ns) const {
+bool StudioCoordinator::awaited(const NodeState& node) const {
   if (node.report.lost || node.last_ns == 0) return false;
-  const int64_t since = node.silhouettes_ns > node.heard_ns ? node.silhouettes_ns : node.heard_ns;
-  return now_ns - since <= std::chrono::nanoseconds(options_.lost_after).count();
+  // Left out once other nodes' silhouettes have come for lost_after without its own (since it was
+  // heard, or its last): judged against the others, not the clock, so that nodes whose cameras are
+  // slow to start (nobody's silhouettes yet) all stay awaited.
+  const int64_t since = std::max({node.silhouettes_ns, node.heard_ns, silhouettes_began_ns_});
+  return newest_silhouettes_ns_ - since <= std::chrono::nanoseconds(options_.lost_after).count();
 }
 
 void StudioCoordinator::checkDeadlines(int64_t now_ns) {
   const int64_t deadline = std::chrono::nanoseconds(options_.deadline).count();
   for (auto& [name, node] : nodes_) {
-    if (!node.report.lost && !node.told_no_frames && node.last_ns > 0 && !awaited(node, now_ns)) {
+    if (!node.report.lost && !node.told_no_frames && node.last_ns > 0 && !awaited(node)) {
       node.told_no_frames = true;
       spdlog::warn(
           "node {} is heard but none of its silhouettes was used for {} ms (cameras? frame ids "

@@ -211,10 +211,12 @@ class StudioCoordinator {
     bool told_no_frames = false;        // warned that it is heard but sends no usable silhouettes
   };
   // Whether frames wait for the node: for its silhouettes, and for its answer to their poses. It is
-  // heard, and its silhouettes were used within lost_after (or it was first heard less than that
-  // ago: starting). A node that is heard but whose silhouettes are not used (its cameras
+  // heard, and other nodes' silhouettes have not been used for lost_after without its own (since
+  // it was heard). A node that is heard but whose silhouettes are not used (its cameras
   // unplugged, its frame ids or its protocol another's) made every frame wait out two deadlines.
-  bool awaited(const NodeState& node, int64_t now_ns) const;
+  bool awaited(const NodeState& node) const;
+  int64_t newest_silhouettes_ns_ = 0;  // when any node's silhouettes were last used
+  int64_t silhouettes_began_ns_ = 0;   // when they began to come, after none for lost_after
   // The cameras' frame ids move together, a frame at a time. A node's silhouettes whose frame id
   // lies more than kFrameIdWindow (message_codec.h) from the newest the studio has seen (a corrupt
   // or hostile message, a node replaying another session, cameras restarted on one node alone) are

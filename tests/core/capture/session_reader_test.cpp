@@ -297,17 +297,29 @@ TEST(SessionReader, MalformedFilesAreErrorsNamingFileAndLine) {
   expectError(index + ":3: expected frame,timestamp_ns as two whole numbers, got '1,2,33333350'");
   replaceInFile(index, "2,", "0,");
   expectError(index + ":4: frame 0 after frame 1: frame numbers must increase");
-  // Times that go back, or that no replay could wait for: replayed at once, or never, before.
-  replaceInFile(index, "1,", "1,-");
-  expectError(index + ":3: expected a time from 0 to 10 days in nanoseconds, got -33333350");
-  replaceInFile(index, "1,", "1,9999999999");
-  expectError(index +
-              ":3: expected a time from 0 to 10 days in nanoseconds, got 999999999933333350");
-  std::ofstream(index, std::ios::trunc) << "frame,timestamp_ns\n0,0\n1,33333350\n2,1000\n";
-  expectError(index +
-              ":4: frame 2 at 1000 ns, before frame 1 at 33333350 ns: times must not go back");
   replaceInFile(index, "frame,timestamp_ns", "frame;timestamp_ns");
   expectError(index + ":1: expected the header 'frame,timestamp_ns', got 'frame;timestamp_ns'");
+  fs::remove_all(folder);
+}
+
+// Times that go back (a camera whose clock restarted mid-take), below 0 or beyond 10 days: each
+// is taken as the frame before's, with a warning naming the first, and every frame kept. A replay
+// at the recorded rate replayed the rest at once, or waited for ever, or overflowed its clock.
+TEST(SessionReader, TimesGoingBackOrAbsurdAreTheFrameBeforesAndSaid) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("times");
+  writeSession(folder, rig, PixelFormat::kMono8, 4);
+  const fs::path index = folder / "index.csv";
+  std::ofstream(index, std::ios::trunc)
+      << "frame,timestamp_ns\n0,0\n1,33333350\n2,1000\n3,999999999933333350\n";
+  const SessionReader reader(folder);
+  ASSERT_EQ(reader.frameCount(), 4);
+  EXPECT_EQ(reader.timestampNs(2), 33333350);
+  EXPECT_EQ(reader.timestampNs(3), 33333350);
+  EXPECT_TRUE(contains(allWarnings(reader),
+                       index.string() + ":4: frame 2 at 1000 ns, after 33333350 ns: 2 times going "
+                                        "back, below 0 or beyond 10 days"))
+      << allWarnings(reader);
   fs::remove_all(folder);
 }
 

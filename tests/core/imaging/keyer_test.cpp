@@ -96,6 +96,16 @@ TEST_F(KeyerTest, SomethingGreyInViewDoesNotTeachTheKeyThatTheScreenIsGrey) {
   EXPECT_GE(from_grey.screenExcess(), GreenScreenKeyer::kDimScreenExcess);
   EXPECT_NEAR(from_grey.threshold(), from_clean.threshold(), 3);
   EXPECT_GT(from_grey.threshold(), 30);
+  // Grey everywhere (the lights off, a real sensor's noise under a lens cap): no screen at all, the
+  // threshold as it was. (Every sample then fell below the screen's least, and an empty list was
+  // read.)
+  for (size_t p = 0; p < empty.size(); p += 4)
+    for (int k = 0; k < 3; ++k)
+      empty[p + k] = uint8_t(std::clamp(40.0f + noise(rng), 0.0f, 255.0f));
+  rgbaToImage(empty.data(), camera.width(), camera.height(), PixelFormat::kBayerRggb8, grey);
+  GreenScreenKeyer from_dark;
+  EXPECT_EQ(from_dark.learnScreen(grey.view()), GreenScreenKeyer().threshold());
+  EXPECT_EQ(from_dark.screenExcess(), 0);
 }
 
 TEST_F(KeyerTest, BackgroundModelLearnedFromTheEmptyStageFindsTheActor) {

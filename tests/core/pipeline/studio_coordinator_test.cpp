@@ -38,10 +38,10 @@ class ScriptedNode {
     m.body = std::move(body);
     return endpoint_.send(m, milliseconds(3000));
   }
-  // The next message of the kind T from the studio, running it meanwhile.
+  // The next message of the kind T from the studio, running it meanwhile (`slices` of 10 ms).
   template <typename T>
-  std::optional<Message> await(StudioCoordinator& studio) {
-    for (int slice = 0; slice < 300; ++slice) {
+  std::optional<Message> await(StudioCoordinator& studio, int slices = 300) {
+    for (int slice = 0; slice < slices; ++slice) {
       studio.runFor(milliseconds(10));
       if (std::optional<DecodeResult> in = endpoint_.receive(milliseconds(0));
           in && in->ok() && std::holds_alternative<T>(in->message->body)) {
@@ -418,20 +418,48 @@ TEST(StudioCoordinator, AFrameLateAfterANewerOneBeganIsDropped) {
   EXPECT_EQ(std::find(posed.begin(), posed.end(), 10), posed.end()) << "frame 10 posed after 11";
 }
 
-// A node that is heard (heartbeats) but sends no silhouettes (its cameras unplugged) holds no
-// frame once lost_after has passed: the next frame's pose goes out without waiting for its
-// silhouettes (the deadline is 5 s, the wait for the pose 3 s) and is not sent to it, whose
+// A node that is heard (heartbeats) but sends no silhouettes (its cameras unplugged) while the
+// other's come holds no frame once lost_after has passed: the frames' poses go out without waiting
+// for its silhouettes (the deadline is 5 s, the wait for a pose 3 s) and are not sent to it, whose
 // statistics would never come. Every frame waited out two deadlines before.
 TEST(StudioCoordinator, ANodeHeardWithoutSilhouettesHoldsNoFrame) {
   TwoNodeStudio two(milliseconds(5000));
-  for (int k = 0; k < 15; ++k) {  // 1.5 s of heartbeats only
+  for (int k = 0; k < 15; ++k) {  // 1.5 s of node1's frames, node2's heartbeats only
+    ASSERT_TRUE(two.node1.send(2 + k, SilhouettesData{}));
     ASSERT_TRUE(two.node2.send(0, HeartbeatData{}));
     two.studio.runFor(milliseconds(100));
   }
-  ASSERT_TRUE(two.node1.send(2, SilhouettesData{}));
-  EXPECT_EQ(nextPoseFrame(two.node1, two.studio, 2), 2);
+  // The frames after the first second were posed at once (three in flight: 12 to 14), node2's
+  // silhouettes not awaited, and node2 was sent none of their poses.
+  const std::optional<int64_t> posed = nextPoseFrame(two.node1, two.studio, 2);
+  ASSERT_TRUE(posed);
+  EXPECT_GE(*posed, 11);
   EXPECT_EQ(nextPoseFrame(two.node2, two.studio, 2), std::nullopt);
   EXPECT_EQ(two.studio.report().nodes.size(), 2u);
+}
+
+// Two nodes heard for 1.5 s before any camera delivers (cameras slow to open): the first frame
+// waits for both nodes' silhouettes, instead of beginning with the first node's cameras alone (a
+// node counted as silent by the clock, not against the others).
+TEST(StudioCoordinator, NodesWhoseCamerasAreSlowToStartAreAllAwaited) {
+  StudioCoordinatorOptions options;
+  options.deadline = milliseconds(5000);
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
+  for (int k = 0; k < 15; ++k) {
+    ASSERT_TRUE(node1.send(0, HeartbeatData{}));
+    ASSERT_TRUE(node2.send(0, HeartbeatData{}));
+    studio.runFor(milliseconds(100));
+  }
+  ASSERT_TRUE(node1.send(1, SilhouettesData{}));
+  for (int k = 0; k < 10; ++k) {  // a second, both heard
+    ASSERT_TRUE(node1.send(0, HeartbeatData{}));
+    ASSERT_TRUE(node2.send(0, HeartbeatData{}));
+    EXPECT_FALSE(node1.await<PoseData>(studio, 10)) << "posed without node2's silhouettes";
+  }
+  ASSERT_TRUE(node2.send(1, SilhouettesData{}));
+  EXPECT_TRUE(node1.await<PoseData>(studio));
 }
 
 // Two nodes, one heard but without silhouettes; the other's cameras restart (frame ids near 0):

@@ -228,6 +228,25 @@ TEST(Take, AMergeCutShortLeavesNothingUnderItsName) {
   EXPECT_FALSE(fs::exists(folder / "merged.partial"));
   EXPECT_EQ(mergeTake(parts, out).frames, 5);
   EXPECT_EQ(SessionReader(out).frameCount(), 5);
+  // Named with a trailing slash, or an empty folder made for it (a mount point): in place there.
+  EXPECT_EQ(mergeTake(parts, (folder / "slash").string() + "/").frames, 5);
+  EXPECT_EQ(SessionReader(folder / "slash").frameCount(), 5);
+  fs::create_directories(folder / "mounted");
+  EXPECT_EQ(mergeTake(parts, folder / "mounted").frames, 5);
+  EXPECT_EQ(SessionReader(folder / "mounted").frameCount(), 5);
+  fs::create_directories(folder / "mounted_full");
+  EXPECT_EQ(testing::inChildProcess([&] {
+              testing::limitFileSize(2000);
+              try {
+                mergeTake(parts, folder / "mounted_full");
+              } catch (const Error&) {
+                return 1;
+              }
+              return 0;
+            }),
+            1);
+  EXPECT_TRUE(fs::is_directory(folder / "mounted_full"));
+  EXPECT_TRUE(fs::is_empty(folder / "mounted_full"));  // emptied again: nothing under the name
   fs::remove_all(folder);
 }
 
