@@ -478,7 +478,9 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
     std::lock_guard lock(view_mutex_);
     const auto frame = frame_views_.find(message.frame_id);
     if (frame != frame_views_.end()) {
-      render_views_ = frame->second;  // assigned: the vectors keep their memory
+      const FrameViews& kept = frame->second;
+      render_views_.resize(kept.count);
+      for (size_t v = 0; v < kept.count; ++v) render_views_[v] = kept.views[v];  // keep memory
     } else {  // none came with this frame's pose (a studio of an older version): the latest
       render_views_.clear();
       for (const auto& [id, view] : views_) render_views_.push_back(view);
@@ -496,22 +498,26 @@ void CameraNode::keepView(int64_t frame_id, const ViewData& view) {
   auto it = frame_views_.find(frame_id);
   if (it == frame_views_.end()) {
     if (spare_frame_views_.empty()) {
-      it = frame_views_.emplace(frame_id, std::vector<ViewData>()).first;
+      it = frame_views_.emplace(frame_id, FrameViews()).first;
     } else {
       auto node = std::move(spare_frame_views_.back());
       spare_frame_views_.pop_back();
       node.key() = frame_id;
-      node.mapped().clear();
+      node.mapped().count = 0;  // its views' memory kept for the assignments below
       it = frame_views_.insert(std::move(node)).position;
     }
   }
-  std::vector<ViewData>& views = it->second;
-  const auto same = std::find_if(views.begin(), views.end(),
-                                 [&](const ViewData& v) { return v.view == view.view; });
-  if (same != views.end()) {
+  FrameViews& kept = it->second;
+  const auto end = kept.views.begin() + static_cast<std::ptrdiff_t>(kept.count);
+  const auto same =
+      std::find_if(kept.views.begin(), end, [&](const ViewData& v) { return v.view == view.view; });
+  if (same != end) {
     *same = view;
+  } else if (kept.count < kept.views.size()) {
+    kept.views[kept.count++] = view;
   } else {
-    views.push_back(view);
+    kept.views.push_back(view);
+    ++kept.count;
   }
   while (static_cast<int>(frame_views_.size()) > 2 * options_.frames_kept)
     spare_frame_views_.push_back(frame_views_.extract(frame_views_.begin()));

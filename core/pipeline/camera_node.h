@@ -179,8 +179,12 @@ class CameraNode {
   // while it was refined (the nodes' images of one frame, drawn from different views, blended
   // into doubled edges while a director dragged the view), and a view the studio stopped asking
   // for is rendered no more. Map nodes reused: no allocation once warm.
-  std::map<int64_t, std::vector<ViewData>> frame_views_;
-  std::vector<std::map<int64_t, std::vector<ViewData>>::node_type> spare_frame_views_;
+  struct FrameViews {
+    std::vector<ViewData> views;  // the first `count` are the frame's; the rest keep their memory
+    size_t count = 0;
+  };
+  std::map<int64_t, FrameViews> frame_views_;
+  std::vector<std::map<int64_t, FrameViews>::node_type> spare_frame_views_;
   void keepView(int64_t frame_id, const ViewData& view);  // under view_mutex_
   std::vector<ViewData> render_views_;  // the frame's views, for the statistics thread
   // The statistics thread's alone: its OpenGL context and renderer (none when no context).

@@ -28,7 +28,9 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
     const SkinnedMesh generic = loadGenericHuman();
     PoseTrackerOptions tracking;
     tracking.silhouette_step = options.silhouette_step;
-    tracking.stage = stage_.box;
+    // A box the rig file gives as it is; one worked out from the cameras, the tracker's own (it
+    // narrows it where its tables would not fit).
+    if (rig_.stage()) tracking.stage = stage_.box;
     tracker_ = std::make_unique<PoseTracker>(rig, generic, tracking);
     generic_skeleton_ = generic.skeleton;
   }

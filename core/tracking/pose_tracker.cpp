@@ -211,15 +211,36 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
                         int64_t(*std::max_element(cell_h.begin(), cell_h.end())) >=
                     kUnseen<uint16_t>;
   stage = opt.stage ? *opt.stage : stageVolume(rig);
+  const auto tableBytes = [&](const StageBox& box) {
+    const Eigen::Vector3i d = (box.size() / opt.voxel_m).array().ceil().cast<int>();
+    return size_t(d.x()) * d.y() * d.z() * cameras * (wide ? 4 : 2);
+  };
+  // A box worked out from the cameras (none given) is narrowed about its centre, down to the
+  // default floor, until its tables fit: many cameras of a megapixel and more on a wide floor
+  // would pass max_table_bytes where the old 3 x 3 m box did not.
+  if (!opt.stage && !rig.stage() && tableBytes(stage) > opt.max_table_bytes) {
+    const StageBox least;
+    const StageBox covered = stage;
+    while (tableBytes(stage) > opt.max_table_bytes &&
+           (stage.size().x() > least.size().x() || stage.size().y() > least.size().y())) {
+      for (int k = 0; k < 2; ++k) {
+        if (stage.size()[k] <= least.size()[k]) continue;
+        stage.lower[k] += 0.1, stage.upper[k] -= 0.1;
+      }
+    }
+    spdlog::warn("stage: {} narrowed to {} so that the tracker's tables fit {} MB",
+                 describeStage(covered), describeStage(stage), opt.max_table_bytes >> 20);
+  }
   lower = stage.lower;
   dims = (stage.size() / opt.voxel_m).array().ceil().cast<int>();
   const size_t voxels = size_t(dims.x()) * dims.y() * dims.z();
-  const size_t table_bytes = voxels * cameras * (wide ? 4 : 2);
-  if (table_bytes > kMaxTableBytes) {
+  const size_t table_bytes = tableBytes(stage);
+  if (table_bytes > opt.max_table_bytes) {
     throw std::invalid_argument(fmt::format(
         "the stage box ({}) at {} cm voxels needs {} MB of the tracker's tables for {} cameras, "
         "more than {} MB: give the rig file a smaller `stage` (docs/rig-file.md)",
-        describeStage(stage), 100 * opt.voxel_m, table_bytes >> 20, cameras, kMaxTableBytes >> 20));
+        describeStage(stage), 100 * opt.voxel_m, table_bytes >> 20, cameras,
+        opt.max_table_bytes >> 20));
   }
   if (wide) {
     cell_wide.assign(voxels * cameras, kUnseen<uint32_t>);

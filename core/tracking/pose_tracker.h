@@ -26,8 +26,10 @@ struct PoseTrackerOptions {
   // The box carved for the actor: empty, the rig's (stageVolume: the rig file's stage, else the
   // floor the cameras cover). Its lookup tables take 2 bytes a voxel and camera (4 for cameras of
   // a megapixel and more): 110 MB for the reference rig's 4.0 x 4.0 x 2.4 m; a box that needs more
-  // than kMaxTableBytes is refused.
+  // than max_table_bytes is refused; one worked out from the cameras is narrowed about its centre
+  // (down to the default floor) until they fit, and the log says so.
   std::optional<StageBox> stage;
+  size_t max_table_bytes = size_t(1) << 30;
   int iterations = 10;         // Levenberg-Marquardt iterations per tracked frame
   double velocity_gain = 0.8;  // of the constant-velocity prediction (0: the previous pose)
   int init_iterations = 20;    // per initialisation hypothesis
@@ -90,9 +92,8 @@ struct TrackResult {
 class PoseTracker {
  public:
   // `generic`: the generic human (makeHumanSkeleton's joints), whose mesh gives the bones' radii.
-  // Throws std::invalid_argument for a stage box whose tables would pass kMaxTableBytes.
+  // Throws std::invalid_argument for a stage box whose tables would pass max_table_bytes.
   PoseTracker(const Rig& rig, const SkinnedMesh& generic, PoseTrackerOptions options = {});
-  static constexpr size_t kMaxTableBytes = size_t(1) << 30;
   const StageBox& stage() const;  // the box it carves
   ~PoseTracker();
   PoseTracker(const PoseTracker&) = delete;

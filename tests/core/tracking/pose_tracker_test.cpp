@@ -113,6 +113,21 @@ TEST(PoseTracker, TracksAnActorAnywhereOnTheRigsStage) {
   EXPECT_LT(e.max_m, 0.06);
 }
 
+// A box worked out from the cameras whose tables would not fit is narrowed (many megapixel
+// cameras on a wide floor refused a rig the old 3 x 3 m box tracked on); one the rig file gives is
+// refused in words.
+TEST(PoseTracker, ACoveredStageIsNarrowedToFitItsTablesAGivenOneRefused) {
+  Rig rig = makeRingRig({});
+  PoseTrackerOptions options;
+  options.max_table_bytes = size_t(70) << 20;  // the reference rig's 4 x 4 m box needs 110 MB
+  const PoseTracker narrowed(rig, generic(), options);
+  EXPECT_NEAR(narrowed.stage().size().x(), 3.0, 1e-6) << describeStage(narrowed.stage());
+  EXPECT_NEAR(narrowed.stage().size().y(), 3.0, 1e-6);
+  EXPECT_TRUE(narrowed.stage().contains({0, 0, 2.3}));
+  rig.setStage(stageVolume(rig));  // the same box, given
+  EXPECT_THROW(PoseTracker(rig, generic(), options), std::invalid_argument);
+}
+
 // A stage box whose lookup tables would not fit is refused in words, not by the allocator.
 TEST(PoseTracker, RefusesAStageTooLargeForItsTables) {
   PoseTrackerOptions options;
