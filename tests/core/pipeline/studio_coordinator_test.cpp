@@ -78,6 +78,21 @@ VertexStatisticsData statisticsMessage(const RefinementStatistics& stats,
   return message;
 }
 
+// A node's image of `view`: one pixel drawn, fully weighted, of red level `red`.
+PartialImageData onePixelImage(const ViewData& view, uint8_t red = 0) {
+  PartialImageData image{view.view, view.width, view.height, ImageEncoding::kRawRgba,
+                         std::vector<uint8_t>(size_t(view.width) * view.height * 4, 0)};
+  image.data[0] = red, image.data[3] = 255;
+  return image;
+}
+
+// Runs the studio until `frames` frames are done, for at most `slices` of 10 ms.
+int64_t framesDoneAfter(StudioCoordinator& studio, int64_t frames, int slices) {
+  for (int slice = 0; slice < slices && studio.framesDone() < frames; ++slice)
+    studio.runFor(milliseconds(10));
+  return studio.framesDone();
+}
+
 int64_t badMessagesOf(const StudioCoordinator& studio, const std::string& name) {
   for (const NodeReport& n : studio.report().nodes)
     if (n.name == name) return n.bad_messages;
@@ -109,14 +124,8 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
   stats.reset(10, defaults.refine.offset_count, defaults.refine.colour_bits);
   ASSERT_TRUE(node.send(2, statisticsMessage(stats, defaults.refine)));
   ASSERT_TRUE(node.await<OffsetsData>(studio));
-  const ViewData& view = studio.view();
-  PartialImageData image{view.view, view.width, view.height, ImageEncoding::kRawRgba,
-                         std::vector<uint8_t>(size_t(view.width) * view.height * 4, 0)};
-  image.data[0] = 200, image.data[3] = 255;  // one red pixel, fully weighted
-  ASSERT_TRUE(node.send(2, image));
-  for (int slice = 0; slice < 300 && studio.framesDone() == 0; ++slice)
-    studio.runFor(milliseconds(10));
-  EXPECT_EQ(studio.framesDone(), 1);
+  ASSERT_TRUE(node.send(2, onePixelImage(studio.view(), 200)));  // one red pixel
+  EXPECT_EQ(framesDoneAfter(studio, 1, 300), 1);
   EXPECT_EQ(studio.report().frames_dropped, 1);
   ASSERT_FALSE(studio.lastImage(0).rgba.empty());
   EXPECT_EQ(studio.lastImage(0).rgba[0], 200);
@@ -134,10 +143,7 @@ TEST(StudioCoordinator, LatencyIsMeasuredOnTheWallClockAndOnlyWhenTheClocksAgree
   const StudioCoordinatorOptions defaults;
   RefinementStatistics stats;
   stats.reset(10, defaults.refine.offset_count, defaults.refine.colour_bits);
-  const ViewData& view = studio.view();
-  PartialImageData image{view.view, view.width, view.height, ImageEncoding::kRawRgba,
-                         std::vector<uint8_t>(size_t(view.width) * view.height * 4, 0)};
-  image.data[3] = 255;
+  const PartialImageData image = onePixelImage(studio.view());
   const int64_t ten_days_ns = int64_t(10) * 24 * 3600 * 1'000'000'000;
   for (int64_t frame = 1; frame <= 2; ++frame) {
     ASSERT_TRUE(node.send(frame, SilhouettesData{}, frame == 1 ? wallNowNs() - ten_days_ns : 0));
@@ -145,9 +151,7 @@ TEST(StudioCoordinator, LatencyIsMeasuredOnTheWallClockAndOnlyWhenTheClocksAgree
     ASSERT_TRUE(node.send(frame, statisticsMessage(stats, defaults.refine)));
     ASSERT_TRUE(node.await<OffsetsData>(studio));
     ASSERT_TRUE(node.send(frame, image));
-    for (int slice = 0; slice < 100 && studio.framesDone() < frame; ++slice)
-      studio.runFor(milliseconds(10));
-    ASSERT_EQ(studio.framesDone(), frame);
+    ASSERT_EQ(framesDoneAfter(studio, frame, 100), frame);
   }
   const RunReport report = studio.report();
   EXPECT_GT(report.latency_ms_p95, 0);
@@ -173,13 +177,8 @@ TEST(StudioCoordinator, AFramesImagesAreTakenByTheViewSentWithItsPose) {
   ViewData resized = asked;
   resized.width /= 2, resized.height /= 2;
   studio.setView(resized);
-  PartialImageData image{asked.view, asked.width, asked.height, ImageEncoding::kRawRgba,
-                         std::vector<uint8_t>(size_t(asked.width) * asked.height * 4, 0)};
-  image.data[0] = 200, image.data[3] = 255;
-  ASSERT_TRUE(node.send(1, image));
-  for (int slice = 0; slice < 100 && studio.framesDone() == 0; ++slice)
-    studio.runFor(milliseconds(10));  // 1 s, half the deadline
-  EXPECT_EQ(studio.framesDone(), 1);
+  ASSERT_TRUE(node.send(1, onePixelImage(asked, 200)));
+  EXPECT_EQ(framesDoneAfter(studio, 1, 100), 1);  // 1 s, half the deadline
   ASSERT_FALSE(studio.lastImage(0).rgba.empty());
   EXPECT_EQ(studio.lastImage(0).width, asked.width);
 }
@@ -290,14 +289,8 @@ TEST(StudioCoordinator, ANodesAnswerTimesAreMeasured) {
   ASSERT_TRUE(node.send(1, statisticsMessage(stats, refine)));
   ASSERT_TRUE(node.await<OffsetsData>(studio));
   std::this_thread::sleep_for(milliseconds(80));  // rendering
-  const ViewData& view = studio.view();
-  PartialImageData image{view.view, view.width, view.height, ImageEncoding::kRawRgba,
-                         std::vector<uint8_t>(size_t(view.width) * view.height * 4, 0)};
-  image.data[3] = 255;
-  ASSERT_TRUE(node.send(1, image));
-  for (int slice = 0; slice < 300 && studio.framesDone() == 0; ++slice)
-    studio.runFor(milliseconds(10));
-  ASSERT_EQ(studio.framesDone(), 1);
+  ASSERT_TRUE(node.send(1, onePixelImage(studio.view())));
+  ASSERT_EQ(framesDoneAfter(studio, 1, 300), 1);
   const NodeReport report = studio.report().nodes.at(0);
   EXPECT_GE(report.statistics_ms, 150);
   EXPECT_LT(report.statistics_ms, 1500);
