@@ -1,7 +1,12 @@
 #include "core/imaging/keyer.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+
+#include "core/base/error.h"
 
 namespace lumistage {
 
@@ -37,8 +42,31 @@ int GreenScreenKeyer::learnScreen(const ImageView& screen, int step, int minimum
   return threshold_;
 }
 
+namespace {
+
+int checkedSize(int width, int height, int block) {
+  if (width <= 0 || height <= 0 || block <= 0) {
+    throw Error(fmt::format("background model: {}x{} pixels in blocks of {}: all must be positive",
+                            width, height, block));
+  }
+  return width;
+}
+
+}  // namespace
+
+bool GreenScreenKeyer::follow(const GreenScreenKeyer& measured) {
+  const int now = measured.screen_excess_;
+  if (now == 0) return false;
+  if (screen_excess_ > 0 &&
+      std::abs(now - screen_excess_) <= std::max(kFollowLevels, screen_excess_ / 8))
+    return false;
+  threshold_ = measured.threshold_;
+  screen_excess_ = now;
+  return true;
+}
+
 BackgroundModel::BackgroundModel(int width, int height, int block, float k)
-    : width_(width),
+    : width_(checkedSize(width, height, block)),
       height_(height),
       block_(block),
       columns_((width + block - 1) / block),
@@ -48,6 +76,10 @@ BackgroundModel::BackgroundModel(int width, int height, int block, float k)
       sum2_(size_t(columns_) * rows_ * 3, 0.0) {}
 
 void BackgroundModel::add(const ImageView& empty) {
+  if (empty.width != width_ || empty.height != height_ || empty.data == nullptr) {
+    throw Error(fmt::format("background model of {}x{} pixels: an empty stage's frame of {}x{}",
+                            width_, height_, empty.width, empty.height));
+  }
   // Sample a few pixels per block: the spread of a block includes its texture and the noise.
   for (int y = 0; y < height_; y += 2) {
     for (int x = 0; x < width_; x += 2) {
@@ -64,6 +96,7 @@ void BackgroundModel::add(const ImageView& empty) {
 }
 
 void BackgroundModel::learn() {
+  if (frames_ == 0) throw Error("background model: no frame of the empty stage to learn from");
   const size_t blocks = size_t(columns_) * rows_;
   mean_.assign(blocks * 3, 0.0f);
   limit2_.assign(blocks, 0.0f);

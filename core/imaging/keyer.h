@@ -91,6 +91,15 @@ class GreenScreenKeyer {
   // and tracked.
   static constexpr int kDimScreenExcess = 40;
   static constexpr int kMinScreenSampleExcess = 8;  // a grey's noise stays below
+  // Follows `measured`, the same screen learnt again from a later frame: takes its threshold when
+  // its darkest excess moved from the learnt one by more than an eighth (and kFollowLevels), so
+  // that a screen whose lights dimmed since it was learnt is not keyed as the actor (its darkest
+  // parts fall below a threshold three quarters of what they were), and a brighter one keys the
+  // spill on the actor's edges again; the few levels a frame's noise and the actor's moving
+  // shadow shift it by leave the key as it is. A measurement that saw no screen changes nothing.
+  // Returns whether the key changed.
+  bool follow(const GreenScreenKeyer& measured);
+  static constexpr int kFollowLevels = 4;
 
  private:
   int threshold_;
@@ -103,8 +112,11 @@ class GreenScreenKeyer {
 // actor.
 class BackgroundModel {
  public:
+  // Throws Error unless the sizes are positive.
   BackgroundModel(int width, int height, int block = 8, float k = 4.0f);
-  // Adds a frame of the empty stage; call learn() after the last.
+  // Adds a frame of the empty stage; call learn() after the last, and key only after it. Throws
+  // Error, naming both sizes, for a frame of another size than the model's; learn() does without a
+  // frame.
   void add(const ImageView& empty);
   void learn();
   bool isForeground(const ImageView& image, int x, int y) const {

@@ -261,7 +261,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       if (whole && screen_sets_learnt_ < kScreenWarmupSets)  // screens are learnt from whole sets
         learnScreens(s);
       else if (whole && s.frame_id % kScreenRetrySets == 0)
-        relearnWarnedScreens(s);
+        checkScreens(s);
       s.keyers = published_keyers_;
       if (whole) takes_.offer(s.frame_id, s.frames);  // and takes recorded
       sets_.push(it->second);
@@ -296,22 +296,44 @@ std::shared_ptr<CameraNode::Set> CameraNode::newSet() {
   });
 }
 
-void CameraNode::relearnWarnedScreens(const Set& set) {
+namespace {
+
+// What is wrong with a camera's view of the screen whose darkest green excess is `excess` (empty:
+// nothing), as the camera's health shows it.
+std::string screenWarning(int excess) {
+  if (excess == 0) return "sees no green screen to key";
+  if (excess < GreenScreenKeyer::kDimScreenExcess) {
+    return fmt::format(
+        "green screen too dim to key cleanly (darkest green excess {} of 255 levels, {} "
+        "wanted): light it brighter or more evenly",
+        excess, GreenScreenKeyer::kDimScreenExcess);
+  }
+  return {};
+}
+
+}  // namespace
+
+void CameraNode::checkScreens(const Set& set) {
   bool changed = false;
   for (size_t c = 0; c < cameras_.size(); ++c) {
-    {
-      std::lock_guard lock(source_mutex_);
-      if (screen_warnings_[c].empty()) continue;
-    }
-    GreenScreenKeyer keyer;
-    keyer.learnScreen(set.frames[c].image.view());
-    if (keyer.screenExcess() < GreenScreenKeyer::kDimScreenExcess) continue;
-    keyers_[c] = keyer;
-    changed = true;
-    spdlog::info("node {}: camera {}: green screen learnt now, key threshold {}", name_,
-                 rig_.camera(cameras_[c]).name(), keyer.threshold());
+    GreenScreenKeyer measured;
+    measured.learnScreen(set.frames[c].image.view());
+    const int was = keyers_[c].screenExcess();
+    std::string warning = screenWarning(measured.screenExcess());
+    const std::string& camera = rig_.camera(cameras_[c]).name();
+    const bool followed = keyers_[c].follow(measured);
+    changed = changed || followed;
     std::lock_guard lock(source_mutex_);
-    screen_warnings_[c].clear();
+    // A warning is logged when it comes, not every time its figure moves.
+    if (!warning.empty() && screen_warnings_[c].empty()) {
+      spdlog::warn("node {}: camera {}: {}", name_, camera, warning);
+    } else if (warning.empty() && (followed || !screen_warnings_[c].empty())) {
+      spdlog::info(
+          "node {}: camera {}: green screen learnt again (darkest green excess {} -> {}), "
+          "key threshold {}",
+          name_, camera, was, measured.screenExcess(), keyers_[c].threshold());
+    }
+    screen_warnings_[c] = std::move(warning);
   }
   if (changed) published_keyers_ = std::make_shared<const std::vector<GreenScreenKeyer>>(keyers_);
 }
@@ -328,16 +350,7 @@ void CameraNode::learnScreens(const Set& set) {
   screen_sets_learnt_ = kScreenWarmupSets;                        // fixed from now on
   for (size_t c = 0; c < cameras_.size(); ++c) {
     const std::string& camera = rig_.camera(cameras_[c]).name();
-    const int excess = keyers_[c].screenExcess();
-    std::string warning;
-    if (excess == 0) {
-      warning = "sees no green screen to key";
-    } else if (excess < GreenScreenKeyer::kDimScreenExcess) {
-      warning = fmt::format(
-          "green screen too dim to key cleanly (darkest green excess {} of 255 levels, {} "
-          "wanted): light it brighter or more evenly",
-          excess, GreenScreenKeyer::kDimScreenExcess);
-    }
+    std::string warning = screenWarning(keyers_[c].screenExcess());
     if (warning.empty()) {
       spdlog::info("node {}: camera {}: green screen learnt, key threshold {}", name_, camera,
                    keyers_[c].threshold());

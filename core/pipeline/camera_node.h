@@ -154,10 +154,13 @@ class CameraNode {
   // learnt one (0.1% of the actor's pixels missed instead of 0.6%), the joints came closer on
   // three clips of four but the calibrated body sized the generic mesh worse (leave-one-out 1 to
   // 2 dB lower).
-  // A camera whose screen could not be keyed then (a lens cap, the lights still off) is tried
-  // again every kScreenRetrySets frames, and its warning cleared once its screen keys cleanly.
+  // Every kScreenRetrySets frames after that every camera's screen is measured again
+  // (GreenScreenKeyer::follow): a camera whose screen could not be keyed then (a lens cap, the
+  // lights still off) is learnt once it shows, its warning cleared; one whose lights dimmed or
+  // brightened since is learnt again, and warned of when it is now too dim (0.09 ms of CPU a camera
+  // at 1024x768, imaging_bench measureScreen, once a second at 30 fps).
   static constexpr int kScreenWarmupSets = 30, kScreenRetrySets = 30;
-  void relearnWarnedScreens(const Set& set);
+  void checkScreens(const Set& set);
   std::vector<GreenScreenKeyer> keyers_;
   std::shared_ptr<const std::vector<GreenScreenKeyer>> published_keyers_;
   int screen_sets_learnt_ = 0;  // sets learnt from so far; kScreenWarmupSets once fixed

@@ -50,6 +50,17 @@ void nodeSilhouette(benchmark::State& state) {
 }
 BENCHMARK(nodeSilhouette)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
 
+// A camera's screen measured again, as a node does for each camera once every 30 frames
+// (CameraNode::checkScreens).
+void measureScreen(benchmark::State& state) {
+  const lumistage::Image image = stageFrame();
+  for (auto _ : state) {
+    lumistage::GreenScreenKeyer measured;
+    benchmark::DoNotOptimize(measured.learnScreen(image.view()));
+  }
+}
+BENCHMARK(measureScreen)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
 
 #include "core/geometry/ring_rig.h"

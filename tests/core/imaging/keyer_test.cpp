@@ -1,11 +1,13 @@
 // Keying against the virtual studio's truth: the silhouette masks the renderer knows exactly.
 #include "core/imaging/keyer.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
 
+#include "core/base/error.h"
 #include "core/sim/virtual_studio.h"
 #include "tests/core/sim/reference_studio.h"
 
@@ -108,6 +110,49 @@ TEST_F(KeyerTest, SomethingGreyInViewDoesNotTeachTheKeyThatTheScreenIsGrey) {
   EXPECT_EQ(from_dark.screenExcess(), 0);
 }
 
+// The lights dim after the screen was learnt: the key learnt then takes the screen's darker parts
+// for the actor; following a measurement of the dimmed screen keys it as before. A measurement of
+// the same screen (its noise, the actor moved) leaves the key alone.
+TEST_F(KeyerTest, AKeyFollowsAScreenThatDimmedSinceItWasLearnt) {
+  StudioFrame frame;
+  studio_->renderFrame(10, frame);
+  const Camera& camera = studio_->rig().camera(2);
+  Image lit, dimmed;
+  rgbaToImage(frame.images[2].data(), camera.width(), camera.height(), PixelFormat::kRgb8, lit);
+  std::vector<uint8_t> dim = frame.images[2];
+  for (size_t p = 0; p < dim.size(); ++p) dim[p] = uint8_t(dim[p] * 0.55f);
+  rgbaToImage(dim.data(), camera.width(), camera.height(), PixelFormat::kRgb8, dimmed);
+
+  GreenScreenKeyer keyer;
+  keyer.learnScreen(lit.view());
+  const int learnt = keyer.threshold();
+  GreenScreenKeyer again;
+  again.learnScreen(lit.view());
+  EXPECT_FALSE(keyer.follow(again));
+  EXPECT_EQ(keyer.threshold(), learnt);
+
+  const Agreement before = compare(keyer, dimmed.view(), frame.masks[2]);
+  GreenScreenKeyer measured;
+  measured.learnScreen(dimmed.view());
+  EXPECT_TRUE(keyer.follow(measured));
+  EXPECT_LT(keyer.threshold(), learnt);
+  EXPECT_EQ(keyer.screenExcess(), measured.screenExcess());
+  const Agreement after = compare(keyer, dimmed.view(), frame.masks[2]);
+  EXPECT_GT(before.errorRate(), 0.02) << "the old key should lose the dimmed screen";
+  EXPECT_LT(after.errorRate(), 0.006);
+  EXPECT_GT(after.iou(), 0.95);
+
+  // A measurement that saw no screen (a lens cap) changes nothing.
+  std::vector<uint8_t> black(frame.images[2].size(), 0);
+  Image dark;
+  rgbaToImage(black.data(), camera.width(), camera.height(), PixelFormat::kRgb8, dark);
+  GreenScreenKeyer none;
+  none.learnScreen(dark.view());
+  const int followed = keyer.threshold();
+  EXPECT_FALSE(keyer.follow(none));
+  EXPECT_EQ(keyer.threshold(), followed);
+}
+
 TEST_F(KeyerTest, BackgroundModelLearnedFromTheEmptyStageFindsTheActor) {
   StudioFrame frame;
   studio_->renderFrame(25, frame);
@@ -121,6 +166,23 @@ TEST_F(KeyerTest, BackgroundModelLearnedFromTheEmptyStageFindsTheActor) {
     model.add(screen.view());
   }
   model.learn();
+  // A frame of another camera's size, and nothing to learn from: errors naming what, not a read
+  // past the model's blocks.
+  BackgroundModel other(camera.width() / 2, camera.height());
+  Image screen;
+  studio_->renderEmptyStage(1, 0, empty);
+  rgbaToImage(empty.data(), camera.width(), camera.height(), PixelFormat::kRgb8, screen);
+  try {
+    other.add(screen.view());
+    ADD_FAILURE() << "a frame of another size was taken";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  fmt::format("an empty stage's frame of {}x{}", camera.width(), camera.height())),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(other.learn(), Error);
+  EXPECT_THROW(BackgroundModel(0, 10), Error);
   Image image;
   rgbaToImage(frame.images[1].data(), camera.width(), camera.height(), PixelFormat::kRgb8, image);
   const Agreement a = compare(model, image.view(), frame.masks[1]);

@@ -20,17 +20,21 @@ using std::chrono::milliseconds;
 // The frames of a node's cameras, every camera of every frame in turn (a screen-green image), a
 // frame every 5 ms; from frame `dies_at` on, camera `dead` delivers nothing (unplugged); before
 // frame `dark_until` every image is black (lens caps on); after `restart_at` frames the cameras
-// count from 0 again (all of them reopened after a power cut).
+// count from 0 again (all of them reopened after a power cut); from frame `dim_from` to
+// `dim_until` the screen is lit a fifth as bright (its green excess 18 levels instead of 90).
 class ScriptedSource : public FrameSource {
  public:
   ScriptedSource(Rig rig, std::vector<int> cameras, int dead, int64_t dies_at,
-                 int64_t dark_until = 0, int64_t restart_at = -1)
+                 int64_t dark_until = 0, int64_t restart_at = -1, int64_t dim_from = -1,
+                 int64_t dim_until = -1)
       : rig_(std::move(rig)),
         cameras_(std::move(cameras)),
         dead_(dead),
         dies_at_(dies_at),
         dark_until_(dark_until),
-        restart_at_(restart_at) {}
+        restart_at_(restart_at),
+        dim_from_(dim_from),
+        dim_until_(dim_until) {}
   const Rig& rig() const override { return rig_; }
   bool next(CameraFrame& frame, milliseconds) override {
     for (;;) {
@@ -45,11 +49,20 @@ class ScriptedSource : public FrameSource {
       frame.timestamp_ns = id * 33'333'333;
       const Camera& c = rig_.camera(camera);
       frame.image.resize(PixelFormat::kRgb8, c.width(), c.height());
-      const bool dark = id < dark_until_;
+      const bool dark = id < dark_until_, dim = id >= dim_from_ && id < dim_until_;
+      const uint8_t r = dark  ? 0
+                        : dim ? 8
+                              : 40,
+                    g = dark  ? 0
+                        : dim ? 30
+                              : 150,
+                    b = dark  ? 0
+                        : dim ? 12
+                              : 60;
       for (size_t p = 0; p + 2 < frame.image.pixels.size(); p += 3) {
-        frame.image.pixels[p] = dark ? 0 : 40;
-        frame.image.pixels[p + 1] = dark ? 0 : 150;
-        frame.image.pixels[p + 2] = dark ? 0 : 60;
+        frame.image.pixels[p] = r;
+        frame.image.pixels[p + 1] = g;
+        frame.image.pixels[p + 2] = b;
       }
       return true;
     }
@@ -60,7 +73,7 @@ class ScriptedSource : public FrameSource {
   Rig rig_;
   std::vector<int> cameras_;
   int dead_;
-  int64_t dies_at_, dark_until_, restart_at_;
+  int64_t dies_at_, dark_until_, restart_at_, dim_from_, dim_until_;
   size_t next_ = 0;
 };
 
@@ -218,22 +231,44 @@ TEST(CameraNode, AFrameIsRenderedWithTheViewThatCameWithItsPose) {
 
 // Lens caps on while the node learns the screens: every camera is said to see no screen; the
 // caps off, the screens are learnt after all and the warnings go from the cameras' health.
+// How many of a heartbeat's cameras show `warning` (-1: not a heartbeat).
+int screenWarnings(const Message& m, const std::string& warning) {
+  const auto* h = std::get_if<HeartbeatData>(&m.body);
+  if (!h) return -1;
+  int n = 0;
+  for (const CameraHealthData& c : h->cameras) n += c.last_error.find(warning) != std::string::npos;
+  return n;
+}
+
 TEST(CameraNode, AScreenThatCouldNotBeLearntIsLearntWhenItShows) {
   NodeUnderTest t([](const Rig& rig, std::vector<int> cameras) {
     return std::make_unique<ScriptedSource>(rig, std::move(cameras), -1, 0, /*dark_until=*/150);
   });
-  const auto warnings = [](const Message& m) {
-    int n = 0;
-    if (const auto* h = std::get_if<HeartbeatData>(&m.body))
-      for (const CameraHealthData& c : h->cameras)
-        n += c.last_error.find("no green screen") != std::string::npos;
-    return std::get_if<HeartbeatData>(&m.body) ? n : -1;
-  };
+  const auto warnings = [](const Message& m) { return screenWarnings(m, "no green screen"); };
   EXPECT_TRUE(t.receiveUntil([&](const Message& m) {
     return warnings(m) == int(t.cameras.size());
   })) << "no camera was said to see no screen";
   EXPECT_TRUE(t.receiveUntil([&](const Message& m) { return warnings(m) == 0; }))
       << "the warnings stayed after the screens showed";
+}
+
+// The lights dim after the screens were learnt (a fader pulled, a lamp failing): every camera
+// says so in its health while they are dim, and nothing once they are back.
+TEST(CameraNode, AScreenThatDimsAfterLearningIsWarnedOf) {
+  NodeUnderTest t([](const Rig& rig, std::vector<int> cameras) {
+    return std::make_unique<ScriptedSource>(rig, std::move(cameras), -1, 0, 0, -1,
+                                            /*dim_from=*/300, /*dim_until=*/800);
+  });
+  const auto dim = [](const Message& m) { return screenWarnings(m, "green screen too dim"); };
+  int64_t newest = -1;
+  EXPECT_TRUE(t.receiveUntil([&](const Message& m) {
+    if (std::holds_alternative<SilhouettesData>(m.body)) newest = m.frame_id;
+    return newest >= 100 && dim(m) == 0;
+  })) << "the screens were not learnt clean";
+  EXPECT_TRUE(t.receiveUntil([&](const Message& m) { return dim(m) == int(t.cameras.size()); }))
+      << "no camera was said to see its screen dimmed";
+  EXPECT_TRUE(t.receiveUntil([&](const Message& m) { return dim(m) == 0; }))
+      << "the warnings stayed after the lights came back";
 }
 
 }  // namespace
