@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -27,6 +28,23 @@ namespace lumistage {
 namespace {
 
 std::atomic<bool> g_stop{false};
+
+// The virtual cameras hold every frame they loop in memory: a loop that would take more than half
+// of this machine's memory is refused before anything is loaded or rendered, naming how many
+// frames would fit.
+void checkLoopFits(const Rig& rig, PixelFormat format, int frames) {
+  size_t set_bytes = 0;
+  for (int c = 0; c < rig.cameraCount(); ++c)
+    set_bytes += size_t(rig.camera(c).width()) * rig.camera(c).height() * bytesPerPixel(format);
+  const double memory = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  const double limit = memory / 2, needed = double(set_bytes) * frames;
+  if (memory <= 0 || needed <= limit) return;
+  throw Error(fmt::format(
+      "--frames {}: {} frames of {} cameras need {:.0f} MiB, over half this machine's memory "
+      "({:.0f} MiB); at most --frames {} fit",
+      frames, frames, rig.cameraCount(), needed / 1048576.0, limit / 1048576.0,
+      int(limit / double(std::max<size_t>(1, set_bytes)))));
+}
 
 void onSignal(int) {
   g_stop = true;
@@ -100,6 +118,7 @@ void addCameraCommands(CLI::App& app) {
       loop->frames.resize(rig.cameraCount());
       const int count = std::min(v->frames, reader.frameCount());
       if (count == 0) throw Error(v->session + ": no complete frame to serve");
+      checkLoopFits(rig, format, count);
       std::vector<CameraFrame> frames;
       for (int f = 0; f < count; ++f) {
         reader.readFrame(f, frames);
@@ -111,6 +130,7 @@ void addCameraCommands(CLI::App& app) {
       if (v->config.empty()) throw CLI::RequiredError("--config or --session");
       StudioConfig config = loadStudioConfig(v->config);
       rig = config.rig;
+      checkLoopFits(rig, format, v->frames);
       VirtualStudio studio(std::move(config), v->frames);
       fmt::print("rendering {} frames of {} cameras on {}\n", v->frames, rig.cameraCount(),
                  studio.rendererDescription());

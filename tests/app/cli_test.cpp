@@ -332,6 +332,11 @@ TEST(Cli, NumbersOutOfRangeAreRefusedByTheirOption) {
        "--max-rms: expected a number from 0.01 to 1000, got nan"},
       {" body generate --vertices 0 --out /nonexistent/b.glb",
        "--vertices: expected a number from 200 to 200000, got 0"},
+      // A loop of the reference studio's 12 cameras that would not fit in memory, refused before
+      // it renders for hours.
+      {" virtual-cameras --config " + std::string(LUMISTAGE_TEST_RESOURCE_DIR) +
+           "/studio/reference.yaml --frames 100000",
+       "--frames 100000: 100000 frames of 12 cameras need"},
       // Where a run would write, checked before it starts, not after its minute.
       {" run --session /nonexistent/session --json /nonexistent/r.json",
        "--json /nonexistent/r.json: no folder /nonexistent to write it into"},
