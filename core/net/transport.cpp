@@ -203,6 +203,7 @@ std::optional<ReceivedMessage> StudioEndpoint::receive(std::chrono::milliseconds
     ReceivedMessage received;
     received.peer = frames.at(0).to_string();
     received.node = received.peer;
+    for (size_t f = 1; f < frames.size(); ++f) received.bytes += frames[f].size();
     if (frames.size() >= 2) {
       // Under CURVE the name comes from the key the handshake proved, not from what the peer
       // calls itself.

@@ -45,6 +45,7 @@ struct Refusal {
 struct ReceivedMessage {
   std::string peer;  // the node's routing id: what send() takes to answer it
   std::string node;  // who sent it: the name its CURVE key is authorized under (kPlain: peer)
+  size_t bytes = 0;  // its size on the wire, the routing id left out
   DecodeResult result;
 };
 

@@ -159,6 +159,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   }
   const Message& message = *received.result.message;
   ++node.report.messages;
+  if (counting_) node.counted_bytes += int64_t(received.bytes);
   if (const auto* heartbeat = std::get_if<HeartbeatData>(&message.body)) {
     node.report.bytes = heartbeat->bytes_sent;  // what the node says it has sent in all
     node.report.cameras.clear();
@@ -185,6 +186,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       return;
     }
     newest_seen_ = std::max(newest_seen_, message.frame_id);  // where the cameras are (takes)
+    if (counting_) ++node.counted_frames;
     node.silhouettes_ns = node.last_ns;
     // Silhouettes flowing again after none for lost_after (the start, cameras back): every node is
     // given lost_after from here.
@@ -764,21 +766,21 @@ RunReport StudioCoordinator::report() const {
   r.stage_ms["combine"] = mean(combine_ms_);
   r.stage_ms["blend"] = mean(blend_ms_);
   r.hull_agreement = frames_done_ > 0 ? hull_agreement_sum_ / frames_done_ : 0;
-  double bytes = 0, raw = 0;
+  double per_frame = 0, raw = 0;
   int counted = 0;
   for (const RigNode& node : rig_.nodes()) {
-    const NodeReport& n = nodes_.at(node.name).report;
-    r.nodes.push_back(n);
+    const NodeState& state = nodes_.at(node.name);
+    r.nodes.push_back(state.report);
     for (int c : node.cameras) {
       raw +=
           double(rig_.camera(c).width()) * rig_.camera(c).height() * options_.raw_bytes_per_pixel;
     }
-    if (n.bytes > 0) {
-      bytes += n.bytes;
+    if (state.counted_frames > 0) {
+      per_frame += double(state.counted_bytes) / double(state.counted_frames);
       ++counted;
     }
   }
-  r.node_bytes_per_frame = counted > 0 && frames_done_ > 0 ? bytes / counted / frames_done_ : 0;
+  r.node_bytes_per_frame = counted > 0 ? per_frame / counted : 0;
   r.raw_bytes_per_frame_per_node = rig_.nodeCount() > 0 ? raw / rig_.nodeCount() : 0;
   r.refusals = endpoint_.refusalCount();
   r.frames_in_flight = static_cast<int>(frames_.size());

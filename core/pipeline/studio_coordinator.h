@@ -91,9 +91,9 @@ struct RunReport {
   double fps = 0;
   double latency_ms_p50 = 0, latency_ms_p95 = 0;  // node capture to frame done
   std::map<std::string, double> stage_ms;         // mean per stage
-  double node_bytes_per_frame = 0;                // mean over nodes
-  double raw_bytes_per_frame_per_node = 0;        // what the node's cameras deliver
-  int64_t frames = 0;                             // done: blended and shown
+  double node_bytes_per_frame = 0;          // mean over nodes, per frame it captured (shown or not)
+  double raw_bytes_per_frame_per_node = 0;  // what the node's cameras deliver
+  int64_t frames = 0;                       // done: blended and shown
   int64_t frames_dropped = 0;  // never shown: refused, overtaken, or reached by no node's image
   int64_t frames_refused =
       0;  // of the dropped: at admission, before any work (max_frames_in_flight)
@@ -209,6 +209,9 @@ class StudioCoordinator {
     int64_t heard_ns = 0;               // when it was first heard (again, after being lost)
     int64_t silhouettes_ns = 0;         // when its silhouettes were last used
     bool told_no_frames = false;        // warned that it is heard but sends no usable silhouettes
+    // While counting: the bytes of its messages, and the frames it sent silhouettes for (what it
+    // sends a frame, whether or not the frame is shown).
+    int64_t counted_bytes = 0, counted_frames = 0;
   };
   // Whether frames wait for the node: for its silhouettes, and for its answer to their poses. It is
   // heard, and other nodes' silhouettes have not been used for lost_after without its own (since
