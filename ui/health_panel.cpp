@@ -165,7 +165,6 @@ void HealthPanel::showSnapshot(const PipelineSnapshot& s) {
   for (const NodeReport& node : s.report.nodes) {
     const QString node_name = QString::fromStdString(node.name);
     const bool exited = s.exited.contains(node_name);
-    const double bytes = s.report.frames > 0 ? double(node.bytes) / s.report.frames : -1;
     for (Row& row : rows_) {
       if (row.node != node_name) continue;
       row.from_pipeline = true;
@@ -176,7 +175,10 @@ void HealthPanel::showSnapshot(const PipelineSnapshot& s) {
       row.answer_ms = !exited && !node.lost && node.statistics_ms >= 0 && node.image_ms >= 0
                           ? node.statistics_ms + node.image_ms
                           : -1;
-      row.bytes_per_frame = bytes / std::max<size_t>(1, node.cameras.size());
+      row.bytes_per_frame =
+          node.bytes_per_frame >= 0
+              ? node.bytes_per_frame / double(std::max<size_t>(1, node.cameras.size()))
+              : -1;
       for (const CameraHealth& c : node.cameras) {
         if (QString::fromStdString(c.camera) != row.camera) continue;
         row.fps = c.frame_rate_hz;

@@ -58,25 +58,26 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
     }
     nodes += fmt::format(
         "{}\n    {{\"name\": \"{}\", \"lost\": {}, \"messages\": {}, \"bytes\": {}, "
-        "\"frames_missed\": {}, "
+        "\"bytes_per_frame\": {:.0f}, \"frames_missed\": {}, "
         "\"times_lost\": {}, \"bad_messages\": {}, \"statistics_ms\": {:.2f}, "
         "\"image_ms\": {:.2f}, \"cameras\": [{}]}}",
         nodes.empty() ? "" : ",", n.name, n.lost ? "true" : "false", n.messages, n.bytes,
-        n.frames_missed, n.times_lost, n.bad_messages, n.statistics_ms, n.image_ms, cameras);
+        n.bytes_per_frame, n.frames_missed, n.times_lost, n.bad_messages, n.statistics_ms,
+        n.image_ms, cameras);
   }
   return fmt::format(
       "{{\n  \"fps\": {:.3f},\n  \"latency_ms_p50\": {:.3f},\n  \"latency_ms_p95\": {:.3f},\n  "
       "\"stage_ms\": {{{}}},\n"
       "  \"node_bytes_per_frame\": {:.1f},\n  \"raw_bytes_per_frame_per_node\": {:.1f},\n  "
-      "\"frames\": {},\n"
+      "\"node_bytes_per_s\": {:.0f},\n  \"frames\": {},\n"
       "  \"frames_dropped\": {},\n  \"frames_refused\": {},\n  \"max_frames_in_flight\": {},\n"
       "  \"hull_agreement\": {:.4f},\n  \"refusals\": {},\n"
       "  \"view\": \"{}x{}\",\n  \"cpu_cores_studio\": {:.3f},\n  \"cpu_cores_nodes\": {:.3f},\n"
       "  \"machine\": {},\n  \"nodes\": [{}\n  ]\n}}\n",
       r.fps, r.latency_ms_p50, r.latency_ms_p95, stages, r.node_bytes_per_frame,
-      r.raw_bytes_per_frame_per_node, r.frames, r.frames_dropped, r.frames_refused, max_in_flight,
-      r.hull_agreement, r.refusals, view.width, view.height, cpu.studio_cores, cpu.nodes_cores,
-      machine, nodes);
+      r.raw_bytes_per_frame_per_node, r.node_bytes_per_s, r.frames, r.frames_dropped,
+      r.frames_refused, max_in_flight, r.hull_agreement, r.refusals, view.width, view.height,
+      cpu.studio_cores, cpu.nodes_cores, machine, nodes);
 }
 
 // Stops the take, waits (at most 30 s) for every node to close its part, and says how each went.
@@ -303,12 +304,13 @@ void addRunCommand(CLI::App& app) {
         "ms (95%)\n",
         r.frames, r.frames_dropped, r.fps, r.latency_ms_p50, r.latency_ms_p95);
     for (const auto& [stage, ms] : r.stage_ms) fmt::print("  {:<16} {:8.3f} ms\n", stage, ms);
-    fmt::print("bytes per frame per node {:.0f} against {:.0f} raw ({:.4f}); {} refusals\n",
-               r.node_bytes_per_frame, r.raw_bytes_per_frame_per_node,
-               r.raw_bytes_per_frame_per_node > 0
-                   ? r.node_bytes_per_frame / r.raw_bytes_per_frame_per_node
-                   : 0.0,
-               r.refusals);
+    fmt::print(
+        "bytes per frame per node {:.0f} against {:.0f} raw ({:.4f}), {:.1f} MB/s a node; {} "
+        "refusals\n",
+        r.node_bytes_per_frame, r.raw_bytes_per_frame_per_node,
+        r.raw_bytes_per_frame_per_node > 0 ? r.node_bytes_per_frame / r.raw_bytes_per_frame_per_node
+                                           : 0.0,
+        r.node_bytes_per_s / 1e6, r.refusals);
     fmt::print("CPU: the studio {:.2f} cores, the nodes {:.2f} cores (over {:.1f} s)\n",
                cpu.studio_cores, cpu.nodes_cores, wall_s);
     for (const NodeReport& n : r.nodes) {

@@ -39,7 +39,11 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
   } else {
     spdlog::info("stage: {}", stage_.how);
   }
-  for (const RigNode& node : rig_.nodes()) nodes_[node.name].report.name = node.name;
+  for (size_t n = 0; n < rig_.nodes().size(); ++n) {
+    NodeState& state = nodes_[rig_.nodes()[n].name];
+    state.report.name = rig_.nodes()[n].name;
+    state.index = int(n);
+  }
   timeline_.reserve(4096);
   // Default view: 320x240 from the front-left, 4.5 m out and 1.7 m up, looking at the stage
   // centre 1 m above the floor (camera axes: x right, y down, z forward).
@@ -159,7 +163,11 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   }
   const Message& message = *received.result.message;
   ++node.report.messages;
-  if (counting_) node.counted_bytes += int64_t(received.bytes);
+  if (counting_) {
+    node.counted_bytes += int64_t(received.bytes);
+    if (node.counted_from_ns == 0) node.counted_from_ns = node.last_ns;
+    node.counted_to_ns = node.last_ns;
+  }
   if (const auto* heartbeat = std::get_if<HeartbeatData>(&message.body)) {
     node.report.bytes = heartbeat->bytes_sent;  // what the node says it has sent in all
     node.report.cameras.clear();
@@ -186,7 +194,6 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       return;
     }
     newest_seen_ = std::max(newest_seen_, message.frame_id);  // where the cameras are (takes)
-    if (counting_) ++node.counted_frames;
     node.silhouettes_ns = node.last_ns;
     // Silhouettes flowing again after none for lost_after (the start, cameras back): every node is
     // given lost_after from here.
@@ -209,6 +216,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       frame.captured_ns = message.sent_ns;
     }
     frame.captured_ns = std::min(frame.captured_ns, message.sent_ns);
+    frame.addBytes(node.index, received.bytes);
     for (const SilhouetteMaskData& mask : silhouettes->masks) {
       // Only the node's own cameras, once a frame: a node with another rig file (other cameras at
       // its places) would otherwise carve the hull with masks of the wrong cameras, the last one
@@ -256,6 +264,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       return;
     FrameState& frame = it->second;
     if (frame.statistics_nodes.count(node.report.name)) return;
+    frame.addBytes(node.index, received.bytes);
     const int colour_bits = stats->packed.size() >= 8 ? stats->packed[5] : 0;
     if (stats->offset_count != options_.refine.offset_count || colour_bits < 1 || colour_bits > 8) {
       ++node.report.bad_messages;
@@ -303,6 +312,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     const auto it = frames_.find(message.frame_id);
     if (it == frames_.end() || it->second.pose_sent_ns == 0) return;
     FrameState& frame = it->second;
+    frame.addBytes(node.index, received.bytes);
     const std::array<int, 3> asked{image->view, image->width, image->height};
     if (std::find(frame.views.begin(), frame.views.end(), asked) == frame.views.end())
       return;  // not a view (of that size) sent with the frame's pose
@@ -379,6 +389,7 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
 
 void StudioCoordinator::FrameState::clearForReuse() {
   first_ns = captured_ns = pose_sent_ns = offsets_sent_ns = offsets_out_ns = 0;
+  std::fill(node_bytes.begin(), node_bytes.end(), 0);
   views.clear();
   mocap_begun = false;
   silhouettes.clear();
@@ -658,6 +669,13 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
           frame_id, -latency_ms / 1000);
     }
     ++frames_done_;
+    for (auto& [name, node] : nodes_) {
+      if (node.index < 0 || size_t(node.index) >= frame.node_bytes.size() ||
+          frame.node_bytes[node.index] == 0)
+        continue;
+      node.shown_bytes += frame.node_bytes[node.index];
+      ++node.shown_frames;
+    }
     if (start_ns_ == 0) start_ns_ = now;
     last_done_ns_ = now;
     for (auto& [name, node] : nodes_) {
@@ -766,21 +784,28 @@ RunReport StudioCoordinator::report() const {
   r.stage_ms["combine"] = mean(combine_ms_);
   r.stage_ms["blend"] = mean(blend_ms_);
   r.hull_agreement = frames_done_ > 0 ? hull_agreement_sum_ / frames_done_ : 0;
-  double per_frame = 0, raw = 0;
+  double per_second = 0, raw = 0;
+  int64_t shown_bytes = 0, shown_frames = 0;
   int counted = 0;
   for (const RigNode& node : rig_.nodes()) {
     const NodeState& state = nodes_.at(node.name);
     r.nodes.push_back(state.report);
+    r.nodes.back().bytes_per_frame =
+        state.shown_frames > 0 ? double(state.shown_bytes) / double(state.shown_frames) : -1;
+    shown_bytes += state.shown_bytes;
+    shown_frames += state.shown_frames;
     for (int c : node.cameras) {
       raw +=
           double(rig_.camera(c).width()) * rig_.camera(c).height() * options_.raw_bytes_per_pixel;
     }
-    if (state.counted_frames > 0) {
-      per_frame += double(state.counted_bytes) / double(state.counted_frames);
+    if (state.counted_to_ns > state.counted_from_ns) {
+      per_second +=
+          double(state.counted_bytes) / ((state.counted_to_ns - state.counted_from_ns) / 1e9);
       ++counted;
     }
   }
-  r.node_bytes_per_frame = counted > 0 ? per_frame / counted : 0;
+  r.node_bytes_per_frame = shown_frames > 0 ? double(shown_bytes) / double(shown_frames) : 0;
+  r.node_bytes_per_s = counted > 0 ? per_second / counted : 0;
   r.raw_bytes_per_frame_per_node = rig_.nodeCount() > 0 ? raw / rig_.nodeCount() : 0;
   r.refusals = endpoint_.refusalCount();
   r.frames_in_flight = static_cast<int>(frames_.size());

@@ -69,6 +69,9 @@ struct NodeReport {
   // the pose sent to its statistics here, the offsets sent to its image here. A node slower than
   // the others (an overloaded PC, a slow link) shows here before it misses deadlines.
   double statistics_ms = -1, image_ms = -1;
+  // What it sent for a frame shown (silhouettes, statistics, images), mean over those frames; -1
+  // before the first.
+  double bytes_per_frame = -1;
   TakeStatusData take;  // its recording of the take, from the latest heartbeat
 };
 
@@ -91,7 +94,9 @@ struct RunReport {
   double fps = 0;
   double latency_ms_p50 = 0, latency_ms_p95 = 0;  // node capture to frame done
   std::map<std::string, double> stage_ms;         // mean per stage
-  double node_bytes_per_frame = 0;          // mean over nodes, per frame it captured (shown or not)
+  // What a node sends for a frame shown (its silhouettes, statistics and images), mean over the
+  // nodes and frames; and what it sends a second, everything, mean over the nodes.
+  double node_bytes_per_frame = 0, node_bytes_per_s = 0;
   double raw_bytes_per_frame_per_node = 0;  // what the node's cameras deliver
   int64_t frames = 0;                       // done: blended and shown
   int64_t frames_dropped = 0;  // never shown: refused, overtaken, or reached by no node's image
@@ -192,6 +197,14 @@ class StudioCoordinator {
     // The views sent with its pose (id, width, height): the nodes render it with those, and its
     // images are taken and waited for by them, not by a view changed or added since.
     std::vector<std::array<int, 3>> views;
+    // Per node (NodeState::index), the bytes of its messages for it: silhouettes, statistics,
+    // images.
+    std::vector<int64_t> node_bytes;
+    void addBytes(int node, size_t bytes) {
+      if (node < 0) return;
+      if (node_bytes.size() <= size_t(node)) node_bytes.resize(node + 1, 0);
+      node_bytes[node] += int64_t(bytes);
+    }
 
     // Empties it for another frame, keeping its buffers (the statistics' half a megabyte, a
     // blend's five at 640x480), which a fresh frame would allocate and fault in again.
@@ -209,9 +222,11 @@ class StudioCoordinator {
     int64_t heard_ns = 0;               // when it was first heard (again, after being lost)
     int64_t silhouettes_ns = 0;         // when its silhouettes were last used
     bool told_no_frames = false;        // warned that it is heard but sends no usable silhouettes
-    // While counting: the bytes of its messages, and the frames it sent silhouettes for (what it
-    // sends a frame, whether or not the frame is shown).
-    int64_t counted_bytes = 0, counted_frames = 0;
+    // While counting: the bytes of its messages, from its first to its last (steady clock).
+    int64_t counted_bytes = 0, counted_from_ns = 0, counted_to_ns = 0;
+    // The frames shown that it sent something for, and the bytes it sent for them.
+    int64_t shown_bytes = 0, shown_frames = 0;
+    int index = -1;  // in the rig's nodes
   };
   // Whether frames wait for the node: for its silhouettes, and for its answer to their poses. It is
   // heard, and other nodes' silhouettes have not been used for lost_after without its own (since

@@ -174,7 +174,10 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
     EXPECT_GT(n.cameras[0].frames, 0) << n.name;
     // Every message read, the compressed refinement statistics among them.
     EXPECT_EQ(n.bad_messages, 0) << n.name;
+    // What it sent for a frame shown: its silhouettes, statistics (zstd) and images, counted.
+    EXPECT_GT(n.bytes_per_frame, 1000) << n.name;
   }
+  EXPECT_GT(report.node_bytes_per_s, 0);
   EXPECT_LT(missed, report.frames);  // nearly every frame had all four nodes' parts
   // Admission: never more than two frames past motion capture at once; newer ones were dropped
   // on arrival (on a 2-core machine four nodes at 30 frames a second keep more than two busy).
