@@ -50,6 +50,7 @@ class SessionSource : public FrameSource {
   // cannot be decoded any more (stats().last_error says which file; finished() is then true).
   bool next(CameraFrame& frame, std::chrono::milliseconds timeout) override;
   bool finished() const override { return finished_; }
+  bool idsCountInstants() const override { return false; }
   CameraStats stats(int camera) const override;
 
   const SessionReader& reader() const { return reader_; }

@@ -54,6 +54,9 @@ struct BodyEncoder {
                                            t.dropped, t.bytes, t.finished, take_error);
     return {fb::Body::Heartbeat, fb::CreateHeartbeat(b, vector, m.bytes_sent, m.cpu, take).Union()};
   }
+  std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const FrameIdsData& m) const {
+    return {fb::Body::FrameIds, fb::CreateFrameIds(b, m.offset).Union()};
+  }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const RecordData& m) const {
     const auto take = b.CreateString(m.take);
     return {fb::Body::Record, fb::CreateRecord(b, take, m.first_frame, m.last_frame).Union()};
@@ -365,6 +368,16 @@ Check decodeRecord(const fb::Record& in, const MessageLimits& limits, RecordData
   return {};
 }
 
+Check decodeFrameIds(const fb::FrameIds& in, const MessageLimits&, FrameIdsData& out) {
+  // Frame ids count from 0 to half the range (StudioCoordinator): a shift beyond it is no shift
+  // between cameras of one rig.
+  constexpr int64_t kLimit = std::numeric_limits<int64_t>::max() / 2;
+  if (in.offset() < -kLimit || in.offset() > kLimit)
+    return "frame ids: offset " + std::to_string(in.offset()) + " beyond half the ids' range";
+  out.offset = in.offset();
+  return {};
+}
+
 Check decodeOffsets(const fb::Offsets& in, const MessageLimits& limits, OffsetsData& out) {
   const size_t vertices = sizeOf(in.offsets());
   if (vertices > limits.max_vertices) {
@@ -552,6 +565,10 @@ DecodeResult decodeMessage(const uint8_t* data, size_t size, const MessageLimits
       c = decodeBody<fb::Record, RecordData>(envelope->body_as_Record(), "record", limits,
                                              decodeRecord, message.body);
       break;
+    case fb::Body::FrameIds:
+      c = decodeBody<fb::FrameIds, FrameIdsData>(envelope->body_as_FrameIds(), "frame ids", limits,
+                                                 decodeFrameIds, message.body);
+      break;
     case fb::Body::NONE:
       c = "message without a body";
       break;
@@ -623,8 +640,8 @@ std::string takeNameError(std::string_view take) {
 
 const char* messageTypeName(const MessageBody& body) {
   static constexpr const char* kNames[] = {
-      "hello",   "heartbeat",     "silhouettes",      "pose", "vertex statistics",
-      "offsets", "partial image", "frame timestamps", "view", "record"};
+      "hello",         "heartbeat",        "silhouettes", "pose",   "vertex statistics", "offsets",
+      "partial image", "frame timestamps", "view",        "record", "frame ids"};
   static_assert(std::size(kNames) == std::variant_size_v<MessageBody>);
   return kNames[body.index()];
 }

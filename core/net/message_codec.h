@@ -148,13 +148,18 @@ struct RecordData {
   bool operator==(const RecordData&) const = default;
 };
 
+struct FrameIdsData {
+  int64_t offset = 0;  // what the node adds to its frame ids from now on
+  bool operator==(const FrameIdsData&) const = default;
+};
+
 // Why `take` cannot name a take (a folder on every node); empty when it can: a valid name as
 // cameras and nodes have (core/base/names.h).
 std::string takeNameError(std::string_view take);
 
-using MessageBody =
-    std::variant<HelloData, HeartbeatData, SilhouettesData, PoseData, VertexStatisticsData,
-                 OffsetsData, PartialImageData, FrameTimestampsData, ViewData, RecordData>;
+using MessageBody = std::variant<HelloData, HeartbeatData, SilhouettesData, PoseData,
+                                 VertexStatisticsData, OffsetsData, PartialImageData,
+                                 FrameTimestampsData, ViewData, RecordData, FrameIdsData>;
 
 // The frame ids of a rig's cameras move together, a frame at a time: an id this far or further
 // from the newest is a restart (the cameras, the session) or a message not to trust, for the nodes

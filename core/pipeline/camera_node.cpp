@@ -183,7 +183,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   std::map<int64_t, std::shared_ptr<Set>> assembling;
   std::vector<int64_t> last_id(cameras_.size(), -1);
   std::vector<uint8_t> told_silent(cameras_.size(), 0), live(cameras_.size(), 0);
-  int64_t newest = -1, first = -1;
+  int64_t newest = -1, first = -1, applied_offset = 0;
   CameraFrame frame;
   // Every camera silent (no set goes out, so the per-camera warning below never comes): said once
   // after kAllSilent, and again when frames come back.
@@ -216,6 +216,13 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     }
     const auto k = std::find(cameras_.begin(), cameras_.end(), frame.camera) - cameras_.begin();
     if (k >= static_cast<long>(cameras_.size())) continue;
+    // The studio's shift, when its cameras count other ids than the other nodes' (followFrameIds):
+    // from the frame it is first seen on, sets begin afresh, as after a restart.
+    if (const int64_t shift = id_offset_; shift != applied_offset) {
+      applied_offset = shift;
+      first = -1;
+    }
+    frame.frame_id += applied_offset;
     if (first < 0 || frame.frame_id < newest - kFrameIdWindow) {  // first, or cameras restarted
       first = newest = frame.frame_id;
       std::fill(last_id.begin(), last_id.end(), -1);
@@ -361,6 +368,25 @@ void CameraNode::learnScreens(const Set& set) {
       screen_warnings_[c] = std::move(warning);
     }
   }
+}
+
+void CameraNode::followFrameIds(int64_t offset) {
+  {
+    std::lock_guard lock(source_mutex_);
+    if (!source_->idsCountInstants()) {
+      spdlog::warn(
+          "node {}: the studio finds its frame ids {} off the other nodes' for the same instants; "
+          "a "
+          "recording's ids are its frames' own: not moved (do the nodes replay one session?)",
+          name_, offset);
+      return;
+    }
+  }
+  const int64_t total = id_offset_ += offset;
+  spdlog::warn(
+      "node {}: its cameras count frame ids {} off the other nodes' cameras for the same instants "
+      "(restarted alone?): its ids move by {} to follow them",
+      name_, offset, total);
 }
 
 void CameraNode::silhouetteLoop(const std::atomic<bool>& stop) {
@@ -592,6 +618,8 @@ void CameraNode::run(const std::atomic<bool>& stop) {
         keepView(received->message->frame_id, view);
       } else if (received->ok() && std::holds_alternative<RecordData>(received->message->body)) {
         takes_.command(std::get<RecordData>(received->message->body));
+      } else if (received->ok() && std::holds_alternative<FrameIdsData>(received->message->body)) {
+        followFrameIds(std::get<FrameIdsData>(received->message->body).offset);
       }
     }
     const auto now = std::chrono::steady_clock::now();

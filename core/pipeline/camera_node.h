@@ -223,6 +223,10 @@ class CameraNode {
   Posed& keepPosed(int64_t frame_id);
   void releasePosedUpTo(int64_t frame_id);
   std::atomic<int64_t> sets_sent_{0}, bytes_sent_{0};
+  // Added to its cameras' frame ids: the studio's FrameIds shifts, summed (network thread), read
+  // by the capture thread. Live cameras only (FrameSource::idsCountInstants).
+  std::atomic<int64_t> id_offset_{0};
+  void followFrameIds(int64_t offset);
   std::mutex monitor_mutex_;
   std::shared_ptr<const Set> monitor_set_;
   std::vector<SilhouetteMaskData> monitor_silhouettes_;

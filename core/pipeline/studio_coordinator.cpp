@@ -45,6 +45,7 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
     state.index = int(n);
   }
   timeline_.reserve(4096);
+  instants_.fill({-1, 0});
   // Default view: 320x240 from the front-left, 4.5 m out and 1.7 m up, looking at the stage
   // centre 1 m above the floor (camera axes: x right, y down, z forward).
   const Eigen::Vector3f centre(-3.2f, -3.2f, 1.7f), target(0, 0, 1.0f);
@@ -348,6 +349,9 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
   const auto near = [](int64_t a, int64_t b) { return std::abs(a - b) <= kFrameIdWindow; };
   if (newest_seen_ < 0 || near(frame_id, newest_seen_)) {
     node.told_frame_id = false;
+    node.refused_since_ns = 0;
+    auto& [id, arrived_ns] = instants_[size_t(frame_id) % kInstants];
+    if (id != frame_id) id = frame_id, arrived_ns = node.last_ns;
     return true;
   }
   // The nodes that vote: those frames wait for, and this one (whose silhouettes, refused, no longer
@@ -370,6 +374,7 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
           "not used unless most nodes' frame ids move there too",
           node.report.name, frame_id, frame_id - newest_seen_, newest_seen_);
     }
+    followLoneNode(node, frame_id);
     return false;
   }
   spdlog::warn("the cameras' frame ids moved from {} to {} on {} of {} nodes: following them",
@@ -385,6 +390,48 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
   newest_seen_ = frame_id;
   for (auto& [name, n] : nodes_) n.told_frame_id = false;
   return true;
+}
+
+int64_t StudioCoordinator::idArrivingAt(int64_t arrived_ns) const {
+  const std::pair<int64_t, int64_t>*oldest = nullptr, *newest = nullptr, *nearest = nullptr;
+  for (const auto& instant : instants_) {
+    if (instant.first < 0 || std::abs(instant.first - newest_seen_) > kInstants) continue;
+    if (!oldest || instant.first < oldest->first) oldest = &instant;
+    if (!newest || instant.first > newest->first) newest = &instant;
+    if (!nearest || std::abs(instant.second - arrived_ns) < std::abs(nearest->second - arrived_ns))
+      nearest = &instant;
+  }
+  if (!nearest || newest->first - oldest->first < kInstants / 4) return -1;
+  const double period =
+      double(newest->second - oldest->second) / double(newest->first - oldest->first);
+  if (period <= 0) return -1;
+  const double frames = double(arrived_ns - nearest->second) / period;
+  const double whole = std::round(frames);
+  if (std::abs(frames - whole) > 1.0 / 3 || std::abs(whole) > kInstants) return -1;
+  return nearest->first + int64_t(whole);
+}
+
+void StudioCoordinator::followLoneNode(NodeState& node, int64_t frame_id) {
+  const int64_t now = node.last_ns;
+  if (node.refused_since_ns == 0) node.refused_since_ns = now;
+  const int64_t id = idArrivingAt(now);
+  const int64_t shift = id >= 0 ? id - frame_id : 0;
+  const bool agreed = shift != 0 && shift == node.suggested_shift;
+  node.suggested_shift = shift;
+  const int64_t wait = std::chrono::nanoseconds(kFollowAfter).count();
+  if (!agreed || now - node.refused_since_ns < wait || now - node.frame_ids_told_ns < wait ||
+      node.peer.empty())
+    return;
+  node.frame_ids_told_ns = now;
+  Message message;
+  message.sender = "studio";
+  message.sent_ns = steadyNowNs();
+  message.body = FrameIdsData{shift};
+  spdlog::warn(
+      "node {}: its frame ids lie {} from the other nodes' for the same instants (its cameras "
+      "restarted alone?): told to move them",
+      node.report.name, shift);
+  endpoint_.send(node.peer, encoder_.encode(message), std::chrono::milliseconds(5));
 }
 
 void StudioCoordinator::FrameState::clearForReuse() {

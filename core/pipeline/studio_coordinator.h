@@ -227,6 +227,9 @@ class StudioCoordinator {
     // The frames shown that it sent something for, and the bytes it sent for them.
     int64_t shown_bytes = 0, shown_frames = 0;
     int index = -1;  // in the rig's nodes
+    // Its ids refused since (0: accepted); when it was last told a shift, and the shift its last
+    // refused silhouettes suggested (followLoneNode).
+    int64_t refused_since_ns = 0, frame_ids_told_ns = 0, suggested_shift = 0;
   };
   // Whether frames wait for the node: for its silhouettes, and for its answer to their poses. It is
   // heard, and other nodes' silhouettes have not been used for lost_after without its own (since
@@ -242,6 +245,19 @@ class StudioCoordinator {
   // "done" already; when most live nodes' ids move together (the cameras or the session restarted),
   // the studio follows them. False: refuse the message.
   bool acceptFrameId(NodeState& node, int64_t frame_id);
+  // A node whose ids alone lie far from the others' while its silhouettes arrive in step with
+  // theirs (its cameras restarted alone: a node's PC rebooted, its cameras power-cycled) is told
+  // the shift that puts its ids on the others' count (FrameIdsData), once its silhouettes have
+  // been refused for kFollowAfter and two in a row agree on the shift. Instants are matched by
+  // when the silhouettes reach the studio, on its own clock (the PCs' clocks may be off by whole
+  // frames): each frame's first arrival is kept for the last kInstants ids.
+  void followLoneNode(NodeState& node, int64_t frame_id);
+  // The frame id whose silhouettes first arrived within a third of a frame period of `arrived_ns`
+  // (steady clock), counting on from the recent frames at their rate; -1 when none does.
+  int64_t idArrivingAt(int64_t arrived_ns) const;
+  static constexpr int kInstants = 64;
+  static constexpr std::chrono::seconds kFollowAfter{1};
+  std::array<std::pair<int64_t, int64_t>, kInstants> instants_;  // (frame id, first arrival)
 
   // The frame's state, a spare one when it is new.
   FrameState& frameState(int64_t frame_id);

@@ -58,8 +58,9 @@ std::vector<Message> oneOfEach() {
   PartialImageData rle{1, 6, 4, ImageEncoding::kRleRgba, encodeRleRgba(rgba)};
   FrameTimestampsData stamps{{{"capture", 100}, {"silhouettes", 250}, {"sent", 300}}};
   std::vector<Message> all;
-  for (MessageBody body : std::vector<MessageBody>{hello, heartbeat, silhouettes, pose, stats,
-                                                   offsets, raw, rle, stamps, view, record}) {
+  for (MessageBody body :
+       std::vector<MessageBody>{hello, heartbeat, silhouettes, pose, stats, offsets, raw, rle,
+                                stamps, view, record, FrameIdsData{-123456}}) {
     all.push_back(envelope(std::move(body)));
   }
   return all;
@@ -283,6 +284,9 @@ TEST(MessageCodec, TakeNamesThatAreNotAPlainFolderNameAreRefused) {
   // An empty take is "none": the stop of every take.
   const std::vector<uint8_t> bytes = encodeMessage(envelope(RecordData{}));
   EXPECT_TRUE(decodeMessage(bytes.data(), bytes.size()).ok());
+  // A shift of the frame ids beyond half their range (a hostile studio) would wrap them.
+  EXPECT_EQ(decodeError(envelope(FrameIdsData{std::numeric_limits<int64_t>::min()})),
+            "frame ids: offset -9223372036854775808 beyond half the ids' range");
 }
 
 TEST(MessageCodec, MalformedViewsAreRefusedWithTheirReason) {

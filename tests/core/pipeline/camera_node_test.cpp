@@ -271,5 +271,32 @@ TEST(CameraNode, AScreenThatDimsAfterLearningIsWarnedOf) {
       << "the warnings stayed after the lights came back";
 }
 
+// Told by the studio that its cameras count other ids than the other nodes' for the same instants,
+// a node moves its frame ids by the shift from then on.
+TEST(CameraNode, ANodeMovesItsFrameIdsWhenTheStudioSaysTheyLieElsewhere) {
+  NodeUnderTest t([](const Rig& rig, std::vector<int> cameras) {
+    return std::make_unique<ScriptedSource>(rig, std::move(cameras), -1, 0);
+  });
+  std::string peer;
+  int64_t before = -1;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (peer.empty() && std::chrono::steady_clock::now() < deadline) {
+    const std::optional<ReceivedMessage> in = t.studio.receive(milliseconds(100));
+    if (in && in->result.ok() &&
+        std::holds_alternative<SilhouettesData>(in->result.message->body)) {
+      peer = in->peer;
+      before = in->result.message->frame_id;
+    }
+  }
+  ASSERT_FALSE(peer.empty()) << "no silhouettes";
+  Message shift;
+  shift.sender = "studio";
+  shift.body = FrameIdsData{100000};
+  ASSERT_TRUE(t.studio.send(peer, shift, milliseconds(1000)));
+  EXPECT_TRUE(t.receiveUntil([&](const Message& m) {
+    return std::holds_alternative<SilhouettesData>(m.body) && m.frame_id >= 100000 + before;
+  })) << "the node's frame ids did not move";
+}
+
 }  // namespace
 }  // namespace lumistage

@@ -493,6 +493,37 @@ TEST(StudioCoordinator, WhenMostNodesFrameIdsMoveTogetherTheStudioFollows) {
   EXPECT_EQ(badMessagesOf(two.studio, "node2"), 0);
 }
 
+// A node's cameras restart alone (its PC rebooted, its cameras power-cycled): its silhouettes,
+// arriving in step with the other node's but counted from 1 again, are refused; after a second it
+// is told the shift that puts its ids on the other's count, and shifted they are taken again.
+TEST(StudioCoordinator, ANodeWhoseCamerasRestartedAloneIsToldToFollowTheOthers) {
+  TwoNodeStudio two(milliseconds(200), 500);
+  for (int64_t f = 501; f < 541; ++f) {  // 40 frames together, about 30 a second
+    ASSERT_TRUE(two.both(f));
+    two.studio.runFor(milliseconds(30));
+  }
+  std::optional<Message> told;
+  int64_t f = 541;
+  const auto restarted = std::chrono::steady_clock::now();
+  for (; f < 700 && !told; ++f) {
+    ASSERT_TRUE(two.node1.send(f, SilhouettesData{}));
+    ASSERT_TRUE(two.node2.send(f - 540, SilhouettesData{}));
+    told = two.node2.await<FrameIdsData>(two.studio, 3);
+  }
+  ASSERT_TRUE(told) << "node2 was never told how its ids lie";
+  EXPECT_EQ(std::get<FrameIdsData>(told->body).offset, 540);
+  EXPECT_GE(std::chrono::steady_clock::now() - restarted, std::chrono::seconds(1))
+      << "told before a second of refusals";
+  const int64_t refused = badMessagesOf(two.studio, "node2");
+  for (int k = 1; k <= 10; ++k) {
+    ASSERT_TRUE(two.both(f + k));
+    two.studio.runFor(milliseconds(30));
+  }
+  EXPECT_EQ(badMessagesOf(two.studio, "node2"), refused);
+  // Its silhouettes used again, the frames wait for it and it is sent their poses.
+  EXPECT_TRUE(nextPoseFrame(two.node2, two.studio, f + 1));
+}
+
 // The first statistics of a frame set the sums' sizes. When they are refused (here another mesh's,
 // their body corrupted), the next node's set them afresh instead of being refused in turn; and a
 // node's image sent twice is blended once.
