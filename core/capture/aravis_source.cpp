@@ -92,6 +92,11 @@ struct AravisSource::Device {
   // what lines its ids up with the other cameras' (the newest id any of them delivered).
   int64_t id_offset = 0;
   bool realign = false;  // the next whole frame sets id_offset
+  // Its newest whole frame's id (its offset added) and when it came, kept while it is lost; the
+  // rate it delivered at, its last measured (or asked for), kept too.
+  int64_t last_id = -1;
+  std::chrono::steady_clock::time_point last_at;
+  double rate_hz = 0;
 };
 
 namespace {
@@ -358,16 +363,29 @@ void AravisSource::receive(int camera) {
     } else {
       int64_t frame_id = d.unwrap(static_cast<int64_t>(arv_buffer_get_frame_id(buffer)));
       if (d.realign) {
-        // Opened again, the camera counts from the start: its ids follow on from the newest
-        // any camera delivered, so that its frames group with the others' again (exact for
-        // triggered cameras, within a frame or so for free-running ones).
+        // Opened again, the camera counts from the start: its ids are put where the freshest
+        // frame any camera of the node delivered (its own before it was lost among them) leads
+        // on to now at that camera's rate, so that its frames group with the others' again (the
+        // same instant's id for triggered cameras, within a frame for free-running ones).
+        // Counted on from that frame's id alone, a node whose cameras were all gone for seconds
+        // came back seconds behind the other nodes' count, pairing other instants' images.
         d.realign = false;
-        int64_t newest = -1;
-        for (const auto& other : devices_)
-          if (other.get() != &d) newest = std::max(newest, other->drops.last());
-        d.id_offset = newest >= 0 ? newest + 1 - frame_id : 0;
+        const Device* freshest = nullptr;
+        for (const auto& other : devices_) {
+          if (other->last_id >= 0 && (!freshest || other->last_at > freshest->last_at))
+            freshest = other.get();
+        }
+        if (freshest) {
+          const double rate = freshest->rate_hz > 0 ? freshest->rate_hz : d.config.frame_rate_hz;
+          const int64_t since =
+              std::llround(std::chrono::duration<double>(now - freshest->last_at).count() * rate);
+          d.id_offset = freshest->last_id + std::max<int64_t>(0, since) - frame_id;
+        } else {
+          d.id_offset = 0;
+        }
       }
       frame_id += d.id_offset;
+      d.last_id = frame_id, d.last_at = now;
       d.stats.dropped += d.drops.whole(frame_id);  // a jump: frames that never arrived
       if (queue_.size() >= capacity_) {  // the consumer fell behind: drop the oldest frame
         ++devices_[queue_.front().camera]->stats.dropped;
@@ -393,6 +411,7 @@ void AravisSource::receive(int camera) {
         d.stats.frame_rate_hz =
             (d.recent.size() - 1) /
             std::chrono::duration<double>(d.recent.back() - d.recent.front()).count();
+        if (d.recent.size() > 10) d.rate_hz = d.stats.frame_rate_hz;
       }
       ready_.notify_one();
     }

@@ -289,20 +289,38 @@ TEST(Aravis, CamerasThatComeBackStreamAgain) {
   std::array<int, 2> received = framesWithin(source, 1.5);
   ASSERT_GT(received[0], 5);
   ASSERT_GT(received[1], 5);
+  // The newest frame before the cameras go, and when.
+  CameraFrame frame;
+  int64_t last_id = -1;
+  for (int k = 0; k < 10; ++k) {
+    if (source.next(frame, std::chrono::milliseconds(100))) last_id = frame.frame_id;
+  }
+  const auto gone = std::chrono::steady_clock::now();
   server.reset();             // gone
   framesWithin(source, 7.0);  // long enough to be taken for lost
   EXPECT_EQ(source.stats(0).frame_rate_hz, 0.0);
   server = std::make_unique<VirtualGigeCameras>(rig, loop, PixelFormat::kMono8, "127.0.1.14");
   // Back within a retry or two; from then on, frames of one instant share their id again.
   std::map<int64_t, int> cameras_of_id;
-  CameraFrame frame;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   received = {0, 0};
+  int64_t first_id = -1;
+  double first_after_s = 0;
   while (std::chrono::steady_clock::now() < deadline && (received[0] < 30 || received[1] < 30)) {
     if (!source.next(frame, std::chrono::milliseconds(100))) continue;
+    if (first_id < 0) {
+      first_id = frame.frame_id;
+      first_after_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - gone).count();
+    }
     ++received[frame.camera];
     ++cameras_of_id[frame.frame_id];
   }
+  // Their ids went on counting the instants while they were gone (25 a second), as the other
+  // nodes' cameras' did: not on from the last frame before.
+  ASSERT_GE(first_id, 0);
+  EXPECT_NEAR(double(first_id - last_id), first_after_s * 25, 6)
+      << "back after " << first_after_s << " s";
   EXPECT_GE(received[0], 30);
   EXPECT_GE(received[1], 30);
   int shared = 0;
