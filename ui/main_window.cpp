@@ -14,6 +14,7 @@
 #include <QStatusBar>
 #include <QTabWidget>
 #include <QThread>
+#include <algorithm>
 #include <exception>
 
 #include "core/calib/calibration_report.h"
@@ -72,15 +73,19 @@ MainWindow::MainWindow(QWidget* parent)
   calibration_dock_ = addDock(tr("Calibration check"), "calibration_dock", calibration_panel_,
                               Qt::BottomDockWidgetArea);
   rig_dock_ = addDock(tr("Cameras"), "cameras_dock", rig_panel_, Qt::BottomDockWidgetArea);
-  splitDockWidget(health_dock_, overlay_dock_, Qt::Vertical);
+  // On a laptop's screen (under 900 lines) the camera health has the right column to itself, the
+  // overlay and the clones tabs beside it: split with them, its table kept under two rows.
+  const bool short_screen = screen()->availableGeometry().height() < 900;
+  if (short_screen)
+    tabifyDockWidget(health_dock_, overlay_dock_);
+  else
+    splitDockWidget(health_dock_, overlay_dock_, Qt::Vertical);
   tabifyDockWidget(overlay_dock_, clone_dock_);
   tabifyDockWidget(pipeline_dock_, calibration_dock_);
   tabifyDockWidget(pipeline_dock_, rig_dock_);
   pipeline_dock_->raise();
-  overlay_dock_->raise();
-  resizeDocks({health_dock_}, {600}, Qt::Horizontal);
-  resizeDocks({health_dock_, overlay_dock_}, {520, 380}, Qt::Vertical);
-  resizeDocks({pipeline_dock_}, {270}, Qt::Vertical);
+  (short_screen ? health_dock_ : overlay_dock_)->raise();
+  sizeDocks(QSize(1600, 1000));
 
   connect(rig_panel_, &RigPanel::cameraSelected, stage_plan_, &StagePlanView::setHighlightedCamera);
   connect(viewport_panel_, &ViewportPanel::viewChanged, pipeline_panel_, &PipelinePanel::setView);
@@ -140,6 +145,7 @@ MainWindow::MainWindow(QWidget* parent)
     // 1600x1000, or the screen less room for the window's frame on a smaller one (a laptop's).
     const QSize room = screen()->availableGeometry().size() - QSize(16, 48);
     resize(QSize(1600, 1000).boundedTo(room).expandedTo(minimumSizeHint()));
+    sizeDocks(size());
   }
   QComboBox* size = viewport_panel_->sizeChoice();
   const int chosen = size->findData(
@@ -160,11 +166,15 @@ QDockWidget* MainWindow::addDock(const QString& title, const QString& name, QWid
   return dock;
 }
 
+void MainWindow::sizeDocks(const QSize& window) {
+  resizeDocks({health_dock_}, {620}, Qt::Horizontal);
+  resizeDocks({health_dock_, overlay_dock_}, {520, 380}, Qt::Vertical);  // when split
+  resizeDocks({pipeline_dock_}, {std::min(270, window.height() / 4)}, Qt::Vertical);
+}
+
 void MainWindow::resetLayout() {
   restoreState(default_state_, kLayoutVersion);
-  resizeDocks({health_dock_}, {620}, Qt::Horizontal);
-  resizeDocks({health_dock_, overlay_dock_}, {520, 380}, Qt::Vertical);
-  resizeDocks({pipeline_dock_}, {270}, Qt::Vertical);
+  sizeDocks(size());
   for (QDockWidget* dock :
        {health_dock_, overlay_dock_, calibration_dock_, clone_dock_, pipeline_dock_, rig_dock_})
     dock->show();

@@ -67,6 +67,8 @@ class MainWindow : public QMainWindow {
   // "clones", "pipeline", "rig") and returns its widget (nullptr for an unknown name).
   QWidget* showPanel(const QString& name);
   void resetLayout();
+  // The docks' default sizes for a window of `window`.
+  void sizeDocks(const QSize& window);
 
  signals:
   void sourceFailed(QString error);

@@ -181,8 +181,8 @@ int main(int argc, char** argv) {
   if (parser.isSet(screenshots_option)) {
     const QString dir = parser.value(screenshots_option);
     QDir().mkpath(dir);
-    window.resetLayout();  // the default layout, whatever was remembered
     window.resize(1600, 1000);
+    window.resetLayout();  // the default layout, whatever was remembered
     // Steps a few hundred milliseconds apart, so that each panel is painted before it is grabbed.
     auto steps = std::make_shared<std::vector<std::function<bool()>>>();
     auto save = [&window, dir](const QString& panel, const QString& file) {
