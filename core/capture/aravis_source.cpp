@@ -9,6 +9,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <optional>
@@ -92,10 +93,10 @@ struct AravisSource::Device {
   // what lines its ids up with the other cameras' (the newest id any of them delivered).
   int64_t id_offset = 0;
   bool realign = false;  // the next whole frame sets id_offset
-  // Its newest whole frame's id (its offset added) and when it came, kept while it is lost; the
-  // rate it delivered at, its last measured (or asked for), kept too.
-  int64_t last_id = -1;
-  std::chrono::steady_clock::time_point last_at;
+  // Its newest whole frame's id (its offset added) and when it began to arrive (the host's clock,
+  // ns), kept while it is lost; its first since it was opened; the rate its ids count at, measured
+  // from the two (dropped frames counted), kept across a loss.
+  int64_t last_id = -1, last_ns = 0, span_id = -1, span_ns = 0;
   double rate_hz = 0;
 };
 
@@ -114,7 +115,8 @@ namespace {
 // for an answer each. Not an IPv4 address (a serial, an id): true, for Aravis to find. Aravis
 // opens devices one at a time, each that does not answer waiting out 2.5 s of retries: a rig of
 // twelve cameras gone kept their reconnection attempts queued 30 s, and the process that wanted
-// to stop waiting for them; asked here first, in parallel, a camera that is not there costs 0.5 s.
+// to stop waiting for them. Asked here first, a camera that is not there costs 0.5 s, and the
+// cameras' threads ask at once (the constructor's first attempts go one camera after another).
 bool answersGigEVision(const std::string& address) {
   sockaddr_in to{};
   to.sin_family = AF_INET;
@@ -131,7 +133,14 @@ bool answersGigEVision(const std::string& address) {
       break;
     pollfd in{fd, POLLIN, 0};
     uint8_t ack[512];
-    while (!answered && poll(&in, 1, 250) > 0) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(250);
+    while (!answered) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          until - std::chrono::steady_clock::now());
+      if (left.count() <= 0) break;
+      const int ready = poll(&in, 1, int(left.count()));
+      if (ready < 0 && errno == EINTR) continue;  // a signal (Ctrl-C's handler): wait on
+      if (ready <= 0) break;
       const ssize_t n = recv(fd, ack, sizeof ack, 0);
       answered = n >= 8 && ack[2] == 0x00 && ack[3] == 0x03;  // DISCOVERY_ACK
     }
@@ -362,30 +371,44 @@ void AravisSource::receive(int camera) {
                                : fmt::format("short image: {} bytes, expected {}", size, bytes);
     } else {
       int64_t frame_id = d.unwrap(static_cast<int64_t>(arv_buffer_get_frame_id(buffer)));
+      // When the frame began to arrive, on the host's clock (Aravis's system timestamp).
+      int64_t arrived_ns = int64_t(arv_buffer_get_system_timestamp(buffer));
+      if (arrived_ns <= 0)
+        arrived_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                         std::chrono::system_clock::now().time_since_epoch())
+                         .count();
       if (d.realign) {
         // Opened again, the camera counts from the start: its ids are put where the freshest
         // frame any camera of the node delivered (its own before it was lost among them) leads
-        // on to now at that camera's rate, so that its frames group with the others' again (the
-        // same instant's id for triggered cameras, within a frame for free-running ones).
-        // Counted on from that frame's id alone, a node whose cameras were all gone for seconds
-        // came back seconds behind the other nodes' count, pairing other instants' images.
+        // on to this frame's arrival at the rate that camera's ids counted at, so that its
+        // frames group with the others' again (within a frame: arrival times jitter, and a rate
+        // measured over seconds is off by a fraction of a percent). Counted on from that frame's
+        // id alone, a node whose cameras were all gone for seconds came back seconds behind the
+        // other nodes' count, pairing other instants' images.
         d.realign = false;
         const Device* freshest = nullptr;
         for (const auto& other : devices_) {
-          if (other->last_id >= 0 && (!freshest || other->last_at > freshest->last_at))
+          if (other->last_id >= 0 && (!freshest || other->last_ns > freshest->last_ns))
             freshest = other.get();
         }
         if (freshest) {
-          const double rate = freshest->rate_hz > 0 ? freshest->rate_hz : d.config.frame_rate_hz;
-          const int64_t since =
-              std::llround(std::chrono::duration<double>(now - freshest->last_at).count() * rate);
+          const double rate = freshest->rate_hz > 0 ? freshest->rate_hz
+                              : d.rate_hz > 0       ? d.rate_hz
+                                                    : d.config.frame_rate_hz;
+          const int64_t since = std::llround((arrived_ns - freshest->last_ns) / 1e9 * rate);
           d.id_offset = freshest->last_id + std::max<int64_t>(0, since) - frame_id;
         } else {
           d.id_offset = 0;
         }
+        d.span_id = -1;
       }
       frame_id += d.id_offset;
-      d.last_id = frame_id, d.last_at = now;
+      if (d.span_id < 0) {
+        d.span_id = frame_id, d.span_ns = arrived_ns;
+      } else if (arrived_ns - d.span_ns > 1'000'000'000 && frame_id > d.span_id) {
+        d.rate_hz = double(frame_id - d.span_id) / ((arrived_ns - d.span_ns) / 1e9);
+      }
+      d.last_id = frame_id, d.last_ns = arrived_ns;
       d.stats.dropped += d.drops.whole(frame_id);  // a jump: frames that never arrived
       if (queue_.size() >= capacity_) {  // the consumer fell behind: drop the oldest frame
         ++devices_[queue_.front().camera]->stats.dropped;
@@ -411,7 +434,6 @@ void AravisSource::receive(int camera) {
         d.stats.frame_rate_hz =
             (d.recent.size() - 1) /
             std::chrono::duration<double>(d.recent.back() - d.recent.front()).count();
-        if (d.recent.size() > 10) d.rate_hz = d.stats.frame_rate_hz;
       }
       ready_.notify_one();
     }
