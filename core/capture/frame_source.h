@@ -39,8 +39,9 @@ class FrameSource {
   virtual bool finished() const { return false; }
   virtual CameraStats stats(int camera) const = 0;
   // Whether its frame ids only count instants, so that another count that numbers the same
-  // instants may replace it (cameras, live): true. A recording's ids name its frames' content,
-  // which a shifted count would pair with other nodes' frames of other instants: false.
+  // instants may replace it (cameras, live): true. A recording's ids, or the virtual studio's,
+  // name their frames' content, which a shifted count would pair with other nodes' frames of other
+  // instants: false.
   virtual bool idsCountInstants() const { return true; }
 };
 

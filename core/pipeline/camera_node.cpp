@@ -5,7 +5,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <thread>
 
 #include "core/base/error.h"
@@ -33,6 +35,7 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
   if (!node) throw Error("camera node: no node '" + name_ + "' in the rig");
   cameras_ = rig_.nodes()[*node].cameras;
   keyers_.resize(cameras_.size());
+  screen_measured_.resize(cameras_.size());
   published_keyers_ = std::make_shared<const std::vector<GreenScreenKeyer>>(keyers_);
   screen_warnings_.resize(cameras_.size());
 }
@@ -218,6 +221,15 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     if (k >= static_cast<long>(cameras_.size())) continue;
     // The studio's shift, when its cameras count other ids than the other nodes' (followFrameIds):
     // from the frame it is first seen on, sets begin afresh, as after a restart.
+    newest_raw_id_ = frame.frame_id;
+    if (applied_offset != 0 && frame.frame_id + applied_offset < 0) {
+      // Its cameras counted from near 0 again under a shift back: the shift no longer holds
+      // (the studio tells it another if need be).
+      spdlog::warn("node {}: its cameras restarted their count: its ids no longer moved by {}",
+                   name_, applied_offset);
+      int64_t expected = applied_offset;
+      id_offset_.compare_exchange_strong(expected, 0);
+    }
     if (const int64_t shift = id_offset_; shift != applied_offset) {
       applied_offset = shift;
       first = -1;
@@ -325,20 +337,34 @@ void CameraNode::checkScreens(const Set& set) {
   for (size_t c = 0; c < cameras_.size(); ++c) {
     GreenScreenKeyer measured;
     measured.learnScreen(set.frames[c].image.view());
-    const int was = keyers_[c].screenExcess();
-    std::string warning = screenWarning(measured.screenExcess());
+    const int was = keyers_[c].screenExcess(), excess = measured.screenExcess();
     const std::string& camera = rig_.camera(cameras_[c]).name();
-    const bool followed = keyers_[c].follow(measured);
+    // Followed when two measurements in a row agree (one frame the actor stood close in, or a
+    // flash, does not move the key), at once when the key never saw a screen (a lens cap off).
+    GreenScreenKeyer& before = screen_measured_[c];
+    const bool agreed = before.screenExcess() > 0 && !before.differs(measured);
+    before = measured;
+    const bool followed = (agreed || was == 0) && keyers_[c].follow(measured);
     changed = changed || followed;
     std::lock_guard lock(source_mutex_);
+    // A screen warned of as too dim keeps its warning until it is a few levels brighter than
+    // wanted, rather than the warning coming and going every second at the edge.
+    const bool dim_before = screen_warnings_[c].find("too dim") != std::string::npos;
+    std::string warning = screenWarning(excess);
+    if (dim_before && warning.empty() &&
+        excess < GreenScreenKeyer::kDimScreenExcess + GreenScreenKeyer::kFollowLevels)
+      warning = screen_warnings_[c];
     // A warning is logged when it comes, not every time its figure moves.
     if (!warning.empty() && screen_warnings_[c].empty()) {
       spdlog::warn("node {}: camera {}: {}", name_, camera, warning);
-    } else if (warning.empty() && (followed || !screen_warnings_[c].empty())) {
+    } else if (warning.empty() && followed) {
       spdlog::info(
           "node {}: camera {}: green screen learnt again (darkest green excess {} -> {}), "
           "key threshold {}",
-          name_, camera, was, measured.screenExcess(), keyers_[c].threshold());
+          name_, camera, was, excess, keyers_[c].threshold());
+    } else if (warning.empty() && !screen_warnings_[c].empty()) {
+      spdlog::info("node {}: camera {}: green screen keys cleanly again (darkest green excess {})",
+                   name_, camera, excess);
     }
     screen_warnings_[c] = std::move(warning);
   }
@@ -354,7 +380,7 @@ void CameraNode::learnScreens(const Set& set) {
   published_keyers_ = std::make_shared<const std::vector<GreenScreenKeyer>>(keyers_);
   ++screen_sets_learnt_;
   if (!clean && screen_sets_learnt_ < kScreenWarmupSets) return;  // settling, perhaps
-  screen_sets_learnt_ = kScreenWarmupSets;                        // fixed from now on
+  screen_sets_learnt_ = kScreenWarmupSets;  // learnt; checked every kScreenRetrySets from now on
   for (size_t c = 0; c < cameras_.size(); ++c) {
     const std::string& camera = rig_.camera(cameras_[c]).name();
     std::string warning = screenWarning(keyers_[c].screenExcess());
@@ -382,7 +408,20 @@ void CameraNode::followFrameIds(int64_t offset) {
       return;
     }
   }
-  const int64_t total = id_offset_ += offset;
+  // Ids stay in 0 .. half the range (the studio refuses others): a shift that would take the
+  // newest out of it (a hostile or confused studio) is refused.
+  constexpr int64_t kMaxId = std::numeric_limits<int64_t>::max() / 2;
+  int64_t current = id_offset_;
+  const int64_t total = current + offset, newest = newest_raw_id_;
+  if (std::abs(offset) > kMaxId || std::abs(total) > kMaxId || newest + total < 0 ||
+      newest + total > kMaxId) {
+    spdlog::warn(
+        "node {}: the studio's shift of its frame ids by {} would take them out of range "
+        "(newest {}): refused",
+        name_, offset, newest + current);
+    return;
+  }
+  if (!id_offset_.compare_exchange_strong(current, total)) return;  // its cameras restarted
   spdlog::warn(
       "node {}: its cameras count frame ids {} off the other nodes' cameras for the same instants "
       "(restarted alone?): its ids move by {} to follow them",

@@ -148,19 +148,19 @@ class CameraNode {
   CameraNodeOptions options_;
   // The capture thread's alone: each own camera's green-screen key, learnt from the first set
   // whose screen keys cleanly, or else from each of the first kScreenWarmupSets sets (a camera
-  // whose exposure is still settling), then fixed; published_keyers_ is the copy every set
-  // carries, replaced only when learning changes the keys. The tracker's
-  // silhouettes keep the fixed threshold its shape calibration was tuned with: keyed with the
-  // learnt one (0.1% of the actor's pixels missed instead of 0.6%), the joints came closer on
-  // three clips of four but the calibrated body sized the generic mesh worse (leave-one-out 1 to
-  // 2 dB lower).
-  // Every kScreenRetrySets frames after that every camera's screen is measured again
+  // whose exposure is still settling), then kept (see kScreenRetrySets); published_keyers_ is the
+  // copy every set carries, replaced only when learning changes the keys. The tracker's silhouettes
+  // keep the fixed threshold its shape calibration was tuned with: keyed with the learnt one (0.1%
+  // of the actor's pixels missed instead of 0.6%), the joints came closer on three clips of four
+  // but the calibrated body sized the generic mesh worse (leave-one-out 1 to 2 dB lower). Every
+  // kScreenRetrySets frames after that every camera's screen is measured again
   // (GreenScreenKeyer::follow): a camera whose screen could not be keyed then (a lens cap, the
   // lights still off) is learnt once it shows, its warning cleared; one whose lights dimmed or
   // brightened since is learnt again, and warned of when it is now too dim (0.09 ms of CPU a camera
   // at 1024x768, imaging_bench measureScreen, once a second at 30 fps).
   static constexpr int kScreenWarmupSets = 30, kScreenRetrySets = 30;
   void checkScreens(const Set& set);
+  std::vector<GreenScreenKeyer> screen_measured_;  // each camera's previous measurement
   std::vector<GreenScreenKeyer> keyers_;
   std::shared_ptr<const std::vector<GreenScreenKeyer>> published_keyers_;
   int screen_sets_learnt_ = 0;  // sets learnt from so far; kScreenWarmupSets once fixed
@@ -226,6 +226,7 @@ class CameraNode {
   // Added to its cameras' frame ids: the studio's FrameIds shifts, summed (network thread), read
   // by the capture thread. Live cameras only (FrameSource::idsCountInstants).
   std::atomic<int64_t> id_offset_{0};
+  std::atomic<int64_t> newest_raw_id_{0};  // the newest frame's id as its camera gave it
   void followFrameIds(int64_t offset);
   std::mutex monitor_mutex_;
   std::shared_ptr<const Set> monitor_set_;

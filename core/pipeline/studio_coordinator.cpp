@@ -152,6 +152,7 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     bool all = true;
     for (const auto& [name, n] : nodes_) all = all && n.last_ns > 0;
     counting_ = all || node.last_ns - first_message_ns_ > 3'000'000'000;
+    if (counting_) counting_since_ns_ = node.last_ns;
   }
   if (node.report.lost) {
     node.report.lost = false;
@@ -166,7 +167,6 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   ++node.report.messages;
   if (counting_) {
     node.counted_bytes += int64_t(received.bytes);
-    if (node.counted_from_ns == 0) node.counted_from_ns = node.last_ns;
     node.counted_to_ns = node.last_ns;
   }
   if (const auto* heartbeat = std::get_if<HeartbeatData>(&message.body)) {
@@ -313,12 +313,12 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     const auto it = frames_.find(message.frame_id);
     if (it == frames_.end() || it->second.pose_sent_ns == 0) return;
     FrameState& frame = it->second;
-    frame.addBytes(node.index, received.bytes);
     const std::array<int, 3> asked{image->view, image->width, image->height};
     if (std::find(frame.views.begin(), frame.views.end(), asked) == frame.views.end())
       return;  // not a view (of that size) sent with the frame's pose
     // Once a node and view: a repeated image would be blended twice.
     if (frame.image_nodes[image->view].count(node.report.name)) return;
+    frame.addBytes(node.index, received.bytes);
     const size_t pixels = size_t(image->width) * image->height;
     PartialImageBlender& blender = frame.blends[image->view];
     if (blender.width() != image->width || blender.height() != image->height)
@@ -350,8 +350,15 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
   if (newest_seen_ < 0 || near(frame_id, newest_seen_)) {
     node.told_frame_id = false;
     node.refused_since_ns = 0;
+    node.times_told = 0;
+    // The frame's first arrival (a straggler of an older id, 64 or more back, leaves the slot
+    // alone), and how far behind it this node's silhouettes come: its usual lag.
     auto& [id, arrived_ns] = instants_[size_t(frame_id) % kInstants];
-    if (id != frame_id) id = frame_id, arrived_ns = node.last_ns;
+    if (frame_id > id) id = frame_id, arrived_ns = node.last_ns;
+    if (id == frame_id) {
+      const int64_t lag = node.last_ns - arrived_ns;
+      node.lag_ns = node.lag_ns == 0 ? lag : (7 * node.lag_ns + lag) / 8;
+    }
     return true;
   }
   // The nodes that vote: those frames wait for, and this one (whose silhouettes, refused, no longer
@@ -407,22 +414,30 @@ int64_t StudioCoordinator::idArrivingAt(int64_t arrived_ns) const {
   if (period <= 0) return -1;
   const double frames = double(arrived_ns - nearest->second) / period;
   const double whole = std::round(frames);
-  if (std::abs(frames - whole) > 1.0 / 3 || std::abs(whole) > kInstants) return -1;
+  if (std::abs(frames - whole) > 0.25 || std::abs(whole) > kInstants) return -1;
   return nearest->first + int64_t(whole);
 }
 
 void StudioCoordinator::followLoneNode(NodeState& node, int64_t frame_id) {
   const int64_t now = node.last_ns;
   if (node.refused_since_ns == 0) node.refused_since_ns = now;
-  const int64_t id = idArrivingAt(now);
+  // Its silhouettes of an instant come its usual lag behind the first of that instant's.
+  const int64_t id = idArrivingAt(now - node.lag_ns);
   const int64_t shift = id >= 0 ? id - frame_id : 0;
-  const bool agreed = shift != 0 && shift == node.suggested_shift;
+  node.agreeing = shift != 0 && shift == node.suggested_shift ? node.agreeing + 1 : 0;
   node.suggested_shift = shift;
   const int64_t wait = std::chrono::nanoseconds(kFollowAfter).count();
-  if (!agreed || now - node.refused_since_ns < wait || now - node.frame_ids_told_ns < wait ||
-      node.peer.empty())
+  if (node.agreeing < kAgreeing || now - node.refused_since_ns < wait ||
+      now - node.frame_ids_told_ns < wait || node.peer.empty() || node.times_told > kTimesTold)
     return;
   node.frame_ids_told_ns = now;
+  if (++node.times_told > kTimesTold) {  // it keeps its ids (a recording's, an older node)
+    spdlog::warn(
+        "node {}: its frame ids stay {} from the other nodes' after being told {} times: "
+        "not told again; its cameras are left out until they meet",
+        node.report.name, shift, kTimesTold);
+    return;
+  }
   Message message;
   message.sender = "studio";
   message.sent_ns = steadyNowNs();
@@ -845,9 +860,9 @@ RunReport StudioCoordinator::report() const {
       raw +=
           double(rig_.camera(c).width()) * rig_.camera(c).height() * options_.raw_bytes_per_pixel;
     }
-    if (state.counted_to_ns > state.counted_from_ns) {
+    if (state.counted_to_ns > counting_since_ns_ && counting_since_ns_ > 0) {
       per_second +=
-          double(state.counted_bytes) / ((state.counted_to_ns - state.counted_from_ns) / 1e9);
+          double(state.counted_bytes) / ((state.counted_to_ns - counting_since_ns_) / 1e9);
       ++counted;
     }
   }

@@ -222,14 +222,17 @@ class StudioCoordinator {
     int64_t heard_ns = 0;               // when it was first heard (again, after being lost)
     int64_t silhouettes_ns = 0;         // when its silhouettes were last used
     bool told_no_frames = false;        // warned that it is heard but sends no usable silhouettes
-    // While counting: the bytes of its messages, from its first to its last (steady clock).
-    int64_t counted_bytes = 0, counted_from_ns = 0, counted_to_ns = 0;
+    // While counting: the bytes of its messages, and when its last came (steady clock).
+    int64_t counted_bytes = 0, counted_to_ns = 0;
     // The frames shown that it sent something for, and the bytes it sent for them.
     int64_t shown_bytes = 0, shown_frames = 0;
     int index = -1;  // in the rig's nodes
     // Its ids refused since (0: accepted); when it was last told a shift, and the shift its last
     // refused silhouettes suggested (followLoneNode).
     int64_t refused_since_ns = 0, frame_ids_told_ns = 0, suggested_shift = 0;
+    int agreeing = 0;    // refused silhouettes in a row that suggested the same shift, less one
+    int times_told = 0;  // shifts told since its ids were last accepted
+    int64_t lag_ns = 0;  // how long after an instant's first silhouettes its own come, smoothed
   };
   // Whether frames wait for the node: for its silhouettes, and for its answer to their poses. It is
   // heard, and other nodes' silhouettes have not been used for lost_after without its own (since
@@ -248,15 +251,20 @@ class StudioCoordinator {
   // A node whose ids alone lie far from the others' while its silhouettes arrive in step with
   // theirs (its cameras restarted alone: a node's PC rebooted, its cameras power-cycled) is told
   // the shift that puts its ids on the others' count (FrameIdsData), once its silhouettes have
-  // been refused for kFollowAfter and two in a row agree on the shift. Instants are matched by
-  // when the silhouettes reach the studio, on its own clock (the PCs' clocks may be off by whole
-  // frames): each frame's first arrival is kept for the last kInstants ids.
+  // been refused for kFollowAfter and three in a row agree on the shift; told kTimesTold times
+  // without its ids coming back, it is told no more. Instants are matched by when the silhouettes
+  // reach the studio, on its own clock (the PCs' clocks may be off by whole frames), less the
+  // node's usual lag behind the first node's: each frame's first arrival is kept for the last
+  // kInstants ids. Only ids beyond the window the studio accepts (kFrameIdWindow) are refused and
+  // so followed: cameras that keep counting on through a restart, or whose node's source counts
+  // them on (AravisSource), are not.
   void followLoneNode(NodeState& node, int64_t frame_id);
   // The frame id whose silhouettes first arrived within a third of a frame period of `arrived_ns`
   // (steady clock), counting on from the recent frames at their rate; -1 when none does.
   int64_t idArrivingAt(int64_t arrived_ns) const;
   static constexpr int kInstants = 64;
   static constexpr std::chrono::seconds kFollowAfter{1};
+  static constexpr int kAgreeing = 2, kTimesTold = 3;
   std::array<std::pair<int64_t, int64_t>, kInstants> instants_;  // (frame id, first arrival)
 
   // The frame's state, a spare one when it is new.
@@ -361,6 +369,7 @@ class StudioCoordinator {
   PoseData last_pose_;
   int64_t last_pose_frame_ = -1;
   int64_t frames_done_ = 0, frames_dropped_ = 0, frames_refused_ = 0;
+  int64_t counting_since_ns_ = 0;  // when counting_ became true (steady clock)
   int peak_frames_begun_ = 0;
   // Figures count once every node has spoken (or a few seconds after the first did): a start-up
   // with nodes still loading is not the pipeline's speed.

@@ -20,6 +20,7 @@ class VirtualStudioSource : public FrameSource {
   const Rig& rig() const override { return studio_.rig(); }
   bool next(CameraFrame& frame, std::chrono::milliseconds timeout) override;
   CameraStats stats(int camera) const override;
+  bool idsCountInstants() const override { return false; }  // an id names the pose it renders
   const VirtualStudio& studio() const { return studio_; }
 
  private:

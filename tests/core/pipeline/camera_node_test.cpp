@@ -291,11 +291,18 @@ TEST(CameraNode, ANodeMovesItsFrameIdsWhenTheStudioSaysTheyLieElsewhere) {
   ASSERT_FALSE(peer.empty()) << "no silhouettes";
   Message shift;
   shift.sender = "studio";
+  // A shift that would take its ids below 0 (a confused or hostile studio) is refused.
+  shift.body = FrameIdsData{-1'000'000'000};
+  ASSERT_TRUE(t.studio.send(peer, shift, milliseconds(1000)));
   shift.body = FrameIdsData{100000};
   ASSERT_TRUE(t.studio.send(peer, shift, milliseconds(1000)));
+  bool negative = false;
   EXPECT_TRUE(t.receiveUntil([&](const Message& m) {
-    return std::holds_alternative<SilhouettesData>(m.body) && m.frame_id >= 100000 + before;
+    if (!std::holds_alternative<SilhouettesData>(m.body)) return false;
+    negative = negative || m.frame_id < 0;
+    return m.frame_id >= 100000 + before;
   })) << "the node's frame ids did not move";
+  EXPECT_FALSE(negative);
 }
 
 }  // namespace
