@@ -4,10 +4,12 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <fstream>
 #include <memory>
 #include <thread>
 
@@ -36,7 +38,12 @@ void checkLoopFits(const Rig& rig, PixelFormat format, int frames) {
   size_t set_bytes = 0;
   for (int c = 0; c < rig.cameraCount(); ++c)
     set_bytes += size_t(rig.camera(c).width()) * rig.camera(c).height() * bytesPerPixel(format);
-  const double memory = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  double memory = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  // In a container, its memory limit (cgroup v2) when lower.
+  if (std::ifstream limit("/sys/fs/cgroup/memory.max"); limit) {
+    double bytes = 0;
+    if (limit >> bytes && bytes > 0) memory = std::min(memory, bytes);
+  }
   const double limit = memory / 2, needed = double(set_bytes) * frames;
   if (memory <= 0 || needed <= limit) return;
   throw Error(fmt::format(

@@ -54,12 +54,15 @@ int checkedSize(int width, int height, int block) {
 
 }  // namespace
 
-bool GreenScreenKeyer::follow(const GreenScreenKeyer& measured) {
+bool GreenScreenKeyer::differs(const GreenScreenKeyer& measured) const {
   const int now = measured.screen_excess_;
-  if (now == 0) return false;
-  if (screen_excess_ > 0 &&
-      std::abs(now - screen_excess_) <= std::max(kFollowLevels, screen_excess_ / 8))
-    return false;
+  return now > 0 && (screen_excess_ == 0 ||
+                     std::abs(now - screen_excess_) > std::max(kFollowLevels, screen_excess_ / 8));
+}
+
+bool GreenScreenKeyer::follow(const GreenScreenKeyer& measured) {
+  if (!differs(measured)) return false;
+  const int now = measured.screen_excess_;
   threshold_ = measured.threshold_;
   screen_excess_ = now;
   return true;

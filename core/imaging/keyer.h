@@ -99,6 +99,8 @@ class GreenScreenKeyer {
   // shadow shift it by leave the key as it is. A measurement that saw no screen changes nothing.
   // Returns whether the key changed.
   bool follow(const GreenScreenKeyer& measured);
+  // Whether follow(measured) would change the key.
+  bool differs(const GreenScreenKeyer& measured) const;
   static constexpr int kFollowLevels = 4;
 
  private:
