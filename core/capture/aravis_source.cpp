@@ -9,12 +9,15 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <thread>
 
 #include "core/base/error.h"
 #include "core/capture/aravis_pixel_format.h"
@@ -116,7 +119,8 @@ namespace {
 // opens devices one at a time, each that does not answer waiting out 2.5 s of retries: a rig of
 // twelve cameras gone kept their reconnection attempts queued 30 s, and the process that wanted
 // to stop waiting for them. Asked here first, a camera that is not there costs 0.5 s, and the
-// cameras' threads ask at once (the constructor's first attempts go one camera after another).
+// cameras are asked at once (each camera's thread; the constructor's first attempts side by
+// side).
 bool answersGigEVision(const std::string& address) {
   sockaddr_in to{};
   to.sin_family = AF_INET;
@@ -275,8 +279,22 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
   const auto attempt = [&](Device& d, void (AravisSource::*step)(Device&)) {
     if (std::optional<std::string> error = tryStep(d, step)) failures.push_back(std::move(*error));
   };
-  for (auto& d : devices_) {
-    if (!d->config.device.empty()) attempt(*d, &AravisSource::openCamera);  // else another node's
+  {
+    // Opened side by side: a camera that is not there costs its discovery's 0.5 s once, not once
+    // per absent camera (Aravis itself opens those that answer one at a time).
+    std::mutex failed;
+    std::vector<std::thread> opening;
+    for (auto& d : devices_) {
+      if (d->config.device.empty()) continue;  // another node's
+      opening.emplace_back([&, device = d.get()] {
+        if (std::optional<std::string> error = tryStep(*device, &AravisSource::openCamera)) {
+          std::lock_guard lock(failed);
+          failures.push_back(std::move(*error));
+        }
+      });
+    }
+    for (std::thread& t : opening) t.join();
+    std::sort(failures.begin(), failures.end());  // in the cameras' order, whoever finished first
   }
   // Every stream exists before any camera sends, and the streams get their buffers only then:
   // Aravis's packet-socket receiver binds to the interface before it filters by address, so a
