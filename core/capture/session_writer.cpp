@@ -150,23 +150,36 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
   for (const std::string& error : errors) {
     if (!error.empty()) throw Error(error);
   }
-  if (truth) {
-    if (truth->surface)
-      saveMeshPly(folder_ / "truth" / "surface" / fmt::format("{:06}.ply", frame_id),
-                  *truth->surface);
-    std::string line = std::to_string(frame_id);
-    for (const Eigen::Vector3d& j : truth->joints)
-      line += fmt::format(",{},{},{}", j.x(), j.y(), j.z());
-    line += "\n";
-    if (!joints_.append(line))
-      throw Error(fmt::format("{}: cannot append frame {}: {}; the session ends before it",
-                              joints_.path().string(), frame_id, joints_.error()));
-  }
+  if (truth) writeTruth(frame_id, *truth, false);  // its masks beside the images, above
   appendIndex(frame_id, timestamp_ns, bytes);
 }
 
+void SessionWriter::writeTruth(int64_t frame_id, const FrameTruth& truth, bool masks) {
+  if (joints_.path().empty())
+    throw Error(fmt::format("{}: frame {}: truth for a session made without it", folder_.string(),
+                            frame_id));
+  if (masks && truth.masks) {
+    for (int c = 0; c < rig_.cameraCount(); ++c) {
+      const Camera& camera = rig_.camera(c);
+      const cv::Mat mask(camera.height(), camera.width(), CV_8UC1,
+                         const_cast<uint8_t*>((*truth.masks)[c].data()));
+      writeImageAtomically(
+          folder_ / "truth" / "masks" / camera.name() / fmt::format("{:06}.png", frame_id), mask);
+    }
+  }
+  if (truth.surface)
+    saveMeshPly(folder_ / "truth" / "surface" / fmt::format("{:06}.ply", frame_id), *truth.surface);
+  std::string line = std::to_string(frame_id);
+  for (const Eigen::Vector3d& j : truth.joints)
+    line += fmt::format(",{},{},{}", j.x(), j.y(), j.z());
+  line += "\n";
+  if (!joints_.append(line))
+    throw Error(fmt::format("{}: cannot append frame {}: {}; the session ends before it",
+                            joints_.path().string(), frame_id, joints_.error()));
+}
+
 void SessionWriter::copyFrame(int64_t frame_id, int64_t timestamp_ns,
-                              const std::vector<fs::path>& files) {
+                              const std::vector<fs::path>& files, const FrameTruth* truth) {
   if (files.size() != static_cast<size_t>(rig_.cameraCount())) {
     throw Error(fmt::format("{}: frame {} has {} images for {} cameras", folder_.string(), frame_id,
                             files.size(), rig_.cameraCount()));
@@ -178,6 +191,7 @@ void SessionWriter::copyFrame(int64_t frame_id, int64_t timestamp_ns,
     writeFileAtomically(folder_ / rig_.camera(c).name() / name, contents, {.sync = false});
     bytes += static_cast<int64_t>(contents.size());
   }
+  if (truth) writeTruth(frame_id, *truth, true);
   appendIndex(frame_id, timestamp_ns, bytes);
 }
 

@@ -43,9 +43,10 @@ class SessionWriter {
   // per camera of the camera's size (as its SessionReader checked them on opening): copied byte
   // for byte, written as writeFrame writes (beside their place, renamed in, then the index line).
   // Joins sessions without decoding and encoding again. Throws Error naming the file as
-  // writeFrame does.
+  // writeFrame does. `truth` as writeFrame's.
   void copyFrame(int64_t frame_id, int64_t timestamp_ns,
-                 const std::vector<std::filesystem::path>& files);
+                 const std::vector<std::filesystem::path>& files,
+                 const FrameTruth* truth = nullptr);
   int framesWritten() const { return frames_; }
   int64_t bytesWritten() const { return bytes_; }  // camera images' file bytes of indexed frames
   ImageFiles imageFiles() const { return files_; }
@@ -54,6 +55,8 @@ class SessionWriter {
  private:
   // Last of a frame: its index line (it exists for readers only once this is complete).
   void appendIndex(int64_t frame_id, int64_t timestamp_ns, int64_t bytes);
+  // A frame's truth: its masks (unless written already), surface and joints' line.
+  void writeTruth(int64_t frame_id, const FrameTruth& truth, bool masks);
 
   std::filesystem::path folder_;
   Rig rig_;

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "core/base/error.h"
+#include "core/body/ply_mesh.h"
 #include "core/capture/session_reader.h"
 #include "core/capture/session_writer.h"
 
@@ -201,14 +202,38 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
         fs::remove_all(entry.path(), ignored);
     }
   } remove_partial{partial, in_place};
+  // A session merged alone (a virtual studio's, its images made PNM) keeps its ground truth; a
+  // take's parts, from the nodes, have none.
+  const bool truth = readers.size() == 1 && first.hasTruth();
+  std::vector<std::string> joint_names;
+  std::vector<std::vector<Eigen::Vector3d>> joints;
+  if (truth) joints = first.readTruthJoints(&joint_names);
   SessionWriter writer(partial, merged_rig, first.pixelFormat(), first.fps(),
-                       fmt::format("take of {} parts", parts.size()), {}, out_files);
+                       fmt::format("take of {} parts", parts.size()), joint_names, out_files);
   std::vector<fs::path> paths(merged_rig.cameraCount());
   std::vector<std::vector<CameraFrame>> decoded(groups.size());  // per group, when not copying
   std::vector<ImageView> views(merged_rig.cameraCount());
   std::vector<std::pair<size_t, int>> source(merged_rig.cameraCount());  // (group, camera in it)
   for (int c = 0; c < merged_rig.cameraCount(); ++c)
     source[c] = owner.at(merged_rig.camera(c).name());
+  std::vector<std::vector<uint8_t>> masks(truth ? merged_rig.cameraCount() : 0);
+  TriangleMesh surface;
+  FrameTruth frame_truth;
+  // A frame's truth, in the merged rig's camera order (nullptr without).
+  auto truthOf = [&](int64_t id) -> const FrameTruth* {
+    if (!truth) return nullptr;
+    const int i = index[0].at(id).second;
+    // Joints always; masks and the surface where the session has them.
+    const bool has_masks = fs::exists(first.truthMaskPath(0, i));
+    for (int c = 0; has_masks && c < merged_rig.cameraCount(); ++c)
+      masks[c] = first.readTruthMask(source[c].second, i);
+    const fs::path ply = first.folder() / "truth" / "surface" / fmt::format("{:06}.ply", id);
+    const bool has_surface = fs::exists(ply);
+    if (has_surface) surface = readPlyMesh(ply);
+    frame_truth = {joints[size_t(i)], has_surface ? &surface : nullptr,
+                   has_masks ? &masks : nullptr};
+    return &frame_truth;
+  };
   // Timestamps: the first group's, from the first common frame.
   auto timestamp = [&](int64_t id) {
     const auto [p, i] = index[0].at(id);
@@ -223,7 +248,7 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
         const auto [p, i] = index[g].at(common[f]);
         paths[c] = readers[p]->imagePath(k, i);
       }
-      writer.copyFrame(common[f], timestamp(common[f]) - start_ns, paths);
+      writer.copyFrame(common[f], timestamp(common[f]) - start_ns, paths, truthOf(common[f]));
     } else {
       for (size_t g = 0; g < groups.size(); ++g) {
         const auto [p, i] = index[g].at(common[f]);
@@ -231,7 +256,7 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
       }
       for (int c = 0; c < merged_rig.cameraCount(); ++c)
         views[c] = decoded[source[c].first][source[c].second].image.view();
-      writer.writeFrame(common[f], timestamp(common[f]) - start_ns, views);
+      writer.writeFrame(common[f], timestamp(common[f]) - start_ns, views, truthOf(common[f]));
     }
     if (progress) progress(static_cast<int>(f) + 1, static_cast<int>(common.size()));
   }

@@ -1,11 +1,14 @@
 #include "core/capture/session_reader.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/base/error.h"
+#include "core/body/ply_mesh.h"
+#include "core/capture/take_merge.h"
 #include "tests/core/capture/capture_test_util.h"
 #include "tests/test_util.h"
 
@@ -362,6 +365,46 @@ TEST(SessionReader, ReadsGroundTruthJointsAndMaskPaths) {
     ADD_FAILURE() << "a NaN joint was read";
   } catch (const Error& e) {
     EXPECT_TRUE(contains(e.what(), csv + ":3: expected a frame number and 6 numbers")) << e.what();
+  }
+  fs::remove_all(folder);
+}
+
+// A virtual studio's session merged alone (made PNM, or its cameras put in a rig's order) keeps its
+// ground truth, frame for frame: eval runs on it as on the original.
+TEST(SessionReader, ASessionMergedAloneKeepsItsGroundTruth) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("merged_truth");
+  const std::vector<std::string> names = {"pelvis", "head"};
+  {
+    SessionWriter writer(folder / "filmed", rig, PixelFormat::kMono8, 30.0, "virtual-studio",
+                         names);
+    std::vector<std::vector<uint8_t>> masks(3, std::vector<uint8_t>(64 * 48, 0));
+    TriangleMesh surface;
+    surface.positions.resize(3, 3);
+    surface.positions << 0, 1, 0, 0, 0, 1, 0, 0, 0.5f;
+    surface.triangles = {Eigen::Vector3i(0, 1, 2)};
+    for (int f = 0; f < 3; ++f) {
+      masks[1][size_t(f)] = 255;  // a different pixel of camera 2's mask each frame
+      surface.positions(2, 2) = float(f);
+      FrameTruth truth{
+          {Eigen::Vector3d(0.1 * f, 1, 2), Eigen::Vector3d(-f, 2, 1.75)}, &surface, &masks};
+      writer.writeFrame(10 + f, timestampOf(f), views(frameImages(rig, PixelFormat::kMono8, f)),
+                        &truth);
+    }
+  }
+  const SessionReader filmed(folder / "filmed");
+  mergeTake({folder / "filmed"}, folder / "pnm", {}, ImageFiles::kPnm);
+  const SessionReader merged(folder / "pnm");
+  ASSERT_TRUE(merged.hasTruth());
+  ASSERT_EQ(merged.frameCount(), 3);
+  std::vector<std::string> read_names;
+  EXPECT_EQ(merged.readTruthJoints(&read_names), filmed.readTruthJoints());
+  EXPECT_EQ(read_names, names);
+  for (int f = 0; f < 3; ++f) {
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(merged.readTruthMask(c, f), filmed.readTruthMask(c, f)) << f << " " << c;
+    const std::string ply = fmt::format("truth/surface/{:06}.ply", 10 + f);
+    EXPECT_EQ(readPlyMesh(folder / "pnm" / ply).positions(2, 2), float(f));
   }
   fs::remove_all(folder);
 }
