@@ -402,8 +402,8 @@ void CameraNode::followFrameIds(int64_t offset) {
     if (!source_->idsCountInstants()) {
       spdlog::warn(
           "node {}: the studio finds its frame ids {} off the other nodes' for the same instants; "
-          "a "
-          "recording's ids are its frames' own: not moved (do the nodes replay one session?)",
+          "its source's ids name its frames (a recording, the virtual studio): not moved (do the "
+          "nodes replay one session?)",
           name_, offset);
       return;
     }
