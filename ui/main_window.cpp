@@ -19,6 +19,7 @@
 
 #include "core/calib/calibration_report.h"
 #include "core/geometry/rig_file.h"
+#include "core/geometry/stage_volume.h"
 #include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
 #include "ui/clone_panel.h"
@@ -209,10 +210,11 @@ QWidget* MainWindow::showPanel(const QString& name) {
 
 void MainWindow::showRig(std::unique_ptr<Rig> rig, const QString& origin) {
   // Views hold a pointer to the rig: give them the new one before the old one goes.
-  stage_plan_->setRig(rig.get());
+  const StageBox stage = stageVolume(*rig);  // searched once, drawn by both views
+  stage_plan_->setRig(rig.get(), stage);
   rig_panel_->setRig(rig.get());
   camera_grid_->setRig(*rig);
-  viewport_panel_->setRig(*rig);
+  viewport_panel_->setRig(*rig, stage);
   health_panel_->setRig(*rig);
   overlay_panel_->setRig(*rig);
   calibration_panel_->setRig(*rig);

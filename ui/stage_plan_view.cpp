@@ -6,8 +6,6 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/geometry/stage_volume.h"
-
 namespace lumistage {
 
 StagePlanView::StagePlanView(QWidget* parent) : QWidget(parent) {
@@ -15,9 +13,9 @@ StagePlanView::StagePlanView(QWidget* parent) : QWidget(parent) {
   setAutoFillBackground(false);
 }
 
-void StagePlanView::setRig(const Rig* rig) {
+void StagePlanView::setRig(const Rig* rig, const StageBox& stage) {
   rig_ = rig;
-  stage_ = rig ? stageVolume(*rig) : StageBox{};
+  stage_ = stage;
   highlighted_ = -1;
   update();
 }

@@ -15,8 +15,8 @@ class StagePlanView : public QWidget {
  public:
   explicit StagePlanView(QWidget* parent = nullptr);
 
-  // Not owned; nullptr for none. The stage drawn is the rig's (stageVolume).
-  void setRig(const Rig* rig);
+  // Not owned; nullptr for none. `stage`: the rig's box (stageVolume), drawn on the floor.
+  void setRig(const Rig* rig, const StageBox& stage);
   void setHighlightedCamera(int camera_index);  // -1 for none
 
   QSize sizeHint() const override { return {640, 560}; }

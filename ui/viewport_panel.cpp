@@ -23,7 +23,6 @@
 #include <cmath>
 
 #include "core/base/atomic_file.h"
-#include "core/geometry/stage_volume.h"
 #include "ui/stage_plan_view.h"
 
 namespace lumistage {
@@ -208,9 +207,9 @@ void ViewportWidget::showView(const PipelineView& view) {
   refresh();
 }
 
-void ViewportWidget::setRig(const Rig& rig) {
+void ViewportWidget::setRig(const Rig& rig, const StageBox& stage) {
   rig_ = rig;
-  stage_ = stageVolume(rig);
+  stage_ = stage;
   refresh();
 }
 
@@ -545,9 +544,9 @@ void ViewportPanel::recordingEnded() {
   record_->setChecked(false);
 }
 
-void ViewportPanel::setRig(const Rig& rig) {
+void ViewportPanel::setRig(const Rig& rig, const StageBox& stage) {
   rig_ = rig;
-  viewport_->setRig(rig);
+  viewport_->setRig(rig, stage);
   while (snap_->count() > 1) snap_->removeItem(1);
   for (const Camera& c : rig.cameras()) snap_->addItem(QString::fromStdString(c.name()));
 }

@@ -53,7 +53,7 @@ class ViewportWidget : public QWidget {
   const OrbitView& view() const { return view_; }
   void setView(const OrbitView& view);
   ViewportLayers& layers() { return layers_; }
-  void setRig(const Rig& rig);
+  void setRig(const Rig& rig, const StageBox& stage);  // stage: the rig's (stageVolume)
   void showSnapshot(const PipelineSnapshot& snapshot);
   // A new blended frame and the body placed for it (every frame, between snapshots).
   void showView(const PipelineView& view);
@@ -112,7 +112,7 @@ class ViewportPanel : public QWidget {
   explicit ViewportPanel(CloneSet* clones, QWidget* parent = nullptr);
 
   ViewportWidget* viewport() const { return viewport_; }
-  void setRig(const Rig& rig);
+  void setRig(const Rig& rig, const StageBox& stage);
   // Commands, as the controls do them:
   bool snapToCamera(int camera);  // false for an unknown camera
   void addKey();                  // the current view at the timeline's time

@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -81,6 +80,11 @@ void addRenderCommand(CLI::App& app) {
       ->capture_default_str();
   render->callback([a] {
     refuseOutputOverInputs("--out", a->out, {{"--session", a->session}});
+    const std::filesystem::path out(a->out);
+    const std::string extension = lowercaseExtension(out);
+    if (extension != ".mp4" && extension != ".avi")
+      throw Error(a->out + ": expected a video file ending in .mp4 or .avi (MPEG-4)");
+    requireOutputFolder("--out", out);
     const SessionReader session(a->session);
     const Rig& rig = session.rig();
     const int frames =
@@ -102,13 +106,6 @@ void addRenderCommand(CLI::App& app) {
     // The video is made beside its name (the same extension: it chooses the container) and
     // renamed over it once it reads back whole: a failed frame, a full disk or an interrupted
     // render never replaces a good video with a torn one.
-    const std::filesystem::path out(a->out);
-    std::string extension = out.extension().string();
-    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (extension != ".mp4" && extension != ".avi")
-      throw Error(a->out + ": expected a video file ending in .mp4 or .avi (MPEG-4)");
-    if (!out.parent_path().empty() && !std::filesystem::is_directory(out.parent_path()))
-      throw Error(a->out + ": no folder " + out.parent_path().string() + " to write it into");
     const std::filesystem::path partial = partialVideoPath(out);
     cv::VideoWriter video(partial.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'),
                           a->fps > 0 ? a->fps : session.fps(),

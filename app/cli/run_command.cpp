@@ -4,7 +4,6 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -191,8 +190,7 @@ void addRunCommand(CLI::App& app) {
     }
     for (const auto& [option, path] :
          {std::pair<const char*, const std::string&>{"--image", a->image}, {"--plot", a->plot}}) {
-      std::string extension = std::filesystem::path(path).extension().string();
-      for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+      const std::string extension = lowercaseExtension(path);
       if (!path.empty() && extension != ".png" && extension != ".jpg" && extension != ".jpeg")
         throw Error(std::string(option) + " " + path + ": expected a .png or .jpg file");
     }

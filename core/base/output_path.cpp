@@ -1,6 +1,7 @@
 #include "core/base/output_path.h"
 
 #include <algorithm>
+#include <cctype>
 
 #include "core/base/error.h"
 
@@ -38,6 +39,12 @@ void requireOutputFolder(std::string_view option, const fs::path& output) {
   if (!fs::is_directory(folder, error))
     throw Error(std::string(option) + " " + output.string() + ": no folder " + folder.string() +
                 " to write it into");
+}
+
+std::string lowercaseExtension(const std::filesystem::path& file) {
+  std::string extension = file.extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return extension;
 }
 
 }  // namespace lumistage

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <initializer_list>
+#include <string>
 #include <string_view>
 
 namespace lumistage {
@@ -25,5 +26,8 @@ void refuseOutputOverInputs(std::string_view option, const std::filesystem::path
 // no folder nodir to write it into"): checked before a command's work, not after a minute's run.
 // An empty output is skipped.
 void requireOutputFolder(std::string_view option, const std::filesystem::path& output);
+
+// The file's extension in lower case (".MP4" -> ".mp4"), which chooses its format; empty for none.
+std::string lowercaseExtension(const std::filesystem::path& file);
 
 }  // namespace lumistage

@@ -67,7 +67,6 @@ class DropCounter {
     broken_since_whole_ = 0;
     return gap;
   }
-  int64_t last() const { return last_; }  // the newest whole frame's id, -1 before one
 
  private:
   int64_t last_ = -1, broken_since_whole_ = 0;

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <limits>
+#include <utility>
 
 #include "core/body/human_model.h"
 #include "core/geometry/stage_volume.h"
@@ -14,6 +15,18 @@
 #include "core/render/partial_image_codec.h"
 
 namespace lumistage {
+
+namespace {
+
+// Counts a node's message refused, and says why the first time (`told`: the node's flag for it).
+template <typename Node, typename... Args>
+void refuseSayingOnce(Node& node, bool& told, fmt::format_string<Args...> why, Args&&... args) {
+  ++node.report.bad_messages;
+  if (std::exchange(told, true)) return;
+  spdlog::warn(why, std::forward<Args>(args)...);
+}
+
+}  // namespace
 
 StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoint,
                                      int body_joint_count, StudioCoordinatorOptions options)
@@ -28,9 +41,10 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
     const SkinnedMesh generic = loadGenericHuman();
     PoseTrackerOptions tracking;
     tracking.silhouette_step = options.silhouette_step;
-    // A box the rig file gives as it is; one worked out from the cameras, the tracker's own (it
-    // narrows it where its tables would not fit).
-    if (rig_.stage()) tracking.stage = stage_.box;
+    // The box chosen above (searched once); one worked out from the cameras is narrowed by the
+    // tracker where its tables would not fit, one the rig file gives is taken as it is.
+    tracking.stage = stage_.box;
+    tracking.stage_from_cameras = !rig_.stage();
     tracker_ = std::make_unique<PoseTracker>(rig, generic, tracking);
     generic_skeleton_ = generic.skeleton;
   }
@@ -234,16 +248,13 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       const Camera& camera = rig_.camera(mask.camera);
       if (mask.width != camera.width() / options_.silhouette_step ||
           mask.height != camera.height() / options_.silhouette_step) {
-        ++node.report.bad_messages;
-        if (!node.told_silhouette_size) {
-          node.told_silhouette_size = true;
-          spdlog::warn(
-              "node {}: camera {}: silhouette of {}x{} cells, the studio tracks from {}x{} (cells "
-              "of {} pixels): not used; is the node of another version?",
-              node.report.name, camera.name(), mask.width, mask.height,
-              camera.width() / options_.silhouette_step, camera.height() / options_.silhouette_step,
-              options_.silhouette_step);
-        }
+        refuseSayingOnce(
+            node, node.told_silhouette_size,
+            "node {}: camera {}: silhouette of {}x{} cells, the studio tracks from {}x{} (cells of "
+            "{} pixels): not used; is the node of another version?",
+            node.report.name, camera.name(), mask.width, mask.height,
+            camera.width() / options_.silhouette_step, camera.height() / options_.silhouette_step,
+            options_.silhouette_step);
         continue;
       }
       LowResSilhouette s;
@@ -268,30 +279,24 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     frame.addBytes(node.index, received.bytes);
     const int colour_bits = stats->packed.size() >= 8 ? stats->packed[5] : 0;
     if (stats->offset_count != options_.refine.offset_count || colour_bits < 1 || colour_bits > 8) {
-      ++node.report.bad_messages;
-      if (!node.told_statistics) {
-        node.told_statistics = true;
-        spdlog::warn(
-            "node {}: frame {}: refinement statistics at {} offsets and {} colour bits, the studio "
-            "refines at {} offsets: not used; is the node's refine: configuration another?",
-            node.report.name, message.frame_id, stats->offset_count, colour_bits,
-            options_.refine.offset_count);
-      }
+      refuseSayingOnce(
+          node, node.told_statistics,
+          "node {}: frame {}: refinement statistics at {} offsets and {} colour bits, the studio "
+          "refines at {} offsets: not used; is the node's refine: configuration another?",
+          node.report.name, message.frame_id, stats->offset_count, colour_bits,
+          options_.refine.offset_count);
       return;
     }
     // Of the body's vertices (alone, or with their window points), where the studio knows the
     // body: otherwise the first node to answer, with another mesh, set the sum's sizes and every
     // node with the right one was refused.
     if (options_.body && !bodyFits(refinedVertices(int(stats->vertex_count)))) {
-      ++node.report.bad_messages;
-      if (!node.told_statistics) {
-        node.told_statistics = true;
-        spdlog::warn(
-            "node {}: frame {}: refinement statistics of {} points, not of the body's {} vertices: "
-            "not used; does the node pose another body?",
-            node.report.name, message.frame_id, stats->vertex_count,
-            options_.body->rest.vertexCount());
-      }
+      refuseSayingOnce(
+          node, node.told_statistics,
+          "node {}: frame {}: refinement statistics of {} points, not of the body's {} vertices: "
+          "not used; does the node pose another body?",
+          node.report.name, message.frame_id, stats->vertex_count,
+          options_.body->rest.vertexCount());
       return;
     }
     if (frame.refine_sum.vertex_count == 0)

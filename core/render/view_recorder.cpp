@@ -1,10 +1,10 @@
 #include "core/render/view_recorder.h"
 
-#include <cctype>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "core/base/error.h"
+#include "core/base/output_path.h"
 #include "core/net/message_codec.h"
 
 namespace lumistage {
@@ -45,9 +45,7 @@ ViewRecorder::ViewRecorder(const std::filesystem::path& file, double fps, int ma
   if (!(fps > 0 && fps <= 1000))
     throw Error(file.string() + ": cannot record the view at " + std::to_string(fps) +
                 " frames a second (expected 0 to 1000)");
-  std::string extension = file.extension().string();
-  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (extension != ".avi")
+  if (lowercaseExtension(file) != ".avi")
     throw Error(file.string() + ": the view is recorded as Motion-JPEG in an AVI: name it .avi");
   const std::filesystem::path folder = file.has_parent_path() ? file.parent_path() : ".";
   std::error_code error;

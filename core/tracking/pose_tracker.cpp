@@ -218,7 +218,8 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   // A box worked out from the cameras (none given) is narrowed about its centre, down to the
   // default floor, until its tables fit: many cameras of a megapixel and more on a wide floor
   // would pass max_table_bytes where the old 3 x 3 m box did not.
-  if (!opt.stage && !rig.stage() && tableBytes(stage) > opt.max_table_bytes) {
+  const bool from_cameras = opt.stage ? opt.stage_from_cameras : !rig.stage();
+  if (from_cameras && tableBytes(stage) > opt.max_table_bytes) {
     const StageBox least;
     const StageBox covered = stage;
     while (tableBytes(stage) > opt.max_table_bytes &&

@@ -29,6 +29,9 @@ struct PoseTrackerOptions {
   // than max_table_bytes is refused; one worked out from the cameras is narrowed about its centre
   // (down to the default floor) until they fit, and the log says so.
   std::optional<StageBox> stage;
+  // `stage` was worked out from the cameras by the caller (stageVolume, for a rig file without
+  // one): narrowed as the tracker's own would be, not refused.
+  bool stage_from_cameras = false;
   size_t max_table_bytes = size_t(1) << 30;
   int iterations = 10;         // Levenberg-Marquardt iterations per tracked frame
   double velocity_gain = 0.8;  // of the constant-velocity prediction (0: the previous pose)
