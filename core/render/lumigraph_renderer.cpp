@@ -165,9 +165,19 @@ void LumigraphRenderer::upload(const Eigen::Matrix3Xf& positions, const Eigen::M
       }
     }
   }
+  // Drawn in an order that shades each vertex about once (DrawOrder).
+  draw_order_.build(n, triangles);
+  const std::vector<int>& order = draw_order_.order();
+  triangles = draw_order_.triangles();
   vertices_.resize(size_t(kVertexFloats) * n);
-  for (int v = 0; v < n; ++v) {
-    float* out = &vertices_[size_t(kVertexFloats) * v];
+  if (!visibility.empty()) {
+    ordered_visibility_.resize(n);
+    for (int i = 0; i < n; ++i) ordered_visibility_[i] = visibility[order[i]];
+    visibility = ordered_visibility_;
+  }
+  for (int i = 0; i < n; ++i) {
+    const int v = order[i];
+    float* out = &vertices_[size_t(kVertexFloats) * i];
     for (int k = 0; k < 3; ++k) {
       out[k] = positions(k, v);
       out[3 + k] = normals(k, v);

@@ -8,6 +8,7 @@
 
 #include "core/capture/image.h"
 #include "core/geometry/rig.h"
+#include "core/render/draw_order.h"
 #include "core/render/gl.h"
 #include "core/render/phong_subdivision.h"
 #include "core/render/render_target.h"
@@ -136,6 +137,8 @@ class LumigraphRenderer {
   GLsizeiptr visibility_capacity_ = 0;
   VertexVisibility visibility_;
   PhongSubdivision subdivision_;
+  DrawOrder draw_order_;  // the uploaded mesh's, and its masks in that order
+  std::vector<uint16_t> ordered_visibility_;
   RenderTarget target_;
   GLuint upload_buffer_ = 0;      // pixel-buffer object for image uploads
   std::vector<float> vertices_;   // interleaved positions, normals and rim dilations, reused
