@@ -92,6 +92,7 @@ void PipelineWorker::run() {
                      .arg(QString::fromStdString(pipeline.studio().endpoint())));
     // The body the studio places, to draw over the views: the generic human (as the nodes use).
     const SkinnedMesh human = loadGenericHuman();
+    Pose pose;
     std::vector<Eigen::Affine3f> transforms;
     const auto start = std::chrono::steady_clock::now();
     auto last = start;
@@ -103,11 +104,10 @@ void PipelineWorker::run() {
           pose_data.angles.size() != size_t(3) * human.skeleton.jointCount())
         return;
       shown.pose_frame = pose_frame;
-      human.skeleton.jointPositions(poseFromMessage(pose_data, human.skeleton.jointCount()),
-                                    shown.joints);
-      for (Eigen::Vector3d& joint : shown.joints) joint *= pose_data.scale;
       auto mesh = std::make_shared<TriangleMesh>();
-      posedBodyMesh(human, pose_data, transforms, mesh->positions, mesh->normals);
+      posedBodyMesh(human, pose_data, pose, transforms, mesh->positions, mesh->normals);
+      human.skeleton.jointPositions(pose, shown.joints);
+      for (Eigen::Vector3d& joint : shown.joints) joint *= pose_data.scale;
       mesh->triangles = human.rest.triangles;
       shown.mesh = std::move(mesh);
     };

@@ -59,6 +59,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   const LeaveOneOutSummary truth = evaluateLeaveOneOut(
       session, frames, [&](int i, int) { return truthSurface(session, i); },
       LeaveOneOutMeshes::kOnePerFrame, fine);
+  Pose pose;
   std::vector<Eigen::Affine3f> transforms;
   Eigen::Matrix3Xf positions, normals;
   // Each frame's pose message once: the meshes below pose the same frames many times over.
@@ -67,7 +68,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     if (!messages[i])
       messages[i] =
           poseMessageFor(generic.skeleton, tracked.skeleton, tracked.poses[i], tracked.joints[i]);
-    posedBodyMesh(generic, *messages[i], transforms, positions, normals);
+    posedBodyMesh(generic, *messages[i], pose, transforms, positions, normals);
   };
   const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(session, frames, [&](int i, int) {
     posed(i);

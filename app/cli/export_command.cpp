@@ -91,6 +91,7 @@ void addExportCommand(CLI::App& app) {
     FrameRefiner refiner(session.rig(), RefineConfig{}, generic.rest.vertexCount(),
                          generic.rest.triangles);
     std::vector<CameraFrame> images;
+    Pose pose;
     std::vector<Eigen::Affine3f> transforms;
     Eigen::Matrix3Xf positions, normals;
     const bool surfaces = args->glb || args->ply || args->obj;
@@ -99,7 +100,7 @@ void addExportCommand(CLI::App& app) {
       mesh.triangles = generic.rest.triangles;
       posedBodyMesh(generic,
                     poseMessageFor(generic.skeleton, mocap.skeleton, clip.frames[i], joints[i]),
-                    transforms, positions, normals);
+                    pose, transforms, positions, normals);
       if (args->unrefined) {
         mesh.positions = positions;
         mesh.normals = normals;

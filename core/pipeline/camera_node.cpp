@@ -65,7 +65,7 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
     set = it->second;
   }
   const PoseData& pose_data = std::get<PoseData>(message.body);
-  posedBodyMesh(body_, pose_data, transforms_, positions_, normals_);
+  posedBodyMesh(body_, pose_data, pose_, transforms_, positions_, normals_);
 
   // The refinement's samples: every vertex's offsets along its normal in this node's cameras.
   sampler_cameras_.clear();

@@ -202,6 +202,7 @@ class CameraNode {
   std::atomic<bool> source_finished_{false};
   TakeRecorder takes_;
   MessageEncoder encoder_;
+  Pose pose_;
   std::vector<Eigen::Affine3f> transforms_;
   Eigen::Matrix3Xf positions_, normals_;
   RefinementSampler sampler_;

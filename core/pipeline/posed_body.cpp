@@ -5,13 +5,18 @@
 namespace lumistage {
 
 Pose poseFromMessage(const PoseData& data, int joint_count) {
-  Pose pose = Pose::rest(joint_count);
+  Pose pose;
+  poseFromMessage(data, joint_count, pose);
+  return pose;
+}
+
+void poseFromMessage(const PoseData& data, int joint_count, Pose& pose) {
+  pose.angles_rad.assign(joint_count, Eigen::Vector3d::Zero());
   pose.root_translation_m = Eigen::Vector3d(data.root[0], data.root[1], data.root[2]);
   for (int j = 0; j < joint_count && 3 * j + 2 < static_cast<int>(data.angles.size()); ++j) {
     pose.angles_rad[j] =
         Eigen::Vector3d(data.angles[3 * j], data.angles[3 * j + 1], data.angles[3 * j + 2]);
   }
-  return pose;
 }
 
 PoseData poseMessageFor(const Skeleton& generic, const Skeleton& calibrated, const Pose& tracked,
@@ -45,10 +50,11 @@ PoseData poseMessageFor(const Skeleton& generic, const Skeleton& calibrated, con
   return data;
 }
 
-void posedBodyMesh(const SkinnedMesh& body, const PoseData& data,
+void posedBodyMesh(const SkinnedMesh& body, const PoseData& data, Pose& pose,
                    std::vector<Eigen::Affine3f>& transforms, Eigen::Matrix3Xf& positions,
                    Eigen::Matrix3Xf& normals) {
-  body.skeleton.skinningTransforms(poseFromMessage(data, body.skeleton.jointCount()), transforms);
+  poseFromMessage(data, body.skeleton.jointCount(), pose);
+  body.skeleton.skinningTransforms(pose, transforms);
   skinMesh(body, transforms, positions, normals);
   if (data.scale != 1.0f) positions *= data.scale;
 }

@@ -13,6 +13,8 @@ namespace lumistage {
 // floor's centre) so that a taller or shorter actor is matched, its pelvis landing at
 // scale * (rest pelvis + root).
 Pose poseFromMessage(const PoseData& data, int joint_count);
+// The same into `pose`, its buffer reused (no allocation once sized).
+void poseFromMessage(const PoseData& data, int joint_count, Pose& pose);
 
 // The message that poses the nodes' generic human (skeleton `generic`) where the tracker found the
 // actor. The tracker's skeleton (PoseTracker::skeleton()) is the generic one with the actor's
@@ -28,8 +30,9 @@ Pose poseFromMessage(const PoseData& data, int joint_count);
 PoseData poseMessageFor(const Skeleton& generic, const Skeleton& calibrated, const Pose& tracked,
                         const std::vector<Eigen::Vector3d>& joints);
 
-// Positions and normals of `body` posed by `data`; reuses the buffers (no allocation once sized).
-void posedBodyMesh(const SkinnedMesh& body, const PoseData& data,
+// Positions and normals of `body` posed by `data`; `pose` and `transforms` are working buffers.
+// All are reused: once sized, nothing allocates (tests/core/hot_path_test.cpp).
+void posedBodyMesh(const SkinnedMesh& body, const PoseData& data, Pose& pose,
                    std::vector<Eigen::Affine3f>& transforms, Eigen::Matrix3Xf& positions,
                    Eigen::Matrix3Xf& normals);
 

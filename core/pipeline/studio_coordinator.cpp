@@ -655,7 +655,8 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
   // Which cameras see each vertex of the mesh the nodes will render: posed and refined as they
   // will, from the same pose message and offsets.
   if (bodyFits(vertices)) {
-    posedBodyMesh(*options_.body, frame.pose, body_transforms_, posed_positions_, posed_normals_);
+    posedBodyMesh(*options_.body, frame.pose, body_pose_, body_transforms_, posed_positions_,
+                  posed_normals_);
     applyOffsets(options_.refine, offsets.offsets, posed_positions_, posed_normals_,
                  refined_positions_);
     const LumigraphParams lumigraph;  // the nodes' renderers'

@@ -335,6 +335,7 @@ class StudioCoordinator {
   std::optional<Skeleton> generic_skeleton_;  // the nodes' generic human's (with tracker_)
   std::unique_ptr<MeshRefiner> refiner_;      // made for the first statistics' vertex count
   // The refined mesh of the frame being sent, and which cameras see its vertices (reused).
+  Pose body_pose_;
   std::vector<Eigen::Affine3f> body_transforms_;
   Eigen::Matrix3Xf posed_positions_, posed_normals_, refined_positions_;
   VertexVisibility visibility_;

@@ -253,9 +253,11 @@ TEST(StudioCoordinator, OffsetsComeWithTheRefinedBodysVisibility) {
     const int unmoved = refine.offsetLevels() / 2;
     ASSERT_TRUE(std::all_of(sent.offsets.begin(), sent.offsets.end(),
                             [&](uint8_t level) { return level < unmoved; }));
+    Pose posed;
     std::vector<Eigen::Affine3f> transforms;
     Eigen::Matrix3Xf positions, normals, refined;
-    posedBodyMesh(*options.body, std::get<PoseData>(pose->body), transforms, positions, normals);
+    posedBodyMesh(*options.body, std::get<PoseData>(pose->body), posed, transforms, positions,
+                  normals);
     applyOffsets(refine, sent.offsets, positions, normals, refined);
     VertexVisibility expected;
     const LumigraphParams lumigraph;
