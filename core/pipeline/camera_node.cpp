@@ -5,8 +5,10 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <limits>
 #include <thread>
 
@@ -176,9 +178,9 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
 
 void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   // Frames arrive camera by camera; a set goes out when every own camera that delivers is in. A
-  // camera that has delivered nothing for more than kSilentFrames frame ids (unplugged,
-  // its cable pulled, its port dead) no longer holds its node's sets back: they go out with the
-  // cameras there are, and the node says so once. (Waiting for it lost the node's other cameras
+  // camera that has delivered none of the node's last kSilentFrames sets (unplugged, its cable
+  // pulled, its port dead, or only late) no longer holds its node's sets back: they go out with
+  // the cameras there are, and the node says so. (Waiting for it lost the node's other cameras
   // too: every set was incomplete and dropped.)
   // A camera not heard from yet is waited for during the first kStartFrames frame ids.
   // (kSilentFrames: the 4 sets the node waited on before.)
@@ -186,8 +188,50 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   std::map<int64_t, std::shared_ptr<Set>> assembling;
   std::vector<int64_t> last_id(cameras_.size(), -1);
   std::vector<uint8_t> told_silent(cameras_.size(), 0), live(cameras_.size(), 0);
+  // A camera whose frames come more than kSilentFrames late (a loaded PC) rather than not at all:
+  // the sets went out without it, and the take, which records whole sets only, waits up to
+  // kLateFrames for its frames (the sets after wait behind, the index needs increasing ids).
+  // It is said to deliver nothing only after kTellSilentAfter without a frame; lateness is said
+  // at most every kTellLateEvery.
+  constexpr int64_t kLateFrames = 30;
+  constexpr auto kTellSilentAfter = std::chrono::seconds(1),
+                 kTellLateEvery = std::chrono::seconds(10);
+  struct ForTake {
+    std::shared_ptr<Set> set;
+    std::vector<CameraFrame> late;  // per own camera: its frame, come after the set went out
+    bool complete() const {
+      for (size_t c = 0; c < late.size(); ++c)
+        if (!set->has(c) && late[c].frame_id != set->frame_id) return false;
+      return true;
+    }
+  };
+  std::deque<ForTake> for_take;
+  std::vector<const CameraFrame*> take_frames;
+  std::vector<std::chrono::steady_clock::time_point> delivered(cameras_.size());
+  std::vector<int64_t> sets_without(cameras_.size(), 0);
+  auto told_late_at = std::chrono::steady_clock::now();  // counted since
   int64_t newest = -1, first = -1, applied_offset = 0;
+  // The newest kSilentFrames + 1 ids seen, a ring (recent_count of them in all).
+  std::array<int64_t, kSilentFrames + 1> recent_ids{};
+  int64_t recent_count = 0;
   CameraFrame frame;
+  // The sets waiting for the take that are complete now, in order; those whose late frames did
+  // not come within kLateFrames are left out of it.
+  const auto offerForTake = [&] {
+    while (!for_take.empty()) {
+      ForTake& front = for_take.front();
+      if (front.complete()) {
+        take_frames.clear();
+        for (size_t c = 0; c < cameras_.size(); ++c)
+          take_frames.push_back(front.set->has(c) ? &front.set->frames[c] : &front.late[c]);
+        takes_.offer(front.set->frame_id, take_frames);
+      } else if (front.set->frame_id >= newest - kLateFrames) {
+        return;
+      }
+      frame_pool_->give(front.late);
+      for_take.pop_front();
+    }
+  };
   // Every camera silent (no set goes out, so the per-camera warning below never comes): said once
   // after kAllSilent, and again when frames come back.
   constexpr auto kAllSilent = std::chrono::seconds(2);
@@ -237,8 +281,24 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     frame.frame_id += applied_offset;
     if (first < 0 || frame.frame_id < newest - kFrameIdWindow) {  // first, or cameras restarted
       first = newest = frame.frame_id;
+      recent_count = 0;
+      recent_ids[recent_count++] = newest;
       std::fill(last_id.begin(), last_id.end(), -1);
       assembling.clear();  // the old ids' sets would outlast every new one (lowest go first)
+      for_take.clear();
+    }
+    delivered[k] = now;
+    // The late frame of a set that went out without it: for the take.
+    if (!for_take.empty() && frame.frame_id >= for_take.front().set->frame_id) {
+      const auto waiting = std::find_if(for_take.begin(), for_take.end(), [&](const ForTake& t) {
+        return t.set->frame_id == frame.frame_id;
+      });
+      if (waiting != for_take.end() && !waiting->set->has(k)) {
+        std::swap(waiting->late[k], frame);
+        frame_pool_->take(frame);
+        offerForTake();
+        continue;
+      }
     }
     std::shared_ptr<Set>& set = assembling[frame.frame_id];
     if (!set) {
@@ -249,11 +309,20 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     std::swap(set->frames[k], frame);
     frame_pool_->take(frame);  // buffers of a set let go, for the next frame
     last_id[k] = std::max(last_id[k], set->frame_id);
-    newest = std::max(newest, set->frame_id);
+    if (set->frame_id > newest) {
+      newest = set->frame_id;
+      recent_ids[recent_count++ % recent_ids.size()] = newest;
+    }
     // Which cameras a set waits for: those that deliver (or are not heard from yet, at first).
+    // Counted in the sets the node saw, not in ids: a loaded node that skips frames (a replay's
+    // ticks, a camera queue that drops its oldest) sees ids jump by more than kSilentFrames, and
+    // took its cameras after the first for silent at every jump: the sets went out with one
+    // camera in three (the demo, with the studio's window on the same 2 cores).
+    const int64_t oldest_recent = recent_count >= int64_t(recent_ids.size())
+                                      ? recent_ids[recent_count % recent_ids.size()]
+                                      : std::numeric_limits<int64_t>::min();
     for (size_t c = 0; c < cameras_.size(); ++c)
-      live[c] =
-          last_id[c] >= 0 ? last_id[c] >= newest - kSilentFrames : newest - first < kStartFrames;
+      live[c] = last_id[c] >= 0 ? last_id[c] >= oldest_recent : newest - first < kStartFrames;
     for (auto it = assembling.begin(); it != assembling.end();) {
       Set& s = *it->second;
       size_t present = 0;
@@ -266,14 +335,40 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
         ++it;
         continue;
       }
+      // Without a camera: one that delivers nothing, or one whose frames come late.
+      bool late_only = true;
       for (size_t c = 0; c < cameras_.size(); ++c) {
-        if (s.has(c) == !told_silent[c]) continue;
-        told_silent[c] = !s.has(c);
-        if (told_silent[c])
+        if (s.has(c)) {
+          if (told_silent[c]) {
+            told_silent[c] = 0;
+            spdlog::info("node {}: camera {} delivers again", name_,
+                         rig_.camera(cameras_[c]).name());
+          }
+          continue;
+        }
+        const bool silent = last_id[c] < 0 || now - delivered[c] > kTellSilentAfter;
+        late_only = late_only && !silent;
+        if (!silent) {
+          ++sets_without[c];
+        } else if (!told_silent[c]) {
+          told_silent[c] = 1;
+          sets_without[c] = 0;  // gone, not late
           spdlog::warn("node {}: camera {} delivers no frames: its node's sets go out without it",
                        name_, rig_.camera(cameras_[c]).name());
-        else
-          spdlog::info("node {}: camera {} delivers again", name_, rig_.camera(cameras_[c]).name());
+        }
+      }
+      if (now - told_late_at > kTellLateEvery &&
+          std::any_of(sets_without.begin(), sets_without.end(), [](int64_t n) { return n > 0; })) {
+        told_late_at = now;
+        for (size_t c = 0; c < cameras_.size(); ++c) {
+          if (sets_without[c] == 0) continue;
+          spdlog::warn(
+              "node {}: camera {}: {} set{} went out without its frames, which came after {} newer "
+              "sets (takes still get them); is the node's PC overloaded?",
+              name_, rig_.camera(cameras_[c]).name(), sets_without[c],
+              sets_without[c] == 1 ? "" : "s", kSilentFrames);
+          sets_without[c] = 0;
+        }
       }
       s.captured_ns = wallNowNs();  // the studio's latency counts from it, maybe on another PC
       const bool whole = present == cameras_.size();
@@ -282,11 +377,21 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       else if (whole && s.frame_id % kScreenRetrySets == 0)
         checkScreens(s);
       s.keyers = published_keyers_;
-      if (whole) takes_.offer(s.frame_id, s.frames);  // and takes recorded
+      // And takes recorded: a whole set at once, unless one before it waits for a late frame; one
+      // without a late camera waits for its frame (one without a silent camera cannot be
+      // recorded: a take's sets are whole).
+      if (whole && for_take.empty()) {
+        take_frames.clear();
+        for (const CameraFrame& f : s.frames) take_frames.push_back(&f);
+        takes_.offer(s.frame_id, take_frames);
+      } else if (whole || late_only) {
+        for_take.push_back({it->second, std::vector<CameraFrame>(whole ? 0 : cameras_.size())});
+      }
       sets_.push(it->second);
       it = assembling.erase(it);
     }
     while (assembling.size() > 4) assembling.erase(assembling.begin());  // a camera fell behind
+    offerForTake();  // those that waited long enough
   }
   source_finished_ = true;
 }

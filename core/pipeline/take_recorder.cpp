@@ -81,7 +81,7 @@ void TakeRecorder::abandon(const std::string& why) {
   spdlog::warn("node {}: take {}: {}", node_, wanted_.take, why);
 }
 
-void TakeRecorder::open(int64_t frame_id, const std::vector<CameraFrame>& frames) {
+void TakeRecorder::open(int64_t frame_id, const CameraFrame& first) {
   // A node restarted during the take (a crash, a power cut) finds its first part there, valid up
   // to its last complete set: the rest goes beside it, <node>-2, <node>-3..., and the merge
   // joins them.
@@ -109,12 +109,12 @@ void TakeRecorder::open(int64_t frame_id, const std::vector<CameraFrame>& frames
   try {
     // A second of sets queued: a disk's hiccup loses nothing (the reference node: 70 MB).
     const int queue = std::max(8, static_cast<int>(std::ceil(fps_)));
-    recorder_ = std::make_unique<SessionRecorder>(part, rig_, frames.front().image.format, fps_,
+    recorder_ = std::make_unique<SessionRecorder>(part, rig_, first.image.format, fps_,
                                                   "lumistage-node " + node_, queue, files_);
     counted_ = recorder_.get();
     if (!std::filesystem::exists(marker, ec))
       writeFileAtomically(marker, std::to_string(wanted_.first_frame) + "\n");
-    first_timestamp_ns_ = frames.front().timestamp_ns;
+    first_timestamp_ns_ = first.timestamp_ns;
     spdlog::info("node {}: recording take {} from frame {} into {}", node_, wanted_.take, frame_id,
                  part.string());
   } catch (const Error& e) {
@@ -125,6 +125,12 @@ void TakeRecorder::open(int64_t frame_id, const std::vector<CameraFrame>& frames
 }
 
 void TakeRecorder::offer(int64_t frame_id, const std::vector<CameraFrame>& frames) {
+  std::vector<const CameraFrame*> pointers;
+  for (const CameraFrame& frame : frames) pointers.push_back(&frame);
+  offer(frame_id, pointers);
+}
+
+void TakeRecorder::offer(int64_t frame_id, std::span<const CameraFrame* const> frames) {
   std::lock_guard lock(mutex_);
   if (closed_ || wanted_.take.empty() || frames.empty() || frame_id < wanted_.first_frame) return;
   if (frame_id > wanted_.last_frame) {
@@ -132,13 +138,13 @@ void TakeRecorder::offer(int64_t frame_id, const std::vector<CameraFrame>& frame
     spdlog::info("node {}: take {} closed after frame {}", node_, wanted_.take, wanted_.last_frame);
     return;
   }
-  if (!recorder_) open(frame_id, frames);
+  if (!recorder_) open(frame_id, *frames.front());
   if (!recorder_) return;
   if (images_.empty()) recorder_->takeSpareImages(images_);  // a written set's buffers
   images_.resize(frames.size());
-  for (size_t k = 0; k < frames.size(); ++k) images_[k] = frames[k].image;  // reuses the buffers
+  for (size_t k = 0; k < frames.size(); ++k) images_[k] = frames[k]->image;  // reuses the buffers
   // Queued: moved from. Dropped (the queue is full): kept for the next set.
-  if (recorder_->push(frame_id, frames.front().timestamp_ns - first_timestamp_ns_,
+  if (recorder_->push(frame_id, frames.front()->timestamp_ns - first_timestamp_ns_,
                       std::move(images_))) {
     images_.clear();
     return;

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -47,14 +48,16 @@ class TakeRecorder {
   void abandon(const std::string& why);
   // A complete set of the node's cameras, in the node's camera order (the capture thread's):
   // queued when the take asks for its frame. Copies the images into buffers of sets already
-  // written, so it allocates only while warming up.
+  // written, so it allocates only while warming up. Sets come in increasing frame ids (a
+  // session's index needs them so).
+  void offer(int64_t frame_id, std::span<const CameraFrame* const> frames);
   void offer(int64_t frame_id, const std::vector<CameraFrame>& frames);
   // For heartbeats (any thread).
   TakeStatusData status() const;
 
  private:
   void close();  // under mutex_: the open take stops taking sets and drains on finisher_
-  void open(int64_t frame_id, const std::vector<CameraFrame>& frames);  // under mutex_
+  void open(int64_t frame_id, const CameraFrame& first);  // under mutex_
 
   const std::filesystem::path folder_;
   const Rig rig_;  // the node's cameras only, and the node

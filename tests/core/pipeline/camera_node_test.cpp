@@ -9,8 +9,10 @@
 #include <thread>
 
 #include "core/body/human_model.h"
+#include "core/capture/session_reader.h"
 #include "core/net/transport.h"
 #include "tests/core/refine/refine_test_scene.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -77,10 +79,67 @@ class ScriptedSource : public FrameSource {
   size_t next_ = 0;
 };
 
+// Screen-green frames of a node's cameras, a set every 10 ms, in which camera `late`'s frames of
+// ids in [late_from, late_until) come `late_by` sets after the others' (a loaded PC's thread);
+// the sets' ids go up by `stride` (a slow reader that skips frames).
+class LateCameraSource : public FrameSource {
+ public:
+  LateCameraSource(Rig rig, std::vector<int> cameras, int late, int64_t late_from,
+                   int64_t late_until, int64_t late_by, int64_t stride = 1)
+      : rig_(std::move(rig)),
+        cameras_(std::move(cameras)),
+        late_(late),
+        late_from_(late_from),
+        late_until_(late_until),
+        late_by_(late_by),
+        stride_(stride) {}
+  const Rig& rig() const override { return rig_; }
+  bool next(CameraFrame& frame, milliseconds) override {
+    for (;;) {
+      const size_t k = next_ % cameras_.size();
+      const int64_t id = int64_t(next_ / cameras_.size()) * stride_;
+      int camera = cameras_[k];
+      int64_t frame_id = id;
+      if (!held_.empty() && held_.front() + late_by_ * stride_ <= id && k == 0) {
+        camera = late_, frame_id = held_.front();  // a late frame, before this set's
+        held_.erase(held_.begin());
+      } else {
+        ++next_;
+        if (camera == late_ && id >= late_from_ && id < late_until_) {
+          held_.push_back(id);
+          continue;
+        }
+        if (next_ % cameras_.size() == 0) std::this_thread::sleep_for(milliseconds(10));
+      }
+      frame.camera = camera;
+      frame.frame_id = frame_id;
+      frame.timestamp_ns = frame_id * 33'333'333;
+      const Camera& c = rig_.camera(camera);
+      frame.image.resize(PixelFormat::kRgb8, c.width(), c.height());
+      for (size_t p = 0; p + 2 < frame.image.pixels.size(); p += 3) {
+        frame.image.pixels[p] = 40;
+        frame.image.pixels[p + 1] = 150;
+        frame.image.pixels[p + 2] = uint8_t(60 + frame_id % 7);
+      }
+      return true;
+    }
+  }
+  CameraStats stats(int) const override { return {}; }
+
+ private:
+  Rig rig_;
+  std::vector<int> cameras_;
+  int late_;
+  int64_t late_from_, late_until_, late_by_, stride_;
+  size_t next_ = 0;
+  std::vector<int64_t> held_;
+};
+
 // A node of the small ring's first node's cameras, talking to a studio endpoint the test holds.
 struct NodeUnderTest {
   explicit NodeUnderTest(
-      std::function<std::unique_ptr<FrameSource>(const Rig&, std::vector<int>)> make_source)
+      std::function<std::unique_ptr<FrameSource>(const Rig&, std::vector<int>)> make_source,
+      CameraNodeOptions options = {})
       : rig(testing::smallRing()),
         studio([] {
           StudioEndpointConfig config;
@@ -98,7 +157,7 @@ struct NodeUnderTest {
               endpoint.security = TransportSecurity::kPlain;
               return endpoint;
             }(),
-            loadGenericHuman()),
+            loadGenericHuman(), std::move(options)),
         running([this] { node.run(stop); }) {}
   ~NodeUnderTest() {
     stop = true;
@@ -303,6 +362,79 @@ TEST(CameraNode, ANodeMovesItsFrameIdsWhenTheStudioSaysTheyLieElsewhere) {
     return m.frame_id >= 100000 + before;
   })) << "the node's frame ids did not move";
   EXPECT_FALSE(negative);
+}
+
+// One camera's frames come 8 sets late for a while (its node's PC loaded): its node's sets go out
+// without them, as before, but the take the studio asked for still gets every set whole. (The
+// take recorded whole sets only: the late stretch was missing from it, and from the merged take of
+// the whole rig.)
+TEST(CameraNode, ATakeKeepsTheSetsACameraWasLateFor) {
+  static constexpr int64_t kLateFrom = 150, kLateUntil = 200, kFirst = 100, kLast = 250;
+  const std::filesystem::path folder = testing::testFolder("late_camera");
+  CameraNodeOptions options;
+  options.takes = folder;
+  options.fps = 30;
+  std::string peer;
+  size_t masks_late = 0, masks_on_time = 0;
+  {
+    NodeUnderTest t(
+        [](const Rig& rig, std::vector<int> cameras) {
+          const int late = cameras.at(1);
+          return std::make_unique<LateCameraSource>(rig, std::move(cameras), late, kLateFrom,
+                                                    kLateUntil, 8);
+        },
+        options);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (peer.empty() && std::chrono::steady_clock::now() < deadline) {
+      const std::optional<ReceivedMessage> in = t.studio.receive(milliseconds(100));
+      if (in && in->result.ok() &&
+          std::holds_alternative<SilhouettesData>(in->result.message->body))
+        peer = in->peer;
+    }
+    ASSERT_FALSE(peer.empty()) << "no silhouettes";
+    Message record;
+    record.sender = "studio";
+    record.body = RecordData{"late", kFirst, kLast};
+    ASSERT_TRUE(t.studio.send(peer, record, milliseconds(1000)));
+    EXPECT_TRUE(t.receiveUntil([&](const Message& m) {
+      const auto* silhouettes = std::get_if<SilhouettesData>(&m.body);
+      if (!silhouettes) return false;
+      if (m.frame_id == kLateFrom + 20) masks_late = silhouettes->masks.size();
+      if (m.frame_id == kLateUntil + 20) masks_on_time = silhouettes->masks.size();
+      return m.frame_id >= kLast + 30;
+    }));
+  }  // the node stops, its take written out
+  EXPECT_EQ(masks_late, testing::smallRing().nodes().front().cameras.size() - 1)
+      << "the sets waited for the late camera";
+  EXPECT_EQ(masks_on_time, testing::smallRing().nodes().front().cameras.size());
+  const SessionReader take(folder / "late" / testing::smallRing().nodes().front().name);
+  ASSERT_EQ(take.frameCount(), kLast - kFirst + 1);
+  for (int i = 0; i < take.frameCount(); ++i) ASSERT_EQ(take.frameId(i), kFirst + i);
+  // The late camera's images are its own frames' (the source marks each frame's blue by its id).
+  std::vector<CameraFrame> frames;
+  take.readFrame(int(kLateFrom + 10 - kFirst), frames);
+  for (const CameraFrame& f : frames) {
+    ASSERT_FALSE(f.image.pixels.empty());
+    EXPECT_EQ(f.image.pixels[2], uint8_t(60 + (kLateFrom + 10) % 7));
+  }
+}
+
+// A node that reads its cameras too slowly skips frames: the ids of its sets go up by 10. Its
+// sets still wait for every camera. (Counted in ids, every camera after the first looked silent at
+// each jump, and the sets went out with one camera in three.)
+TEST(CameraNode, SetsWaitForEveryCameraWhenTheNodeSkipsFrames) {
+  NodeUnderTest t([](const Rig& rig, std::vector<int> cameras) {
+    return std::make_unique<LateCameraSource>(rig, std::move(cameras), -1, 0, 0, 0, 10);
+  });
+  size_t fewest = 99;
+  int sets = 0;
+  EXPECT_TRUE(t.receiveUntil([&](const Message& m) {
+    const auto* silhouettes = std::get_if<SilhouettesData>(&m.body);
+    if (!silhouettes || m.frame_id < 100) return false;
+    fewest = std::min(fewest, silhouettes->masks.size());
+    return ++sets >= 30;
+  }));
+  EXPECT_EQ(fewest, t.cameras.size());
 }
 
 }  // namespace
