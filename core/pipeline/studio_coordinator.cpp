@@ -697,9 +697,23 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     agreeing += sum.outside[s] == 0;
   }
   const int64_t combined = steadyNowNs();
+  // Whole: every node still awaited sent its image of every view. A frame without some (a node
+  // that missed a deadline) lacks what only that node's cameras saw, the director's view full of
+  // holes: it is shown only when no whole frame was for hold_incomplete (a node that never makes
+  // it in time would otherwise leave the view frozen), else dropped.
+  bool whole = !frame.blends.empty();
+  for (const auto& [view, blender] : frame.blends) {
+    const auto it = frame.image_nodes.find(view);
+    for (const auto& [name, node] : nodes_)
+      if (awaited(node) && (it == frame.image_nodes.end() || !it->second.count(name)))
+        whole = false;
+  }
+  const bool hold =
+      !whole && last_whole_ns_ > 0 &&
+      now - last_whole_ns_ < std::chrono::nanoseconds(options_.hold_incomplete).count();
   bool shown = false;
   for (const auto& [view, blender] : frame.blends) {
-    if (blender.added() == 0) continue;
+    if (blender.added() == 0 || hold) continue;
     shown = true;
     // Normalise the nodes' alphas per pixel and blend.
     BlendedImage& image = last_images_[view];
@@ -715,8 +729,10 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   // in flight) beyond it are still shown, not counted. A frame that no node's image reached (their
   // statistics or images missed the deadlines, as while the nodes start or on an overloaded
   // machine) shows nothing: it is dropped, not done, so that a run of N frames shows N.
+  if (shown && whole) last_whole_ns_ = now;
   if (counting_ && !shown && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
     ++frames_dropped_;
+    frames_held_ += hold;
   } else if (counting_ && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
     combine_ms_.add((combined - start) / 1e6);
     blend_ms_.add((steadyNowNs() - combined) / 1e6);
@@ -737,6 +753,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
           frame_id, -latency_ms / 1000);
     }
     ++frames_done_;
+    frames_incomplete_ += !whole;
     for (auto& [name, node] : nodes_) {
       if (node.index < 0 || size_t(node.index) >= frame.node_bytes.size() ||
           frame.node_bytes[node.index] == 0)
@@ -830,6 +847,8 @@ RunReport StudioCoordinator::report() const {
   r.frames = frames_done_;
   r.frames_dropped = frames_dropped_;
   r.frames_refused = frames_refused_;
+  r.frames_incomplete = frames_incomplete_;
+  r.frames_held = frames_held_;
   r.peak_frames_begun = peak_frames_begun_;
   r.fps = frames_done_ > 1 && last_done_ns_ > start_ns_
               ? (frames_done_ - 1) / ((last_done_ns_ - start_ns_) / 1e9)

@@ -34,7 +34,10 @@ struct StudioCoordinatorOptions {
   // of that frame (fewer cameras, not a stall).
   std::chrono::milliseconds deadline{120};
   std::chrono::milliseconds lost_after{1000};  // no message for this long: the node is lost
-  int64_t max_frames = 0;                      // stop after this many complete frames; 0: never
+  // A frame without an awaited node's image of a view (it missed the deadline) is shown only when
+  // no whole frame was for this long: it lacks what only that node's cameras saw.
+  std::chrono::milliseconds hold_incomplete{500};
+  int64_t max_frames = 0;  // stop after this many complete frames; 0: never
   // A frame begins (motion capture) only while fewer frames than this are between motion capture
   // and done; otherwise it is dropped before any work, so that a pipeline slower than its cameras
   // drops frames instead of queueing them (latency stays bounded). 0: no limit.
@@ -102,6 +105,9 @@ struct RunReport {
   int64_t frames_dropped = 0;  // never shown: refused, overtaken, or reached by no node's image
   int64_t frames_refused =
       0;  // of the dropped: at admission, before any work (max_frames_in_flight)
+  // Shown without some awaited node's image (no whole frame for hold_incomplete); and, of the
+  // dropped, held back for that.
+  int64_t frames_incomplete = 0, frames_held = 0;
   int peak_frames_begun = 0;  // the most frames between motion capture and done at once
   double hull_agreement = 0;  // share of posed vertices seen inside the silhouettes
   std::vector<NodeReport> nodes;
@@ -370,6 +376,8 @@ class StudioCoordinator {
   PoseData last_pose_;
   int64_t last_pose_frame_ = -1;
   int64_t frames_done_ = 0, frames_dropped_ = 0, frames_refused_ = 0;
+  int64_t frames_incomplete_ = 0, frames_held_ = 0;
+  int64_t last_whole_ns_ = 0;      // when a frame with every awaited node's images was last shown
   int64_t counting_since_ns_ = 0;  // when counting_ became true (steady clock)
   int peak_frames_begun_ = 0;
   // Figures count once every node has spoken (or a few seconds after the first did): a start-up

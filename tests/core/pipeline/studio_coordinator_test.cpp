@@ -333,7 +333,6 @@ TEST(StudioCoordinator, NodesWhoseMessagesWaitWhileTheStudioWorksAreNotLost) {
   EXPECT_EQ(studio.nodeState("node2"), "lost");
 }
 
-// The bad messages the studio counted for `name`.
 // The next pose the studio sends `node`, for a frame at or after `frame_id`.
 std::optional<int64_t> nextPoseFrame(ScriptedNode& node, StudioCoordinator& studio,
                                      int64_t frame_id) {
@@ -563,6 +562,47 @@ TEST(StudioCoordinator, OneNodesBadStatisticsOrRepeatedImageSpoilNoOtherNodes) {
     studio.runFor(milliseconds(10));
   ASSERT_EQ(studio.framesDone(), 1);
   EXPECT_EQ(studio.lastImage(0).rgba.at(0), 200);
+}
+
+// A frame without one node's image (it missed the deadline) lacks what only that node's cameras
+// saw: while whole frames come it is held back, not shown; when none has come for hold_incomplete,
+// it is shown rather than leave the view frozen. (Every frame with any image was shown: under
+// load the director's view was full of holes.)
+TEST(StudioCoordinator, AFrameWithoutANodesImageIsHeldBackWhileWholeOnesCome) {
+  TwoNodeStudio two(milliseconds(100));
+  StudioCoordinator& studio = two.studio;
+  const RefineConfig refine;
+  RefinementStatistics stats;
+  stats.reset(10, refine.offset_count, refine.colour_bits);
+  // Frame f through every stage, its image from node1 and, when `whole`, from node2.
+  const auto frame = [&](int64_t f, bool whole) {
+    if (f > 1) {
+      ASSERT_TRUE(two.both(f));
+      ASSERT_EQ(nextPoseFrame(two.node1, studio, f), f);
+    }
+    ASSERT_TRUE(two.node1.send(f, statisticsMessage(stats, refine)));
+    ASSERT_TRUE(two.node2.send(f, statisticsMessage(stats, refine)));
+    ASSERT_TRUE(two.node1.await<OffsetsData>(studio));
+    ASSERT_TRUE(two.node1.send(f, onePixelImage(studio.view(), uint8_t(10 * f))));
+    if (whole) {
+      ASSERT_TRUE(two.node2.send(f, onePixelImage(studio.view(), uint8_t(10 * f))));
+    }
+  };
+  frame(1, true);
+  ASSERT_EQ(framesDoneAfter(studio, 1, 300), 1);
+  const auto shown = std::chrono::steady_clock::now();
+  frame(2, false);
+  studio.runFor(milliseconds(300));  // past its images' deadline
+  ASSERT_LT(std::chrono::steady_clock::now() - shown, StudioCoordinatorOptions{}.hold_incomplete)
+      << "too slow a machine for this test";
+  EXPECT_EQ(studio.framesDone(), 1);
+  EXPECT_EQ(studio.report().frames_held, 1);
+  EXPECT_EQ(studio.lastImage(0).rgba.at(0), 10);
+  studio.runFor(StudioCoordinatorOptions{}.hold_incomplete);
+  frame(3, false);
+  EXPECT_EQ(framesDoneAfter(studio, 2, 300), 2);
+  EXPECT_EQ(studio.report().frames_incomplete, 1);
+  EXPECT_EQ(studio.lastImage(0).rgba.at(0), 30);
 }
 
 }  // namespace
