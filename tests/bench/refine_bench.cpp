@@ -13,41 +13,22 @@
 #include "core/refine/refinement_sampler.h"
 #include "core/refine/refinement_statistics.h"
 #include "core/sim/virtual_studio.h"
+#include "tests/core/refine/reference_frame.h"
 
 namespace {
 
 using namespace lumistage;
 
-struct Scene {
-  StudioConfig config;
-  SkinnedMesh generic = loadGenericHuman();
-  std::vector<Image> images;
-  std::vector<GreenScreenKeyer> keyers;
-  Eigen::Matrix3Xf positions, normals;
+struct Scene : testing::ReferenceFrame {
   // Per window points (1, 3) and node, compressed as nodes send it.
   std::vector<std::vector<uint8_t>> wire[4];
 
-  Scene() {
-    config = loadStudioConfig(resourcePath("studio/reference.yaml"));
-    config.actor.target_vertices = 4000;
-    VirtualStudio studio(config, 30);
-    StudioFrame frame;
-    studio.renderFrame(20, frame);
-    const Rig& rig = config.rig;
-    images.resize(rig.cameraCount());
-    keyers.resize(rig.cameraCount());
-    for (int c = 0; c < rig.cameraCount(); ++c) {
-      rgbaToImage(frame.images[c].data(), rig.camera(c).width(), rig.camera(c).height(),
-                  PixelFormat::kBayerRggb8, images[c]);
-    }
-    const JointPoseFit fit = fitPoseToJoints(generic.skeleton, frame.joints,
-                                             initialJointPoseFit(generic.skeleton, frame.joints));
-    posedScaledMesh(generic, fit, positions, normals);
+  Scene() : ReferenceFrame(loadStudioConfig(resourcePath("studio/reference.yaml")), false) {
     RefinementStatistics stats;
     RefinementStatisticsCodec codec;
     for (int points : {1, 3}) {
       RefinementSampler sampler(refineConfig(points));
-      for (int n = 0; n < rig.nodeCount(); ++n) {
+      for (int n = 0; n < config.rig.nodeCount(); ++n) {
         sampler.sample(camerasOf(n), positions, normals, generic.rest.triangles, stats);
         wire[points].emplace_back();
         codec.encode(stats, wire[points].back());
@@ -58,12 +39,6 @@ struct Scene {
     RefineConfig c = config.refine;
     c.window_points = window_points;
     return c;
-  }
-  std::vector<SamplerCamera> camerasOf(int node) const {
-    std::vector<SamplerCamera> out;
-    for (int c : config.rig.nodes()[node].cameras)
-      out.push_back({&config.rig.camera(c), images[c].view(), &keyers[c], nullptr});
-    return out;
   }
 };
 

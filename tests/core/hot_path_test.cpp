@@ -10,9 +10,6 @@
 #include <cerrno>
 #include <cstdlib>
 
-#include "core/base/resource_path.h"
-#include "core/body/human_model.h"
-#include "core/body/joint_pose_fit.h"
 #include "core/pipeline/posed_body.h"
 #include "core/pipeline/silhouettes.h"
 #include "core/refine/mesh_refiner.h"
@@ -22,8 +19,9 @@
 #include "core/render/partial_image_codec.h"
 #include "core/render/phong_subdivision.h"
 #include "core/render/vertex_visibility.h"
-#include "core/sim/virtual_studio.h"
 #include "core/tracking/pose_tracker.h"
+#include "tests/core/refine/reference_frame.h"
+#include "tests/core/sim/reference_studio.h"
 
 extern "C" {
 void* __libc_malloc(size_t size);
@@ -100,44 +98,11 @@ class Allocations {
   }
 };
 
-// The reference studio's frame 20: its 12 images as Bayer (as GigE cameras deliver them), keyers
-// learnt from them, the generic human posed on the actor's true joints.
-struct Frame {
-  StudioConfig config =
-      loadStudioConfig(std::string(LUMISTAGE_TEST_RESOURCE_DIR) + "/studio/reference.yaml");
-  SkinnedMesh generic = loadGenericHuman();
-  std::vector<Image> images;
-  std::vector<GreenScreenKeyer> keyers;
-  StudioFrame frame;
-  JointPoseFit fit;
-  Eigen::Matrix3Xf positions, normals;
-
-  Frame() {
-    config.actor.target_vertices = 4000;
-    VirtualStudio studio(config, 30);
-    studio.renderFrame(20, frame);
-    const Rig& rig = config.rig;
-    images.resize(rig.cameraCount());
-    keyers.resize(rig.cameraCount());
-    for (int c = 0; c < rig.cameraCount(); ++c) {
-      rgbaToImage(frame.images[c].data(), rig.camera(c).width(), rig.camera(c).height(),
-                  PixelFormat::kBayerRggb8, images[c]);
-      keyers[c].learnScreen(images[c].view());
-    }
-    fit = fitPoseToJoints(generic.skeleton, frame.joints,
-                          initialJointPoseFit(generic.skeleton, frame.joints));
-    posedScaledMesh(generic, fit, positions, normals);
-  }
-  std::vector<SamplerCamera> camerasOf(int node) const {
-    std::vector<SamplerCamera> out;
-    for (int c : config.rig.nodes()[node].cameras)
-      out.push_back({&config.rig.camera(c), images[c].view(), &keyers[c], nullptr});
-    return out;
-  }
-};
+// The reference studio's frame 20, its keyers learnt from it.
+using Frame = testing::ReferenceFrame;
 
 const Frame& frame() {
-  static const Frame f;
+  static const Frame f(testing::referenceStudio(4000), true);
   return f;
 }
 
