@@ -216,8 +216,9 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   int64_t recent_count = 0;
   CameraFrame frame;
   // The sets waiting for the take that are complete now, in order; those whose late frames did
-  // not come within kLateFrames are left out of it.
-  const auto offerForTake = [&] {
+  // not come within kLateFrames (or at all, `all`: the ids restart, the capture ends) are left out
+  // of it.
+  const auto offerForTake = [&](bool all) {
     while (!for_take.empty()) {
       ForTake& front = for_take.front();
       if (front.complete()) {
@@ -225,7 +226,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
         for (size_t c = 0; c < cameras_.size(); ++c)
           take_frames.push_back(front.set->has(c) ? &front.set->frames[c] : &front.late[c]);
         takes_.offer(front.set->frame_id, take_frames);
-      } else if (front.set->frame_id >= newest - kLateFrames) {
+      } else if (!all && front.set->frame_id >= newest - kLateFrames) {
         return;
       }
       frame_pool_->give(front.late);
@@ -285,7 +286,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       recent_ids[recent_count++] = newest;
       std::fill(last_id.begin(), last_id.end(), -1);
       assembling.clear();  // the old ids' sets would outlast every new one (lowest go first)
-      for_take.clear();
+      offerForTake(true);
     }
     delivered[k] = now;
     // The late frame of a set that went out without it: for the take.
@@ -294,9 +295,12 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
         return t.set->frame_id == frame.frame_id;
       });
       if (waiting != for_take.end() && !waiting->set->has(k)) {
+        // Late, not gone: counted as delivered, so that a camera that is always last (a slower
+        // link) is awaited again once it keeps up.
+        last_id[k] = std::max(last_id[k], frame.frame_id);
         std::swap(waiting->late[k], frame);
         frame_pool_->take(frame);
-        offerForTake();
+        offerForTake(false);
         continue;
       }
     }
@@ -364,7 +368,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
           if (sets_without[c] == 0) continue;
           spdlog::warn(
               "node {}: camera {}: {} set{} went out without its frames, which came after {} newer "
-              "sets (takes still get them); is the node's PC overloaded?",
+              "sets (a take being recorded still gets them); is the node's PC overloaded?",
               name_, rig_.camera(cameras_[c]).name(), sets_without[c],
               sets_without[c] == 1 ? "" : "s", kSilentFrames);
           sets_without[c] = 0;
@@ -378,21 +382,22 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
         checkScreens(s);
       s.keyers = published_keyers_;
       // And takes recorded: a whole set at once, unless one before it waits for a late frame; one
-      // without a late camera waits for its frame (one without a silent camera cannot be
-      // recorded: a take's sets are whole).
+      // without a late camera waits for its frame while a take wants it (one without a silent
+      // camera cannot be recorded: a take's sets are whole).
       if (whole && for_take.empty()) {
         take_frames.clear();
         for (const CameraFrame& f : s.frames) take_frames.push_back(&f);
         takes_.offer(s.frame_id, take_frames);
-      } else if (whole || late_only) {
+      } else if (whole || (late_only && takes_.wants(s.frame_id))) {
         for_take.push_back({it->second, std::vector<CameraFrame>(whole ? 0 : cameras_.size())});
       }
       sets_.push(it->second);
       it = assembling.erase(it);
     }
     while (assembling.size() > 4) assembling.erase(assembling.begin());  // a camera fell behind
-    offerForTake();  // those that waited long enough
+    offerForTake(false);  // those that waited long enough
   }
+  offerForTake(true);
   source_finished_ = true;
 }
 

@@ -701,15 +701,16 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   // that missed a deadline) lacks what only that node's cameras saw, the director's view full of
   // holes: it is shown only when no whole frame was for hold_incomplete (a node that never makes
   // it in time would otherwise leave the view frozen), else dropped.
-  bool whole = !frame.blends.empty();
-  for (const auto& [view, blender] : frame.blends) {
-    const auto it = frame.image_nodes.find(view);
+  bool whole = !frame.views.empty(), drawn = false;
+  for (const std::array<int, 3>& view : frame.views) {
+    const auto it = frame.image_nodes.find(view[0]);
     for (const auto& [name, node] : nodes_)
       if (awaited(node) && (it == frame.image_nodes.end() || !it->second.count(name)))
         whole = false;
   }
+  for (const auto& [view, blender] : frame.blends) drawn = drawn || blender.added() > 0;
   const bool hold =
-      !whole && last_whole_ns_ > 0 &&
+      drawn && !whole && last_whole_ns_ > 0 &&
       now - last_whole_ns_ < std::chrono::nanoseconds(options_.hold_incomplete).count();
   bool shown = false;
   for (const auto& [view, blender] : frame.blends) {

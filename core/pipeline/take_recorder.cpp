@@ -124,6 +124,11 @@ void TakeRecorder::open(int64_t frame_id, const CameraFrame& first) {
   }
 }
 
+bool TakeRecorder::wants(int64_t frame_id) const {
+  std::lock_guard lock(mutex_);
+  return !wanted_.take.empty() && frame_id >= wanted_.first_frame && frame_id <= wanted_.last_frame;
+}
+
 void TakeRecorder::offer(int64_t frame_id, const std::vector<CameraFrame>& frames) {
   std::vector<const CameraFrame*> pointers;
   for (const CameraFrame& frame : frames) pointers.push_back(&frame);

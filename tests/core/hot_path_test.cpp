@@ -6,6 +6,7 @@
 // allocate.
 #include <gtest/gtest.h>
 #include <malloc.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstdlib>
@@ -65,6 +66,7 @@ void* aligned_alloc(size_t alignment, size_t size) {
   return __libc_memalign(alignment, size);
 }
 int posix_memalign(void** out, size_t alignment, size_t size) {
+  if (alignment % sizeof(void*) != 0 || (alignment & (alignment - 1)) != 0) return EINVAL;
   count();
   void* p = __libc_memalign(alignment, size);
   if (!p) return ENOMEM;
@@ -73,11 +75,13 @@ int posix_memalign(void** out, size_t alignment, size_t size) {
 }
 void* valloc(size_t size) {
   count();
-  return __libc_memalign(4096, size);
+  return __libc_memalign(size_t(sysconf(_SC_PAGESIZE)), size);
 }
 void* pvalloc(size_t size) {
   count();
-  return __libc_memalign(4096, (size + 4095) / 4096 * 4096);
+  const size_t page = size_t(sysconf(_SC_PAGESIZE));
+  const size_t rounded = size == 0 ? page : (size + page - 1) / page * page;
+  return rounded < size ? nullptr : __libc_memalign(page, rounded);
 }
 }
 
@@ -106,13 +110,21 @@ const Frame& frame() {
   return f;
 }
 
+// Where the count test's allocations go, so that no compiler elides them.
+void* volatile sink = nullptr;
+
 // The count itself: what operator new, a growing vector and Eigen's dynamic matrices take.
 TEST(HotPaths, AllocationsAreCounted) {
   Allocations allocations;
   auto one = std::make_unique<int>(1);
+  sink = one.get();
   std::vector<int> grown;
-  for (int i = 0; i < 3; ++i) grown.push_back(i);  // 1, 2, 4
+  for (int i = 0; i < 3; ++i) {
+    grown.push_back(i);  // 1, 2, 4
+    sink = grown.data();
+  }
   Eigen::MatrixXd matrix(20, 20);
+  sink = matrix.data();
   const long counted = allocations.stop();
   EXPECT_EQ(counted, 5);
   EXPECT_EQ(*one + grown[2] + int(matrix.rows()), 23);
