@@ -221,6 +221,14 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
       spdlog::info("node {}: its silhouettes are used again", node.report.name);
     }
   }
+  // Every answer is timed, in time or late, for the deadlines (updateDeadlines).
+  if (const SentAt& sent = sentAt(message.frame_id); sent.frame_id == message.frame_id) {
+    if (std::holds_alternative<VertexStatisticsData>(message.body) && sent.pose_ns > 0)
+      node.statistics_answers.add(double(node.last_ns - sent.pose_ns) / 1e6);
+    const auto* image = std::get_if<PartialImageData>(&message.body);
+    if (image && sent.offsets_ns > 0 && !views_.empty() && image->view == views_.front().view)
+      node.image_answers.add(double(node.last_ns - sent.offsets_ns) / 1e6);
+  }
   if (message.frame_id <= newest_done_) return;  // a frame already done or given up
   if (std::find(refused_.begin(), refused_.end(), message.frame_id) != refused_.end())
     return;  // dropped at admission
@@ -620,6 +628,7 @@ void StudioCoordinator::sendPose(int64_t frame_id, FrameState& frame) {
       frame.pose_nodes.insert(name);
   }
   frame.pose_sent_ns = steadyNowNs();
+  sentAt(frame_id) = {frame_id, frame.pose_sent_ns, 0};
   if (frame.pose_nodes.empty()) finishFrame(frame_id, frame);
 }
 
@@ -674,6 +683,8 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
   }
   int sent = 0;
   frame.offsets_out_ns = steadyNowNs();
+  if (SentAt& sent = sentAt(frame_id); sent.frame_id == frame_id)
+    sent.offsets_ns = frame.offsets_out_ns;
   for (const std::string& name : frame.statistics_nodes) {
     NodeState& node = nodes_.at(name);
     if (node.report.lost || node.peer.empty()) continue;
@@ -731,6 +742,8 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   // statistics or images missed the deadlines, as while the nodes start or on an overloaded
   // machine) shows nothing: it is dropped, not done, so that a run of N frames shows N.
   if (shown && whole) last_whole_ns_ = now;
+  if (drawn) incomplete_share_ = 0.9 * incomplete_share_ + 0.1 * double(!whole);
+  updateDeadlines();
   if (counting_ && !shown && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
     ++frames_dropped_;
     frames_held_ += hold;
@@ -785,8 +798,31 @@ bool StudioCoordinator::awaited(const NodeState& node) const {
   return newest_silhouettes_ns_ - since <= std::chrono::nanoseconds(options_.lost_after).count();
 }
 
+void StudioCoordinator::updateDeadlines() {
+  const int64_t base = std::chrono::nanoseconds(options_.deadline).count();
+  const int64_t most =
+      std::max(base, int64_t(std::chrono::nanoseconds(options_.max_deadline).count()));
+  const auto follow = [&](RecentSamples NodeState::*answers) {
+    double slowest_ms = 0;
+    for (const auto& [name, node] : nodes_) {
+      const std::vector<double>& values = (node.*answers).values();
+      if (!awaited(node) || values.size() < 8) continue;
+      quantile_scratch_.assign(values.begin(), values.end());
+      slowest_ms = std::max(slowest_ms, quantile(quantile_scratch_, 0.75));
+    }
+    return std::clamp(int64_t(1.25 * slowest_ms * 1e6), base, most);
+  };
+  if (incomplete_share_ < 0.25) {
+    statistics_deadline_ns_ = image_deadline_ns_ = base;
+    return;
+  }
+  statistics_deadline_ns_ = follow(&NodeState::statistics_answers);
+  image_deadline_ns_ = follow(&NodeState::image_answers);
+}
+
 void StudioCoordinator::checkDeadlines(int64_t now_ns) {
   const int64_t deadline = std::chrono::nanoseconds(options_.deadline).count();
+  if (statistics_deadline_ns_ == 0) updateDeadlines();
   for (auto& [name, node] : nodes_) {
     if (!node.report.lost && !node.told_no_frames && node.last_ns > 0 && !awaited(node)) {
       node.told_no_frames = true;
@@ -810,10 +846,10 @@ void StudioCoordinator::checkDeadlines(int64_t now_ns) {
       beginMocap(frame_id, frame);  // with the nodes that made it
       it = frames_.upper_bound(frame_id);
     } else if (frame.pose_sent_ns > 0 && frame.offsets_sent_ns == 0 &&
-               now_ns - frame.pose_sent_ns > deadline) {
+               now_ns - frame.pose_sent_ns > statistics_deadline_ns_) {
       runRefinement(frame_id, frame);  // with the nodes' statistics that made it
       it = frames_.upper_bound(frame_id);
-    } else if (frame.offsets_sent_ns > 0 && now_ns - frame.offsets_sent_ns > deadline) {
+    } else if (frame.offsets_sent_ns > 0 && now_ns - frame.offsets_sent_ns > image_deadline_ns_) {
       finishFrame(frame_id, frame);
       it = frames_.upper_bound(frame_id);
     }

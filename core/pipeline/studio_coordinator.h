@@ -37,6 +37,12 @@ struct StudioCoordinatorOptions {
   // A frame without an awaited node's image of a view (it missed the deadline) is shown only when
   // no whole frame was for this long: it lacks what only that node's cameras saw.
   std::chrono::milliseconds hold_incomplete{500};
+  // While a quarter or more of the recent frames lack a node's image (an overloaded node whose
+  // answers come after `deadline` every frame: holes in the view), the statistics' and the images'
+  // deadlines follow the nodes' answers: 1.25 times the slowest awaited node's 75th percentile of
+  // its last 32 answers (late ones too), never below `deadline` nor above this. Otherwise they are
+  // `deadline`: a node now and then late costs no latency.
+  std::chrono::milliseconds max_deadline{480};
   int64_t max_frames = 0;  // stop after this many complete frames; 0: never
   // A frame begins (motion capture) only while fewer frames than this are between motion capture
   // and done; otherwise it is dropped before any work, so that a pipeline slower than its cameras
@@ -239,6 +245,8 @@ class StudioCoordinator {
     int agreeing = 0;    // refused silhouettes in a row that suggested the same shift, less one
     int times_told = 0;  // shifts told since its ids were last accepted
     int64_t lag_ns = 0;  // how long after an instant's first silhouettes its own come, smoothed
+    // Its last answers' times (ms), late ones too: what the stages' deadlines follow.
+    RecentSamples statistics_answers{32}, image_answers{32};
   };
   // Whether frames wait for the node: for its silhouettes, and for its answer to their poses. It is
   // heard, and other nodes' silhouettes have not been used for lost_after without its own (since
@@ -377,7 +385,19 @@ class StudioCoordinator {
   int64_t last_pose_frame_ = -1;
   int64_t frames_done_ = 0, frames_dropped_ = 0, frames_refused_ = 0;
   int64_t frames_incomplete_ = 0, frames_held_ = 0;
-  int64_t last_whole_ns_ = 0;      // when a frame with every awaited node's images was last shown
+  int64_t last_whole_ns_ = 0;  // when a frame with every awaited node's images was last shown
+  // When recent frames' poses and offsets went out, kept past the frames: late answers are timed.
+  struct SentAt {
+    int64_t frame_id = -1, pose_ns = 0, offsets_ns = 0;
+  };
+  std::array<SentAt, 64> sent_at_{};
+  SentAt& sentAt(int64_t frame_id) { return sent_at_[size_t(frame_id) % sent_at_.size()]; }
+  // The stages' deadlines (steady ns), following the nodes' answers (max_deadline); updated as
+  // frames finish.
+  void updateDeadlines();
+  int64_t statistics_deadline_ns_ = 0, image_deadline_ns_ = 0;
+  double incomplete_share_ = 0;  // of the recent frames drawn, those without some node's image
+  std::vector<double> quantile_scratch_;
   int64_t counting_since_ns_ = 0;  // when counting_ became true (steady clock)
   int peak_frames_begun_ = 0;
   // Figures count once every node has spoken (or a few seconds after the first did): a start-up

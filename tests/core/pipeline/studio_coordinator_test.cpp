@@ -605,5 +605,34 @@ TEST(StudioCoordinator, AFrameWithoutANodesImageIsHeldBackWhileWholeOnesCome) {
   EXPECT_EQ(studio.lastImage(0).rgba.at(0), 30);
 }
 
+// A node whose statistics come 200 ms after the pose, past the 100 ms deadline (an overloaded
+// node): every frame is drawn without its cameras (node1's image alone), its late answers are
+// timed, the statistics' deadline stretches to take them, and after a few frames its statistics
+// are used and its image asked for. (With a fixed deadline every frame went without it.)
+TEST(StudioCoordinator, TheDeadlinesStretchToANodeThatAnswersLate) {
+  TwoNodeStudio two(milliseconds(100));
+  StudioCoordinator& studio = two.studio;
+  const RefineConfig refine;
+  RefinementStatistics stats;
+  stats.reset(10, refine.offset_count, refine.colour_bits);
+  int64_t first_with_node2 = -1;
+  for (int64_t f = 1; f <= 16 && first_with_node2 < 0; ++f) {
+    if (f > 1) {
+      ASSERT_TRUE(two.both(f));
+      ASSERT_EQ(nextPoseFrame(two.node1, studio, f), f);
+    }
+    ASSERT_TRUE(two.node1.send(f, statisticsMessage(stats, refine)));
+    ASSERT_TRUE(two.node1.send(f, onePixelImage(studio.view(), 100)));
+    studio.runFor(milliseconds(200));
+    ASSERT_TRUE(two.node2.send(f, statisticsMessage(stats, refine)));
+    // node2 is sent the frame's offsets only when its statistics made the deadline.
+    const std::optional<Message> offsets = two.node2.await<OffsetsData>(studio, 40);
+    if (offsets && offsets->frame_id == f) first_with_node2 = f;
+    studio.runFor(milliseconds(300));  // the frame done or given up
+  }
+  EXPECT_GT(first_with_node2, 1) << "the late node's statistics were used from the start";
+  EXPECT_NE(first_with_node2, -1) << "the late node's statistics were never used";
+}
+
 }  // namespace
 }  // namespace lumistage
