@@ -683,8 +683,7 @@ void StudioCoordinator::runRefinement(int64_t frame_id, FrameState& frame) {
   }
   int sent = 0;
   frame.offsets_out_ns = steadyNowNs();
-  if (SentAt& sent = sentAt(frame_id); sent.frame_id == frame_id)
-    sent.offsets_ns = frame.offsets_out_ns;
+  if (SentAt& at = sentAt(frame_id); at.frame_id == frame_id) at.offsets_ns = frame.offsets_out_ns;
   for (const std::string& name : frame.statistics_nodes) {
     NodeState& node = nodes_.at(name);
     if (node.report.lost || node.peer.empty()) continue;
