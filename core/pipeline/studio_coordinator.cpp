@@ -59,6 +59,8 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
     state.index = int(n);
   }
   timeline_.reserve(4096);
+  statistics_deadline_ns_ = image_deadline_ns_ =
+      std::chrono::nanoseconds(options_.deadline).count();
   instants_.fill({-1, 0});
   // Default view: 320x240 from the front-left, 4.5 m out and 1.7 m up, looking at the stage
   // centre 1 m above the floor (camera axes: x right, y down, z forward).
@@ -767,17 +769,15 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     }
     ++frames_done_;
     frames_incomplete_ += !whole;
-    for (auto& [name, node] : nodes_) {
-      if (node.index < 0 || size_t(node.index) >= frame.node_bytes.size() ||
-          frame.node_bytes[node.index] == 0)
-        continue;
-      node.shown_bytes += frame.node_bytes[node.index];
-      ++node.shown_frames;
-    }
     if (start_ns_ == 0) start_ns_ = now;
     last_done_ns_ = now;
     for (auto& [name, node] : nodes_) {
       if (!node.report.lost && !frame.silhouette_nodes.count(name)) ++node.report.frames_missed;
+      if (node.index >= 0 && size_t(node.index) < frame.node_bytes.size() &&
+          frame.node_bytes[node.index] > 0) {
+        node.shown_bytes += frame.node_bytes[node.index];
+        ++node.shown_frames;
+      }
     }
   }
   // Older frames still open will never be shown: they are dropped.
@@ -821,7 +821,6 @@ void StudioCoordinator::updateDeadlines() {
 
 void StudioCoordinator::checkDeadlines(int64_t now_ns) {
   const int64_t deadline = std::chrono::nanoseconds(options_.deadline).count();
-  if (statistics_deadline_ns_ == 0) updateDeadlines();
   for (auto& [name, node] : nodes_) {
     if (!node.report.lost && !node.told_no_frames && node.last_ns > 0 && !awaited(node)) {
       node.told_no_frames = true;

@@ -356,16 +356,28 @@ struct TwoNodeStudio {
                              }())),
         studio(*made),
         node1(studio.endpoint(), "node1"),
-        node2(studio.endpoint(), "node2") {
+        node2(studio.endpoint(), "node2"),
+        first(first_frame) {
     EXPECT_TRUE(both(first_frame));
     EXPECT_EQ(nextPoseFrame(node1, studio, first_frame), first_frame);
+    RefinementStatistics stats;
+    stats.reset(10, refine.offset_count, refine.colour_bits);
+    statistics = statisticsMessage(stats, refine);
   }
   bool both(int64_t frame_id) {
     return node1.send(frame_id, SilhouettesData{}) && node2.send(frame_id, SilhouettesData{});
   }
+  // Both nodes' silhouettes of `frame_id` sent (the first frame's were) and node1 sent its pose.
+  bool posed(int64_t frame_id) {
+    return frame_id == first ||
+           (both(frame_id) && nextPoseFrame(node1, studio, frame_id) == frame_id);
+  }
   std::unique_ptr<StudioCoordinator> made;
   StudioCoordinator& studio;
   ScriptedNode node1, node2;
+  const int64_t first;
+  const RefineConfig refine;
+  VertexStatisticsData statistics;  // of 10 vertices, nothing seen
 };
 
 // One node's silhouettes of a frame a trillion frames ahead (a corrupt or hostile message) are
@@ -571,17 +583,11 @@ TEST(StudioCoordinator, OneNodesBadStatisticsOrRepeatedImageSpoilNoOtherNodes) {
 TEST(StudioCoordinator, AFrameWithoutANodesImageIsHeldBackWhileWholeOnesCome) {
   TwoNodeStudio two(milliseconds(100));
   StudioCoordinator& studio = two.studio;
-  const RefineConfig refine;
-  RefinementStatistics stats;
-  stats.reset(10, refine.offset_count, refine.colour_bits);
   // Frame f through every stage, its image from node1 and, when `whole`, from node2.
   const auto frame = [&](int64_t f, bool whole) {
-    if (f > 1) {
-      ASSERT_TRUE(two.both(f));
-      ASSERT_EQ(nextPoseFrame(two.node1, studio, f), f);
-    }
-    ASSERT_TRUE(two.node1.send(f, statisticsMessage(stats, refine)));
-    ASSERT_TRUE(two.node2.send(f, statisticsMessage(stats, refine)));
+    ASSERT_TRUE(two.posed(f));
+    ASSERT_TRUE(two.node1.send(f, two.statistics));
+    ASSERT_TRUE(two.node2.send(f, two.statistics));
     ASSERT_TRUE(two.node1.await<OffsetsData>(studio));
     ASSERT_TRUE(two.node1.send(f, onePixelImage(studio.view(), uint8_t(10 * f))));
     if (whole) {
@@ -612,19 +618,13 @@ TEST(StudioCoordinator, AFrameWithoutANodesImageIsHeldBackWhileWholeOnesCome) {
 TEST(StudioCoordinator, TheDeadlinesStretchToANodeThatAnswersLate) {
   TwoNodeStudio two(milliseconds(100));
   StudioCoordinator& studio = two.studio;
-  const RefineConfig refine;
-  RefinementStatistics stats;
-  stats.reset(10, refine.offset_count, refine.colour_bits);
   int64_t first_with_node2 = -1;
   for (int64_t f = 1; f <= 16 && first_with_node2 < 0; ++f) {
-    if (f > 1) {
-      ASSERT_TRUE(two.both(f));
-      ASSERT_EQ(nextPoseFrame(two.node1, studio, f), f);
-    }
-    ASSERT_TRUE(two.node1.send(f, statisticsMessage(stats, refine)));
+    ASSERT_TRUE(two.posed(f));
+    ASSERT_TRUE(two.node1.send(f, two.statistics));
     ASSERT_TRUE(two.node1.send(f, onePixelImage(studio.view(), 100)));
     studio.runFor(milliseconds(200));
-    ASSERT_TRUE(two.node2.send(f, statisticsMessage(stats, refine)));
+    ASSERT_TRUE(two.node2.send(f, two.statistics));
     // node2 is sent the frame's offsets only when its statistics made the deadline.
     const std::optional<Message> offsets = two.node2.await<OffsetsData>(studio, 40);
     if (offsets && offsets->frame_id == f) first_with_node2 = f;
