@@ -130,8 +130,8 @@ bool BackgroundModel::isForeground(const Rgb& c, int x, int y) const {
   return distance2(c, b) > limit2_[b];
 }
 
-float BackgroundModel::backgroundLevel(const ImageView& image, int x, int y) const {
-  return -std::sqrt(distance2(colourAt(image, x, y), blockOf(x, y)));
+float BackgroundModel::backgroundLevel(const Rgb& c, int x, int y) const {
+  return -std::sqrt(distance2(c, blockOf(x, y)));
 }
 
 }  // namespace lumistage

@@ -66,12 +66,11 @@ class GreenScreenKeyer {
   bool isForeground(const Rgb& c, int /*x*/, int /*y*/) const {
     return greenExcess(c) < threshold_;
   }
-  // How much the pixel looks like the screen: its green excess. A pixel that the actor covers in
-  // part mixes the two colours, so this is nearly linear in the screen's share of the pixel, and a
-  // silhouette's edge lies where it is halfway between the actor's and the screen's.
-  int backgroundLevel(const ImageView& image, int x, int y) const {
-    return greenExcess(colourAt(image, x, y));
-  }
+  // How much the pixel (x, y), of colour `c`, looks like the screen: its green excess. A pixel that
+  // the actor covers in part mixes the two colours, so this is nearly linear in the screen's share
+  // of the pixel, and a silhouette's edge lies where it is halfway between the actor's and the
+  // screen's.
+  int backgroundLevel(const Rgb& c, int /*x*/, int /*y*/) const { return greenExcess(c); }
   static int greenExcess(const Rgb& c) { return c.g - (c.r > c.b ? c.r : c.b); }
   // Learns from a frame of the empty stage, or of the stage with the actor (a person rarely fills
   // the view): sets the threshold at three quarters of the 1st percentile of the screen's green
@@ -126,9 +125,10 @@ class BackgroundModel {
   }
   // The same for the colour `c` already read at (x, y).
   bool isForeground(const Rgb& c, int x, int y) const;
-  // How much the pixel looks like the empty stage: minus its colour's distance from its block's
-  // mean, which is linear in the actor's share of the pixel (GreenScreenKeyer::backgroundLevel).
-  float backgroundLevel(const ImageView& image, int x, int y) const;
+  // How much the pixel (x, y), of colour `c`, looks like the empty stage: minus its colour's
+  // distance from its block's mean, which is linear in the actor's share of the pixel
+  // (GreenScreenKeyer::backgroundLevel).
+  float backgroundLevel(const Rgb& c, int x, int y) const;
   int frames() const { return frames_; }
 
  private:

@@ -15,6 +15,48 @@ struct Neighbours {
   float fx, fy;
 };
 
+// colourAt() on one image, its format's branches taken once a camera instead of at every read (the
+// sampler reads five pixels a sample): on Bayer, where a cell's red, greens and blue lie from its
+// first pixel.
+class ColourReader {
+ public:
+  explicit ColourReader(const ImageView& image) : image_(image), bayer_(isBayer(image.format)) {
+    if (!bayer_) return;
+    const BayerLayout l = bayerLayout(image.format);
+    const int w = image.width;
+    red_ = l.red_y * w + l.red_x, blue_ = (1 - l.red_y) * w + 1 - l.red_x;
+    green_red_row_ = l.red_y * w + 1 - l.red_x, green_blue_row_ = (1 - l.red_y) * w + l.red_x;
+  }
+  Rgb operator()(int x, int y) const {
+    if (!bayer_) return colourAt(image_, x, y);
+    const int x0 = std::min(x, image_.width - 2) & ~1, y0 = std::min(y, image_.height - 2) & ~1;
+    const uint8_t* cell = image_.data + size_t(y0) * size_t(image_.width) + size_t(x0);
+    return cellColour(cell);
+  }
+  // The colours of the four pixels, or Bayer cells, `x0`, `x1` of rows `y0`, `y1` (within the
+  // image; on Bayer, cells' first pixels), in the order (x0, y0), (x1, y0), (x0, y1), (x1, y1).
+  void four(int x0, int x1, int y0, int y1, Rgb out[4]) const {
+    if (!bayer_) {
+      out[0] = colourAt(image_, x0, y0), out[1] = colourAt(image_, x1, y0);
+      out[2] = colourAt(image_, x0, y1), out[3] = colourAt(image_, x1, y1);
+      return;
+    }
+    const size_t w = size_t(image_.width);
+    const uint8_t *row0 = image_.data + size_t(y0) * w, *row1 = image_.data + size_t(y1) * w;
+    out[0] = cellColour(row0 + x0), out[1] = cellColour(row0 + x1);
+    out[2] = cellColour(row1 + x0), out[3] = cellColour(row1 + x1);
+  }
+
+ private:
+  Rgb cellColour(const uint8_t* cell) const {
+    return {cell[red_], (cell[green_red_row_] + cell[green_blue_row_] + 1) / 2, cell[blue_]};
+  }
+
+  ImageView image_;
+  bool bayer_;
+  int red_ = 0, blue_ = 0, green_red_row_ = 0, green_blue_row_ = 0;
+};
+
 // A camera's image as the refinement interpolates it: its grid of pixels or Bayer cells, worked
 // out once a camera instead of at every read (the colour term reads four pixels a sample; the
 // grid's size divided out at each read cost about 0.2 ms of a node's 7.5, near the bench's noise).
@@ -22,11 +64,14 @@ class PixelGrid {
  public:
   explicit PixelGrid(const ImageView& image)
       : image_(image),
+        colour_(image),
         bayer_(isBayer(image.format)),
         step_(bayer_ ? 2 : 1),
         columns_(image.width / step_),
         rows_(image.height / step_) {}
   const ImageView& image() const { return image_; }
+  Rgb colour(int x, int y) const { return colour_(x, y); }
+  void colours(const Neighbours& n, Rgb out[4]) const { colour_.four(n.x0, n.x1, n.y0, n.y1, out); }
 
   Neighbours around(float u, float w) const {
     // A Bayer cell k holds pixels 2k and 2k + 1: its centre is at 2k + 0.5.
@@ -40,6 +85,7 @@ class PixelGrid {
 
  private:
   ImageView image_;
+  ColourReader colour_;
   bool bayer_;
   int step_, columns_, rows_;
 };
@@ -49,9 +95,11 @@ class PixelGrid {
 template <typename Key>
 float interpolatedBackgroundLevel(const Key& key, const PixelGrid& grid, float u, float w) {
   const Neighbours n = grid.around(u, w);
-  const auto at = [&](int x, int y) { return float(key.backgroundLevel(grid.image(), x, y)); };
-  return (1 - n.fy) * ((1 - n.fx) * at(n.x0, n.y0) + n.fx * at(n.x1, n.y0)) +
-         n.fy * ((1 - n.fx) * at(n.x0, n.y1) + n.fx * at(n.x1, n.y1));
+  Rgb c[4];
+  grid.colours(n, c);
+  const auto at = [&](int k, int x, int y) { return float(key.backgroundLevel(c[k], x, y)); };
+  return (1 - n.fy) * ((1 - n.fx) * at(0, n.x0, n.y0) + n.fx * at(1, n.x1, n.y0)) +
+         n.fy * ((1 - n.fx) * at(2, n.x0, n.y1) + n.fx * at(3, n.x1, n.y1));
 }
 
 // The bilinear weights in fixed point: a whole pixel weighs kWeightOne.
@@ -75,9 +123,11 @@ void interpolatedColour(const Key& key, const PixelGrid& grid, float u, float w,
   constexpr int kOne = 1 << kWeightBits;
   const int xs[4] = {n.x0, n.x1, n.x0, n.x1}, ys[4] = {n.y0, n.y0, n.y1, n.y1};
   const int weights[4] = {(kOne - wx) * (kOne - wy), wx * (kOne - wy), (kOne - wx) * wy, wx * wy};
+  Rgb colours[4];
+  grid.colours(n, colours);
   int sum = 0, r = 0, g = 0, b = 0;
   for (int k = 0; k < 4; ++k) {
-    const Rgb c = colourAt(grid.image(), xs[k], ys[k]);
+    const Rgb& c = colours[k];
     const int wk = key.isForeground(c, xs[k], ys[k]) ? weights[k] : 0;
     sum += wk, r += wk * c.r, g += wk * c.g, b += wk * c.b;
   }
@@ -91,7 +141,7 @@ void interpolatedColour(const Key& key, const PixelGrid& grid, float u, float w,
     rgb[1] = uint32_t((g + sum / 2) / sum) >> shift;
     rgb[2] = uint32_t((b + sum / 2) / sum) >> shift;
   } else {
-    const Rgb c = colourAt(grid.image(), ix, iy);
+    const Rgb c = grid.colour(ix, iy);
     rgb[0] = uint32_t(c.r) >> shift, rgb[1] = uint32_t(c.g) >> shift,
     rgb[2] = uint32_t(c.b) >> shift;
   }
@@ -310,7 +360,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
       }
       const int ix = static_cast<int>(u + 0.5f), iy = static_cast<int>(w + 0.5f);
       const size_t s = base + i;
-      if (!key.isForeground(image, ix, iy)) {
+      if (!key.isForeground(grid.colour(ix, iy), ix, iy)) {
         ++out.outside[s];
         if (previous_inside && v < first_window) {
           uint8_t& edge = out.edges[s - 1];
