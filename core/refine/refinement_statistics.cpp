@@ -375,6 +375,7 @@ void RefinementStatisticsCodec::encode(const RefinementStatistics& stats,
     if (compressor_ &&
         (ZSTD_isError(
              ZSTD_CCtx_setParameter(compressor_.get(), ZSTD_c_compressionLevel, kZstdLevel)) ||
+         ZSTD_isError(ZSTD_CCtx_setParameter(compressor_.get(), ZSTD_c_hashLog, kZstdHashLog)) ||
          ZSTD_isError(ZSTD_CCtx_setParameter(compressor_.get(), ZSTD_c_checksumFlag, 1)))) {
       compressor_.reset();
     }
