@@ -1,5 +1,7 @@
 #include "core/pipeline/silhouettes.h"
 
+#include <algorithm>
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -9,12 +11,13 @@ namespace lumistage {
 namespace {
 
 #if defined(__SSE2__)
-// bayerSilhouette's first cells of row cy at a step of 4, eight at a time: each cell's window then
-// covers the 4x4 pixels (4cx .. 4cx + 3, 4cy .. 4cy + 3), so 32 bytes of each of the 4 rows hold 8
-// cells. 16-bit lanes hold one pixel column of a Bayer cell; _mm_madd_epi16 weighs a cell's two
-// columns 1 and 2; the division by 9 is a multiplication by 7282 / 65536, exact for every sum up
-// to 255 · 9 + 4. Returns the cells done (a multiple of 8); bayerSilhouette does the rest. A
-// 1024x768 camera: 40-48 against 203-210 us in bayerSilhouette's loop (`imaging_bench
+// bayerSilhouette's first cells of row cy at a step of 4, eight at a time: each cell's 3x3 window
+// then lies in the 2x2 Bayer cells of the pixels (4cx .. 4cx + 3, 4cy .. 4cy + 3), so 32 bytes of
+// each of the 4 rows hold 8 cells. 16-bit lanes hold one pixel column of a Bayer cell;
+// _mm_madd_epi16 weighs a cell's two columns 1 and 2; the division by 9 is a multiplication by 7282
+// / 65536, exact for every sum up to 255 · 9 + 4. Returns the cells done (a multiple of 8);
+// bayerSilhouette does the rest. A 1024x768 camera: 40-48 against 203-210 us in bayerSilhouette's
+// loop (`imaging_bench
 // --benchmark_filter=nodeSilhouette/4`, a machine slower than the figures below).
 int bayerSilhouetteRow4(const GreenScreenKeyer& key, const ImageView& image, const BayerLayout& l,
                         int cy, LowResSilhouette& out) {
@@ -25,7 +28,8 @@ int bayerSilhouetteRow4(const GreenScreenKeyer& key, const ImageView& image, con
   const uint8_t* blue[2] = {rows + (1 - l.red_y) * w, rows + (3 - l.red_y) * w};
   const __m128i low = _mm_set1_epi16(0x00ff), columns = _mm_set_epi16(2, 1, 2, 1, 2, 1, 2, 1);
   const __m128i four = _mm_set1_epi16(4), ninth = _mm_set1_epi16(7282);
-  const __m128i threshold = _mm_set1_epi16(int16_t(key.threshold()));
+  // A green excess lies in -255 .. 255: any threshold beyond keys alike clamped to 16 bits.
+  const __m128i threshold = _mm_set1_epi16(int16_t(std::clamp(key.threshold(), -256, 256)));
   // The channels' weighted sums of 4 cells (16 pixel columns from x), in 32-bit lanes.
   const auto sums4 = [&](size_t x) {
     __m128i r = _mm_setzero_si128(), g = r, b = r;
@@ -75,7 +79,8 @@ int bayerSilhouetteRow4(const GreenScreenKeyer& key, const ImageView& image, con
 // image, so the 3x3 pixels around it always lie in the cells (x/2 - 1, y/2 - 1) (one pixel of the
 // window: its last column and row) to (x/2, y/2) (two pixels a side), weighted 1, 2, 2, 4 (over
 // 9). Each cell decoded as colourAt decodes it, straight from the mosaic's rows: the same result
-// as keyCell, 122 against 433-565 us a camera at step 4 (235 us through colourAt).
+// as keyCell, 122 against 433-565 us a camera at step 4 (235 us through colourAt). At step 4 it
+// keys only the cells bayerSilhouetteRow4 leaves (none at 1024 pixels wide).
 void bayerSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step,
                      LowResSilhouette& out) {
   const BayerLayout l = bayerLayout(image.format);

@@ -15,9 +15,9 @@ struct Neighbours {
   float fx, fy;
 };
 
-// colourAt() on one image, its format's branches taken once a camera instead of at every read (the
-// sampler reads five pixels a sample): on Bayer, where a cell's red, greens and blue lie from its
-// first pixel.
+// colourAt() on one image, for pixels inside it (as the sampler's reads are), its format's branches
+// taken once a camera instead of at every read (the sampler reads five pixels a sample): on Bayer,
+// where a cell's red, greens and blue lie from its first pixel.
 class ColourReader {
  public:
   explicit ColourReader(const ImageView& image) : image_(image), bayer_(isBayer(image.format)) {

@@ -79,6 +79,18 @@ TEST(VisualHullLocator, NodeSilhouettesAreTheKeyOfEveryCell) {
         EXPECT_LT(set, s.width * s.height) << pixelFormatName(format) << " step " << step;
       }
     }
+    // Thresholds beyond any green excess (a keyer made by hand) key every cell alike, in 16 bits
+    // too: all the actor, or none of it.
+    Image bayer;
+    rgbaToImage(rgba.data(), width, height, PixelFormat::kBayerRggb8, bayer);
+    for (const int threshold : {40000, -40000}) {
+      LowResSilhouette s;
+      computeSilhouette(GreenScreenKeyer(threshold), bayer.view(), 0, 4, s);
+      int set = 0;
+      for (int y = 0; y < s.height; ++y)
+        for (int x = 0; x < s.width; ++x) set += s.at(x, y);
+      EXPECT_EQ(set, threshold > 0 ? s.width * s.height : 0) << "threshold " << threshold;
+    }
   }
 }
 
