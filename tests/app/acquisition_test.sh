@@ -2,7 +2,8 @@
 # The whole acquisition path with real processes: a synthetic session is served by virtual GigE
 # Vision cameras (lumistage virtual-cameras), streamed and recorded by an Aravis client
 # (lumistage stream --record), and the recording must hold exactly the frames that were served;
-# then the live cameras feed a camera node and the studio's pipeline (lumistage run).
+# then the live cameras feed a camera node and the studio's pipeline (lumistage run), also across
+# a power cycle of every camera.
 # Run inside packaging/in-network-namespace.sh (it needs the 127.0.1.x loopback addresses).
 # Usage: acquisition_test.sh LUMISTAGE_BINARY
 set -eu
@@ -49,5 +50,22 @@ grep -q "^fps: 20$" "$work/again/session.yaml" || fail "the replay was recorded 
 # The same cameras, live, through a camera-node process into the studio's pipeline.
 "$cli" run --rig "$work/served/rig.yaml" --address 127.0.1.3 --frames 20 --seconds 15 > "$work/run.log" 2>&1 || fail "run: $(cat "$work/run.log")"
 grep -q "^20 frames in all" "$work/run.log" || fail "the pipeline did not complete 20 frames from live cameras: $(cat "$work/run.log")"
+kill $server 2>/dev/null || true
+wait $server 2>/dev/null || true
 
-echo "acquisition: $sets frame sets served, streamed, recorded bit-exact and replayed; 20 frames through the pipeline"
+# Every camera power-cycled while the pipeline runs (the server stops for 2 s, then serves again):
+# the node opens them again and the pipeline goes on to its frame count, on the same processes.
+"$cli" virtual-cameras --session "$work/served" --address 127.0.1.3 --seconds 4 > "$work/server.log" 2>&1 &
+server=$!
+"$cli" run --rig "$work/served/rig.yaml" --address 127.0.1.3 --frames 100 --seconds 40 > "$work/cycled.log" 2>&1 &
+run=$!
+wait $server || true
+sleep 2
+"$cli" virtual-cameras --session "$work/served" --address 127.0.1.3 --seconds 40 > "$work/server.log" 2>&1 &
+server=$!
+wait $run || fail "run across the cameras' power cycle: $(cat "$work/cycled.log")"
+grep -q "lost" "$work/cycled.log" || fail "the cameras were never lost: $(cat "$work/cycled.log")"
+grep -q "frames again" "$work/cycled.log" || fail "the node never had frames again: $(cat "$work/cycled.log")"
+grep -q "^100 frames in all" "$work/cycled.log" || fail "the pipeline did not go on after the cameras came back: $(cat "$work/cycled.log")"
+
+echo "acquisition: $sets frame sets served, streamed, recorded bit-exact and replayed; 20 frames through the pipeline; 100 across the cameras' power cycle"
