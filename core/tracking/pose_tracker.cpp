@@ -161,8 +161,16 @@ struct PoseTracker::Impl {
   Eigen::MatrixXd damped;
   Eigen::LDLT<Eigen::MatrixXd> ldlt;
   Pose candidate, predicted, fitted;
-  std::vector<double> row;
-  std::vector<int> row_index;
+  // Per joint, the residuals' normal equations in the joint's spatial terms (evaluate): every
+  // degree of freedom moves a point p by a x (p - c) (a turn about axis a through c) or by a (a
+  // shift), so a residual's Jacobian row over a joint's chain is S_d . w, with S_d = (c x a, a) or
+  // (a, 0) and w = (g, p x g) for its slope g = dr/dp. The residuals of a joint add w w^T and
+  // w r, and the chain's block of J^T J is S^T M S, once a joint: per residual 36 products
+  // instead of one for each pair of the chain's degrees of freedom (up to 24: about 300).
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  std::vector<Eigen::Matrix<double, 6, 6>> joint_m;
+  std::vector<Vector6d> joint_g, dof_spatial;
+  std::vector<uint8_t> joint_used;
   // Tracking state.
   bool tracking = false;
   int bad_frames = 0;
@@ -317,8 +325,10 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   delta.setZero(n);
   damped.setZero(n, n);
   ldlt = Eigen::LDLT<Eigen::MatrixXd>(n);
-  row.resize(n);
-  row_index.resize(n);
+  joint_m.resize(generic.jointCount());
+  joint_g.resize(generic.jointCount());
+  joint_used.resize(generic.jointCount());
+  dof_spatial.resize(n);
   dof_axis.resize(n);
   dof_centre.resize(n);
   pose = previous = prior_pose = candidate = predicted = fitted = Pose::rest(generic.jointCount());
@@ -659,28 +669,27 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
         }
         dof_centre[d] = global[dof.joint].translation();
       }
+      if (dof.kind == Dof::kTranslation) {
+        dof_spatial[d] << dof_axis[d], Eigen::Vector3d::Zero();
+      } else {
+        dof_spatial[d] << dof_centre[d].cross(dof_axis[d]), dof_axis[d];
+      }
+    }
+    for (size_t j = 0; j < joint_m.size(); ++j) {
+      joint_m[j].setZero();
+      joint_g[j].setZero();
+      joint_used[j] = 0;
     }
   }
   // Accumulates w * J^T J and w * J^T r for a residual whose Jacobian is dr/dp . dp/dtheta, p a
-  // point moving with `joint`.
+  // point moving with `joint` (in the joint's spatial terms, joint_m and joint_g).
   auto accumulate = [&](int joint, const Eigen::Vector3d& point, const Eigen::Vector3d& dr_dp,
                         double r, double w) {
-    const std::vector<int>& ch = chain[joint];
-    const int k = int(ch.size());
-    for (int i = 0; i < k; ++i) {
-      const int d = ch[i];
-      const Dof& dof = dofs[d];
-      const Eigen::Vector3d dp = dof.kind == Dof::kTranslation
-                                     ? dof_axis[d]
-                                     : Eigen::Vector3d(dof_axis[d].cross(point - dof_centre[d]));
-      row[i] = dr_dp.dot(dp);
-    }
-    for (int i = 0; i < k; ++i) {
-      const double wi = w * row[i];
-      if (wi == 0) continue;
-      grad(ch[i]) += wi * r;
-      for (int j = i; j < k; ++j) h(ch[i], ch[j]) += wi * row[j];
-    }
+    Vector6d spatial;
+    spatial << dr_dp, point.cross(dr_dp);
+    joint_m[joint].noalias() += w * spatial * spatial.transpose();
+    joint_g[joint] += (w * r) * spatial;
+    joint_used[joint] = 1;
   };
   placeCapsules();
   double cost = 0;
@@ -753,6 +762,18 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
           dv(0, k.fy * iz, -k.fy * x.y() * iz * iz);
       const Eigen::Vector3d dr_dx = m_per_cell / step * (gx * du + gy * dv);
       accumulate(s.joint, q, cam.rotation().transpose() * dr_dx, r, ws);
+    }
+  }
+  // The joints' sums into the degrees of freedom: S^T M S and S^T g over each joint's chain.
+  if (jacobian) {
+    for (size_t j = 0; j < joint_m.size(); ++j) {
+      if (!joint_used[j]) continue;
+      const std::vector<int>& ch = chain[j];
+      for (size_t b = 0; b < ch.size(); ++b) {
+        const Vector6d moved = joint_m[j] * dof_spatial[ch[b]];
+        for (size_t a = 0; a <= b; ++a) h(ch[a], ch[b]) += dof_spatial[ch[a]].dot(moved);
+        grad(ch[b]) += dof_spatial[ch[b]].dot(joint_g[j]);
+      }
     }
   }
   // Temporal prior.
