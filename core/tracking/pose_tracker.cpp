@@ -115,6 +115,15 @@ struct PoseTracker::Impl {
   // [voxel * cameras + camera]: cell while every camera's cells fit in 16 bits, else cell_wide.
   std::vector<uint16_t> cell;
   std::vector<uint32_t> cell_wide;
+  // Blocks of kBlock^3 voxels, [block * cameras + camera]: a cell of one of the block's voxels and
+  // how far (in cells, rounded up) every other voxel's cell lies from it, or kUnseen where the
+  // camera does not see all of the block. A camera whose distance transform at that cell exceeds
+  // the reach carves the whole block away (the transform moves by at most a cell a cell), so the
+  // empty space around the actor is carved a block at a time instead of a voxel at a time.
+  static constexpr int kBlock = 4;
+  Eigen::Vector3i block_dims;
+  std::vector<uint32_t> block_cell;
+  std::vector<uint8_t> block_reach;
   std::vector<uint8_t> occupied;
   std::vector<Eigen::Vector3d> surface_all, hull;
   // Silhouette distance transforms (cells), per camera; present[c] when this frame has one. Each
@@ -188,6 +197,8 @@ struct PoseTracker::Impl {
   void prepareSilhouettes(const std::vector<const LowResSilhouette*>& silhouettes);
   // Carves voxels [lo, hi] (inclusive) and samples the hull's surface; returns the volume.
   double carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid, double* top_z);
+  template <typename T>
+  void makeBlocks(const std::vector<T>& table);
   double evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h, Eigen::VectorXd& grad);
   // Places the capsules for the pose in `global` (cap_a, cap_b) and remakes the hull samples'
   // candidate capsules when they no longer hold.
@@ -284,6 +295,11 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
         }
       }
     }
+  }
+  if (wide) {
+    makeBlocks(cell_wide);
+  } else {
+    makeBlocks(cell);
   }
   dt.resize(cameras);
   for (int c = 0; c < cameras; ++c) dt[c].assign(size_t(cell_w[c]) * cell_h[c], kFarCells);
@@ -552,6 +568,48 @@ void PoseTracker::Impl::prepareSilhouettes(
   }
 }
 
+template <typename T>
+void PoseTracker::Impl::makeBlocks(const std::vector<T>& table) {
+  block_dims = (dims.array() + kBlock - 1) / kBlock;
+  const size_t blocks = size_t(block_dims.x()) * block_dims.y() * block_dims.z();
+  block_cell.assign(blocks * cameras, kUnseen<uint32_t>);
+  block_reach.assign(blocks * cameras, 0);
+  const size_t sy = size_t(dims.x()), sz = size_t(dims.x()) * dims.y();
+  for (int bz = 0; bz < block_dims.z(); ++bz) {
+    for (int by = 0; by < block_dims.y(); ++by) {
+      for (int bx = 0; bx < block_dims.x(); ++bx) {
+        const Eigen::Vector3i first(bx * kBlock, by * kBlock, bz * kBlock);
+        const Eigen::Vector3i last = (first.array() + kBlock - 1).min(dims.array() - 1);
+        const size_t b = (size_t(bz) * block_dims.y() + by) * block_dims.x() + bx;
+        for (int c = 0; c < cameras; ++c) {
+          const T ref = table[(first.z() * sz + first.y() * sy + first.x()) * cameras + c];
+          if (ref == kUnseen<T>) continue;
+          const int rx = int(ref % T(cell_w[c])), ry = int(ref / T(cell_w[c]));
+          int reach2 = 0;
+          bool seen = true;
+          for (int z = first.z(); seen && z <= last.z(); ++z) {
+            for (int y = first.y(); seen && y <= last.y(); ++y) {
+              for (int x = first.x(); x <= last.x(); ++x) {
+                const T at = table[(z * sz + y * sy + x) * cameras + c];
+                if (at == kUnseen<T>) {
+                  seen = false;
+                  break;
+                }
+                const int dx = int(at % T(cell_w[c])) - rx, dy = int(at / T(cell_w[c])) - ry;
+                reach2 = std::max(reach2, dx * dx + dy * dy);
+              }
+            }
+          }
+          const int reach = int(std::ceil(std::sqrt(double(reach2))));
+          if (!seen || reach > 255) continue;
+          block_cell[b * cameras + c] = uint32_t(ref);
+          block_reach[b * cameras + c] = uint8_t(reach);
+        }
+      }
+    }
+  }
+}
+
 double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid,
                                 double* top_z) {
   lo = lo.cwiseMax(Eigen::Vector3i::Zero());
@@ -567,11 +625,21 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
   // The camera that carved the last voxel away is asked first: neighbouring voxels mostly fall
   // outside the same silhouette.
   int first = 0;
-  const auto carveWith = [&]<typename T>(const std::vector<T>& table) {
-    for (int z = lo.z(); z <= hi.z(); ++z) {
-      for (int y = lo.y(); y <= hi.y(); ++y) {
-        size_t v = z * sz + y * sy + lo.x() * sx;
-        for (int x = lo.x(); x <= hi.x(); ++x, ++v) {
+  // Whether camera c carves all of block b away: its distance transform at the block's cell
+  // beyond the block's reach (outside the transform's box, the silhouette is more than kDtMargin
+  // cells away).
+  const auto carvesBlock = [&](size_t b, int c) {
+    const uint32_t at = block_cell[b * cameras + c];
+    if (!present[c] || at == kUnseen<uint32_t>) return false;
+    const float d = dt[c][at];
+    return (d >= kFarCells ? float(kDtMargin) : d) > float(block_reach[b * cameras + c]);
+  };
+  const auto carveWith = [&]<typename T>(const std::vector<T>& table, const Eigen::Vector3i& from,
+                                         const Eigen::Vector3i& to) {
+    for (int z = from.z(); z <= to.z(); ++z) {
+      for (int y = from.y(); y <= to.y(); ++y) {
+        size_t v = z * sz + y * sy + from.x() * sx;
+        for (int x = from.x(); x <= to.x(); ++x, ++v) {
           const T* cells = &table[v * cameras];
           int seen = 0;
           bool inside = true;
@@ -597,10 +665,27 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
       }
     }
   };
-  if (cell_wide.empty()) {
-    carveWith(cell);
-  } else {
-    carveWith(cell_wide);
+  const Eigen::Vector3i block_lo = lo / kBlock, block_hi = hi / kBlock;
+  for (int bz = block_lo.z(); bz <= block_hi.z(); ++bz) {
+    for (int by = block_lo.y(); by <= block_hi.y(); ++by) {
+      for (int bx = block_lo.x(); bx <= block_hi.x(); ++bx) {
+        const size_t b = (size_t(bz) * block_dims.y() + by) * block_dims.x() + bx;
+        bool carved = carvesBlock(b, first);
+        for (int c = 0; c < cameras && !carved; ++c) {
+          if (c != first && carvesBlock(b, c)) carved = true, first = c;
+        }
+        if (carved) continue;  // its voxels stay unoccupied
+        const Eigen::Vector3i from = (Eigen::Vector3i(bx, by, bz) * kBlock).cwiseMax(lo);
+        const Eigen::Vector3i to =
+            (Eigen::Vector3i(bx, by, bz) * kBlock + Eigen::Vector3i::Constant(kBlock - 1))
+                .cwiseMin(hi);
+        if (cell_wide.empty()) {
+          carveWith(cell, from, to);
+        } else {
+          carveWith(cell_wide, from, to);
+        }
+      }
+    }
   }
   // Surface voxels: kept, with a 6-neighbour that is not (the region's border and the floor
   // count as empty). The sample moves half a voxel toward its empty neighbours: onto the hull's
