@@ -232,7 +232,10 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   stage = opt.stage ? *opt.stage : stageVolume(rig);
   const auto tableBytes = [&](const StageBox& box) {
     const Eigen::Vector3i d = (box.size() / opt.voxel_m).array().ceil().cast<int>();
-    return size_t(d.x()) * d.y() * d.z() * cameras * (wide ? 4 : 2);
+    const Eigen::Vector3i blocks = (d.array() + kBlock - 1) / kBlock;
+    // The voxels' cells, and the blocks' cell and reach (makeBlocks).
+    return size_t(d.x()) * d.y() * d.z() * cameras * (wide ? 4 : 2) +
+           size_t(blocks.x()) * blocks.y() * blocks.z() * cameras * 5;
   };
   // A box worked out from the cameras (none given) is narrowed about its centre, down to the
   // default floor, until its tables fit: many cameras of a megapixel and more on a wide floor

@@ -25,9 +25,10 @@ struct PoseTrackerOptions {
   double voxel_m = 0.02;
   // The box carved for the actor: empty, the rig's (stageVolume: the rig file's stage, else the
   // floor the cameras cover). Its lookup tables take 2 bytes a voxel and camera (4 for cameras of
-  // a megapixel and more): 110 MB for the reference rig's 4.0 x 4.0 x 2.4 m; a box that needs more
-  // than max_table_bytes is refused; one worked out from the cameras is narrowed about its centre
-  // (down to the default floor) until they fit, and the log says so.
+  // a megapixel and more) and 5 a block of 4x4x4 voxels and camera: 114 MB for the reference rig's
+  // 4.0 x 4.0 x 2.4 m; a box that needs more than max_table_bytes is refused; one worked out from
+  // the cameras is narrowed about its centre (down to the default floor) until they fit, and the
+  // log says so.
   std::optional<StageBox> stage;
   // `stage` was worked out from the cameras by the caller (stageVolume, for a rig file without
   // one): narrowed as the tracker's own would be, not refused.
