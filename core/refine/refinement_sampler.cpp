@@ -15,63 +15,45 @@ struct Neighbours {
   float fx, fy;
 };
 
-// colourAt() on one image, for pixels inside it (as the sampler's reads are), its format's branches
-// taken once a camera instead of at every read (the sampler reads five pixels a sample): on Bayer,
-// where a cell's red, greens and blue lie from its first pixel.
-class ColourReader {
+// A camera's image as the refinement interpolates it: its grid of pixels or Bayer cells, and on
+// Bayer where a cell's red, greens and blue lie from its first pixel, worked out once a camera
+// instead of at every read (the colour term reads five pixels a sample; the grid's size divided out
+// at each read cost about 0.2 ms of a node's 7.5, near the bench's noise; colourAt's choice of
+// format and layout at each read, a fifth of the sampler's instructions).
+class PixelGrid {
  public:
-  explicit ColourReader(const ImageView& image) : image_(image), bayer_(isBayer(image.format)) {
+  explicit PixelGrid(const ImageView& image)
+      : image_(image),
+        bayer_(isBayer(image.format)),
+        step_(bayer_ ? 2 : 1),
+        columns_(image.width / step_),
+        rows_(image.height / step_) {
     if (!bayer_) return;
     const BayerLayout l = bayerLayout(image.format);
     const int w = image.width;
     red_ = l.red_y * w + l.red_x, blue_ = (1 - l.red_y) * w + 1 - l.red_x;
     green_red_row_ = l.red_y * w + 1 - l.red_x, green_blue_row_ = (1 - l.red_y) * w + l.red_x;
   }
-  Rgb operator()(int x, int y) const {
+
+  // colourAt() for a pixel inside the image (as the sampler's reads are).
+  Rgb colour(int x, int y) const {
     if (!bayer_) return colourAt(image_, x, y);
     const int x0 = std::min(x, image_.width - 2) & ~1, y0 = std::min(y, image_.height - 2) & ~1;
-    const uint8_t* cell = image_.data + size_t(y0) * size_t(image_.width) + size_t(x0);
-    return cellColour(cell);
+    return cellColour(image_.data + size_t(y0) * size_t(image_.width) + size_t(x0));
   }
-  // The colours of the four pixels, or Bayer cells, `x0`, `x1` of rows `y0`, `y1` (within the
-  // image; on Bayer, cells' first pixels), in the order (x0, y0), (x1, y0), (x0, y1), (x1, y1).
-  void four(int x0, int x1, int y0, int y1, Rgb out[4]) const {
+  // The colours of the four neighbours `n` (within the image), in the order (x0, y0), (x1, y0),
+  // (x0, y1), (x1, y1).
+  void colours(const Neighbours& n, Rgb out[4]) const {
     if (!bayer_) {
-      out[0] = colourAt(image_, x0, y0), out[1] = colourAt(image_, x1, y0);
-      out[2] = colourAt(image_, x0, y1), out[3] = colourAt(image_, x1, y1);
+      out[0] = colourAt(image_, n.x0, n.y0), out[1] = colourAt(image_, n.x1, n.y0);
+      out[2] = colourAt(image_, n.x0, n.y1), out[3] = colourAt(image_, n.x1, n.y1);
       return;
     }
     const size_t w = size_t(image_.width);
-    const uint8_t *row0 = image_.data + size_t(y0) * w, *row1 = image_.data + size_t(y1) * w;
-    out[0] = cellColour(row0 + x0), out[1] = cellColour(row0 + x1);
-    out[2] = cellColour(row1 + x0), out[3] = cellColour(row1 + x1);
+    const uint8_t *row0 = image_.data + size_t(n.y0) * w, *row1 = image_.data + size_t(n.y1) * w;
+    out[0] = cellColour(row0 + n.x0), out[1] = cellColour(row0 + n.x1);
+    out[2] = cellColour(row1 + n.x0), out[3] = cellColour(row1 + n.x1);
   }
-
- private:
-  Rgb cellColour(const uint8_t* cell) const {
-    return {cell[red_], (cell[green_red_row_] + cell[green_blue_row_] + 1) / 2, cell[blue_]};
-  }
-
-  ImageView image_;
-  bool bayer_;
-  int red_ = 0, blue_ = 0, green_red_row_ = 0, green_blue_row_ = 0;
-};
-
-// A camera's image as the refinement interpolates it: its grid of pixels or Bayer cells, worked
-// out once a camera instead of at every read (the colour term reads four pixels a sample; the
-// grid's size divided out at each read cost about 0.2 ms of a node's 7.5, near the bench's noise).
-class PixelGrid {
- public:
-  explicit PixelGrid(const ImageView& image)
-      : image_(image),
-        colour_(image),
-        bayer_(isBayer(image.format)),
-        step_(bayer_ ? 2 : 1),
-        columns_(image.width / step_),
-        rows_(image.height / step_) {}
-  const ImageView& image() const { return image_; }
-  Rgb colour(int x, int y) const { return colour_(x, y); }
-  void colours(const Neighbours& n, Rgb out[4]) const { colour_.four(n.x0, n.x1, n.y0, n.y1, out); }
 
   Neighbours around(float u, float w) const {
     // A Bayer cell k holds pixels 2k and 2k + 1: its centre is at 2k + 0.5.
@@ -84,10 +66,14 @@ class PixelGrid {
   }
 
  private:
+  Rgb cellColour(const uint8_t* cell) const {
+    return {cell[red_], (cell[green_red_row_] + cell[green_blue_row_] + 1) / 2, cell[blue_]};
+  }
+
   ImageView image_;
-  ColourReader colour_;
   bool bayer_;
   int step_, columns_, rows_;
+  int red_ = 0, blue_ = 0, green_red_row_ = 0, green_blue_row_ = 0;
 };
 
 // The key's background level (GreenScreenKeyer::backgroundLevel) at pixel position (u, w):

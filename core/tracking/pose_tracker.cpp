@@ -199,6 +199,14 @@ struct PoseTracker::Impl {
   double carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid, double* top_z);
   template <typename T>
   void makeBlocks(const std::vector<T>& table);
+  // The largest squared distance, in cells of camera c, of the cells of voxels first .. last from
+  // the first one's; -1 where the camera does not see one of them.
+  template <typename T>
+  int blockReach2(const std::vector<T>& table, const Eigen::Vector3i& first,
+                  const Eigen::Vector3i& last, int c) const;
+  static Eigen::Vector3i blocksOf(const Eigen::Vector3i& voxels) {
+    return (voxels.array() + kBlock - 1) / kBlock;
+  }
   double evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h, Eigen::VectorXd& grad);
   // Places the capsules for the pose in `global` (cap_a, cap_b) and remakes the hull samples'
   // candidate capsules when they no longer hold.
@@ -232,7 +240,7 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   stage = opt.stage ? *opt.stage : stageVolume(rig);
   const auto tableBytes = [&](const StageBox& box) {
     const Eigen::Vector3i d = (box.size() / opt.voxel_m).array().ceil().cast<int>();
-    const Eigen::Vector3i blocks = (d.array() + kBlock - 1) / kBlock;
+    const Eigen::Vector3i blocks = blocksOf(d);
     // The voxels' cells, and the blocks' cell and reach (makeBlocks).
     return size_t(d.x()) * d.y() * d.z() * cameras * (wide ? 4 : 2) +
            size_t(blocks.x()) * blocks.y() * blocks.z() * cameras * 5;
@@ -572,40 +580,44 @@ void PoseTracker::Impl::prepareSilhouettes(
 }
 
 template <typename T>
+int PoseTracker::Impl::blockReach2(const std::vector<T>& table, const Eigen::Vector3i& first,
+                                   const Eigen::Vector3i& last, int c) const {
+  const size_t sy = size_t(dims.x()), sz = size_t(dims.x()) * dims.y();
+  const T ref = table[(first.z() * sz + first.y() * sy + first.x()) * cameras + c];
+  const int w = cell_w[c], rx = int(ref % w), ry = int(ref / w);
+  int reach2 = 0;
+  for (int z = first.z(); z <= last.z(); ++z) {
+    for (int y = first.y(); y <= last.y(); ++y) {
+      for (int x = first.x(); x <= last.x(); ++x) {
+        const T at = table[(z * sz + y * sy + x) * cameras + c];
+        if (at == kUnseen<T>) return -1;
+        const int dx = int(at % w) - rx, dy = int(at / w) - ry;
+        reach2 = std::max(reach2, dx * dx + dy * dy);
+      }
+    }
+  }
+  return reach2;
+}
+
+template <typename T>
 void PoseTracker::Impl::makeBlocks(const std::vector<T>& table) {
-  block_dims = (dims.array() + kBlock - 1) / kBlock;
+  block_dims = blocksOf(dims);
   const size_t blocks = size_t(block_dims.x()) * block_dims.y() * block_dims.z();
   block_cell.assign(blocks * cameras, kUnseen<uint32_t>);
   block_reach.assign(blocks * cameras, 0);
   const size_t sy = size_t(dims.x()), sz = size_t(dims.x()) * dims.y();
+  size_t b = 0;
   for (int bz = 0; bz < block_dims.z(); ++bz) {
     for (int by = 0; by < block_dims.y(); ++by) {
-      for (int bx = 0; bx < block_dims.x(); ++bx) {
+      for (int bx = 0; bx < block_dims.x(); ++bx, ++b) {
         const Eigen::Vector3i first(bx * kBlock, by * kBlock, bz * kBlock);
         const Eigen::Vector3i last = (first.array() + kBlock - 1).min(dims.array() - 1);
-        const size_t b = (size_t(bz) * block_dims.y() + by) * block_dims.x() + bx;
+        const size_t v = first.z() * sz + first.y() * sy + first.x();
         for (int c = 0; c < cameras; ++c) {
-          const T ref = table[(first.z() * sz + first.y() * sy + first.x()) * cameras + c];
-          if (ref == kUnseen<T>) continue;
-          const int rx = int(ref % T(cell_w[c])), ry = int(ref / T(cell_w[c]));
-          int reach2 = 0;
-          bool seen = true;
-          for (int z = first.z(); seen && z <= last.z(); ++z) {
-            for (int y = first.y(); seen && y <= last.y(); ++y) {
-              for (int x = first.x(); x <= last.x(); ++x) {
-                const T at = table[(z * sz + y * sy + x) * cameras + c];
-                if (at == kUnseen<T>) {
-                  seen = false;
-                  break;
-                }
-                const int dx = int(at % T(cell_w[c])) - rx, dy = int(at / T(cell_w[c])) - ry;
-                reach2 = std::max(reach2, dx * dx + dy * dy);
-              }
-            }
-          }
-          const int reach = int(std::ceil(std::sqrt(double(reach2))));
-          if (!seen || reach > 255) continue;
-          block_cell[b * cameras + c] = uint32_t(ref);
+          const int reach2 = blockReach2(table, first, last, c);
+          const int reach = reach2 < 0 ? 256 : int(std::ceil(std::sqrt(double(reach2))));
+          if (reach > 255) continue;  // not seen whole, or too wide to carve at once
+          block_cell[b * cameras + c] = uint32_t(table[v * cameras + c]);
           block_reach[b * cameras + c] = uint8_t(reach);
         }
       }
