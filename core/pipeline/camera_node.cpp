@@ -215,6 +215,13 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   std::array<int64_t, kSilentFrames + 1> recent_ids{};
   int64_t recent_count = 0;
   CameraFrame frame;
+  // A set to the take: its own frames, and `late` ones (per own camera) where it has none.
+  const auto offerSet = [&](const Set& set, const std::vector<CameraFrame>& late) {
+    take_frames.clear();
+    for (size_t c = 0; c < cameras_.size(); ++c)
+      take_frames.push_back(set.has(c) ? &set.frames[c] : &late[c]);
+    takes_.offer(set.frame_id, take_frames);
+  };
   // The sets waiting for the take that are complete now, in order; those whose late frames did
   // not come within kLateFrames (or at all, `all`: the ids restart, the capture ends) are left out
   // of it.
@@ -222,10 +229,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
     while (!for_take.empty()) {
       ForTake& front = for_take.front();
       if (front.complete()) {
-        take_frames.clear();
-        for (size_t c = 0; c < cameras_.size(); ++c)
-          take_frames.push_back(front.set->has(c) ? &front.set->frames[c] : &front.late[c]);
-        takes_.offer(front.set->frame_id, take_frames);
+        offerSet(*front.set, front.late);
       } else if (!all && front.set->frame_id >= newest - kLateFrames) {
         return;
       }
@@ -385,9 +389,7 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       // without a late camera waits for its frame while a take wants it (one without a silent
       // camera cannot be recorded: a take's sets are whole).
       if (whole && for_take.empty()) {
-        take_frames.clear();
-        for (const CameraFrame& f : s.frames) take_frames.push_back(&f);
-        takes_.offer(s.frame_id, take_frames);
+        offerSet(s, {});
       } else if (whole || (late_only && takes_.wants(s.frame_id))) {
         for_take.push_back({it->second, std::vector<CameraFrame>(whole ? 0 : cameras_.size())});
       }

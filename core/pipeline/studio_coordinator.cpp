@@ -714,20 +714,23 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   // holes: it is shown only when no whole frame was for hold_incomplete (a node that never makes
   // it in time would otherwise leave the view frozen), else dropped.
   bool whole = !frame.views.empty(), drawn = false;
-  for (const std::array<int, 3>& view : frame.views) {
-    const auto it = frame.image_nodes.find(view[0]);
-    for (const auto& [name, node] : nodes_)
-      if (awaited(node) && (it == frame.image_nodes.end() || !it->second.count(name)))
+  for (size_t v = 0; v < frame.views.size() && whole; ++v) {
+    const auto it = frame.image_nodes.find(frame.views[v][0]);
+    for (const auto& [name, node] : nodes_) {
+      if (awaited(node) && (it == frame.image_nodes.end() || !it->second.count(name))) {
         whole = false;
+        break;
+      }
+    }
   }
   for (const auto& [view, blender] : frame.blends) drawn = drawn || blender.added() > 0;
   const bool hold =
       drawn && !whole && last_whole_ns_ > 0 &&
       now - last_whole_ns_ < std::chrono::nanoseconds(options_.hold_incomplete).count();
-  bool shown = false;
+  const bool shown = drawn && !hold;
   for (const auto& [view, blender] : frame.blends) {
-    if (blender.added() == 0 || hold) continue;
-    shown = true;
+    if (!shown) break;
+    if (blender.added() == 0) continue;
     // Normalise the nodes' alphas per pixel and blend.
     BlendedImage& image = last_images_[view];
     image.frame_id = frame_id;

@@ -129,12 +129,6 @@ bool TakeRecorder::wants(int64_t frame_id) const {
   return !wanted_.take.empty() && frame_id >= wanted_.first_frame && frame_id <= wanted_.last_frame;
 }
 
-void TakeRecorder::offer(int64_t frame_id, const std::vector<CameraFrame>& frames) {
-  std::vector<const CameraFrame*> pointers;
-  for (const CameraFrame& frame : frames) pointers.push_back(&frame);
-  offer(frame_id, pointers);
-}
-
 void TakeRecorder::offer(int64_t frame_id, std::span<const CameraFrame* const> frames) {
   std::lock_guard lock(mutex_);
   if (closed_ || wanted_.take.empty() || frames.empty() || frame_id < wanted_.first_frame) return;

@@ -51,7 +51,6 @@ class TakeRecorder {
   // written, so it allocates only while warming up. Sets come in increasing frame ids (a
   // session's index needs them so).
   void offer(int64_t frame_id, std::span<const CameraFrame* const> frames);
-  void offer(int64_t frame_id, const std::vector<CameraFrame>& frames);
   // Whether a take asks for this frame (any thread).
   bool wants(int64_t frame_id) const;
   // For heartbeats (any thread).

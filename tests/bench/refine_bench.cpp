@@ -23,7 +23,7 @@ struct Scene : testing::ReferenceFrame {
   // Per window points (1, 3) and node, compressed as nodes send it.
   std::vector<std::vector<uint8_t>> wire[4];
 
-  Scene() : ReferenceFrame(loadStudioConfig(resourcePath("studio/reference.yaml")), false) {
+  Scene() : ReferenceFrame(false) {
     RefinementStatistics stats;
     RefinementStatisticsCodec codec;
     for (int points : {1, 3}) {

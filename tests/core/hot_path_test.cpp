@@ -22,7 +22,6 @@
 #include "core/render/vertex_visibility.h"
 #include "core/tracking/pose_tracker.h"
 #include "tests/core/refine/reference_frame.h"
-#include "tests/core/sim/reference_studio.h"
 
 extern "C" {
 void* __libc_malloc(size_t size);
@@ -106,7 +105,7 @@ class Allocations {
 using Frame = testing::ReferenceFrame;
 
 const Frame& frame() {
-  static const Frame f(testing::referenceStudio(4000), true);
+  static const Frame f(true);
   return f;
 }
 

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <functional>
 #include <thread>
 
@@ -18,6 +19,18 @@ namespace lumistage {
 namespace {
 
 using std::chrono::milliseconds;
+
+// Frame `id` of `camera`, at 30 fps, every pixel of one RGB colour.
+void fillFrame(const Rig& rig, int camera, int64_t id, const std::array<uint8_t, 3>& rgb,
+               CameraFrame& frame) {
+  frame.camera = camera;
+  frame.frame_id = id;
+  frame.timestamp_ns = id * 33'333'333;
+  const Camera& c = rig.camera(camera);
+  frame.image.resize(PixelFormat::kRgb8, c.width(), c.height());
+  for (size_t p = 0; p + 2 < frame.image.pixels.size(); p += 3)
+    std::copy(rgb.begin(), rgb.end(), &frame.image.pixels[p]);
+}
 
 // The frames of a node's cameras, every camera of every frame in turn (a screen-green image), a
 // frame every 5 ms; from frame `dies_at` on, camera `dead` delivers nothing (unplugged); before
@@ -46,11 +59,6 @@ class ScriptedSource : public FrameSource {
       ++next_;
       if (camera == dead_ && id >= dies_at_) continue;
       if (next_ % cameras_.size() == 0) std::this_thread::sleep_for(milliseconds(5));
-      frame.camera = camera;
-      frame.frame_id = id;
-      frame.timestamp_ns = id * 33'333'333;
-      const Camera& c = rig_.camera(camera);
-      frame.image.resize(PixelFormat::kRgb8, c.width(), c.height());
       const bool dark = id < dark_until_, dim = id >= dim_from_ && id < dim_until_;
       const uint8_t r = dark  ? 0
                         : dim ? 8
@@ -61,11 +69,7 @@ class ScriptedSource : public FrameSource {
                     b = dark  ? 0
                         : dim ? 12
                               : 60;
-      for (size_t p = 0; p + 2 < frame.image.pixels.size(); p += 3) {
-        frame.image.pixels[p] = r;
-        frame.image.pixels[p + 1] = g;
-        frame.image.pixels[p + 2] = b;
-      }
+      fillFrame(rig_, camera, id, {r, g, b}, frame);
       return true;
     }
   }
@@ -111,16 +115,7 @@ class LateCameraSource : public FrameSource {
           continue;
         }
       }
-      frame.camera = camera;
-      frame.frame_id = frame_id;
-      frame.timestamp_ns = frame_id * 33'333'333;
-      const Camera& c = rig_.camera(camera);
-      frame.image.resize(PixelFormat::kRgb8, c.width(), c.height());
-      for (size_t p = 0; p + 2 < frame.image.pixels.size(); p += 3) {
-        frame.image.pixels[p] = 40;
-        frame.image.pixels[p + 1] = 150;
-        frame.image.pixels[p + 2] = uint8_t(60 + frame_id % 7);
-      }
+      fillFrame(rig_, camera, frame_id, {40, 150, uint8_t(60 + frame_id % 7)}, frame);
       return true;
     }
   }

@@ -34,6 +34,13 @@ std::vector<CameraFrame> nodeSet(const Rig& rig, int node, int64_t f) {
   return set;
 }
 
+// Offers a node's frames as its capture loop does: by pointer.
+void offerSet(TakeRecorder& recorder, int64_t f, const std::vector<CameraFrame>& set) {
+  std::vector<const CameraFrame*> frames;
+  for (const CameraFrame& frame : set) frames.push_back(&frame);
+  recorder.offer(f, frames);
+}
+
 // Waits (at most 10 s) until the recorder has closed its take.
 TakeStatusData finished(const TakeRecorder& recorder) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
@@ -60,7 +67,7 @@ TEST(Take, NodesRecordTheAskedFramesAndTheirPartsMergeBitExact) {
     }
     for (int n = 0; n < 3; ++n) {
       if (!nodes[n] || (n == 2 && f == 8)) continue;  // node3's cameras lost frame 8
-      nodes[n]->offer(f, nodeSet(rig, n, f));
+      offerSet(*nodes[n], f, nodeSet(rig, n, f));
     }
   }
   const int written[3] = {3, 10, 9};  // node1 since its restart
@@ -140,7 +147,7 @@ TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
   // Started without a takes folder.
   TakeRecorder nowhere({}, rig, "node1", 30.0);
   nowhere.command({"take-1", 0});
-  nowhere.offer(0, nodeSet(rig, 0, 0));
+  offerSet(nowhere, 0, nodeSet(rig, 0, 0));
   EXPECT_EQ(nowhere.status().error, "this node records no takes: start it with --takes FOLDER");
   EXPECT_TRUE(nowhere.status().finished);
   EXPECT_EQ(nowhere.status().written, 0);
@@ -151,7 +158,7 @@ TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
   std::ofstream(old / "keep.txt") << "an earlier take";
   TakeRecorder taken(folder / "takes", rig, "node1", 30.0);
   taken.command({"take-1", 0});
-  taken.offer(0, nodeSet(rig, 0, 0));
+  offerSet(taken, 0, nodeSet(rig, 0, 0));
   const TakeStatusData status = taken.status();
   EXPECT_NE(status.error.find(old.string()), std::string::npos) << status.error;
   EXPECT_TRUE(status.finished);
@@ -161,14 +168,14 @@ TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
   // so only once what was queued is on the disk.
   TakeRecorder recorder(folder / "takes", rig, "node2", 30.0);
   recorder.command({"a", 0});
-  for (int64_t f = 0; f < 4; ++f) recorder.offer(f, nodeSet(rig, 1, f));
+  for (int64_t f = 0; f < 4; ++f) offerSet(recorder, f, nodeSet(rig, 1, f));
   recorder.command({"b", 0});
   EXPECT_EQ(recorder.status().take, "b");
   EXPECT_EQ(recorder.status().written, 0);
-  for (int64_t f = 4; f < 6; ++f) recorder.offer(f, nodeSet(rig, 1, f));
+  for (int64_t f = 4; f < 6; ++f) offerSet(recorder, f, nodeSet(rig, 1, f));
   recorder.command({});
   EXPECT_TRUE(finished(recorder).finished);
-  recorder.offer(6, nodeSet(rig, 1, 6));
+  offerSet(recorder, 6, nodeSet(rig, 1, 6));
   EXPECT_EQ(SessionReader(folder / "takes" / "a" / "node2").frameCount(), 4);
   EXPECT_EQ(SessionReader(folder / "takes" / "b" / "node2").frameCount(), 2);
 
@@ -178,14 +185,14 @@ TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
   // (node restarted too: a second part was written beside the first, and the merge joined them).
   TakeRecorder third(folder / "takes", rig, "node3", 30.0);
   third.command({"c", 0, 2});  // stopped after frame 2, as the studio stops a take
-  for (int64_t f = 0; f < 4; ++f) third.offer(f, nodeSet(rig, 2, f));
+  for (int64_t f = 0; f < 4; ++f) offerSet(third, f, nodeSet(rig, 2, f));
   EXPECT_TRUE(finished(third).error.empty());
   for (int restarted = 0; restarted < 2; ++restarted) {
     SCOPED_TRACE(restarted);
     TakeRecorder fresh(folder / "takes", rig, "node3", 30.0);
     TakeRecorder& node = restarted ? fresh : third;
     node.command({"c", 100});
-    for (int64_t f = 100; f < 103; ++f) node.offer(f, nodeSet(rig, 2, f));
+    for (int64_t f = 100; f < 103; ++f) offerSet(node, f, nodeSet(rig, 2, f));
     const TakeStatusData again = finished(node);
     EXPECT_NE(again.error.find("a take named c was recorded"), std::string::npos) << again.error;
     EXPECT_NE(again.error.find("from frame 0: this one (from frame 100) needs another name"),
@@ -209,7 +216,7 @@ TEST(Take, AMergeCutShortLeavesNothingUnderItsName) {
     nodes.push_back(std::make_unique<TakeRecorder>(folder / "takes", rig, node.name, 30.0));
   for (auto& node : nodes) node->command({"t", 0, 4});
   for (int64_t f = 0; f < 6; ++f)
-    for (int n = 0; n < 3; ++n) nodes[n]->offer(f, nodeSet(rig, n, f));
+    for (int n = 0; n < 3; ++n) offerSet(*nodes[n], f, nodeSet(rig, n, f));
   for (auto& node : nodes) ASSERT_TRUE(finished(*node).error.empty());
   std::vector<fs::path> parts;
   for (const RigNode& node : rig.nodes()) parts.push_back(folder / "takes" / "t" / node.name);

@@ -5,6 +5,7 @@
 // the actor's true joints, and the sampler's inputs for a node's cameras.
 #include <vector>
 
+#include "core/base/resource_path.h"
 #include "core/body/human_model.h"
 #include "core/body/joint_pose_fit.h"
 #include "core/refine/refinement_sampler.h"
@@ -21,9 +22,10 @@ struct ReferenceFrame {
   JointPoseFit fit;
   Eigen::Matrix3Xf positions, normals;  // the generic human posed on the true joints
 
-  // `studio` with its actor at about 4000 vertices; `learn_screens`: the keyers learn the screen
-  // from the frame, as nodes do.
-  ReferenceFrame(StudioConfig studio, bool learn_screens) : config(std::move(studio)) {
+  // The reference studio with its actor at about 4000 vertices; `learn_screens`: the keyers learn
+  // the screen from the frame, as nodes do.
+  explicit ReferenceFrame(bool learn_screens)
+      : config(loadStudioConfig(resourcePath("studio/reference.yaml"))) {
     config.actor.target_vertices = 4000;
     VirtualStudio virtual_studio(config, 30);
     virtual_studio.renderFrame(20, frame);
