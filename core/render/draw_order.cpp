@@ -5,11 +5,11 @@
 
 namespace lumistage {
 
-void DrawOrder::build(int n, std::span<const Eigen::Vector3i> triangles) {
+bool DrawOrder::build(int n, std::span<const Eigen::Vector3i> triangles) {
   if (n == source_vertices_ && triangles.size() == source_.size() &&
       (triangles.empty() ||
        !std::memcmp(triangles.data(), source_.data(), triangles.size() * sizeof(Eigen::Vector3i))))
-    return;
+    return false;
   source_.assign(triangles.begin(), triangles.end());
   source_vertices_ = n;
   // Each vertex's triangles (compressed rows).
@@ -92,6 +92,7 @@ void DrawOrder::build(int n, std::span<const Eigen::Vector3i> triangles) {
   }
   for (int v = 0; v < n; ++v)
     if (number[v] < 0) order_.push_back(v);
+  return true;
 }
 
 }  // namespace lumistage

@@ -21,8 +21,8 @@ class DrawOrder {
   static constexpr int kPatch = 512;  // triangles; of 64 to 2048 tried, the fewest invocations
 
   // Triangles with an index outside [0, vertex_count) are left out. Rebuilt only when the
-  // triangles or the vertex count differ from the last call's.
-  void build(int vertex_count, std::span<const Eigen::Vector3i> triangles);
+  // triangles or the vertex count differ from the last call's; returns whether it was.
+  bool build(int vertex_count, std::span<const Eigen::Vector3i> triangles);
 
   // The draw's vertex k is the mesh's vertex order()[k]; vertices no triangle uses come last.
   const std::vector<int>& order() const { return order_; }

@@ -166,7 +166,7 @@ void LumigraphRenderer::upload(const Eigen::Matrix3Xf& positions, const Eigen::M
     }
   }
   // Drawn in an order that shades each vertex about once (DrawOrder).
-  draw_order_.build(n, triangles);
+  const bool new_order = draw_order_.build(n, triangles);
   const std::vector<int>& order = draw_order_.order();
   triangles = draw_order_.triangles();
   vertices_.resize(size_t(kVertexFloats) * n);
@@ -194,11 +194,14 @@ void LumigraphRenderer::upload(const Eigen::Matrix3Xf& positions, const Eigen::M
   glBufferSubData(GL_ARRAY_BUFFER, 0, vertex_bytes, vertices_.data());
   static_assert(sizeof(Eigen::Vector3i) == 3 * sizeof(GLuint));
   const GLsizeiptr index_bytes = GLsizeiptr(triangles.size() * sizeof(Eigen::Vector3i));
-  if (index_bytes > index_capacity_) {
+  // The indices change with the topology alone (the element buffer is the vertex array's).
+  const bool grown = index_bytes > index_capacity_;
+  if (grown) {
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, index_bytes, nullptr, GL_STATIC_DRAW);
     index_capacity_ = index_bytes;
   }
-  if (index_bytes > 0) glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, index_bytes, triangles.data());
+  if (index_bytes > 0 && (new_order || grown))
+    glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, index_bytes, triangles.data());
   index_count_ = static_cast<GLsizei>(triangles.size() * 3);
   glBindBuffer(GL_ARRAY_BUFFER, visibility_buffer_);
   const GLsizeiptr visibility_bytes = GLsizeiptr(visibility.size() * sizeof(uint16_t));
