@@ -1,17 +1,11 @@
 #include "core/render/draw_order.h"
 
-#include <cstring>
 #include <deque>
 
 namespace lumistage {
 
 bool DrawOrder::build(int n, std::span<const Eigen::Vector3i> triangles) {
-  if (n == source_vertices_ && triangles.size() == source_.size() &&
-      (triangles.empty() ||
-       !std::memcmp(triangles.data(), source_.data(), triangles.size() * sizeof(Eigen::Vector3i))))
-    return false;
-  source_.assign(triangles.begin(), triangles.end());
-  source_vertices_ = n;
+  if (!built_for_.changed(n, triangles)) return false;
   // Each vertex's triangles (compressed rows).
   std::vector<int> first(size_t(n) + 1, 0), used;
   const int count = static_cast<int>(triangles.size());

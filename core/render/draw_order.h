@@ -4,6 +4,8 @@
 #include <span>
 #include <vector>
 
+#include "core/render/topology_key.h"
+
 namespace lumistage {
 
 // An order to draw a triangle mesh in so that each vertex is shaded about once. Mesa llvmpipe
@@ -30,8 +32,7 @@ class DrawOrder {
   const std::vector<Eigen::Vector3i>& triangles() const { return triangles_; }
 
  private:
-  std::vector<Eigen::Vector3i> source_;
-  int source_vertices_ = -1;
+  TopologyKey built_for_;
   std::vector<int> order_;
   std::vector<Eigen::Vector3i> triangles_;
 };

@@ -1,14 +1,11 @@
 #include "core/render/phong_subdivision.h"
 
 #include <algorithm>
-#include <cstring>
 #include <unordered_map>
 
 namespace lumistage {
 
 void PhongSubdivision::buildTopology(int n, std::span<const Eigen::Vector3i> triangles) {
-  source_.assign(triangles.begin(), triangles.end());
-  source_vertices_ = n;
   edges_.clear();
   triangles_.clear();
   std::unordered_map<uint64_t, int> middle;
@@ -34,10 +31,7 @@ void PhongSubdivision::subdivide(const Eigen::Matrix3Xf& positions, const Eigen:
                                  std::span<const Eigen::Vector3i> triangles,
                                  std::span<const uint16_t> masks) {
   const int n = static_cast<int>(positions.cols());
-  if (n != source_vertices_ || triangles.size() != source_.size() ||
-      (!triangles.empty() &&
-       std::memcmp(triangles.data(), source_.data(), triangles.size() * sizeof(Eigen::Vector3i))))
-    buildTopology(n, triangles);
+  if (built_for_.changed(n, triangles)) buildTopology(n, triangles);
   const Eigen::Index total = n + static_cast<Eigen::Index>(edges_.size());
   if (positions_.cols() != total) positions_.resize(3, total);
   if (normals_.cols() != total) normals_.resize(3, total);

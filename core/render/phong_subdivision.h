@@ -5,6 +5,8 @@
 #include <span>
 #include <vector>
 
+#include "core/render/topology_key.h"
+
 namespace lumistage {
 
 // One step of Phong tessellation (Boubekeur & Alexa 2008) on the CPU, for rendering a coarse mesh
@@ -36,8 +38,7 @@ class PhongSubdivision {
  private:
   void buildTopology(int vertex_count, std::span<const Eigen::Vector3i> triangles);
 
-  std::vector<Eigen::Vector3i> source_;  // the triangles the topology was built for
-  int source_vertices_ = -1;
+  TopologyKey built_for_;               // the triangles the topology was built for
   std::vector<Eigen::Vector2i> edges_;  // middle k is vertex vertex_count + k
   Eigen::Matrix3Xf positions_, normals_;
   std::vector<Eigen::Vector3i> triangles_;
