@@ -189,24 +189,12 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   std::vector<int64_t> last_id(cameras_.size(), -1);
   std::vector<uint8_t> told_silent(cameras_.size(), 0), live(cameras_.size(), 0);
   // A camera whose frames come more than kSilentFrames late (a loaded PC) rather than not at all:
-  // the sets went out without it, and the take, which records whole sets only, waits up to
-  // kLateFrames for its frames (the sets after wait behind, the index needs increasing ids).
-  // It is said to deliver nothing only after kTellSilentAfter without a frame; lateness is said
-  // at most every kTellLateEvery.
-  constexpr int64_t kLateFrames = 30;
+  // the sets went out without it, and the take waits for its frames (TakeBacklog). It is said to
+  // deliver nothing only after kTellSilentAfter without a frame; lateness is said at most every
+  // kTellLateEvery.
   constexpr auto kTellSilentAfter = std::chrono::seconds(1),
                  kTellLateEvery = std::chrono::seconds(10);
-  struct ForTake {
-    std::shared_ptr<Set> set;
-    std::vector<CameraFrame> late;  // per own camera: its frame, come after the set went out
-    bool complete() const {
-      for (size_t c = 0; c < late.size(); ++c)
-        if (!set->has(c) && late[c].frame_id != set->frame_id) return false;
-      return true;
-    }
-  };
-  std::deque<ForTake> for_take;
-  std::vector<const CameraFrame*> take_frames;
+  TakeBacklog for_take(takes_, *frame_pool_, cameras_.size());
   std::vector<std::chrono::steady_clock::time_point> delivered(cameras_.size());
   std::vector<int64_t> sets_without(cameras_.size(), 0);
   auto told_late_at = std::chrono::steady_clock::now();  // counted since
@@ -215,28 +203,6 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   std::array<int64_t, kSilentFrames + 1> recent_ids{};
   int64_t recent_count = 0;
   CameraFrame frame;
-  // A set to the take: its own frames, and `late` ones (per own camera) where it has none.
-  const auto offerSet = [&](const Set& set, const std::vector<CameraFrame>& late) {
-    take_frames.clear();
-    for (size_t c = 0; c < cameras_.size(); ++c)
-      take_frames.push_back(set.has(c) ? &set.frames[c] : &late[c]);
-    takes_.offer(set.frame_id, take_frames);
-  };
-  // The sets waiting for the take that are complete now, in order; those whose late frames did
-  // not come within kLateFrames (or at all, `all`: the ids restart, the capture ends) are left out
-  // of it.
-  const auto offerForTake = [&](bool all) {
-    while (!for_take.empty()) {
-      ForTake& front = for_take.front();
-      if (front.complete()) {
-        offerSet(*front.set, front.late);
-      } else if (!all && front.set->frame_id >= newest - kLateFrames) {
-        return;
-      }
-      frame_pool_->give(front.late);
-      for_take.pop_front();
-    }
-  };
   // Every camera silent (no set goes out, so the per-camera warning below never comes): said once
   // after kAllSilent, and again when frames come back.
   constexpr auto kAllSilent = std::chrono::seconds(2);
@@ -290,23 +256,16 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       recent_ids[recent_count++] = newest;
       std::fill(last_id.begin(), last_id.end(), -1);
       assembling.clear();  // the old ids' sets would outlast every new one (lowest go first)
-      offerForTake(true);
+      for_take.release(newest, true);
     }
     delivered[k] = now;
-    // The late frame of a set that went out without it: for the take.
-    if (!for_take.empty() && frame.frame_id >= for_take.front().set->frame_id) {
-      const auto waiting = std::find_if(for_take.begin(), for_take.end(), [&](const ForTake& t) {
-        return t.set->frame_id == frame.frame_id;
-      });
-      if (waiting != for_take.end() && !waiting->set->has(k)) {
-        // Late, not gone: counted as delivered, so that a camera that is always last (a slower
-        // link) is awaited again once it keeps up.
-        last_id[k] = std::max(last_id[k], frame.frame_id);
-        std::swap(waiting->late[k], frame);
-        frame_pool_->take(frame);
-        offerForTake(false);
-        continue;
-      }
+    // The late frame of a set that went out without it: for the take. Late, not gone: counted as
+    // delivered, so that a camera that is always last (a slower link) is awaited again once it
+    // keeps up.
+    if (const int64_t id = frame.frame_id; for_take.catchLate(frame, size_t(k))) {
+      last_id[k] = std::max(last_id[k], id);
+      for_take.release(newest, false);
+      continue;
     }
     std::shared_ptr<Set>& set = assembling[frame.frame_id];
     if (!set) {
@@ -385,22 +344,58 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       else if (whole && s.frame_id % kScreenRetrySets == 0)
         checkScreens(s);
       s.keyers = published_keyers_;
-      // And takes recorded: a whole set at once, unless one before it waits for a late frame; one
-      // without a late camera waits for its frame while a take wants it (one without a silent
-      // camera cannot be recorded: a take's sets are whole).
-      if (whole && for_take.empty()) {
-        offerSet(s, {});
-      } else if (whole || (late_only && takes_.wants(s.frame_id))) {
-        for_take.push_back({it->second, std::vector<CameraFrame>(whole ? 0 : cameras_.size())});
-      }
+      for_take.add(it->second, whole, late_only);
       sets_.push(it->second);
       it = assembling.erase(it);
     }
     while (assembling.size() > 4) assembling.erase(assembling.begin());  // a camera fell behind
-    offerForTake(false);  // those that waited long enough
+    for_take.release(newest, false);  // those that waited long enough
   }
-  offerForTake(true);
+  for_take.release(newest, true);
   source_finished_ = true;
+}
+
+void CameraNode::TakeBacklog::add(const std::shared_ptr<Set>& set, bool whole, bool late_only) {
+  if (whole && waiting_.empty()) {
+    offer(*set, {});
+  } else if (whole || (late_only && takes_.wants(set->frame_id))) {
+    waiting_.push_back({set, std::vector<CameraFrame>(whole ? 0 : cameras_)});
+  }
+}
+
+bool CameraNode::TakeBacklog::catchLate(CameraFrame& frame, size_t k) {
+  if (waiting_.empty() || frame.frame_id < waiting_.front().set->frame_id) return false;
+  const auto it = std::find_if(waiting_.begin(), waiting_.end(),
+                               [&](const Waiting& w) { return w.set->frame_id == frame.frame_id; });
+  if (it == waiting_.end() || it->set->has(k)) return false;
+  std::swap(it->late[k], frame);
+  pool_.take(frame);
+  return true;
+}
+
+void CameraNode::TakeBacklog::release(int64_t newest, bool all) {
+  while (!waiting_.empty()) {
+    Waiting& front = waiting_.front();
+    if (front.complete()) {
+      offer(*front.set, front.late);
+    } else if (!all && front.set->frame_id >= newest - kLateFrames) {
+      return;
+    }
+    pool_.give(front.late);
+    waiting_.pop_front();
+  }
+}
+
+bool CameraNode::TakeBacklog::Waiting::complete() const {
+  for (size_t c = 0; c < late.size(); ++c)
+    if (!set->has(c) && late[c].frame_id != set->frame_id) return false;
+  return true;
+}
+
+void CameraNode::TakeBacklog::offer(const Set& set, const std::vector<CameraFrame>& late) {
+  frames_.clear();
+  for (size_t c = 0; c < cameras_; ++c) frames_.push_back(set.has(c) ? &set.frames[c] : &late[c]);
+  takes_.offer(set.frame_id, frames_);
 }
 
 void CameraNode::FramePool::give(std::vector<CameraFrame>& frames) {

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -112,6 +113,40 @@ class CameraNode {
   };
   // A new set whose frames go back to the pool when it is released.
   std::shared_ptr<Set> newSet();
+  // The capture thread's sets on their way to the take, which records whole sets only, in
+  // increasing ids: a whole set goes at once, unless one before it still waits; a set that went
+  // out without a late camera's frame (its PC loaded, not the camera gone) waits for that frame up
+  // to kLateFrames newer ids, and the sets after it wait behind it.
+  class TakeBacklog {
+   public:
+    static constexpr int64_t kLateFrames = 30;
+    TakeBacklog(TakeRecorder& takes, FramePool& pool, size_t cameras)
+        : takes_(takes), pool_(pool), cameras_(cameras) {}
+    // A set gone out: `whole`, or without cameras that are late only (`late_only`; one without a
+    // silent camera cannot be recorded).
+    void add(const std::shared_ptr<Set>& set, bool whole, bool late_only);
+    // Own camera k's `frame`, when a waiting set went out without it: kept for the take, `frame`
+    // given spare buffers, and true.
+    bool catchLate(CameraFrame& frame, size_t k);
+    // The waiting sets that are complete now, to the take in order; those still incomplete
+    // kLateFrames behind `newest` (or any, `all`: the ids restart, the capture ends) are left out.
+    void release(int64_t newest, bool all);
+
+   private:
+    struct Waiting {
+      std::shared_ptr<Set> set;
+      std::vector<CameraFrame> late;  // per own camera: its frame, come after the set went out
+      bool complete() const;
+    };
+    // A set to the take: its own frames, and `late` ones (per own camera) where it has none.
+    void offer(const Set& set, const std::vector<CameraFrame>& late);
+
+    TakeRecorder& takes_;
+    FramePool& pool_;
+    const size_t cameras_;
+    std::deque<Waiting> waiting_;
+    std::vector<const CameraFrame*> frames_;  // a set's, reused
+  };
 
   void captureLoop(const std::atomic<bool>& stop);
   void silhouetteLoop(const std::atomic<bool>& stop);
