@@ -7,6 +7,7 @@
 in float v_weight[kOwnCameras];
 in vec2 v_texel[kOwnCameras];
 in float v_total;
+in float v_despill[kOwnCameras];  // how far to limit each own camera's green (its spill), 0 to 1
 
 uniform sampler2DArray images;
 uniform vec2 texel_scale;  // image texel to texture coordinate of `images`
@@ -35,6 +36,7 @@ void main() {
     float w = v_weight[j];
     if (w <= 0.0) continue;
     vec3 c = sampleImage(v_texel[j], j);
+    c.g = mix(c.g, min(c.g, max(c.r, c.b)), v_despill[j]);
     unmasked += w;
     float m = 1.0;
     // The colour is normalised by the weights, so a partly masked camera would still colour a

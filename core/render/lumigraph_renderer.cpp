@@ -379,6 +379,7 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform1f(p.uniform("min_facing"), params_.min_facing);
   glUniform1f(p.uniform("max_angle"), params_.max_angle_rad);
   glUniform1f(p.uniform("epsilon"), params_.epsilon_rad);
+  glUniform1f(p.uniform("despill_angle"), params_.despill_angle_rad);
   // A camera's pixel to its mask's texture coordinate: the mask's cells cover the camera's image.
   mask_scales_.resize(own_.size());
   for (size_t j = 0; j < own_.size(); ++j) {

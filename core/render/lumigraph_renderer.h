@@ -42,6 +42,16 @@ struct LumigraphParams {
   // the refined generic human +0.2 dB over the actor's mask and +0.1 to +0.2 dB over the matte
   // (docs/lumigraph.md). Off for meshes finely tessellated already (the true surface).
   bool phong_subdivision = true;
+  // Suppresses the screen's green spill in the colours of the cameras that look from elsewhere
+  // than the desired camera, as keyers do: a camera's green at most the larger of its red and
+  // blue, fully where the rays to the desired and to the input camera are this far apart, not at
+  // all where they coincide (the spill a camera sees at its grazing angles is its own view's: a
+  // desired camera on an input camera still gives that camera's image, spill and all); 0: off.
+  // The screen's light on the actor's edges, and the screen itself where a camera sees past a mesh
+  // a little too wide (between the legs), was blended into other views as green fringes and
+  // patches. An actor on a green screen wears no green, which would key as the screen.
+  // Leave-one-out +0.01 to +0.07 dB over the actor's mask and the matte alike (docs/lumigraph.md).
+  float despill_angle_rad = 0.17f;
 };
 
 // Unstructured lumigraph rendering on the GPU (or Mesa llvmpipe), through an offscreen OpenGL 4.3

@@ -106,7 +106,11 @@ TEST_F(LumigraphRendererTest, BayerImagesAreSampledAsTheirCellsColours) {
   for (PixelFormat format : {PixelFormat::kBayerRggb8, PixelFormat::kBayerGbrg8}) {
     std::vector<int> all;
     for (int c = 0; c < rig().cameraCount(); ++c) all.push_back(c);
-    LumigraphRenderer renderer(rig(), all);
+    // The sampling alone: the pattern's waves make green the largest colour in places, which the
+    // despill would limit where the other cameras colour the rim.
+    LumigraphParams params;
+    params.despill_angle_rad = 0;
+    LumigraphRenderer renderer(rig(), all, params);
     renderer.setMesh(frame_->surface.positions, frame_->surface.normals, frame_->surface.triangles);
     for (int c = 0; c < rig().cameraCount(); ++c) {
       const Camera& camera = rig().camera(c);
@@ -152,6 +156,64 @@ TEST_F(LumigraphRendererTest, BayerImagesAreSampledAsTheirCellsColours) {
     EXPECT_LT(error / (3 * pixels), 1.0) << int(format);
     EXPECT_LT(double(far_off) / (3 * pixels), 0.01) << int(format);
   }
+}
+
+// The screen's green spill: every camera's image a greenish grey (green above red and blue, as
+// the screen's light makes the actor's edges). Seen from an input camera, the view keeps that
+// camera's colour, spill and all; seen from elsewhere (the camera left out, or a view between
+// cameras), green is limited to the larger of red and blue; with the despill off, it is not.
+TEST_F(LumigraphRendererTest, SpillIsKeptFromAnInputCameraAndLimitedFromElsewhere) {
+  const std::array<uint8_t, 4> spilled = {90, 150, 70, 255};
+  const auto render = [&](float despill_angle, const Camera& view, int left_out) {
+    std::vector<int> all;
+    for (int c = 0; c < rig().cameraCount(); ++c) all.push_back(c);
+    LumigraphParams params;
+    params.despill_angle_rad = despill_angle;
+    LumigraphRenderer renderer(rig(), all, params);
+    renderer.setMesh(frame_->surface.positions, frame_->surface.normals, frame_->surface.triangles);
+    for (int c = 0; c < rig().cameraCount(); ++c) {
+      const Camera& camera = rig().camera(c);
+      std::vector<uint8_t> rgba(size_t(camera.width()) * camera.height() * 4);
+      for (size_t i = 0; i < rgba.size(); i += 4)
+        std::copy(spilled.begin(), spilled.end(), &rgba[i]);
+      renderer.setImageRgba(c, rgba.data(), camera.width(), camera.height());
+    }
+    std::vector<bool> active(size_t(rig().cameraCount()), true);
+    if (left_out >= 0) active[size_t(left_out)] = false;
+    renderer.setActive(active);
+    std::vector<uint8_t> rendered;
+    renderer.render(view, rendered);
+    // The drawn pixels' mean red, green and blue.
+    std::array<double, 3> mean = {0, 0, 0};
+    int64_t drawn = 0;
+    for (size_t i = 0; i < rendered.size(); i += 4) {
+      if (rendered[i + 3] == 0) continue;
+      ++drawn;
+      for (int k = 0; k < 3; ++k) mean[k] += rendered[i + k];
+    }
+    EXPECT_GT(drawn, 5000);
+    for (double& m : mean) m /= double(std::max<int64_t>(drawn, 1));
+    return mean;
+  };
+  const float on = LumigraphParams().despill_angle_rad;
+  ASSERT_GT(on, 0.0f);
+  const Camera& input = rig().camera(4);
+  for (const auto& [view, left_out] : {std::pair{input, -1}, std::pair{input, 4}}) {
+    const std::array<double, 3> despilled = render(on, view, left_out);
+    const std::array<double, 3> kept = render(0, view, left_out);
+    SCOPED_TRACE(left_out < 0 ? "from the input camera" : "from the input camera, left out");
+    EXPECT_NEAR(kept[1], 150, 1.0);
+    EXPECT_NEAR(despilled[0], 90, 1.0);
+    EXPECT_NEAR(despilled[2], 70, 1.0);
+    if (left_out < 0) {
+      // The camera's own view: its spill is what it sees (the rim it does not see, a few per cent
+      // of the pixels, is the other cameras', despilled).
+      EXPECT_GT(despilled[1], 145);
+    } else {
+      EXPECT_NEAR(despilled[1], 90, 1.0);  // the others' spill is theirs
+    }
+  }
+  EXPECT_NEAR(render(on, desiredView(), -1)[1], 90, 1.0);
 }
 
 // A monochrome camera's picture is grey, pixel by pixel: rendered from that camera, every drawn
@@ -392,8 +454,8 @@ TEST_F(LumigraphRendererTest, AViewTooLargeForTheDeviceIsRefused) {
   auto renderer = makeRenderer();
   std::vector<uint8_t> before, after;
   renderer->render(desiredView(), before);
-  const Camera huge("huge", 100000, 10, {400, 400, 49999.5, 4.5, 0}, {},
-                    desiredView().rotation(), desiredView().translation());
+  const Camera huge("huge", 100000, 10, {400, 400, 49999.5, 4.5, 0}, {}, desiredView().rotation(),
+                    desiredView().translation());
   const std::string message = testing::errorOf([&] { renderer->render(huge, after); });
   EXPECT_NE(message.find("a view of 100000x10 pixels: this OpenGL device draws 1 to"),
             std::string::npos)
