@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 
 #include "app/cli/checks.h"
@@ -15,6 +18,7 @@
 #include "core/eval/mocap_eval.h"
 #include "core/eval/segmentation_eval.h"
 #include "core/eval/surface_metrics.h"
+#include "core/eval/view_metrics.h"
 #include "core/pipeline/posed_body.h"
 #include "core/refine/frame_refiner.h"
 #include "core/render/egl_context.h"
@@ -23,6 +27,8 @@
 namespace lumistage {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 // `count` frame indices spread evenly over [0, total), each in the middle of its share, without
 // repeats.
@@ -46,9 +52,11 @@ constexpr int kWarmFrames = 4;
 // score: nothing of the view it renders went into its geometry; loo_psnr_db_strict), on that mesh
 // unrefined, with each vertex at its best offset (what a refinement could reach on the tracked
 // mesh), and on the true surface (the upper bound).
+// With `pictures` given, every refined view is also written there beside the camera's image and
+// their error map (comparisonPicture), as <frame id>_<camera>.png.
 void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
                     const MocapEvalResult& tracked, const RefineConfig& refine, int frame_count,
-                    EvalReport& report) {
+                    const fs::path& pictures, EvalReport& report) {
   const int total = std::min<int>(session.frameCount(), static_cast<int>(tracked.poses.size()));
   std::vector<int> frames;
   for (int i : spreadFrames(total, frame_count))
@@ -113,7 +121,24 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     mesh.computeNormals();
     return mesh;
   };
-  const LeaveOneOutSummary refined = evaluateLeaveOneOut(session, frames, refined_mesh);
+  ComparisonPicture picture;
+  std::vector<uint8_t> encoded;
+  cv::Mat bgr;
+  const LeaveOneOutViewSink write_picture = [&](int i, int c, std::span<const uint8_t> rendered,
+                                                std::span<const uint8_t> image,
+                                                std::span<const uint8_t> mask) {
+    const Camera& camera = session.rig().camera(c);
+    comparisonPicture(rendered, image, mask, camera.width(), camera.height(), picture);
+    const cv::Mat rgb(picture.height, picture.width, CV_8UC3, picture.rgb.data());
+    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+    const fs::path file = pictures / fmt::format("{:06}_{}.png", session.frameId(i), camera.name());
+    if (!cv::imencode(".png", bgr, encoded)) throw Error(file.string() + ": cannot encode");
+    writeFileAtomically(
+        file, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()));
+  };
+  const LeaveOneOutSummary refined =
+      evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerFrame, {},
+                          pictures.empty() ? LeaveOneOutViewSink() : write_picture);
   // Strict: camera c's view rendered on a mesh refined without camera c's image.
   const LeaveOneOutSummary strict =
       evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerLeftOutCamera);
@@ -149,7 +174,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
 
 void addEvalCommand(CLI::App& app) {
   struct Args {
-    std::string session, json, config;
+    std::string session, json, config, loo_pictures;
     int cameras = 0, frames = 0, loo_frames = 3;
     bool quiet = false;
   };
@@ -170,10 +195,15 @@ void addEvalCommand(CLI::App& app) {
                    "frames of the leave-one-camera-out rendering score, spread over the session; "
                    "0: none")
       ->capture_default_str();
+  eval->add_option("--loo-pictures", args->loo_pictures,
+                   "folder to write every scored view into, beside the camera's image and their "
+                   "error map (<frame>_<camera>.png)");
   eval->add_flag("--quiet", args->quiet, "no report on standard output");
   eval->callback([args] {
     refuseOutputOverInputs("--json", args->json, {{"--session", args->session}});
     requireOutputFolder("--json", args->json);
+    refuseOutputOverInputs("--loo-pictures", args->loo_pictures, {{"--session", args->session}});
+    if (!args->loo_pictures.empty()) fs::create_directories(args->loo_pictures);
     const SessionReader session(args->session);
     if (!session.hasTruth())
       throw Error(args->session + ": no ground truth (truth/) to evaluate against");
@@ -202,7 +232,8 @@ void addEvalCommand(CLI::App& app) {
     SurfaceEvaluationOptions surface;
     if (!args->config.empty()) surface.refine = loadStudioConfig(args->config).refine;
     if (args->loo_frames > 0)
-      addLeaveOneOut(session, generic, tracked, surface.refine, args->loo_frames, report);
+      addLeaveOneOut(session, generic, tracked, surface.refine, args->loo_frames,
+                     args->loo_pictures, report);
 
     // Refinement: the generic human posed by a fit to the true joints, refined from the images,
     // both measured against the true surface.

@@ -51,7 +51,8 @@ TriangleMesh truthSurface(const SessionReader& session, int i) {
 
 LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::vector<int>& frames,
                                        const std::function<TriangleMesh(int, int)>& mesh_for,
-                                       LeaveOneOutMeshes meshes, const LumigraphParams& params) {
+                                       LeaveOneOutMeshes meshes, const LumigraphParams& params,
+                                       const LeaveOneOutViewSink& views) {
   const Rig& rig = session.rig();
   const int n = rig.cameraCount();
   std::vector<int> all(n);
@@ -61,6 +62,7 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
   std::vector<ScoreMean> per_camera(n);
   std::vector<CameraFrame> images;
   std::vector<std::vector<uint8_t>> truth(n), masks(n);
+  std::vector<uint8_t> rendered;
   FrameInputs inputs;  // images and foreground masks, as the nodes give theirs
   for (int i : frames) {
     session.readFrame(i, images);
@@ -70,16 +72,14 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
       masks[c] = session.readTruthMask(c, i);
     }
     std::vector<ViewScore> scores;
-    if (meshes == LeaveOneOutMeshes::kOnePerFrame) {
-      const TriangleMesh mesh = mesh_for(i, -1);
-      renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
-      scores = leaveOneOut(renderer, rig, truth, masks);
-    } else {
-      for (int c = 0; c < n; ++c) {
-        const TriangleMesh mesh = mesh_for(i, c);
+    TriangleMesh mesh;
+    for (int c = 0; c < n; ++c) {
+      if (c == 0 || meshes == LeaveOneOutMeshes::kOnePerLeftOutCamera) {
+        mesh = mesh_for(i, meshes == LeaveOneOutMeshes::kOnePerFrame ? -1 : c);
         renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
-        scores.push_back(leaveOneOut(renderer, rig, truth, masks, c));
       }
+      scores.push_back(leaveOneOut(renderer, rig, truth, masks, c, &rendered));
+      if (views) views(i, c, rendered, truth[c], masks[c]);
     }
     for (int c = 0; c < n; ++c) per_camera[c].add(scores[c]);
     ++summary.frames;

@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cstdint>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "core/body/skinned_mesh.h"
@@ -23,14 +25,22 @@ struct LeaveOneOutSummary {
 // never saw camera c's image).
 enum class LeaveOneOutMeshes { kOnePerFrame, kOnePerLeftOutCamera };
 
+// Each view as it was scored: frame index, camera, the render (RGBA8), the camera's image (RGBA8)
+// and its truth mask, all of the camera's size.
+using LeaveOneOutViewSink =
+    std::function<void(int frame, int camera, std::span<const uint8_t> rendered,
+                       std::span<const uint8_t> truth, std::span<const uint8_t> mask)>;
+
 // For each frame index in `frames`, renders every camera's view from the other cameras on the
 // mesh `mesh_for` gives (the truth surface, the posed or the refined mesh; normals set) and
-// compares it with the camera's image over its truth mask. Needs a current OpenGL context
-// (EglContext). Throws Error naming the file when a mask cannot be read.
+// compares it with the camera's image over its truth mask; `views`, when given, sees every view.
+// Needs a current OpenGL context (EglContext). Throws Error naming the file when a mask cannot be
+// read.
 LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::vector<int>& frames,
                                        const std::function<TriangleMesh(int, int)>& mesh_for,
                                        LeaveOneOutMeshes meshes = LeaveOneOutMeshes::kOnePerFrame,
-                                       const LumigraphParams& params = {});
+                                       const LumigraphParams& params = {},
+                                       const LeaveOneOutViewSink& views = {});
 
 // The truth surface of frame index i (truth/surface/NNNNNN.ply, normals computed).
 TriangleMesh truthSurface(const SessionReader& session, int i);

@@ -1,6 +1,8 @@
 #include "core/eval/view_metrics.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 #include "core/base/error.h"
@@ -125,17 +127,69 @@ void imageToRgba(const ImageView& image, std::vector<uint8_t>& rgba) {
 
 ViewScore leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
                       const std::vector<std::vector<uint8_t>>& truth,
-                      const std::vector<std::vector<uint8_t>>& masks, int left_out) {
+                      const std::vector<std::vector<uint8_t>>& masks, int left_out,
+                      std::vector<uint8_t>* rendered) {
   const int n = rig.cameraCount();
   std::vector<bool> active(n, true);
   active.at(left_out) = false;
   renderer.setActive(active);
   const Camera& camera = rig.camera(left_out);
-  std::vector<uint8_t> rendered;
-  renderer.render(camera, rendered);
+  std::vector<uint8_t> own;
+  std::vector<uint8_t>& view = rendered ? *rendered : own;
+  renderer.render(camera, view);
   renderer.setActive(std::vector<bool>(n, true));
-  return compareOverMask(rendered, truth.at(left_out), masks.at(left_out), camera.width(),
+  return compareOverMask(view, truth.at(left_out), masks.at(left_out), camera.width(),
                          camera.height());
+}
+
+void comparisonPicture(std::span<const uint8_t> rendered, std::span<const uint8_t> truth,
+                       std::span<const uint8_t> mask, int width, int height,
+                       ComparisonPicture& picture) {
+  const size_t n = size_t(width) * height;
+  if (rendered.size() != n * 4 || truth.size() != n * 4 || mask.size() != n)
+    throw Error("comparisonPicture: images of " + std::to_string(width) + "x" +
+                std::to_string(height) + " RGBA8 and a one-byte mask expected");
+  int x0 = width, y0 = height, x1 = -1, y1 = -1;  // what holds the actor or was drawn
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = size_t(y) * width + x;
+      if (!mask[i] && rendered[4 * i + 3] == 0) continue;
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+  if (x1 < 0) {
+    x0 = y0 = 0, x1 = width - 1, y1 = height - 1;
+  } else {
+    constexpr int m = ComparisonPicture::kPictureMargin;
+    x0 = std::max(0, x0 - m), y0 = std::max(0, y0 - m);
+    x1 = std::min(width - 1, x1 + m), y1 = std::min(height - 1, y1 + m);
+  }
+  const int w = x1 - x0 + 1, h = y1 - y0 + 1;
+  picture.width = 3 * w;
+  picture.height = h;
+  picture.rgb.assign(size_t(picture.width) * h * 3, 0);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y + y0) * width + (x + x0);
+      uint8_t* out = &picture.rgb[(size_t(y) * picture.width + x) * 3];
+      uint8_t* image = out + size_t(w) * 3;
+      uint8_t* error = out + size_t(w) * 6;
+      const uint8_t* r = &rendered[4 * i];
+      const uint8_t* t = &truth[4 * i];
+      const bool drawn = r[3] != 0;
+      for (int k = 0; k < 3; ++k) {
+        out[k] = drawn ? r[k] : 0;
+        image[k] = t[k];
+      }
+      if (mask[i] && !drawn) {
+        error[0] = 255;
+      } else if (!mask[i] && drawn) {
+        error[1] = 128, error[2] = 255;
+      } else if (mask[i]) {
+        const int d = std::abs(r[0] - t[0]) + std::abs(r[1] - t[1]) + std::abs(r[2] - t[2]);
+        error[0] = error[1] = error[2] = uint8_t(std::min(255, 4 * d / 3));
+      }
+    }
+  }
 }
 
 std::vector<ViewScore> leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,

@@ -39,9 +39,26 @@ void imageToRgba(const ImageView& image, std::vector<uint8_t>& rgba);
 std::vector<ViewScore> leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
                                    const std::vector<std::vector<uint8_t>>& truth,
                                    const std::vector<std::vector<uint8_t>>& masks);
-// The same for camera `left_out` alone.
+// The same for camera `left_out` alone; the view rendered into `rendered` when given.
 ViewScore leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
                       const std::vector<std::vector<uint8_t>>& truth,
-                      const std::vector<std::vector<uint8_t>>& masks, int left_out);
+                      const std::vector<std::vector<uint8_t>>& masks, int left_out,
+                      std::vector<uint8_t>* rendered = nullptr);
+
+// A view beside the camera's image, for a person to see where it fails: three panels side by
+// side, RGB8 (rows top first): the render over black, the camera's image, and the error map: over
+// the actor's mask the mean absolute difference of the three channels, four times, in grey; red
+// where the mask has the actor and the render drew nothing; blue where the render drew beyond the
+// actor; black elsewhere. Each panel is the view cropped to the actor and what was drawn, with a
+// margin of kPictureMargin pixels (all of it when there is neither). Inputs as compareOverMask
+// takes them (throws Error for other sizes).
+struct ComparisonPicture {
+  static constexpr int kPictureMargin = 16;
+  int width = 0, height = 0;  // of the three panels together
+  std::vector<uint8_t> rgb;   // width * height * 3
+};
+void comparisonPicture(std::span<const uint8_t> rendered, std::span<const uint8_t> truth,
+                       std::span<const uint8_t> mask, int width, int height,
+                       ComparisonPicture& picture);
 
 }  // namespace lumistage

@@ -552,11 +552,22 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
   const fs::path folder = tempPath("eval"), session = folder / "session";
   ASSERT_TRUE(synthRingSession(folder, "--cameras 8 --width 640 --height 480",
                                "actor:\n  clothing: true\n  vertices: 2000\n", "--frames 8"));
-  const fs::path json = folder / "eval.json";
+  const fs::path json = folder / "eval.json", pictures = folder / "views";
   const Result r = run(kCli + " eval --session " + session.string() + " --loo-frames 1 --json " +
-                       json.string() + " --quiet");
+                       json.string() + " --loo-pictures " + pictures.string() + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string text = readFile(json);
+  // Every camera's scored view beside its image and their error map, cropped to the actor.
+  int pictures_written = 0;
+  for (const auto& entry : fs::directory_iterator(pictures)) {
+    const cv::Mat picture = cv::imread(entry.path().string());
+    ASSERT_FALSE(picture.empty()) << entry.path();
+    EXPECT_EQ(picture.cols % 3, 0) << entry.path();
+    EXPECT_LT(picture.cols, 3 * 640) << entry.path();
+    EXPECT_EQ(entry.path().extension(), ".png");
+    ++pictures_written;
+  }
+  EXPECT_EQ(pictures_written, 8);
   EXPECT_LT(reportNumber(text, "key_missed_pct"), 0.5) << text;
   EXPECT_EQ(reportNumber(text, "key_extra_pct"), 0.0) << text;
   EXPECT_EQ(reportNumber(text, "frames_tracked"), 8.0) << text;

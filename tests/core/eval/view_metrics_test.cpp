@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "core/base/error.h"
@@ -67,6 +68,54 @@ TEST(ViewMetrics, AViewWithoutTheActorIsNotScoredOverTheMask) {
 TEST(ViewMetrics, RefusesImagesOfAnotherSize) {
   const std::vector<uint8_t> mask(4, 1), image(16, 0), small(12, 0);
   EXPECT_THROW(compareOverMask(small, image, mask, 4, 1), Error);
+  ComparisonPicture picture;
+  EXPECT_THROW(comparisonPicture(small, image, mask, 4, 1, picture), Error);
+}
+
+// The picture a person looks at: the render, the camera's image and the error map side by side,
+// cropped to the actor and what was drawn, with a margin. In a 100x60 view the actor covers
+// x 40-49, y 20-29; the render draws x 42-51 (two columns beyond the actor, two missed), its
+// first drawn column 30 levels off.
+TEST(ViewMetrics, AComparisonPictureShowsTheErrorsWhereTheyAre) {
+  const int w = 100, h = 60, m = ComparisonPicture::kPictureMargin;
+  std::vector<uint8_t> mask(size_t(w) * h, 0), truth(size_t(w) * h * 4, 0),
+      rendered(size_t(w) * h * 4, 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      truth[4 * i + 1] = 200, truth[4 * i + 3] = 255;  // the screen
+      if (y < 20 || y > 29) continue;
+      if (x >= 40 && x <= 49) {
+        mask[i] = 255;
+        truth[4 * i] = 100, truth[4 * i + 1] = 100, truth[4 * i + 2] = 100;
+      }
+      if (x >= 42 && x <= 51) {
+        rendered[4 * i] = rendered[4 * i + 1] = rendered[4 * i + 2] = x == 42 ? 130 : 100;
+        rendered[4 * i + 3] = 255;
+      }
+    }
+  ComparisonPicture picture;
+  comparisonPicture(rendered, truth, mask, w, h, picture);
+  const int panel = (51 + m) - (40 - m) + 1;
+  ASSERT_EQ(picture.width, 3 * panel);
+  ASSERT_EQ(picture.height, (29 + m) - (20 - m) + 1);
+  ASSERT_EQ(picture.rgb.size(), size_t(picture.width) * picture.height * 3);
+  // The view's (x, y) in panel p (0 render, 1 image, 2 errors).
+  const auto at = [&](int p, int x, int y) {
+    const uint8_t* c =
+        &picture.rgb[(size_t(y - (20 - m)) * picture.width + p * panel + (x - (40 - m))) * 3];
+    return std::array<int, 3>{c[0], c[1], c[2]};
+  };
+  using C = std::array<int, 3>;
+  EXPECT_EQ(at(0, 45, 25), (C{100, 100, 100}));
+  EXPECT_EQ(at(0, 40, 25), (C{0, 0, 0}));        // undrawn: black
+  EXPECT_EQ(at(1, 40, 25), (C{100, 100, 100}));  // the camera's image
+  EXPECT_EQ(at(1, 30, 25), (C{0, 200, 0}));
+  EXPECT_EQ(at(2, 40, 25), (C{255, 0, 0}));      // missed: red
+  EXPECT_EQ(at(2, 51, 25), (C{0, 128, 255}));    // beyond the actor: blue
+  EXPECT_EQ(at(2, 42, 25), (C{120, 120, 120}));  // 30 levels off in each channel, four times
+  EXPECT_EQ(at(2, 45, 25), (C{0, 0, 0}));        // exact
+  EXPECT_EQ(at(2, 30, 25), (C{0, 0, 0}));        // the screen, not drawn
 }
 
 }  // namespace
