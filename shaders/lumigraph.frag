@@ -7,7 +7,6 @@
 in float v_weight[kOwnCameras];
 in vec2 v_texel[kOwnCameras];
 in float v_total;
-in float v_despill[kOwnCameras];  // how far to limit each own camera's green (its spill), 0 to 1
 
 uniform sampler2DArray images;
 uniform vec2 texel_scale;  // image texel to texture coordinate of `images`
@@ -16,6 +15,9 @@ uniform vec2 texel_scale;  // image texel to texture coordinate of `images`
 uniform sampler2DArray masks;
 uniform vec2 mask_scales[kOwnCameras];  // own camera j's pixel to its mask's texture coordinate
 uniform int use_masks;
+// How far each own camera's green is limited to the larger of its red and blue (the screen's
+// spill), 0 to 1: not at all where the desired camera looks from that camera (LumigraphParams).
+uniform float despill[kOwnCameras];
 
 out vec4 colour;
 
@@ -36,7 +38,7 @@ void main() {
     float w = v_weight[j];
     if (w <= 0.0) continue;
     vec3 c = sampleImage(v_texel[j], j);
-    c.g = mix(c.g, min(c.g, max(c.r, c.b)), v_despill[j]);
+    c.g = mix(c.g, min(c.g, max(c.r, c.b)), despill[j]);
     unmasked += w;
     float m = 1.0;
     // The colour is normalised by the weights, so a partly masked camera would still colour a

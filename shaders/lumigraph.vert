@@ -37,9 +37,6 @@ uniform int k_nearest;
 uniform float min_facing;
 uniform float max_angle;
 uniform float epsilon;
-// Each own camera's green is limited to the larger of its red and blue (the screen's spill) by
-// smoothstep(0, despill_angle, angle_i): not at all where the desired camera looks from it.
-uniform float despill_angle;  // 0: never
 
 uniform mat4 clone;          // stage (world) from the captured actor frame
 uniform vec3 desired_centre;  // the desired camera's centre in the captured actor frame
@@ -54,7 +51,6 @@ uniform vec2 view_size;
 out float v_weight[kOwnCameras];  // of the own cameras
 out vec2 v_texel[kOwnCameras];    // pixel coordinates + 0.5 (texel space of the camera's image)
 out float v_total;                // the weight of every camera of the rig
-out float v_despill[kOwnCameras];  // of the own cameras: how far their green is limited
 
 vec2 projectPixel(vec3 c, vec4 fc, float s, vec3 radial, vec2 tangential) {
   vec2 x = c.xy / c.z;
@@ -122,7 +118,6 @@ void main() {
   for (int j = 0; j < kOwnCameras; ++j) {
     int i = kOwn[j];
     v_weight[j] = weight[i];
-    v_despill[j] = despill_angle > 0.0 ? smoothstep(0.0, despill_angle, angle[i]) : 0.0;
     v_texel[j] = vec2(-1.0);
     vec3 c = rotations[i] * p + translations[i];
     if (c.z <= 0.05) continue;

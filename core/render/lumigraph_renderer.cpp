@@ -71,7 +71,11 @@ void setDesiredCamera(const ShaderProgram& p, const CameraUniforms& u) {
 }  // namespace
 
 LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, LumigraphParams params)
-    : rig_(rig), own_(std::move(own)), params_(params), active_(rig.cameraCount(), 1) {
+    : rig_(rig),
+      own_(std::move(own)),
+      params_(params),
+      active_(rig.cameraCount(), 1),
+      despill_(own_.size(), 0.0f) {
   if (rig_.cameraCount() > kMaxCameras || rig_.cameraCount() == 0) {
     throw Error("LumigraphRenderer: the rig has " + std::to_string(rig_.cameraCount()) +
                 " cameras; 1 to " + std::to_string(kMaxCameras) + " are supported");
@@ -148,6 +152,8 @@ void LumigraphRenderer::upload(const Eigen::Matrix3Xf& positions, const Eigen::M
                                std::span<const Eigen::Vector3i> triangles,
                                std::span<const uint16_t> visibility) {
   const int n = static_cast<int>(positions.cols());
+  mesh_centre_ =
+      n > 0 ? Eigen::Vector3f(positions.rowwise().sum() / float(n)) : Eigen::Vector3f::Zero();
   // Rim dilation: the mean sagitta of each vertex's edges, (-n_v . (p_u - p_v)) / 4 for an edge
   // v-u where the surface bends away (convex), 0 where it bends toward the normal.
   rim_sum_.assign(n, 0.0f);
@@ -379,7 +385,6 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform1f(p.uniform("min_facing"), params_.min_facing);
   glUniform1f(p.uniform("max_angle"), params_.max_angle_rad);
   glUniform1f(p.uniform("epsilon"), params_.epsilon_rad);
-  glUniform1f(p.uniform("despill_angle"), params_.despill_angle_rad);
   // A camera's pixel to its mask's texture coordinate: the mask's cells cover the camera's image.
   mask_scales_.resize(own_.size());
   for (size_t j = 0; j < own_.size(); ++j) {
@@ -421,6 +426,18 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
       const Eigen::Matrix4f m = clone.matrix();
       glUniformMatrix4fv(p.uniform("clone"), 1, GL_FALSE, m.data());
       glUniform3fv(p.uniform("desired_centre"), 1, desired_in_actor.data());
+      // Each own camera's despill: by the angle between the rays from the mesh's centre to the
+      // desired camera and to that camera.
+      const Eigen::Vector3f to_desired = desired_in_actor - mesh_centre_;
+      for (size_t j = 0; j < own_.size(); ++j) {
+        const Eigen::Vector3f to_camera = centres.col(own_[j]) - mesh_centre_;
+        const float angle =
+            std::atan2(to_desired.cross(to_camera).norm(), to_desired.dot(to_camera));
+        const float a = params_.despill_angle_rad;
+        const float t = a > 0 ? std::clamp(angle / a, 0.0f, 1.0f) : 0.0f;
+        despill_[j] = t * t * (3 - 2 * t);  // smoothstep(0, a, angle)
+      }
+      glUniform1fv(p.uniform("despill"), GLsizei(own_.size()), despill_.data());
       glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
     }
   }

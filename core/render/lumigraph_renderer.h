@@ -44,12 +44,12 @@ struct LumigraphParams {
   bool phong_subdivision = true;
   // Suppresses the screen's green spill in the colours of the cameras that look from elsewhere
   // than the desired camera, as keyers do: a camera's green at most the larger of its red and
-  // blue, fully where the rays to the desired and to the input camera are this far apart, not at
-  // all where they coincide (the spill a camera sees at its grazing angles is its own view's: a
-  // desired camera on an input camera still gives that camera's image, spill and all); 0: off.
-  // The screen's light on the actor's edges, and the screen itself where a camera sees past a mesh
-  // a little too wide (between the legs), was blended into other views as green fringes and
-  // patches. An actor on a green screen wears no green, which would key as the screen.
+  // blue, fully where the rays from the mesh's centre to the desired and to the input camera are
+  // this far apart, not at all where they coincide (the spill a camera sees at its grazing angles
+  // is its own view's: a desired camera on an input camera still gives that camera's image, spill
+  // and all); 0: off. The screen's light on the actor's edges, and the screen itself where a camera
+  // sees past a mesh a little too wide (between the legs), was blended into other views as green
+  // fringes and patches. An actor on a green screen wears no green, which would key as the screen.
   // Leave-one-out +0.01 to +0.07 dB over the actor's mask and the matte alike (docs/lumigraph.md).
   float despill_angle_rad = 0.17f;
 };
@@ -153,7 +153,10 @@ class LumigraphRenderer {
   GLuint upload_buffer_ = 0;      // pixel-buffer object for image uploads
   std::vector<float> vertices_;   // interleaved positions, normals and rim dilations, reused
   std::vector<uint8_t> staging_;  // an image's texels on their way up, reused
-  std::vector<float> rim_sum_;    // per vertex: the sagittas of its edges, and their count
+  Eigen::Vector3f mesh_centre_ = Eigen::Vector3f::Zero();  // the uploaded vertices' mean
+  std::vector<float>
+      despill_;  // per own camera, for the shader (LumigraphParams::despill_angle_rad)
+  std::vector<float> rim_sum_;  // per vertex: the sagittas of its edges, and their count
   std::vector<int> rim_count_;
 };
 
