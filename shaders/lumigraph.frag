@@ -1,8 +1,8 @@
 #version 430 core
 // The renderer's own cameras blended with the interpolated lumigraph weights: colour = their
-// weighted mean, alpha = their share of the weight of every camera of the rig (1 when the
-// renderer has them all; less where a foreground mask takes weight away). Images are RGBA8, or
-// the colours of a Bayer image's 2x2 cells.
+// (despilled) colours' weighted mean, alpha = their share of the weight of every camera of the
+// rig (1 when the renderer has them all; less where a foreground mask takes weight away). Images
+// are RGBA8, or the colours of a Bayer image's 2x2 cells.
 // kOwnCameras is defined when compiling; own camera j's image is layer j of `images`.
 in float v_weight[kOwnCameras];
 in vec2 v_texel[kOwnCameras];

@@ -203,10 +203,17 @@ void addEvalCommand(CLI::App& app) {
     refuseOutputOverInputs("--json", args->json, {{"--session", args->session}});
     requireOutputFolder("--json", args->json);
     refuseOutputOverInputs("--loo-pictures", args->loo_pictures, {{"--session", args->session}});
-    if (!args->loo_pictures.empty()) fs::create_directories(args->loo_pictures);
+    if (!args->loo_pictures.empty() && args->loo_frames == 0)
+      throw Error("--loo-pictures: --loo-frames 0 scores no view to picture");
     const SessionReader session(args->session);
     if (!session.hasTruth())
       throw Error(args->session + ": no ground truth (truth/) to evaluate against");
+    if (!args->loo_pictures.empty()) {
+      std::error_code ec;
+      fs::create_directories(args->loo_pictures, ec);
+      if (ec)
+        throw Error("--loo-pictures " + args->loo_pictures + ": cannot create: " + ec.message());
+    }
     EvalReport report;
     report.setText("session", "session", args->session);
     // Stages add their sections in pipeline order; a later stage may use an earlier one's result.

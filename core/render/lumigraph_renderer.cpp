@@ -1,6 +1,7 @@
 #include "core/render/lumigraph_renderer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <string>
 

@@ -568,6 +568,15 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
     ++pictures_written;
   }
   EXPECT_EQ(pictures_written, 8);
+  // A pictures folder that cannot be made, or pictures of no view, are refused before any work.
+  Result refused = run(kCli + " eval --session " + session.string() + " --loo-pictures " +
+                       json.string() + "/views --quiet");
+  EXPECT_EQ(refused.exit_code, 1) << refused.output;
+  EXPECT_NE(refused.output.find("cannot create"), std::string::npos) << refused.output;
+  refused = run(kCli + " eval --session " + session.string() + " --loo-frames 0 --loo-pictures " +
+                pictures.string() + " --quiet");
+  EXPECT_EQ(refused.exit_code, 1) << refused.output;
+  EXPECT_NE(refused.output.find("--loo-frames 0"), std::string::npos) << refused.output;
   EXPECT_LT(reportNumber(text, "key_missed_pct"), 0.5) << text;
   EXPECT_EQ(reportNumber(text, "key_extra_pct"), 0.0) << text;
   EXPECT_EQ(reportNumber(text, "frames_tracked"), 8.0) << text;

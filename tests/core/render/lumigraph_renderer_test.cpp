@@ -214,6 +214,41 @@ TEST_F(LumigraphRendererTest, SpillIsKeptFromAnInputCameraAndLimitedFromElsewher
     }
   }
   EXPECT_NEAR(render(on, desiredView(), -1)[1], 90, 1.0);
+
+  // Between the two: camera 4 turned about the stage's vertical through the mesh's centre, so
+  // that the rays from the centre to it and to camera 4 are about a third of the angle apart
+  // (where the smoothstep is not the straight ramp). A
+  // renderer of camera 4 alone colours every pixel it draws with that camera's colour, its green
+  // limited by smoothstep(0, angle, their angle), the same everywhere.
+  LumigraphParams flat;  // the mesh's centre: the mean of the vertices drawn
+  flat.phong_subdivision = false;
+  LumigraphRenderer alone(rig(), {4}, flat);
+  alone.setMesh(frame_->surface.positions, frame_->surface.normals, frame_->surface.triangles);
+  std::vector<uint8_t> rgba(size_t(input.width()) * input.height() * 4);
+  for (size_t i = 0; i < rgba.size(); i += 4) std::copy(spilled.begin(), spilled.end(), &rgba[i]);
+  alone.setImageRgba(0, rgba.data(), input.width(), input.height());
+  const Eigen::Vector3d centre = frame_->surface.positions.cast<double>().rowwise().mean();
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(0.3 * on, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3d moved = centre + turn * (input.centre() - centre);
+  const Eigen::Matrix3d R = input.rotation() * turn.transpose();
+  const Camera between("between", input.width(), input.height(), input.intrinsics(),
+                       input.distortion(), R, -R * moved);
+  const Eigen::Vector3d a = input.centre() - centre, b = moved - centre;
+  const double t = std::atan2(a.cross(b).norm(), a.dot(b)) / on;
+  ASSERT_GT(t, 0.15);
+  ASSERT_LT(t, 0.4);
+  const double limited = 150 - t * t * (3 - 2 * t) * (150 - 90);
+  std::vector<uint8_t> rendered;
+  alone.render(between, rendered);
+  int64_t drawn = 0, off = 0;
+  for (size_t i = 0; i < rendered.size(); i += 4) {
+    if (rendered[i + 3] == 0) continue;
+    ++drawn;
+    off += std::abs(rendered[i + 1] - limited) > 1.0 || rendered[i] != 90 || rendered[i + 2] != 70;
+  }
+  EXPECT_GT(drawn, 5000);
+  EXPECT_EQ(off, 0) << "green " << limited;
 }
 
 // A monochrome camera's picture is grey, pixel by pixel: rendered from that camera, every drawn
