@@ -18,7 +18,7 @@ namespace lumistage {
 
 // How the lumigraph weighs and tests cameras (docs/lumigraph.md has the weight function).
 struct LumigraphParams {
-  int k = 3;                    // cameras blended per vertex (at most 4)
+  int k = 4;                    // cameras blended per vertex (at most 4; docs/lumigraph.md)
   float min_facing = 0.1f;      // cos of 84 degrees: grazing views are left out
   float max_angle_rad = 1.57f;  // the threshold when at most k cameras qualify
   float epsilon_rad = 1e-4f;    // angles below this count as this

@@ -19,7 +19,7 @@ namespace lumistage {
 // their sum over all cameras of all nodes) they blend. A desired camera on input camera i drives
 // angle_i to 0 and w_i far above the rest: the blend reproduces that camera's image.
 struct LumigraphWeightParams {
-  int k = 3;                    // cameras blended per point
+  int k = 4;                    // cameras blended per point (LumigraphParams::k)
   double min_facing = 0.1;      // cos of 84 degrees: grazing views are left out
   double max_angle_rad = 1.57;  // the threshold when fewer than k+1 cameras qualify
   double epsilon_rad = 1e-4;    // angles below this count as this (no division by zero)
