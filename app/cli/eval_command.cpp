@@ -3,8 +3,6 @@
 #include <fmt/format.h>
 
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <optional>
 
 #include "app/cli/checks.h"
@@ -13,6 +11,7 @@
 #include "core/base/output_path.h"
 #include "core/body/human_model.h"
 #include "core/capture/session_reader.h"
+#include "core/capture/session_writer.h"
 #include "core/eval/eval_report.h"
 #include "core/eval/leave_one_out.h"
 #include "core/eval/mocap_eval.h"
@@ -122,19 +121,13 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     return mesh;
   };
   ComparisonPicture picture;
-  std::vector<uint8_t> encoded;
-  cv::Mat bgr;
   const LeaveOneOutViewSink write_picture = [&](int i, int c, std::span<const uint8_t> rendered,
                                                 std::span<const uint8_t> image,
                                                 std::span<const uint8_t> mask) {
     const Camera& camera = session.rig().camera(c);
     comparisonPicture(rendered, image, mask, camera.width(), camera.height(), picture);
-    const cv::Mat rgb(picture.height, picture.width, CV_8UC3, picture.rgb.data());
-    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-    const fs::path file = pictures / fmt::format("{:06}_{}.png", session.frameId(i), camera.name());
-    if (!cv::imencode(".png", bgr, encoded)) throw Error(file.string() + ": cannot encode");
-    writeFileAtomically(
-        file, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()));
+    writePngAtomically(pictures / fmt::format("{:06}_{}.png", session.frameId(i), camera.name()),
+                       {PixelFormat::kRgb8, picture.width, picture.height, picture.rgb.data()});
   };
   const LeaveOneOutSummary refined =
       evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerFrame, {},

@@ -20,12 +20,13 @@ namespace lumistage {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-// Encodes in memory and writes with checked system calls: cv::imwrite ignores the result of
-// fclose, so on a full disk it can leave a truncated PNG that would then be renamed into place.
-// Returns the bytes written.
-size_t writeImageAtomically(const fs::path& path, const cv::Mat& image) {
+size_t writePngAtomically(const fs::path& path, const ImageView& view) {
+  const cv::Mat source(view.height, view.width,
+                       view.format == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1,
+                       const_cast<uint8_t*>(view.data));
+  cv::Mat image = source;
+  if (view.format == PixelFormat::kRgb8)
+    cv::cvtColor(source, image, cv::COLOR_RGB2BGR);  // imencode takes BGR
   // Fast PNG: the session is written while capturing (lossless at any level). Run-length
   // matching instead of zlib's default search: a 1024x768 Bayer frame of the virtual studio in
   // 11.7 against 17.7 ms (its sensor noise leaves few matches to find; 20% more bytes), an RGB
@@ -43,6 +44,13 @@ size_t writeImageAtomically(const fs::path& path, const cv::Mat& image) {
       path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()),
       {.sync = false});
   return encoded.size();
+}
+
+namespace {
+
+// A camera's truth mask (one byte a pixel) as an image.
+ImageView maskView(const Camera& camera, const std::vector<uint8_t>& mask) {
+  return {PixelFormat::kMono8, camera.width(), camera.height(), mask.data()};
 }
 
 // A PNM file (binary PGM or PPM, maxval 255): the header, then the rows as they are.
@@ -129,18 +137,11 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
         if (files_ == ImageFiles::kPnm) {
           bytes += int64_t(writePnmAtomically(folder_ / camera.name() / name, view));
         } else {
-          const cv::Mat source(view.height, view.width,
-                               view.format == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1,
-                               const_cast<uint8_t*>(view.data));
-          cv::Mat image = source;
-          if (view.format == PixelFormat::kRgb8)
-            cv::cvtColor(source, image, cv::COLOR_RGB2BGR);  // imwrite takes BGR
-          bytes += int64_t(writeImageAtomically(folder_ / camera.name() / name, image));
+          bytes += int64_t(writePngAtomically(folder_ / camera.name() / name, view));
         }
         if (truth && truth->masks) {
-          const cv::Mat mask(camera.height(), camera.width(), CV_8UC1,
-                             const_cast<uint8_t*>((*truth->masks)[c].data()));
-          writeImageAtomically(folder_ / "truth" / "masks" / camera.name() / mask_name, mask);
+          writePngAtomically(folder_ / "truth" / "masks" / camera.name() / mask_name,
+                             maskView(camera, (*truth->masks)[c]));
         }
       } catch (const std::exception& e) {
         errors[c] = e.what();
@@ -161,10 +162,9 @@ void SessionWriter::writeTruth(int64_t frame_id, const FrameTruth& truth, bool m
   if (masks && truth.masks) {
     for (int c = 0; c < rig_.cameraCount(); ++c) {
       const Camera& camera = rig_.camera(c);
-      const cv::Mat mask(camera.height(), camera.width(), CV_8UC1,
-                         const_cast<uint8_t*>((*truth.masks)[c].data()));
-      writeImageAtomically(
-          folder_ / "truth" / "masks" / camera.name() / fmt::format("{:06}.png", frame_id), mask);
+      writePngAtomically(
+          folder_ / "truth" / "masks" / camera.name() / fmt::format("{:06}.png", frame_id),
+          maskView(camera, (*truth.masks)[c]));
     }
   }
   if (truth.surface)

@@ -15,6 +15,12 @@
 
 namespace lumistage {
 
+// Writes `image` as a PNG file (rgb8 in colour, any other format one byte a pixel), encoded in
+// memory and written with checked system calls beside its place, then renamed into it:
+// cv::imwrite ignores the result of fclose, so on a full disk it could leave a truncated PNG.
+// Throws Error naming the file. Returns the bytes written.
+size_t writePngAtomically(const std::filesystem::path& path, const ImageView& image);
+
 // Ground truth of one frame of the virtual studio.
 struct FrameTruth {
   std::vector<Eigen::Vector3d> joints;    // metres, in the skeleton's joint order

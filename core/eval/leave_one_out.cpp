@@ -72,10 +72,10 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
       masks[c] = session.readTruthMask(c, i);
     }
     std::vector<ViewScore> scores;
-    TriangleMesh mesh;
+    const bool mesh_per_camera = meshes == LeaveOneOutMeshes::kOnePerLeftOutCamera;
     for (int c = 0; c < n; ++c) {
-      if (c == 0 || meshes == LeaveOneOutMeshes::kOnePerLeftOutCamera) {
-        mesh = mesh_for(i, meshes == LeaveOneOutMeshes::kOnePerFrame ? -1 : c);
+      if (c == 0 || mesh_per_camera) {
+        const TriangleMesh mesh = mesh_for(i, mesh_per_camera ? c : -1);
         renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
       }
       scores.push_back(leaveOneOut(renderer, rig, truth, masks, c, &rendered));
