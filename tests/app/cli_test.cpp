@@ -596,6 +596,19 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
             0.5 * reportNumber(text, "surface_mm_unrefined"))
       << text;
   EXPECT_FALSE(std::isnan(reportNumber(text, "loo_psnr_db_cam08"))) << text;
+  // Which way the refinement's offsets miss the best ones: most vertices within a few millimetres
+  // of theirs, the percentiles in order and agreeing with the shares beyond 2 mm either way.
+  const double p10 = reportNumber(text, "loo_offset_error_mm_p10"),
+               p50 = reportNumber(text, "loo_offset_error_mm_p50"),
+               p90 = reportNumber(text, "loo_offset_error_mm_p90"),
+               inward = reportNumber(text, "loo_offset_inward_pct"),
+               outward = reportNumber(text, "loo_offset_outward_pct");
+  EXPECT_LE(p10, p50) << text;
+  EXPECT_LE(p50, p90) << text;
+  EXPECT_LT(std::abs(p50), 2.0) << text;
+  EXPECT_LT(inward + outward, 70.0) << text;
+  EXPECT_EQ(p10 < -2.0, inward >= 10.0) << text;
+  EXPECT_EQ(p90 > 2.0, outward >= 10.0) << text;
   // The matte score also counts what is drawn beyond the actor; the true surface misses nothing.
   // (Its 2000 vertices here, rim-dilated, draw beyond the actor too: the pipeline's refined mesh
   // comes within half a dB of it, the strict one, carved by no silhouette of its view, does not.)
