@@ -115,7 +115,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     TriangleMesh mesh;
     mesh.triangles = generic.rest.triangles;
     nearestOffsetsAlongNormals(positions, normals, SurfaceDistance(truthSurface(session, i)),
-                               refine.t_max_m, 0.0005, mesh.positions);
+                               refine.t_inward_m, refine.t_max_m, 0.0005, mesh.positions);
     std::vector<float>& t = best_offset_m[i];
     t.resize(positions.cols());
     for (Eigen::Index v = 0; v < positions.cols(); ++v)

@@ -136,14 +136,15 @@ void surfaceDistancesMm(const Eigen::Matrix3Xf& points, const SurfaceDistance& s
 }
 
 void nearestOffsetsAlongNormals(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
-                                const SurfaceDistance& surface, double t_max_m, double step_m,
-                                Eigen::Matrix3Xf& out) {
+                                const SurfaceDistance& surface, double t_inward_m, double t_max_m,
+                                double step_m, Eigen::Matrix3Xf& out) {
   if (out.cols() != positions.cols()) out.resize(3, positions.cols());
-  const int steps = step_m > 0 ? int(std::floor(t_max_m / step_m + 1e-9)) : 0;
+  const int inward = step_m > 0 ? int(std::floor(t_inward_m / step_m + 1e-9)) : 0;
+  const int outward = step_m > 0 ? int(std::floor(t_max_m / step_m + 1e-9)) : 0;
   for (Eigen::Index v = 0; v < positions.cols(); ++v) {
     const Eigen::Vector3d p = positions.col(v).cast<double>(), n = normals.col(v).cast<double>();
     double nearest = std::numeric_limits<double>::infinity(), best_t = 0;
-    for (int k = -steps; k <= steps; ++k) {
+    for (int k = -inward; k <= outward; ++k) {
       const double t = k * step_m, d = surface.distance(p + t * n);
       // Ties (a line along the surface) go to the smaller offset.
       if (d < nearest || (d == nearest && std::abs(t) < std::abs(best_t))) nearest = d, best_t = t;

@@ -44,13 +44,13 @@ void surfaceDistancesMm(const Eigen::Matrix3Xf& points, const SurfaceDistance& s
                         std::vector<double>& out);
 
 // What the refinement could reach on a mesh at best: each vertex moved along its normal to the
-// point of [-t_max_m, t_max_m] nearest the surface (searched in steps of step_m), as if every
-// offset were chosen knowing the truth. Rendered, it splits what the refinement's choice loses
-// from what the mesh and the pose cannot represent (docs/eval-report.md, loo_psnr_db_best_offsets).
-// `out` is resized only when its size differs.
+// point of [-t_inward_m, t_max_m] (the refinement's range, RefineConfig) nearest the surface
+// (searched in steps of step_m), as if every offset were chosen knowing the truth. Rendered, it
+// splits what the refinement's choice loses from what the mesh and the pose cannot represent
+// (docs/eval-report.md, loo_psnr_db_best_offsets). `out` is resized only when its size differs.
 void nearestOffsetsAlongNormals(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
-                                const SurfaceDistance& surface, double t_max_m, double step_m,
-                                Eigen::Matrix3Xf& out);
+                                const SurfaceDistance& surface, double t_inward_m, double t_max_m,
+                                double step_m, Eigen::Matrix3Xf& out);
 
 // The refinement measured on a virtual-studio session: per frame, the generic human posed by a
 // fit to the true joints (truth/joints.csv; one bone-length scale) is the unrefined mesh; each

@@ -702,8 +702,9 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   int agreeing = 0, seen_vertices = 0;
   const RefinementStatistics& sum = frame.refine_sum;
   const int vertices = refinedVertices(sum.vertex_count);  // the vertices, not window points
+  const int zero = options_.refine.zeroOffsetIndex();
   for (int v = 0; v < vertices; ++v) {
-    const size_t s = size_t(v) * sum.offset_count + sum.offset_count / 2;
+    const size_t s = size_t(v) * sum.offset_count + zero;
     if (sum.colour_count[s] == 0 && sum.outside[s] == 0) continue;
     ++seen_vertices;
     agreeing += sum.outside[s] == 0;

@@ -10,10 +10,10 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
   RefineConfig config;
   in.requireMap(node, key);
   in.checkKeys(node, key,
-               {"offset_count", "t_max_m", "outside_weight", "outward_weight", "colour_weight",
-                "colour_sigma", "unseen_colour", "smooth_weight", "temporal_weight", "tie_margin",
-                "smooth_iterations", "depth_map_step", "depth_tolerance_m", "min_facing_cos",
-                "colour_bits", "window_points", "window_m"});
+               {"offset_count", "t_max_m", "t_inward_m", "outside_weight", "outward_weight",
+                "colour_weight", "colour_sigma", "unseen_colour", "smooth_weight",
+                "temporal_weight", "tie_margin", "smooth_iterations", "depth_map_step",
+                "depth_tolerance_m", "min_facing_cos", "colour_bits", "window_points", "window_m"});
   auto number = [&](const char* name, double& value, double lo, double hi, const char* expected) {
     if (!node[name]) return;
     const std::string path = YamlReader::child(key, name);
@@ -30,6 +30,7 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
   integer("offset_count", config.offset_count, 1, RefineConfig::kMaxOffsetCount,
           "expected 1 to 32 offsets");
   number("t_max_m", config.t_max_m, 0.0, 0.5, "expected metres in [0, 0.5]");
+  number("t_inward_m", config.t_inward_m, 0.0, 0.5, "expected metres in [0, 0.5]");
   number("outside_weight", config.outside_weight, 0, 1e6, "expected a weight >= 0");
   number("outward_weight", config.outward_weight, 0, 1e6, "expected a weight >= 0");
   number("colour_weight", config.colour_weight, 0, 1e6, "expected a weight >= 0");

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <string_view>
 
 namespace YAML {
@@ -12,7 +14,7 @@ class YamlReader;
 
 // The mesh refinement's parameters (the paper's §IV), read from the `refine:` section of a studio
 // config (docs/virtual-studio.md documents every key). Each vertex of the posed generic mesh is
-// tried at `offset_count` offsets uniformly in [-t_max_m, t_max_m] along its normal; each offset
+// tried at `offset_count` offsets uniformly in [-t_inward_m, t_max_m] along its normal; each offset
 // gets an error, a weighted sum of terms (all terms are dimensionless, so the weights compare):
 //   outside_weight  x cameras whose silhouette the point falls outside of (the visual hull term:
 //                     0 on or inside the hull);
@@ -31,8 +33,15 @@ class YamlReader;
 // (RefinementStatistics::edges; halfway when none was located); or half a step toward the lowest
 // point of the error's parabola through the sample and its neighbours.
 struct RefineConfig {
-  int offset_count = 21;
+  // The range: [-t_inward_m, t_max_m] along the normal (outward positive), offset_count samples
+  // 5 mm apart by default. t_max_m also scales the outward, smoothness and temporal terms
+  // (t / t_max_m). It reaches further out than in: a clothed actor is thicker than the generic
+  // human (on the reference clips the best offsets' median is +21 mm), and the five samples
+  // from -50 to -30 mm decided nothing that leave-one-out could tell (docs/lumigraph.md), for a
+  // sixth of the nodes' samples and statistics.
+  int offset_count = 18;
   double t_max_m = 0.05;
+  double t_inward_m = 0.035;
   double outside_weight = 1.0;
   // 0.75 since the colour window: with a colour term that can be trusted further inside the hull,
   // a weaker pull toward it (docs/lumigraph.md).
@@ -66,16 +75,24 @@ struct RefineConfig {
   int pointsPerVertex() const { return window_points == kWindowPoints ? kWindowPoints : 1; }
 
   double offsetAt(int index) const {
-    return offset_count > 1 ? -t_max_m + 2 * t_max_m * index / (offset_count - 1) : 0.0;
+    return offset_count > 1 ? -t_inward_m + (t_inward_m + t_max_m) * index / (offset_count - 1)
+                            : 0.0;
   }
-  int zeroOffsetIndex() const { return offset_count / 2; }
+  // The offset nearest 0 (the posed mesh itself).
+  int zeroOffsetIndex() const {
+    const double range = t_inward_m + t_max_m;
+    if (offset_count < 2 || !(range > 0)) return offset_count / 2;
+    return std::clamp(int(std::lround(t_inward_m / range * (offset_count - 1))), 0,
+                      offset_count - 1);
+  }
   // Levels: eighths of a step (0.625 mm by default), level kLevelsPerStep·i is offset index i; at
   // most 255 levels in a byte, hence at most kMaxOffsetCount offsets.
   static constexpr int kLevelsPerStep = 8;
   static constexpr int kMaxOffsetCount = 254 / kLevelsPerStep + 1;
   int offsetLevels() const { return kLevelsPerStep * (offset_count - 1) + 1; }
   double levelOffset(int level) const {
-    return offset_count > 1 ? -t_max_m + 2 * t_max_m * level / (kLevelsPerStep * (offset_count - 1))
+    return offset_count > 1 ? -t_inward_m + (t_inward_m + t_max_m) * level /
+                                                (kLevelsPerStep * (offset_count - 1))
                             : 0.0;
   }
   int zeroLevel() const { return kLevelsPerStep * zeroOffsetIndex(); }

@@ -144,8 +144,7 @@ TEST(HotPaths, ANodesFrameAllocatesNothingAfterTheFirst) {
   Pose pose;
   std::vector<Eigen::Affine3f> transforms;
   Eigen::Matrix3Xf positions, normals, refined;
-  const std::vector<uint8_t> offsets(f.generic.rest.vertexCount(),
-                                     uint8_t(refine.offsetLevels() / 2));
+  const std::vector<uint8_t> offsets(f.generic.rest.vertexCount(), uint8_t(refine.zeroLevel()));
   PhongSubdivision phong;
   std::vector<uint16_t> visible(f.generic.rest.vertexCount(), 0x0fff);
   std::vector<uint8_t> rgba(size_t(640) * 480 * 4, 0);

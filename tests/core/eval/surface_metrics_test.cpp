@@ -45,7 +45,7 @@ TEST(SurfaceDistance, BestOffsetsReachTheSurfaceWithinTheRangeOnly) {
   for (const auto& [radius, expected] : {std::pair{0.32, 0.32}, std::pair{0.36, 0.34}}) {
     const SurfaceDistance truth(testing::icosphere(centre, radius, 5));
     Eigen::Matrix3Xf moved;
-    nearestOffsetsAlongNormals(coarse.positions, coarse.normals, truth, 0.04, 0.0005, moved);
+    nearestOffsetsAlongNormals(coarse.positions, coarse.normals, truth, 0.04, 0.04, 0.0005, moved);
     ASSERT_EQ(moved.cols(), coarse.positions.cols());
     for (Eigen::Index v = 0; v < moved.cols(); ++v)
       ASSERT_NEAR((moved.col(v).cast<double>() - centre).norm(), expected, 0.001) << v;

@@ -239,7 +239,7 @@ TEST(StudioCoordinator, OffsetsComeWithTheRefinedBodysVisibility) {
     stats.reset(n, refine.offset_count, refine.colour_bits);
     // Every vertex outside a silhouette from the posed surface out: the refinement moves it in.
     for (int v = 0; v < n; ++v)
-      for (int t = refine.offset_count / 2; t < refine.offset_count; ++t)
+      for (int t = refine.zeroOffsetIndex(); t < refine.offset_count; ++t)
         stats.outside[size_t(v) * refine.offset_count + t] = 1;
     ASSERT_TRUE(node.send(frame, statisticsMessage(stats, refine)));
     const std::optional<Message> offsets = node.await<OffsetsData>(studio);
@@ -250,7 +250,7 @@ TEST(StudioCoordinator, OffsetsComeWithTheRefinedBodysVisibility) {
     }
     ASSERT_TRUE(offsets);
     const OffsetsData& sent = std::get<OffsetsData>(offsets->body);
-    const int unmoved = refine.offsetLevels() / 2;
+    const int unmoved = refine.zeroLevel();
     ASSERT_TRUE(std::all_of(sent.offsets.begin(), sent.offsets.end(),
                             [&](uint8_t level) { return level < unmoved; }));
     Pose posed;

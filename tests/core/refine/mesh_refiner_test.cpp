@@ -13,8 +13,11 @@ namespace lumistage {
 namespace {
 
 // A config whose terms are all off: a test switches on the one it looks at.
+// The tests below place their samples on a range as far in as out, 21 offsets, 0 at offset 10.
 RefineConfig noTerms() {
   RefineConfig c;
+  c.offset_count = 21;
+  c.t_inward_m = c.t_max_m;
   c.outside_weight = c.outward_weight = c.colour_weight = c.smooth_weight = c.temporal_weight = 0;
   c.tie_margin = 0;
   return c;
@@ -182,6 +185,13 @@ TEST(MeshRefiner, TieBreakTakesTheMinimumClosestToZero) {
   one.stats.reset(1, c.offset_count, c.colour_bits);
   for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, i == 18 ? 0 : (i == 8 ? 12 : 40));
   EXPECT_EQ(refineOne(c, one.stats), kStep * 18);
+  // On a range reaching 2 cm in and 8 cm out, 0 is offset 4: of two consistent offsets, 1 (three
+  // steps in) wins over 8 (four steps out), though 8 is nearer the range's middle.
+  c.t_inward_m = 0.02, c.t_max_m = 0.08;
+  ASSERT_EQ(c.zeroOffsetIndex(), 4);
+  one.stats.reset(1, c.offset_count, c.colour_bits);
+  for (int i = 0; i < c.offset_count; ++i) one.colour(i, 4, 120, (i == 1 || i == 8) ? 1 : 40);
+  EXPECT_EQ(refineOne(c, one.stats), kStep * 1);
 }
 
 TEST(MeshRefiner, ASilhouetteCrossingInwardMovesHalfAStepIn) {
@@ -461,7 +471,7 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
 // The sampler projects a vertex's offsets along a parabola through the projections of the
 // range's ends and middle: through a strong lens, every sample still lands on the pixel the
 // camera's own projection gives (the key alternates from one pixel column to the next, so a
-// projection a pixel off would flip it).
+// projection a pixel off would flip it), whether the range reaches as far in as out or not.
 TEST(RefinementSampler, ProjectsEveryOffsetAsTheCameraDoes) {
   RingRigSpec spec;
   spec.width = 320, spec.height = 240, spec.radius_m = 2.0, spec.vertical_fov_deg = 60;
@@ -481,27 +491,32 @@ TEST(RefinementSampler, ProjectsEveryOffsetAsTheCameraDoes) {
   const std::vector<SamplerCamera> cameras = {{&camera, image.view(), &keyer, nullptr}};
   // Off the optical axis, where the lens bends the lines most.
   const TriangleMesh sphere = testing::icosphere(Eigen::Vector3d(0.3, 0.4, 1.3), 0.25, 3);
-  RefineConfig config;
-  config.t_max_m = 0.09;
-  config.window_points = 1;
-  RefinementSampler sampler(config);
-  RefinementStatistics stats;
-  sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
-  int compared = 0, different = 0;
-  for (int v = 0; v < sphere.vertexCount(); ++v) {
-    for (int i = 0; i < config.offset_count; ++i) {
-      const Eigen::Vector3d p = sphere.positions.col(v).cast<double>() +
-                                config.offsetAt(i) * sphere.normals.col(v).cast<double>();
-      const std::optional<Eigen::Vector2d> pixel = camera.project(p);
-      if (!pixel || !camera.inImage(*pixel)) continue;
-      ++compared;
-      const bool screen = int(std::floor(pixel->x() + 0.5)) % 2 == 1;
-      different += stats.outside[size_t(v) * config.offset_count + i] != (screen ? 1 : 0);
+  for (const double inward : {0.09, 0.02}) {
+    RefineConfig config;
+    config.t_max_m = 0.09;
+    config.t_inward_m = inward;
+    config.offset_count = 21;
+    config.window_points = 1;
+    RefinementSampler sampler(config);
+    RefinementStatistics stats;
+    sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
+    int compared = 0, different = 0;
+    for (int v = 0; v < sphere.vertexCount(); ++v) {
+      for (int i = 0; i < config.offset_count; ++i) {
+        const Eigen::Vector3d p = sphere.positions.col(v).cast<double>() +
+                                  config.offsetAt(i) * sphere.normals.col(v).cast<double>();
+        const std::optional<Eigen::Vector2d> pixel = camera.project(p);
+        if (!pixel || !camera.inImage(*pixel)) continue;
+        ++compared;
+        const bool screen = int(std::floor(pixel->x() + 0.5)) % 2 == 1;
+        different += stats.outside[size_t(v) * config.offset_count + i] != (screen ? 1 : 0);
+      }
     }
+    ASSERT_GT(compared, 10000) << inward;
+    // Only a projection within a few thousandths of a pixel of a column's border may differ.
+    EXPECT_LE(different, compared / 500)
+        << different << " of " << compared << ", inward " << inward;
   }
-  ASSERT_GT(compared, 10000);
-  // Only a projection within a few thousandths of a pixel of a column's border may differ.
-  EXPECT_LE(different, compared / 500) << different << " of " << compared;
 }
 
 // Window points: a vertex's two neighbours lie window_m along the tangent nearest the vertical

@@ -17,9 +17,10 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
       "format: lumistage-studio\nversion: 1\nrig: " +
       (std::filesystem::path(LUMISTAGE_TEST_RESOURCE_DIR) / "rigs" / "reference.yaml").string() +
       "\n";
-  std::ofstream(folder / "a.yaml") << head
-                                   << "refine:\n  t_max_m: 0.05\n  offset_count: 11\n"
-                                      "  colour_weight: 0.5\n";
+  std::ofstream(folder / "a.yaml")
+      << head
+      << "refine:\n  t_max_m: 0.05\n  t_inward_m: 0.05\n  offset_count: 11\n"
+         "  colour_weight: 0.5\n";
   const StudioConfig config = loadStudioConfig(folder / "a.yaml");
   EXPECT_DOUBLE_EQ(config.refine.t_max_m, 0.05);
   EXPECT_EQ(config.refine.offset_count, 11);
@@ -28,6 +29,23 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
   EXPECT_DOUBLE_EQ(config.refine.offsetAt(0), -0.05);
   EXPECT_DOUBLE_EQ(config.refine.offsetAt(5), 0.0);
   EXPECT_DOUBLE_EQ(config.refine.offsetAt(10), 0.05);
+  // By default the range reaches further out than in, 5 mm a step, the posed surface among them.
+  const RefineConfig defaults;
+  EXPECT_NEAR(defaults.offsetAt(1) - defaults.offsetAt(0), 0.005, 1e-12);
+  EXPECT_NEAR(defaults.offsetAt(defaults.offset_count - 1), defaults.t_max_m, 1e-12);
+  EXPECT_GT(defaults.t_max_m, defaults.t_inward_m);
+  EXPECT_NEAR(defaults.offsetAt(defaults.zeroOffsetIndex()), 0.0, 1e-12);
+  EXPECT_NEAR(defaults.levelOffset(defaults.zeroLevel()), 0.0, 1e-12);
+  // An asymmetric range: 2 cm in, 6 cm out, 9 offsets.
+  std::ofstream(folder / "g.yaml") << head
+                                   << "refine:\n  t_inward_m: 0.02\n  t_max_m: 0.06\n"
+                                      "  offset_count: 9\n";
+  const RefineConfig g = loadStudioConfig(folder / "g.yaml").refine;
+  EXPECT_DOUBLE_EQ(g.offsetAt(0), -0.02);
+  EXPECT_DOUBLE_EQ(g.offsetAt(8), 0.06);
+  EXPECT_EQ(g.zeroOffsetIndex(), 2);
+  EXPECT_NEAR(g.offsetAt(2), 0.0, 1e-12);
+  EXPECT_EQ(g.zeroLevel(), 16);
 
   std::ofstream(folder / "b.yaml") << head << "refine:\n  t_max: 0.05\n";
   EXPECT_NE(testing::errorOf([&] { loadStudioConfig(folder / "b.yaml"); }).find("refine"),
@@ -37,6 +55,9 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
     std::ofstream(folder / name) << head << "refine:\n" << refine;
     return testing::errorOf([&] { loadStudioConfig(folder / name); });
   };
+  EXPECT_NE(errorFor("h.yaml", "  t_inward_m: -0.01\n")
+                .find("h.yaml:5: refine.t_inward_m: expected metres in [0, 0.5]"),
+            std::string::npos);
   EXPECT_NE(errorFor("c.yaml", "  colour_bits: 9\n")
                 .find("c.yaml:5: refine.colour_bits: expected 1 to 8 bits"),
             std::string::npos);
