@@ -316,13 +316,13 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
     // 1.5 of a node's 7.4 ms (refine_bench) against projecting each through the lens.
     const float t_lo = offsets_m_[0], t_hi = offsets_m_[offsets - 1];
     const float t_mid = 0.5f * (t_lo + t_hi), half = 0.5f * (t_hi - t_lo);
-    const Eigen::Vector3f c_lo = c0 + t_lo * d, c_hi = c0 + t_hi * d, c_mid = c0 + t_mid * d;
-    const bool curve =
-        offsets >= 3 && half > 0 && c_lo.z() > 0 && c_hi.z() > 0 && c_mid.z() > 0 && c0.z() > 0;
+    // Both ends in front of the camera put the whole segment there.
+    const Eigen::Vector3f c_lo = c0 + t_lo * d, c_hi = c0 + t_hi * d;
+    const bool curve = offsets >= 3 && half > 0 && c_lo.z() > 0 && c_hi.z() > 0;
     Eigen::Vector2f p_mid = Eigen::Vector2f::Zero(), slope = p_mid, bend = p_mid;
     if (curve) {
       const Eigen::Vector2f p_lo = projection.pixel(c_lo), p_hi = projection.pixel(c_hi);
-      p_mid = projection.pixel(c_mid);
+      p_mid = projection.pixel(c0 + t_mid * d);
       slope = (p_hi - p_lo) / (2 * half);
       bend = (p_hi + p_lo - 2 * p_mid) / (2 * half * half);
     }
