@@ -172,6 +172,9 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   }
   if (node.report.lost) {
     node.report.lost = false;
+    // What it recorded before it was lost is not what it records now (a node restarted mid-take
+    // starts a part of its own): its next heartbeat says.
+    node.report.take = {};
     spdlog::info("node {} is streaming", node.report.name);
     sendTake(node);  // the take under way, if any: and the node's word that it reached the studio
   }

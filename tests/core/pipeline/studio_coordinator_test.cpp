@@ -333,6 +333,39 @@ TEST(StudioCoordinator, NodesWhoseMessagesWaitWhileTheStudioWorksAreNotLost) {
   EXPECT_EQ(studio.nodeState("node2"), "lost");
 }
 
+// A node lost mid-take and back (its PC restarted) reports no take until its next heartbeat: the
+// take it recorded before, its sets written, are not what the new process records.
+TEST(StudioCoordinator, ANodeBackFromLostReportsItsTakeAnew) {
+  StudioCoordinatorOptions options;
+  options.lost_after = milliseconds(200);
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint(), "node1");
+  const auto take = [&] {
+    for (const NodeReport& n : studio.report().nodes)
+      if (n.name == "node1") return n.take;
+    return TakeStatusData{};
+  };
+  HeartbeatData recording;
+  recording.take = TakeStatusData{"take-1", 10, 0, 12, 0, 1000, false, ""};
+  ASSERT_TRUE(node.send(0, recording));
+  studio.runFor(milliseconds(100));
+  EXPECT_EQ(take().written, 12);
+  studio.runFor(milliseconds(300));
+  ASSERT_EQ(studio.nodeState("node1"), "lost");
+  HelloData hello;
+  hello.node_name = "node1";
+  ASSERT_TRUE(node.send(0, hello));
+  studio.runFor(milliseconds(100));
+  EXPECT_EQ(studio.nodeState("node1"), "streaming");
+  EXPECT_TRUE(take().take.empty());
+  EXPECT_EQ(take().written, 0);
+  recording.take.written = 3;
+  ASSERT_TRUE(node.send(0, recording));
+  studio.runFor(milliseconds(100));
+  EXPECT_EQ(take().written, 3);
+}
+
 // The next pose the studio sends `node`, for a frame at or after `frame_id`.
 std::optional<int64_t> nextPoseFrame(ScriptedNode& node, StudioCoordinator& studio,
                                      int64_t frame_id) {
