@@ -287,13 +287,14 @@ Check decodeVertexStatistics(const fb::VertexStatistics& in, const MessageLimits
            num(limits.max_offsets);
   }
   // The statistics' wire form (core/refine/refinement_statistics.h), packed or compressed: a
-  // header that starts with the vertex and offset counts, then at most 11 bytes a sample packed,
-  // zstd's bound of that compressed. Its contents are checked where it is combined
-  // (addEncodedRefinementStatistics).
+  // header that starts with the vertex and offset counts, then at most 12 bytes a sample and a
+  // contour bit a point packed, zstd's bound of that compressed. Its contents are checked where it
+  // is combined (addEncodedRefinementStatistics).
   const uint64_t samples = vertices * offsets, size = sizeOf(in.packed());
   const bool compressed = size >= kPackedStatisticsHeaderBytes && in.packed()->Get(6) == 0;
-  const uint64_t least = compressed ? kCompressedStatisticsHeaderBytes
-                                    : kPackedStatisticsHeaderBytes + samples,
+  const uint64_t least = compressed
+                             ? kCompressedStatisticsHeaderBytes
+                             : kPackedStatisticsHeaderBytes + samples + contourBytes(vertices),
                  most = compressed ? maxCompressedStatisticsBytes(samples)
                                    : maxPackedStatisticsBytes(samples);
   if (size < least || size > most) {

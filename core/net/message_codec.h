@@ -29,8 +29,9 @@ namespace lumistage {
 // node would refuse the studio's record command); 5: refinement statistics carry the hull's edges
 // and offsets eighths of a step (a version 4 studio would refuse the statistics and misplace every
 // vertex); 6: refinement statistics' values as differences and the cameras' disagreement (a
-// version 5 studio would read wrong colours).
-inline constexpr uint16_t kProtocolVersion = 6;
+// version 5 studio would read wrong colours); 7: refinement statistics end with the vertices'
+// contour bits (a version 6 studio would refuse every node's statistics).
+inline constexpr uint16_t kProtocolVersion = 7;
 
 struct HelloData {
   std::string node_name;

@@ -83,8 +83,19 @@ float MeshRefiner::dataError(const RefinementStatistics& stats, size_t s, int i)
     const size_t window = size_t(vertex_count_) * config_.offset_count;
     colour = windowColour(stats, s, windowPoints(stats), window, sigma2);
   }
+  const int v = int(s / size_t(config_.offset_count));
+  const float contour =
+      stats.contour[v] && lastInside(stats, v) == i ? float(config_.contour_weight) : 0.0f;
   return float(config_.outside_weight) * float(stats.outside[s]) -
-         float(config_.outward_weight) * t_rel + float(config_.colour_weight) * colour;
+         float(config_.outward_weight) * t_rel + float(config_.colour_weight) * colour - contour;
+}
+
+int MeshRefiner::lastInside(const RefinementStatistics& stats, int v) const {
+  const int m = config_.offset_count;
+  const uint8_t* outside = &stats.outside[size_t(v) * m];
+  for (int i = m - 2; i >= 0; --i)
+    if (outside[i] == 0 && outside[i + 1] > 0) return i;
+  return -1;
 }
 
 int MeshRefiner::choose(const float* e) const {
@@ -130,6 +141,13 @@ bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>
       e += colour_w * windowColour(stats, s, points, samples, sigma2);
     }
     data_[s] = e;
+  }
+  // The contour term: at a vertex on a camera's contour, the last sample inside the hull.
+  const float contour_w = float(config_.contour_weight);
+  for (int v = 0; contour_w > 0 && v < vertex_count_; ++v) {
+    if (!stats.contour[v]) continue;
+    const int i = lastInside(stats, v);
+    if (i >= 0) data_[size_t(v) * m + i] -= contour_w;
   }
   const float inv_t = config_.t_max_m > 0 ? 1.0f / float(config_.t_max_m) : 0.0f;
   const float temporal = has_previous_ ? float(config_.temporal_weight) : 0.0f;

@@ -34,11 +34,14 @@ class MeshRefiner {
 
   // The data error of the last refine() (terms 1 to 3), per sample v·offset_count + t.
   const std::vector<float>& dataErrors() const { return data_; }
-  // The data terms of one sample (of a vertex, not of a window point), for tests and tools.
+  // The data terms of one sample (of a vertex, not of a window point), for tests and tools. The
+  // contour term counts at the vertex's last sample inside the hull.
   float dataError(const RefinementStatistics& stats, size_t sample, int offset_index) const;
 
  private:
   int choose(const float* error) const;
+  // Vertex v's last sample inside the hull before it leaves outward (the contour term's), or -1.
+  int lastInside(const RefinementStatistics& stats, int v) const;
   // 1 or RefineConfig::kWindowPoints (the statistics' points a vertex), 0 when they are not of
   // this mesh.
   int windowPoints(const RefinementStatistics& stats) const;

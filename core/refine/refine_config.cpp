@@ -10,10 +10,12 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
   RefineConfig config;
   in.requireMap(node, key);
   in.checkKeys(node, key,
-               {"offset_count", "t_max_m", "t_inward_m", "outside_weight", "outward_weight",
-                "colour_weight", "colour_sigma", "unseen_colour", "smooth_weight",
-                "temporal_weight", "tie_margin", "smooth_iterations", "depth_map_step",
-                "depth_tolerance_m", "min_facing_cos", "colour_bits", "window_points", "window_m"});
+               {"offset_count",   "t_max_m",           "t_inward_m",     "outside_weight",
+                "outward_weight", "colour_weight",     "colour_sigma",   "unseen_colour",
+                "smooth_weight",  "temporal_weight",   "tie_margin",     "smooth_iterations",
+                "depth_map_step", "depth_tolerance_m", "min_facing_cos", "colour_bits",
+                "window_points",  "window_m",          "contour_weight", "contour_cos",
+                "contour_probe_m"});
   auto number = [&](const char* name, double& value, double lo, double hi, const char* expected) {
     if (!node[name]) return;
     const std::string path = YamlReader::child(key, name);
@@ -49,6 +51,9 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
     in.fail(node["window_points"], YamlReader::child(key, "window_points"),
             "expected 1 or 3 points");
   number("window_m", config.window_m, 0, 0.05, "expected metres in [0, 0.05]");
+  number("contour_weight", config.contour_weight, 0, 1e6, "expected a weight >= 0");
+  number("contour_cos", config.contour_cos, 0, 1, "expected a cosine in [0, 1]");
+  number("contour_probe_m", config.contour_probe_m, 0, 0.5, "expected metres in [0, 0.5]");
   return config;
 }
 

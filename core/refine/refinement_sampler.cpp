@@ -214,6 +214,33 @@ bool seesTheSurface(const SamplerCamera& input, const Key& key, const DepthMap& 
          float(seen) >= RefinementSampler::kMinSurfaceSeen * float(in_view);
 }
 
+// Marks the vertices that `camera` sees on its contour (RefineConfig::contour_cos,
+// contour_probe_m): facing it at a grazing angle, not hidden in its depth map, and with the point
+// a probe out along the normal falling where the posed mesh does not cover the map, so that
+// nothing behind the vertex fills the camera's silhouette there. A few microseconds a camera: the
+// map and the vertices' projections are the sampler's own.
+void markContour(const Camera& camera, const DepthMap& depth, const RefineConfig& config,
+                 const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
+                 std::vector<uint8_t>& contour) {
+  const FloatProjection projection(camera);
+  const Eigen::Vector3f centre = camera.centre().cast<float>();
+  const float max_cos = float(config.contour_cos), probe = float(config.contour_probe_m);
+  const float tolerance = float(config.depth_tolerance_m);
+  const Eigen::Matrix2Xf& pixels = depth.vertexPixels();
+  const Eigen::VectorXf& depths = depth.vertexDepths();
+  for (Eigen::Index v = 0; v < positions.cols(); ++v) {
+    if (contour[v] || !(depths(v) > 0)) continue;
+    const Eigen::Vector3f x = positions.col(v), nrm = normals.col(v), to_camera = centre - x;
+    const float facing = nrm.dot(to_camera);
+    if (!(facing > 0 && facing <= max_cos * to_camera.norm())) continue;
+    if (!depth.visible(pixels(0, v), pixels(1, v), depths(v), tolerance)) continue;
+    const Eigen::Vector3f c = projection.toCamera(x + probe * nrm);
+    if (c.z() <= 0) continue;
+    const Eigen::Vector2f p = projection.pixel(c);
+    if (depth.depthAt(p.x(), p.y()) == DepthMap::kFar) contour[v] = 1;
+  }
+}
+
 }  // namespace
 
 Eigen::Vector3f windowDirection(const Eigen::Vector3f& normal) {
@@ -264,6 +291,8 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
         return;
       }
       sampleCamera(c, key, depth_maps_[k], *points, *point_normals, out);
+      if (config_.contour_weight > 0)
+        markContour(*c.camera, depth_maps_[k], config_, positions, normals, out.contour);
     };
     static const GreenScreenKeyer kDefaultKeyer;
     if (c.background) {

@@ -22,6 +22,7 @@ void RefinementStatistics::reset(int vertices, int offsets, int bits) {
   sums.assign(3 * n, 0);
   squares.assign(n, 0);
   edges.assign(n, 0);
+  contour.assign(size_t(vertices), 0);
 }
 
 bool RefinementStatistics::add(const RefinementStatistics& other) {
@@ -37,6 +38,7 @@ bool RefinementStatistics::add(const RefinementStatistics& other) {
     edges[s] = RefinementStatistics::innerEdge(edges[s], other.edges[s]);
   }
   for (size_t i = 0; i < 3 * n; ++i) sums[i] = uint16_t(sums[i] + other.sums[i]);
+  for (size_t v = 0; v < contour.size(); ++v) contour[v] |= other.contour[v];
   dropOutside();
   return true;
 }
@@ -203,7 +205,8 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
   }
   const int sum_bytes = std::min(2, bytesFor(max_sum)), square_bytes = bytesFor(max_residual);
   const size_t values = kHeaderBytes + n, residuals = values + 3 * coloured * sum_bytes;
-  out.resize(residuals + squared * square_bytes + leaving);
+  const size_t contour_at = residuals + squared * square_bytes + leaving;
+  out.resize(contour_at + contourBytes(uint64_t(stats.vertex_count)));
   size_t at = 0;
   put(out, at, uint32_t(stats.vertex_count), 4);
   out[at++] = uint8_t(stats.offset_count);
@@ -231,6 +234,9 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
   at = residuals + squared * square_bytes;
   forEachLeaving(stats.outside.data(), 0xff, n, stats.offset_count,
                  [&](size_t s) { out[at++] = stats.edges[s]; });
+  std::fill(out.begin() + contour_at, out.end(), 0);
+  for (size_t v = 0; v < stats.contour.size(); ++v)
+    if (stats.contour[v]) out[contour_at + v / 8] |= uint8_t(1 << (v % 8));
 }
 
 namespace {
@@ -249,8 +255,8 @@ constexpr uint8_t kPackedOutside = 15;  // a packed count's outside count
 
 // Whether the packed form after its header holds exactly the n samples' counts and the values
 // they announce; the reason when not.
-const char* checkBody(std::span<const uint8_t> data, size_t n, int offsets, int sum_bytes,
-                      int square_bytes, size_t& coloured, size_t& squared) {
+const char* checkBody(std::span<const uint8_t> data, size_t vertices, size_t n, int offsets,
+                      int sum_bytes, int square_bytes, size_t& coloured, size_t& squared) {
   if (data.size() < kHeaderBytes + n) return "truncated counts";
   const uint8_t* counts = data.data() + kHeaderBytes;
   size_t with_colour = 0, with_square = 0;  // not the references: the counts' bytes may alias them
@@ -261,8 +267,12 @@ const char* checkBody(std::span<const uint8_t> data, size_t n, int offsets, int 
   coloured = with_colour, squared = with_square;
   size_t leaving = 0;
   forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t) { ++leaving; });
-  if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes + leaving)
+  if (data.size() != kHeaderBytes + n + coloured * 3 * sum_bytes + squared * square_bytes +
+                         leaving + contourBytes(vertices))
     return "size does not match its counts";
+  // The contour's last byte holds no bits beyond the points.
+  if (vertices % 8 != 0 && data.back() >> (vertices % 8) != 0)
+    return "contour bits past its points";
   return nullptr;
 }
 
@@ -277,7 +287,8 @@ bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std:
   if (uint64_t(vertices) * offsets > uint64_t(max_samples)) return fail("too many samples");
   const size_t n = size_t(vertices) * offsets;
   size_t coloured, squared;
-  if (const char* why = checkBody(data, n, offsets, sum_bytes, square_bytes, coloured, squared))
+  if (const char* why =
+          checkBody(data, vertices, n, offsets, sum_bytes, square_bytes, coloured, squared))
     return fail(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
   out.reset(int(vertices), offsets, bits);
@@ -293,6 +304,7 @@ bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std:
   }
   const uint8_t* p = values.end();
   forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t s) { out.edges[s] = *p++; });
+  for (size_t v = 0; v < vertices; ++v) out.contour[v] = (p[v / 8] >> (v % 8)) & 1;
   return true;
 }
 
@@ -306,7 +318,8 @@ bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::st
   if (!validWidths(sum_bytes, square_bytes)) return fail("bad value widths");
   const size_t n = size_t(vertices) * offsets;
   size_t coloured, squared;
-  if (const char* why = checkBody(data, n, offsets, sum_bytes, square_bytes, coloured, squared))
+  if (const char* why =
+          checkBody(data, vertices, n, offsets, sum_bytes, square_bytes, coloured, squared))
     return fail(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
   PackedValues values(counts + n, coloured, squared, sum_bytes, square_bytes);
@@ -324,6 +337,7 @@ bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::st
   forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t s) {
     sum.edges[s] = RefinementStatistics::innerEdge(sum.edges[s], *p++);
   });
+  for (size_t v = 0; v < vertices; ++v) sum.contour[v] |= (p[v / 8] >> (v % 8)) & 1;
   return true;
 }
 
@@ -410,12 +424,12 @@ bool RefinementStatisticsCodec::unpack(std::span<const uint8_t> data, int max_sa
   constexpr size_t h = kCompressedStatisticsHeaderBytes;
   if (data.size() < h) return fail("shorter than its compressed header");
   if (data[7] != kZstdCompression) return fail("unknown compression " + std::to_string(data[7]));
-  const uint64_t n = uint64_t(get(data.data(), 4)) * data[4];
+  const uint64_t points = get(data.data(), 4), n = points * data[4];
   if (n > uint64_t(max_samples)) return fail("too many samples");
-  const uint64_t size = get(data.data() + 8, 4);
-  if (size < kHeaderBytes + n || size > maxPackedStatisticsBytes(n)) {
+  const uint64_t size = get(data.data() + 8, 4), least = kHeaderBytes + n + contourBytes(points);
+  if (size < least || size > maxPackedStatisticsBytes(n)) {
     return fail("compressed form declares " + std::to_string(size) + " packed bytes, " +
-                std::to_string(n) + " samples take " + std::to_string(kHeaderBytes + n) + " to " +
+                std::to_string(n) + " samples take " + std::to_string(least) + " to " +
                 std::to_string(maxPackedStatisticsBytes(n)));
   }
   const std::span<const uint8_t> frame = data.subspan(h);

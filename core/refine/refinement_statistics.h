@@ -26,6 +26,10 @@ namespace lumistage {
 // edge at (edges[s] - 1) / 254 of the step from s to s + 1 — the innermost of the silhouette edges
 // that the set's cameras cross there, each located below a pixel (RefinementSampler); 0 when none
 // was located. Sets combine by the innermost edge, which is the hull's: exact too.
+//
+// And per point, whether one of the set's cameras sees it on its silhouette's contour (contour[v],
+// RefinementSampler): where the visual hull touches the surface, so that the hull's crossing along
+// the point's normal is the surface itself rather than a bound on it. Sets combine by either.
 struct RefinementStatistics {
   int vertex_count = 0;
   int offset_count = 0;
@@ -35,6 +39,7 @@ struct RefinementStatistics {
   std::vector<uint16_t> sums;         // per sample: R, G, B
   std::vector<uint32_t> squares;      // per sample: Σ over cameras and channels of c²
   std::vector<uint8_t> edges;         // per sample: 0, or the hull's edge toward s + 1
+  std::vector<uint8_t> contour;       // per point (vertex_count): 1 on a camera's contour, else 0
 
   static constexpr int kEdgeLevels = 254;  // an edge's fraction of a step: (edges[s] - 1) / 254
   // The innermost of two edges, either possibly absent (0).
@@ -71,7 +76,8 @@ struct RefinementStatistics {
 // colour count, rounded down; modulo 2^32), k times the colour's variance, which is small where
 // the cameras agree. Then one byte for every sample where the hull leaves (leavesHull()): its
 // edge. The differences and the variances are what makes the form compress: a third less than
-// the sums and squares as they are, on a node's statistics (docs/lumigraph.md).
+// the sums and squares as they are, on a node's statistics (docs/lumigraph.md). Last, the points'
+// contour flags, a bit each (point v: bit v % 8 of byte v / 8).
 //
 // Compressed (RefinementStatisticsCodec::encode, what nodes send): the packed form's vertex count,
 // offset count and colour bits in the same places, then 0 where the packed form has its sums'
@@ -80,10 +86,14 @@ struct RefinementStatistics {
 // whole packed form.
 inline constexpr size_t kPackedStatisticsHeaderBytes = 8;
 inline constexpr size_t kCompressedStatisticsHeaderBytes = 12;
+// The contour flags' bytes of `points` points.
+inline constexpr uint64_t contourBytes(uint64_t points) {
+  return (points + 7) / 8;
+}
 // The largest packed form of `samples` samples: a count, 2-byte sums, a 4-byte square and an edge
-// each.
+// each, and a contour bit for each of at most as many points.
 inline constexpr uint64_t maxPackedStatisticsBytes(uint64_t samples) {
-  return kPackedStatisticsHeaderBytes + samples * 12;
+  return kPackedStatisticsHeaderBytes + samples * 12 + contourBytes(samples);
 }
 // The largest compressed form of `samples` samples: the header and zstd's bound for the largest
 // packed form (ZSTD_COMPRESSBOUND).

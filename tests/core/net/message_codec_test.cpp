@@ -41,6 +41,7 @@ std::vector<Message> oneOfEach() {
   stats.offset_count = 3;
   stats.packed = {5, 0, 0, 0, 3, 6, 1, 2};  // the header, then a byte a sample (no colour)
   for (int i = 0; i < 15; ++i) stats.packed.push_back(uint8_t(i % 3));
+  stats.packed.push_back(0x05);  // the contour bits of the 5 vertices
   OffsetsData offsets{21, {0, 10, 20, 5, 7}, {0x0fff, 0, 0x8001, 3, 0xffff}};
   ViewData view{1,
                 320,
@@ -206,13 +207,13 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
   stats.offset_count = 21;
   stats.packed.assign(12, 1);
   EXPECT_EQ(decodeError(envelope(stats)),
-            "vertex statistics: 41000 vertices x 21 offsets needs 861008 to 10332008 packed bytes, "
+            "vertex statistics: 41000 vertices x 21 offsets needs 866133 to 10439633 packed bytes, "
             "got 12");
   stats.vertex_count = 2;
   stats.offset_count = 3;
-  stats.packed.assign(156, 0);  // 0 where the packed form has its sums' width: compressed
+  stats.packed.assign(157, 0);  // 0 where the packed form has its sums' width: compressed
   EXPECT_EQ(decodeError(envelope(stats)),
-            "vertex statistics: 2 vertices x 3 offsets needs 12 to 155 compressed bytes, got 156");
+            "vertex statistics: 2 vertices x 3 offsets needs 12 to 156 compressed bytes, got 157");
 
   stats = std::get<VertexStatisticsData>(oneOfEach()[4].body);
   stats.packed[0] = 4;

@@ -19,6 +19,7 @@ RefineConfig noTerms() {
   c.offset_count = 21;
   c.t_inward_m = c.t_max_m;
   c.outside_weight = c.outward_weight = c.colour_weight = c.smooth_weight = c.temporal_weight = 0;
+  c.contour_weight = 0;
   c.tie_margin = 0;
   return c;
 }
@@ -205,6 +206,32 @@ TEST(MeshRefiner, ASilhouetteCrossingInwardMovesHalfAStepIn) {
   for (int i = 0; i < 3; ++i) one.stats.outside[i] = 1;
   one.stats.dropOutside();
   EXPECT_EQ(refineOne(c, one.stats), kStep * 3 - kHalf);
+}
+
+// The contour term: where a camera sees the vertex on its contour, the hull's crossing is the
+// surface, and a colour term a little higher at the last sample inside (the screen's spill on the
+// rim) no longer takes the vertex a step in; elsewhere it still does.
+TEST(MeshRefiner, TheContourTermTakesAContourVertexToTheHull) {
+  RefineConfig c = noTerms();
+  c.outside_weight = c.colour_weight = 1;
+  c.contour_weight = 0.6;
+  OneVertex one(c);
+  for (int i = 15; i < c.offset_count; ++i) one.stats.outside[i] = 1;
+  for (int i = 0; i < 15; ++i) one.colour(i, 4, 120, i == 13 ? 0 : (i == 14 ? 20 : 40));
+  // Sample 13 agrees best; 14, the last inside, a little less.
+  EXPECT_EQ(refineOne(c, one.stats), kStep * 13);
+  MeshRefiner refiner(c, 1, {});
+  const float inside = refiner.dataError(one.stats, 14, 14);
+  EXPECT_GT(inside, 0.3f);
+  one.stats.contour[0] = 1;
+  // On a contour: the last sample inside, moved to the hull's edge (none located: halfway).
+  EXPECT_EQ(refineOne(c, one.stats), kStep * 14 + kHalf);
+  EXPECT_FLOAT_EQ(refiner.dataError(one.stats, 14, 14), inside - 0.6f);
+  EXPECT_FLOAT_EQ(refiner.dataError(one.stats, 13, 13), 0.0f);  // only the last inside
+  // A weaker term than the colour's difference leaves the choice to the colours: sample 13, though
+  // the error's parabola through it and its neighbours now leans half a step toward the hull.
+  c.contour_weight = 0.3;
+  EXPECT_EQ(refineOne(c, one.stats), kStep * 13 + kHalf);
 }
 
 TEST(MeshRefiner, SmoothnessPullsAnAmbiguousVertexToItsNeighbours) {
@@ -557,6 +584,56 @@ TEST_F(EllipsoidScene, WindowPointsAreSampledAfterTheVertices) {
 // A camera knocked toward the wall sees only the screen: every sample would lie outside its
 // silhouette, which drops every sample's colours and leaves the mesh to the hull term alone. It is
 // left out, and the statistics are those of the other cameras; a camera that sees the shape is not.
+// A vertex is on a camera's contour where the camera sees it edge-on with nothing of the mesh
+// behind it: a sphere with a second one behind it, half a radius aside, has a contour on the side
+// away from the second sphere only (there the hull's crossing is the surface; on the other side
+// the camera's silhouette is the sphere behind).
+TEST_F(EllipsoidScene, MarksTheVerticesOnACamerasContour) {
+  const Camera& camera = rig_->camera(0);
+  const Eigen::Vector3d centre = camera.centre();
+  const Eigen::Vector3d ahead = (shape_.centre - centre).normalized();
+  const Eigen::Vector3d side = camera.rotation().row(0).transpose();  // the image's x, in the world
+  const TriangleMesh front = testing::icosphere(shape_.centre, 0.25, 3);
+  const TriangleMesh behind =
+      testing::icosphere(shape_.centre + 0.6 * ahead + 0.25 * side, 0.25, 3);
+  const int n = front.vertexCount();
+  TriangleMesh both;
+  both.positions.resize(3, 2 * n);
+  both.normals.resize(3, 2 * n);
+  both.positions << front.positions, behind.positions;
+  both.normals << front.normals, behind.normals;
+  both.triangles = front.triangles;
+  for (const Eigen::Vector3i& t : behind.triangles) both.triangles.push_back(t.array() + n);
+  RefineConfig config;
+  config.depth_map_step = 4;
+  config.contour_probe_m = 0.04;  // beyond a depth map's cell at 2 m on these small cameras
+  RefinementSampler sampler(config);
+  RefinementStatistics stats;
+  sampler.sample(cameras({0}), both.positions, both.normals, both.triangles, stats);
+  ASSERT_EQ(sampler.seesNobody()[0], 0);
+  int away = 0, away_marked = 0, toward_marked = 0, facing_marked = 0;
+  for (int v = 0; v < n; ++v) {
+    const Eigen::Vector3d normal = front.normals.col(v).cast<double>();
+    const Eigen::Vector3d to_camera = (centre - front.positions.col(v).cast<double>()).normalized();
+    const double facing = normal.dot(to_camera), aside = normal.dot(side);
+    const bool marked = stats.contour[v] != 0;
+    if (facing > 0.35) facing_marked += marked;
+    if (facing > 0.05 && facing <= 0.25 && aside < -0.9) ++away, away_marked += marked;
+    if (aside > 0.9) toward_marked += marked;
+  }
+  EXPECT_EQ(facing_marked, 0);
+  EXPECT_EQ(toward_marked, 0);
+  ASSERT_GE(away, 3);
+  EXPECT_EQ(away_marked, away);
+  // Only the mesh's vertices: the window points come after them and are never marked.
+  EXPECT_EQ(std::count(stats.contour.begin() + 2 * n, stats.contour.end(), 1), 0);
+  // The term off: nothing is marked.
+  config.contour_weight = 0;
+  RefinementSampler off(config);
+  off.sample(cameras({0}), both.positions, both.normals, both.triangles, stats);
+  EXPECT_EQ(std::count(stats.contour.begin(), stats.contour.end(), 1), 0);
+}
+
 TEST_F(EllipsoidScene, ACameraThatSeesNobodyIsLeftOut) {
   const TriangleMesh sphere = testing::icosphere(shape_.centre, 0.27, 2);
   std::vector<int> all, others;

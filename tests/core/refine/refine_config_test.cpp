@@ -73,6 +73,21 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
   EXPECT_NE(errorFor("f.yaml", "  window_m: 0.1\n")
                 .find("f.yaml:5: refine.window_m: expected metres in [0, 0.05]"),
             std::string::npos);
+  // The contour term: its weight, the facing that counts as edge-on and the probe's reach.
+  std::ofstream(folder / "i.yaml") << head
+                                   << "refine:\n  contour_weight: 0\n  contour_cos: 0.2\n"
+                                      "  contour_probe_m: 0.03\n";
+  const RefineConfig i = loadStudioConfig(folder / "i.yaml").refine;
+  EXPECT_EQ(i.contour_weight, 0.0);
+  EXPECT_DOUBLE_EQ(i.contour_cos, 0.2);
+  EXPECT_DOUBLE_EQ(i.contour_probe_m, 0.03);
+  EXPECT_GT(RefineConfig{}.contour_weight, 0.0);
+  EXPECT_NE(errorFor("j.yaml", "  contour_cos: 1.5\n")
+                .find("j.yaml:5: refine.contour_cos: expected a cosine in [0, 1]"),
+            std::string::npos);
+  EXPECT_NE(errorFor("k.yaml", "  contour_weight: -1\n")
+                .find("k.yaml:5: refine.contour_weight: expected a weight >= 0"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -34,6 +34,8 @@ RefinementStatistics randomStatistics(std::mt19937& rng, int vertices, int offse
   std::uniform_int_distribution<int> edge(0, 255);
   for (int i = 0; i < s.sampleCount(); ++i)
     if (s.leavesHull(i)) s.edges[i] = uint8_t(edge(rng));
+  // A point in four on a camera's contour.
+  for (int v = 0; v < vertices; ++v) s.contour[v] = coin(rng) == 0;
   return s;
 }
 
@@ -76,7 +78,8 @@ TEST(RefinementStatistics, PackedValuesAreDifferencesAndDisagreement) {
   std::vector<uint8_t> packed;
   encodeRefinementStatistics(s, packed);
   const size_t n = size_t(s.sampleCount());
-  ASSERT_EQ(packed.size(), kPackedStatisticsHeaderBytes + n + 3 * n + n);  // 1-byte values
+  // 1-byte values, then the contour bits (none set).
+  ASSERT_EQ(packed.size(), kPackedStatisticsHeaderBytes + n + 3 * n + n + contourBytes(kVertices));
   const size_t values = packed.size() - kPackedStatisticsHeaderBytes - n;
   const size_t zeros = size_t(std::count(packed.end() - values, packed.end(), uint8_t(0)));
   EXPECT_GE(zeros, values - 3 * kVertices);  // each vertex's first sums may differ
@@ -114,6 +117,15 @@ TEST(RefinementStatistics, MalformedWireIsRefused) {
   bad = wire;
   bad[0] = 0xff, bad[1] = 0xff, bad[2] = 0xff;  // absurd vertex count
   EXPECT_FALSE(decodeRefinementStatistics(bad, back));
+  // 50 points: the contour's last byte holds 2 of them; a bit beyond is no point's.
+  bad = wire;
+  bad.back() |= 0x80;
+  EXPECT_FALSE(decodeRefinementStatistics(bad, back, &error));
+  EXPECT_EQ(error, "refinement statistics: contour bits past its points");
+  RefinementStatistics sum;
+  sum.reset(50, 21, 6);
+  EXPECT_FALSE(addEncodedRefinementStatistics(bad, sum, &error));
+  EXPECT_TRUE(decodeRefinementStatistics(wire, back, &error)) << error;
 }
 
 TEST(RefinementStatistics, CompressedWireRoundTripsExactly) {
@@ -209,12 +221,13 @@ TEST(RefinementStatistics, HostileCompressedWireIsRefused) {
   bad[7] = 2;
   EXPECT_EQ(refusal(bad), why + "unknown compression 2");
 
-  // Declared sizes: above the bound of 50 x 21 samples (8 + 12 a sample), below their counts, or
-  // other than the frame's own.
-  EXPECT_EQ(refusal(withSize(12609)),
-            why + "compressed form declares 12609 packed bytes, 1050 samples take 1058 to 12608");
-  EXPECT_EQ(refusal(withSize(1000)),
-            why + "compressed form declares 1000 packed bytes, 1050 samples take 1058 to 12608");
+  // Declared sizes: above the bound of 50 x 21 samples (8 + 12 a sample and a contour bit for as
+  // many points), below their counts and the 50 points' contour bits, or other than the frame's
+  // own.
+  EXPECT_EQ(refusal(withSize(12741)),
+            why + "compressed form declares 12741 packed bytes, 1050 samples take 1065 to 12740");
+  EXPECT_EQ(refusal(withSize(1064)),
+            why + "compressed form declares 1064 packed bytes, 1050 samples take 1065 to 12740");
   EXPECT_EQ(refusal(withSize(uint32_t(packed.size() + 1))),
             why + "zstd frame declares " + std::to_string(packed.size()) + " bytes, the header " +
                 std::to_string(packed.size() + 1));
@@ -275,6 +288,16 @@ TEST(RefinementStatistics, CombiningIsExactAndOrderIndependent) {
     edges += forward.edges[i] != 0;
   }
   EXPECT_GT(edges, 20);  // the case is exercised
+  // A point is on the combined set's contour where it is on any node's.
+  int contour = 0;
+  for (int v = 0; v < 200; ++v) {
+    const bool any = std::any_of(nodes.begin(), nodes.end(),
+                                 [&](const RefinementStatistics& n) { return n.contour[v] != 0; });
+    EXPECT_EQ(forward.contour[v], any ? 1 : 0) << v;
+    contour += forward.contour[v];
+  }
+  EXPECT_GT(contour, 100);  // 1 - (3/4)^4 of them
+  EXPECT_LT(contour, 200);
   RefinementStatistics other;
   other.reset(201, 21, 6);
   EXPECT_FALSE(forward.add(other));
