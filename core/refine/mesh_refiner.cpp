@@ -85,7 +85,9 @@ float MeshRefiner::dataError(const RefinementStatistics& stats, size_t s, int i)
   }
   const int v = int(s / size_t(config_.offset_count));
   const float contour =
-      stats.contour[v] && lastInside(stats, v) == i ? float(config_.contour_weight) : 0.0f;
+      size_t(v) < stats.contour.size() && stats.contour[v] && lastInside(stats, v) == i
+          ? float(config_.contour_weight)
+          : 0.0f;
   return float(config_.outside_weight) * float(stats.outside[s]) -
          float(config_.outward_weight) * t_rel + float(config_.colour_weight) * colour - contour;
 }
@@ -143,7 +145,8 @@ bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>
     data_[s] = e;
   }
   // The contour term: at a vertex on a camera's contour, the last sample inside the hull.
-  const float contour_w = float(config_.contour_weight);
+  const float contour_w =
+      stats.contour.size() >= size_t(vertex_count_) ? float(config_.contour_weight) : 0.0f;
   for (int v = 0; contour_w > 0 && v < vertex_count_; ++v) {
     if (!stats.contour[v]) continue;
     const int i = lastInside(stats, v);
