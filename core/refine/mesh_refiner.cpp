@@ -93,10 +93,9 @@ float MeshRefiner::dataError(const RefinementStatistics& stats, size_t s, int i)
 }
 
 int MeshRefiner::lastInside(const RefinementStatistics& stats, int v) const {
-  const int m = config_.offset_count;
-  const uint8_t* outside = &stats.outside[size_t(v) * m];
-  for (int i = m - 2; i >= 0; --i)
-    if (outside[i] == 0 && outside[i + 1] > 0) return i;
+  const size_t first = size_t(v) * config_.offset_count;
+  for (int i = config_.offset_count - 2; i >= 0; --i)
+    if (stats.leavesHull(first + i)) return i;
   return -1;
 }
 
