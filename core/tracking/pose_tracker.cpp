@@ -1031,9 +1031,11 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z);
   out.hull_points = int(hull.size());
   if (volume < opt.min_volume_m3 || volume > opt.max_volume_m3 || top_z < 1.0) return false;
+  // The crown under the hull's top, which the generic human's proportions are scaled to.
+  const double crown_z = top_z - opt.hair_m;
   if (!shape_calibrated) {
     BodyShape s;
-    s.height_m = std::clamp(s.height_m * top_z / generic_top_z, 1.3, 2.3);
+    s.height_m = std::clamp(s.height_m * crown_z / generic_top_z, 1.3, 2.3);
     setShape(s);
   }
   use_prior = false;
@@ -1085,10 +1087,10 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
     auto make = [&](const double* v) {
       foot_scale = v[6];
       BodyShape s;
-      // The height that keeps the body's top at the hull's top with this leg length
+      // The height that keeps the body's crown under the hull's top with this leg length
       // (makeHumanSkeleton: the legs are 0.84 of the generic height unit, 1.75 m).
-      s.height_m = std::clamp(BodyShape{}.height_m * top_z / (generic_top_z + 0.84 * (v[2] - 1.0)),
-                              1.3, 2.3);
+      s.height_m = std::clamp(
+          BodyShape{}.height_m * crown_z / (generic_top_z + 0.84 * (v[2] - 1.0)), 1.3, 2.3);
       s.arm_length_scale = v[1];
       s.leg_length_scale = v[2];
       s.shoulder_width_scale = v[3];
