@@ -566,8 +566,18 @@ TEST(StudioCoordinator, ANodeWhoseCamerasRestartedAloneIsToldToFollowTheOthers) 
     two.studio.runFor(milliseconds(30));
   }
   EXPECT_EQ(badMessagesOf(two.studio, "node2"), refused);
-  // Its silhouettes used again, the frames wait for it and it is sent their poses.
-  EXPECT_TRUE(nextPoseFrame(two.node2, two.studio, f + 1));
+  // Its silhouettes used again, the frames wait for it and it is sent their poses: one of the
+  // frames from f + 1 on, while both nodes go on sending, as nodes do. (Waiting on the ten frames
+  // above alone, one run of the whole suite on the 2-core machine saw no pose reach node2 within
+  // 3 s, 2026-12-04; the other runs did.)
+  bool posed = false;
+  for (int k = 11; k <= 40 && !posed; ++k) {
+    posed = nextPoseFrame(two.node2, two.studio, f + 1).has_value();
+    if (!posed) {
+      ASSERT_TRUE(two.both(f + k));
+    }
+  }
+  EXPECT_TRUE(posed);
 }
 
 // The first statistics of a frame set the sums' sizes. When they are refused (here another mesh's,
