@@ -122,8 +122,8 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
     report.set(
         section, "mpjpe_mm_max",
         errors_mm.empty() ? std::nan("") : *std::max_element(errors_mm.begin(), errors_mm.end()));
-    report.set(section, "mpjpe_mm_p95",
-               nearestRankPercentile(errors_mm, 0.95));  // as the surface's
+    // The nearest-rank percentile, as the surface's.
+    report.set(section, "mpjpe_mm_p95", nearestRankPercentile(errors_mm, 0.95));
     // Each joint's share: where the error is a bias (the shape calibration's, docs/eval-report.md)
     // the height shows it, whichever way the actor faces.
     const double frames_counted = double(errors_mm.size());
