@@ -89,20 +89,17 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
     ++tracked;
     report.setFrame(f, "fit_rms_mm", r.fit_rms_m * 1e3);
     if (!truth.empty()) {
+      // The initialising frame itself is reported but not held to the tracking bound.
+      const bool counted = initialised || r.state == TrackState::kTracking;
       double sum = 0;
-      for (size_t j = 0; j < truth_index.size(); ++j)
-        sum += (r.joints[j] - truth[f][truth_index[j]]).norm();
+      for (size_t j = 0; j < truth_index.size(); ++j) {
+        const Eigen::Vector3d d = r.joints[j] - truth[f][truth_index[j]];
+        sum += d.norm();
+        if (counted) joint_error_m[j] += d.norm(), joint_height_m[j] += d.z();
+      }
       const double mm = 1e3 * sum / truth_index.size();
       report.setFrame(f, "mpjpe_mm", mm);
-      // The initialising frame itself is reported but not held to the tracking bound.
-      if (initialised || r.state == TrackState::kTracking) {
-        errors_mm.push_back(mm);
-        for (size_t j = 0; j < truth_index.size(); ++j) {
-          const Eigen::Vector3d d = r.joints[j] - truth[f][truth_index[j]];
-          joint_error_m[j] += d.norm();
-          joint_height_m[j] += d.z();
-        }
-      }
+      if (counted) errors_mm.push_back(mm);
       initialised = true;
     }
   }
@@ -126,13 +123,12 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
     report.set(section, "mpjpe_mm_p95", nearestRankPercentile(errors_mm, 0.95));
     // Each joint's share: where the error is a bias (the shape calibration's, docs/eval-report.md)
     // the height shows it, whichever way the actor faces.
-    const double frames_counted = double(errors_mm.size());
+    // mm a frame counted; NaN when none was.
+    const double per_frame = errors_mm.empty() ? std::nan("") : 1e3 / double(errors_mm.size());
     for (size_t j = 0; j < truth_index.size(); ++j) {
       const std::string& name = tracker.skeleton().joint(int(j)).name;
-      report.set(section, "joint_error_mm_" + name,
-                 frames_counted > 0 ? 1e3 * joint_error_m[j] / frames_counted : std::nan(""));
-      report.set(section, "joint_height_error_mm_" + name,
-                 frames_counted > 0 ? 1e3 * joint_height_m[j] / frames_counted : std::nan(""));
+      report.set(section, "joint_error_mm_" + name, joint_error_m[j] * per_frame);
+      report.set(section, "joint_height_error_mm_" + name, joint_height_m[j] * per_frame);
     }
   }
   report.set(section, "pose_ms", mean(times_ms));
