@@ -134,4 +134,8 @@ float BackgroundModel::backgroundLevel(const Rgb& c, int x, int y) const {
   return -std::sqrt(distance2(c, blockOf(x, y)));
 }
 
+bool BackgroundModel::isForegroundLevel(float level, int x, int y) const {
+  return level < 0 && level * level > limit2_[blockOf(x, y)];
+}
+
 }  // namespace lumistage

@@ -71,6 +71,11 @@ class GreenScreenKeyer {
   // of the pixel, and a silhouette's edge lies where it is halfway between the actor's and the
   // screen's.
   int backgroundLevel(const Rgb& c, int /*x*/, int /*y*/) const { return greenExcess(c); }
+  // Whether a background level (interpolated between pixels, say) near pixel (x, y) is the
+  // actor's: isForeground() of a colour is this of its level.
+  bool isForegroundLevel(float level, int /*x*/, int /*y*/) const {
+    return level < float(threshold_);
+  }
   static int greenExcess(const Rgb& c) { return c.g - (c.r > c.b ? c.r : c.b); }
   // Learns from a frame of the empty stage, or of the stage with the actor (a person rarely fills
   // the view): sets the threshold at three quarters of the 1st percentile of the screen's green
@@ -129,6 +134,9 @@ class BackgroundModel {
   // distance from its block's mean, which is linear in the actor's share of the pixel
   // (GreenScreenKeyer::backgroundLevel).
   float backgroundLevel(const Rgb& c, int x, int y) const;
+  // Whether a background level (interpolated between pixels, say) near pixel (x, y) is the
+  // actor's, by the bound of the pixel's block: isForeground() of a colour is this of its level.
+  bool isForegroundLevel(float level, int x, int y) const;
   int frames() const { return frames_; }
 
  private:

@@ -423,7 +423,9 @@ TEST(RefinementSampler, LocatesTheHullsEdgeBelowAPixel) {
 // as its projection's column gives it, not its nearest pixel's (up to 2 levels off, 4 between a
 // Bayer image's cells); and beside the silhouette's edge, the screen's colour never enters a
 // sample's. On Bayer the colours are the 2x2 cells' (red at a cell's first column, half a pixel
-// left of its centre).
+// left of its centre). The key too is read between pixels: a sample is the actor's up to where
+// the green excess interpolated between the last actor pixel (cell) and the first screen one
+// reaches the key's threshold, and no further.
 TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
   const Rig rig = testing::smallRing();
   const Camera& camera = rig.camera(0);
@@ -465,7 +467,15 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
       const int x = int(std::floor(u + 0.5));
       return red(bayer ? x & ~1 : x);
     };
-    double interpolated_error = 0, nearest_error = 0;
+    // Where the interpolated green excess reaches the threshold: between the centres of the last
+    // actor pixel (cell) and the first screen one.
+    const double last_actor = bayer ? edge_x - 1.5 : edge_x - 1.0, pitch = bayer ? 2 : 1;
+    const double actor_excess = 60 - std::max(red(bayer ? edge_x - 2 : edge_x - 1), 120.0);
+    const double screen_excess = 200 - 60;
+    const double turns =
+        last_actor + pitch * (keyer.threshold() - actor_excess) / (screen_excess - actor_excess);
+    ASSERT_GT(turns, edge_x - 0.5);  // past where the nearest pixel's key turned
+    double interpolated_error = 0, nearest_error = 0, furthest = 0;
     int inner = 0, beside_edge = 0;
     for (int v = 0; v < sphere.vertexCount(); ++v) {
       for (int i = 0; i < config.offset_count; ++i) {
@@ -474,7 +484,8 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
         const Eigen::Vector3d p = sphere.positions.col(v).cast<double>() +
                                   config.offsetAt(i) * sphere.normals.col(v).cast<double>();
         const double u = camera.project(p)->x();
-        ASSERT_LT(u, edge_x - 0.5) << "a sample whose nearest pixel is the screen has a colour";
+        ASSERT_LT(u, turns + 1e-3) << "a sample keyed as the screen has a colour";
+        furthest = std::max(furthest, u);
         if (u > edge_x - (bayer ? 1.5 : 1.0)) {
           // Its right-hand neighbours are the screen: the colour is the actor's alone.
           ++beside_edge;
@@ -489,6 +500,7 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
     }
     ASSERT_GT(inner, 200);
     ASSERT_GT(beside_edge, 10);
+    EXPECT_GT(furthest, turns - 0.1);  // the key reaches as far as it should
     interpolated_error /= inner, nearest_error /= inner;
     EXPECT_LT(interpolated_error, 0.4) << "nearest pixel: " << nearest_error;
     EXPECT_GT(nearest_error, 0.8);
@@ -496,9 +508,9 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
 }
 
 // The sampler projects a vertex's offsets along a parabola through the projections of the
-// range's ends and middle: through a strong lens, every sample still lands on the pixel the
-// camera's own projection gives (the key alternates from one pixel column to the next, so a
-// projection a pixel off would flip it), whether the range reaches as far in as out or not.
+// range's ends and middle: through a strong lens, every sample still lands where the camera's own
+// projection puts it (the key alternates from one pixel column to the next, so a projection a
+// fraction of a pixel off would flip it), whether the range reaches as far in as out or not.
 TEST(RefinementSampler, ProjectsEveryOffsetAsTheCameraDoes) {
   RingRigSpec spec;
   spec.width = 320, spec.height = 240, spec.radius_m = 2.0, spec.vertical_fov_deg = 60;
@@ -535,7 +547,11 @@ TEST(RefinementSampler, ProjectsEveryOffsetAsTheCameraDoes) {
         const std::optional<Eigen::Vector2d> pixel = camera.project(p);
         if (!pixel || !camera.inImage(*pixel)) continue;
         ++compared;
-        const bool screen = int(std::floor(pixel->x() + 0.5)) % 2 == 1;
+        // Keyed between pixels: the actor's within (threshold - actor's excess) / (screen's -
+        // actor's) of a pixel of an even column's centre, where the interpolated excess stays
+        // below the threshold.
+        const double from_actor = std::abs(pixel->x() - 2 * std::round(pixel->x() / 2));
+        const bool screen = from_actor >= (keyer.threshold() + 10) / 150.0;
         different += stats.outside[size_t(v) * config.offset_count + i] != (screen ? 1 : 0);
       }
     }
