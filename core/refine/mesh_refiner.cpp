@@ -27,7 +27,7 @@ MeshRefiner::MeshRefiner(const RefineConfig& config, int vertex_count,
   }
   const size_t samples = size_t(vertex_count) * config_.offset_count;
   data_.assign(samples, 0);
-  total_.assign(config_.offset_count, 0);
+  total_.assign(2 * size_t(config_.offset_count), 0);  // also the outward term's two rows
   offsets_m_.resize(config_.offset_count);
   for (int i = 0; i < config_.offset_count; ++i) offsets_m_[i] = float(config_.offsetAt(i));
   previous_.assign(vertex_count, uint8_t(config_.zeroOffsetIndex()));
@@ -70,8 +70,14 @@ int MeshRefiner::windowPoints(const RefinementStatistics& stats) const {
   return 0;
 }
 
+bool MeshRefiner::onContour(const RefinementStatistics& stats, int v) {
+  return size_t(v) < stats.contour.size() && stats.contour[v];
+}
+
 float MeshRefiner::dataError(const RefinementStatistics& stats, size_t s, int i) const {
   const float t_rel = config_.t_max_m > 0 ? offsets_m_[i] / float(config_.t_max_m) : 0.0f;
+  const int v = int(s / size_t(config_.offset_count));
+  const bool contour = onContour(stats, v);
   float colour;
   if (stats.outside[s] > 0) {
     colour = 1.0f;
@@ -83,13 +89,10 @@ float MeshRefiner::dataError(const RefinementStatistics& stats, size_t s, int i)
     const size_t window = size_t(vertex_count_) * config_.offset_count;
     colour = windowColour(stats, s, windowPoints(stats), window, sigma2);
   }
-  const int v = int(s / size_t(config_.offset_count));
-  const float contour =
-      size_t(v) < stats.contour.size() && stats.contour[v] && lastInside(stats, v) == i
-          ? float(config_.contour_weight)
-          : 0.0f;
-  return float(config_.outside_weight) * float(stats.outside[s]) -
-         float(config_.outward_weight) * t_rel + float(config_.colour_weight) * colour - contour;
+  const float bonus = contour && lastInside(stats, v) == i ? float(config_.contour_weight) : 0.0f;
+  const double outward = contour ? config_.outward_weight : config_.off_contour_outward_weight;
+  return float(config_.outside_weight) * float(stats.outside[s]) - float(outward) * t_rel +
+         float(config_.colour_weight) * colour - bonus;
 }
 
 int MeshRefiner::lastInside(const RefinementStatistics& stats, int v) const {
@@ -126,22 +129,28 @@ bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>
   const float unseen = colour_w * float(config_.unseen_colour);
   const float unit = float(1 << (8 - stats.colour_bits));
   const float sigma2 = float(config_.colour_sigma * config_.colour_sigma) / (unit * unit);
+  // The outward term at each offset, on a camera's contour and off it.
+  float* on_contour = total_.data();
+  float* off_contour = on_contour + m;
   for (int i = 0; i < m; ++i) {
-    total_[i] = config_.t_max_m > 0
-                    ? -float(config_.outward_weight) * offsets_m_[i] / float(config_.t_max_m)
-                    : 0.0f;
+    const float t_rel = config_.t_max_m > 0 ? offsets_m_[i] / float(config_.t_max_m) : 0.0f;
+    on_contour[i] = -float(config_.outward_weight) * t_rel;
+    off_contour[i] = -float(config_.off_contour_outward_weight) * t_rel;
   }
   const size_t samples = size_t(vertex_count_) * m;
-  for (size_t s = 0, i = 0; s < samples; ++s, i = (i + 1 == size_t(m) ? 0 : i + 1)) {
-    float e = total_[i];
-    if (stats.outside[s] > 0) {
-      e += outside_w * float(stats.outside[s]) + colour_w;
-    } else if (stats.colour_count[s] < 2) {
-      e += unseen;
-    } else {
-      e += colour_w * windowColour(stats, s, points, samples, sigma2);
+  for (int v = 0; v < vertex_count_; ++v) {
+    const float* outward = onContour(stats, v) ? on_contour : off_contour;
+    for (size_t i = 0, s = size_t(v) * m; i < size_t(m); ++i, ++s) {
+      float e = outward[i];
+      if (stats.outside[s] > 0) {
+        e += outside_w * float(stats.outside[s]) + colour_w;
+      } else if (stats.colour_count[s] < 2) {
+        e += unseen;
+      } else {
+        e += colour_w * windowColour(stats, s, points, samples, sigma2);
+      }
+      data_[s] = e;
     }
-    data_[s] = e;
   }
   // The contour term: at a vertex on a camera's contour, the last sample inside the hull.
   const float contour_w =

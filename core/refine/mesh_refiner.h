@@ -35,13 +35,17 @@ class MeshRefiner {
   // The data error of the last refine() (terms 1 to 3), per sample v·offset_count + t.
   const std::vector<float>& dataErrors() const { return data_; }
   // The data terms of one sample (of a vertex, not of a window point), for tests and tools. The
-  // contour term counts at the vertex's last sample inside the hull.
+  // contour term counts at the vertex's last sample inside the hull, the outward term by whether
+  // the vertex is on a contour.
   float dataError(const RefinementStatistics& stats, size_t sample, int offset_index) const;
 
  private:
   int choose(const float* error) const;
   // Vertex v's last sample inside the hull before it leaves outward (the contour term's), or -1.
   int lastInside(const RefinementStatistics& stats, int v) const;
+  // Whether a camera sees vertex v on its contour (the contour term's and outward_weight's
+  // vertices; off_contour_outward_weight at the others).
+  static bool onContour(const RefinementStatistics& stats, int v);
   // 1 or RefineConfig::kWindowPoints (the statistics' points a vertex), 0 when they are not of
   // this mesh.
   int windowPoints(const RefinementStatistics& stats) const;

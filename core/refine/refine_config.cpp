@@ -9,13 +9,14 @@ namespace lumistage {
 RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std::string_view key) {
   RefineConfig config;
   in.requireMap(node, key);
-  in.checkKeys(node, key,
-               {"offset_count",   "t_max_m",           "t_inward_m",     "outside_weight",
-                "outward_weight", "colour_weight",     "colour_sigma",   "unseen_colour",
-                "smooth_weight",  "temporal_weight",   "tie_margin",     "smooth_iterations",
-                "depth_map_step", "depth_tolerance_m", "min_facing_cos", "colour_bits",
-                "window_points",  "window_m",          "contour_weight", "contour_cos",
-                "contour_probe_m"});
+  in.checkKeys(node, key, {"offset_count",      "t_max_m",         "t_inward_m",
+                           "outside_weight",    "outward_weight",  "off_contour_outward_weight",
+                           "colour_weight",     "colour_sigma",    "unseen_colour",
+                           "smooth_weight",     "temporal_weight", "tie_margin",
+                           "smooth_iterations", "depth_map_step",  "depth_tolerance_m",
+                           "min_facing_cos",    "colour_bits",     "window_points",
+                           "window_m",          "contour_weight",  "contour_cos",
+                           "contour_probe_m"});
   auto number = [&](const char* name, double& value, double lo, double hi, const char* expected) {
     if (!node[name]) return;
     const std::string path = YamlReader::child(key, name);
@@ -35,6 +36,8 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
   number("t_inward_m", config.t_inward_m, 0.0, 0.5, "expected metres in [0, 0.5]");
   number("outside_weight", config.outside_weight, 0, 1e6, "expected a weight >= 0");
   number("outward_weight", config.outward_weight, 0, 1e6, "expected a weight >= 0");
+  number("off_contour_outward_weight", config.off_contour_outward_weight, 0, 1e6,
+         "expected a weight >= 0");
   number("colour_weight", config.colour_weight, 0, 1e6, "expected a weight >= 0");
   number("colour_sigma", config.colour_sigma, 0.1, 255, "expected 8-bit levels in [0.1, 255]");
   number("unseen_colour", config.unseen_colour, 0, 1, "expected a value in [0, 1]");

@@ -18,7 +18,10 @@ class YamlReader;
 // gets an error, a weighted sum of terms (all terms are dimensionless, so the weights compare):
 //   outside_weight  x cameras whose silhouette the point falls outside of (the visual hull term:
 //                     0 on or inside the hull);
-//   outward_weight  x -t / t_max: favours large outward offsets, i.e. points near the hull;
+//   outward_weight  x -t / t_max: favours large outward offsets, i.e. points near the hull, at
+//                     the vertices some camera sees on its contour (below), where the hull
+//                     touches the surface; off_contour_outward_weight at the others, where it is
+//                     only a bound on it;
 //   colour_weight   x s²/(s² + colour_sigma²), s the colour standard deviation (8-bit levels)
 //                     across the cameras that see the point (visibility from low-res depth
 //                     maps); 1 when the point is outside the hull, unseen_colour when fewer than
@@ -50,6 +53,12 @@ struct RefineConfig {
   // 0.75 since the colour window: with a colour term that can be trusted further inside the hull,
   // a weaker pull toward it (docs/lumigraph.md).
   double outward_weight = 0.75;
+  // The outward term at the vertices no camera sees on its contour (contour_cos, contour_probe_m):
+  // between the legs, under the arms, on the loose shirt, where the hull is looser than the actor
+  // and faint cloth left the outward term to carry the vertices past the surface (a quarter of
+  // them more than 2 mm outside their best offset). 0.5 against 0.75: leave-one-camera-out on the
+  // four reference clips (docs/lumigraph.md).
+  double off_contour_outward_weight = 0.5;
   double colour_weight = 1.0;
   double colour_sigma = 20.0;  // 8-bit levels
   double unseen_colour = 0.6;
@@ -88,6 +97,11 @@ struct RefineConfig {
   // The points sampled for each vertex: 1, or kWindowPoints with the window (the statistics hold
   // this many times the vertices).
   int pointsPerVertex() const { return window_points == kWindowPoints ? kWindowPoints : 1; }
+  // Whether the nodes mark the vertices on their cameras' contours (RefinementStatistics::contour):
+  // the contour term or the outward term's split needs them.
+  bool marksContours() const {
+    return contour_weight > 0 || off_contour_outward_weight != outward_weight;
+  }
 
   double offsetAt(int index) const {
     return offset_count > 1 ? -t_inward_m + (t_inward_m + t_max_m) * index / (offset_count - 1)

@@ -291,7 +291,7 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
         return;
       }
       sampleCamera(c, key, depth_maps_[k], *points, *point_normals, out);
-      if (config_.contour_weight > 0)
+      if (config_.marksContours())
         markContour(*c.camera, depth_maps_[k], config_, positions, normals, out.contour);
     };
     static const GreenScreenKeyer kDefaultKeyer;

@@ -19,7 +19,7 @@ RefineConfig noTerms() {
   c.offset_count = 21;
   c.t_inward_m = c.t_max_m;
   c.outside_weight = c.outward_weight = c.colour_weight = c.smooth_weight = c.temporal_weight = 0;
-  c.contour_weight = 0;
+  c.off_contour_outward_weight = c.contour_weight = 0;
   c.tie_margin = 0;
   return c;
 }
@@ -72,7 +72,7 @@ TEST(MeshRefiner, HullTermAloneMovesAnOutsideVertexInToTheHull) {
 
 TEST(MeshRefiner, OutwardTermAloneFavoursLargeOffsets) {
   RefineConfig c = noTerms();
-  c.outward_weight = 1;
+  c.outward_weight = c.off_contour_outward_weight = 1;
   OneVertex one(c);
   EXPECT_EQ(refineOne(c, one.stats), kStep * (c.offset_count - 1));
   // With the hull: as far out as the hull allows, half a step beyond the last sample inside.
@@ -232,6 +232,30 @@ TEST(MeshRefiner, TheContourTermTakesAContourVertexToTheHull) {
   // the error's parabola through it and its neighbours now leans half a step toward the hull.
   c.contour_weight = 0.3;
   EXPECT_EQ(refineOne(c, one.stats), kStep * 13 + kHalf);
+}
+
+// The outward term pulls a vertex that a camera sees on its contour, where the hull touches the
+// surface, harder than one off every contour (between the legs, under the arms), where the hull is
+// only a bound on it and a colour minimum inside it may be the surface.
+TEST(MeshRefiner, TheOutwardTermHoldsAVertexOffTheContoursLess) {
+  RefineConfig c = noTerms();
+  c.outside_weight = 3;
+  c.colour_weight = 1;
+  c.outward_weight = 2;
+  c.off_contour_outward_weight = 0.5;
+  OneVertex one(c);
+  for (int i = 15; i < c.offset_count; ++i) one.stats.outside[i] = 1;
+  for (int i = 0; i < 15; ++i) one.colour(i, 4, 120, i == 10 ? 8 : 40);
+  one.stats.dropOutside();
+  EXPECT_EQ(refineOne(c, one.stats), kStep * 10);  // the colours' minimum
+  MeshRefiner refiner(c, 1, {});
+  const float off = refiner.dataError(one.stats, 14, 14),
+              off_at_0 = refiner.dataError(one.stats, 10, 10);
+  one.stats.contour[0] = 1;
+  EXPECT_EQ(refineOne(c, one.stats), kStep * 14 + kHalf);  // the hull (no edge located: halfway)
+  // Sample 14 lies 0.4 of t_max out: the outward term there is 0.4 x 2 against 0.4 x 0.5.
+  EXPECT_NEAR(refiner.dataError(one.stats, 14, 14), off - (2 - 0.5) * 0.4, 1e-5);
+  EXPECT_FLOAT_EQ(refiner.dataError(one.stats, 10, 10), off_at_0);  // t = 0: no outward term
 }
 
 TEST(MeshRefiner, SmoothnessPullsAnAmbiguousVertexToItsNeighbours) {
@@ -643,11 +667,18 @@ TEST_F(EllipsoidScene, MarksTheVerticesOnACamerasContour) {
   EXPECT_EQ(away_marked, away);
   // Only the mesh's vertices: the window points come after them and are never marked.
   EXPECT_EQ(std::count(stats.contour.begin() + 2 * n, stats.contour.end(), 1), 0);
-  // The term off: nothing is marked.
+  const auto marked = [&] { return std::count(stats.contour.begin(), stats.contour.end(), 1); };
+  const long with_term = marked();
+  // The contour term off: the outward term's split still needs the marks.
   config.contour_weight = 0;
+  RefinementSampler split(config);
+  split.sample(cameras({0}), both.positions, both.normals, both.triangles, stats);
+  EXPECT_EQ(marked(), with_term);
+  // Neither: nothing is marked.
+  config.off_contour_outward_weight = config.outward_weight;
   RefinementSampler off(config);
   off.sample(cameras({0}), both.positions, both.normals, both.triangles, stats);
-  EXPECT_EQ(std::count(stats.contour.begin(), stats.contour.end(), 1), 0);
+  EXPECT_EQ(marked(), 0);
 }
 
 TEST_F(EllipsoidScene, ACameraThatSeesNobodyIsLeftOut) {

@@ -88,6 +88,20 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
   EXPECT_NE(errorFor("k.yaml", "  contour_weight: -1\n")
                 .find("k.yaml:5: refine.contour_weight: expected a weight >= 0"),
             std::string::npos);
+  // The outward term off the contours: its own weight; the nodes mark the contours for it alone.
+  std::ofstream(folder / "l.yaml") << head
+                                   << "refine:\n  contour_weight: 0\n"
+                                      "  off_contour_outward_weight: 0.3\n";
+  const RefineConfig l = loadStudioConfig(folder / "l.yaml").refine;
+  EXPECT_DOUBLE_EQ(l.off_contour_outward_weight, 0.3);
+  EXPECT_TRUE(l.marksContours());
+  RefineConfig same = l;
+  same.off_contour_outward_weight = same.outward_weight;
+  EXPECT_FALSE(same.marksContours());
+  EXPECT_LT(RefineConfig{}.off_contour_outward_weight, RefineConfig{}.outward_weight);
+  EXPECT_NE(errorFor("m.yaml", "  off_contour_outward_weight: -0.5\n")
+                .find("m.yaml:5: refine.off_contour_outward_weight: expected a weight >= 0"),
+            std::string::npos);
 }
 
 }  // namespace
