@@ -159,8 +159,9 @@ struct NodeUnderTest {
     running.join();
   }
   // Hands every message the node sends to `take` until it returns true or 20 s pass.
-  bool receiveUntil(const std::function<bool(const Message&)>& take) {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  bool receiveUntil(const std::function<bool(const Message&)>& take,
+                    std::chrono::seconds within = std::chrono::seconds(20)) {
+    const auto deadline = std::chrono::steady_clock::now() + within;
     while (std::chrono::steady_clock::now() < deadline) {
       const std::optional<ReceivedMessage> in = studio.receive(milliseconds(100));
       if (in && in->result.ok() && take(*in->result.message)) return true;
@@ -251,19 +252,28 @@ TEST(CameraNode, AFrameIsRenderedWithTheViewThatCameWithItsPose) {
     m.body = std::move(body);
     return t.studio.send(node, m, milliseconds(100));
   };
-  int64_t frame = -1;
-  ASSERT_TRUE(t.receiveUntil([&](const Message& m) {
-    if (!std::get_if<SilhouettesData>(&m.body) || m.frame_id < 40) return false;
-    frame = m.frame_id;  // past the screens' learning
-    return true;
-  }));
   PoseData pose;
   pose.angles.assign(3 * kHumanJointCount, 0.0f);
-  ASSERT_TRUE(sendTo(frame, viewOfSize(160, 120)));
-  ASSERT_TRUE(sendTo(frame, pose));
-  ASSERT_TRUE(t.receiveUntil([&](const Message& m) {
-    return std::get_if<VertexStatisticsData>(&m.body) && m.frame_id == frame;
-  }));
+  // A frame past the screens' learning, posed: its statistics come. The node keeps the last
+  // frames_kept sets for their poses; on a loaded machine the source may have run past this one
+  // before its pose came, so a later frame is tried then.
+  int64_t frame = 39;
+  bool refined = false;
+  for (int attempt = 0; attempt < 5 && !refined; ++attempt) {
+    ASSERT_TRUE(t.receiveUntil([&](const Message& m) {
+      if (!std::get_if<SilhouettesData>(&m.body) || m.frame_id <= frame) return false;
+      frame = m.frame_id;
+      return true;
+    }));
+    ASSERT_TRUE(sendTo(frame, viewOfSize(160, 120)));
+    ASSERT_TRUE(sendTo(frame, pose));
+    refined = t.receiveUntil(
+        [&](const Message& m) {
+          return std::get_if<VertexStatisticsData>(&m.body) && m.frame_id == frame;
+        },
+        std::chrono::seconds(5));
+  }
+  ASSERT_TRUE(refined);
   // The next frame's view (larger) and pose reach the node before this frame's offsets.
   ASSERT_TRUE(sendTo(frame + 1, viewOfSize(320, 240)));
   ASSERT_TRUE(sendTo(frame + 1, pose));
