@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/base/error.h"
+#include "core/render/egl_context.h"
 #include "core/render/shader_program.h"
 
 namespace lumistage {
@@ -89,6 +90,11 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
     throw Error("LumigraphRenderer: 1 to " + std::to_string(kMaxCameras) + " own cameras needed");
   programs_ = std::make_unique<Programs>(rig_.cameraCount(), own_);
   params_.k = std::clamp(params_.k, 1, 4);
+  if (params_.bayer_images == LumigraphParams::BayerImages::kAuto) {
+    params_.bayer_images = currentRendererIsSoftware()
+                               ? LumigraphParams::BayerImages::kCells
+                               : LumigraphParams::BayerImages::kFullResolution;
+  }
   params_.depth_map_divisor = std::max(1, params_.depth_map_divisor);
   for (const Camera& c : rig_.cameras()) {
     images_width_ = std::max(images_width_, c.width());
@@ -247,6 +253,13 @@ void LumigraphRenderer::setImage(int own_index, const ImageView& image) {
       staging_[4 * i] = staging_[4 * i + 1] = staging_[4 * i + 2] = v;
       staging_[4 * i + 3] = 255;
     }
+    useImageFormat(false);
+    uploadImage(own_index, image.width, image.height, staging_.data());
+    return;
+  }
+  if (params_.bayer_images == LumigraphParams::BayerImages::kFullResolution) {
+    staging_.resize(size_t(image.width) * image.height * 4);
+    demosaicBayerToRgba(image, staging_.data());
     useImageFormat(false);
     uploadImage(own_index, image.width, image.height, staging_.data());
     return;

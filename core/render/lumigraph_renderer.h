@@ -52,6 +52,17 @@ struct LumigraphParams {
   // fringes and patches. An actor on a green screen wears no green, which would key as the screen.
   // Leave-one-out +0.01 to +0.07 dB over the actor's mask and the matte alike (docs/lumigraph.md).
   float despill_angle_rad = 0.17f;
+  // How Bayer images reach the shader: as their 2x2 cells' colours (R, the mean of the two G, B:
+  // half the camera's resolution each way, one byte a pixel to upload), or demosaiced at full
+  // resolution on the CPU (OpenCV's bilinear demosaic, as `lumistage eval` shows a camera's image)
+  // and uploaded as RGBA. Full resolution: leave-one-camera-out on Bayer sessions of the four
+  // reference clips +0.38 dB over the actor's mask (the true surface 27.7 -> 28.6 dB), for 2.3 ms
+  // of a node's CPU (1.2 ms wall, OpenCV on two threads) to demosaic and upload its three 1024x768
+  // images against 0.17 ms as cells; its view costs the same (docs/lumigraph.md). kAuto: full
+  // resolution on a GPU, cells on a software renderer (Mesa llvmpipe), where the CPU is the frame's
+  // budget.
+  enum class BayerImages { kAuto, kCells, kFullResolution };
+  BayerImages bayer_images = BayerImages::kAuto;
 };
 
 // Unstructured lumigraph rendering on the GPU (or Mesa llvmpipe), through an offscreen OpenGL 4.3
@@ -89,8 +100,9 @@ class LumigraphRenderer {
   // The image of own camera `own_index` (index into ownCameras()). Bayer images upload their
   // 2x2 cells' colours (R, the mean of the two G, B; as many bytes as the Bayer image), which the
   // shader samples bilinearly: one filtered texture read a camera and fragment instead of four
-  // gathers; rgb8 is widened to RGBA, mono8 to grey RGBA. All own images must share one kind,
-  // Bayer or not (a renderer's are one session's or one node's cameras).
+  // gathers; or, with params().bayer_images kFullResolution, their full-resolution demosaic as
+  // RGBA. rgb8 is widened to RGBA, mono8 to grey RGBA. All own images must share one kind, Bayer
+  // or not (a renderer's are one session's or one node's cameras).
   void setImage(int own_index, const ImageView& image);
   // RGBA8 (rows top first) as setImage(rgb8) would take it.
   void setImageRgba(int own_index, const uint8_t* rgba, int width, int height);

@@ -85,25 +85,28 @@ void uploadNodeImages(LumigraphRenderer& r, bool bayer) {
   }
 }
 
-// A node's renderer: mesh 0 the truth surface, 1 the generic human; the generic human Phong-
+// A node's renderer: images RGBA (bayer 0), Bayer as their cells' colours (1) or demosaiced at full
+// resolution (2); mesh 0 the truth surface, 1 the generic human; the generic human Phong-
 // subdivided as the pipeline renders it (phong < 0), the finely tessellated truth as it is, unless
 // `phong` says otherwise.
-std::unique_ptr<LumigraphRenderer> nodeRenderer(bool bayer, int mesh = 0, int divisor = 4,
+std::unique_ptr<LumigraphRenderer> nodeRenderer(int bayer, int mesh = 0, int divisor = 4,
                                                 int phong = -1) {
   Scene& s = scene();
   LumigraphParams params;
+  params.bayer_images = bayer == 2 ? LumigraphParams::BayerImages::kFullResolution
+                                   : LumigraphParams::BayerImages::kCells;
   params.depth_map_divisor = divisor;  // the visibility maps at the cameras' size / divisor
   params.phong_subdivision = phong < 0 ? mesh != 0 : phong != 0;
   auto r = std::make_unique<LumigraphRenderer>(s.studio->rig(), s.node, params);
   const TriangleMesh& m = mesh == 0 ? s.frame.surface : s.generic;
   r->setMesh(m.positions, m.normals, m.triangles);
-  uploadNodeImages(*r, bayer);
+  uploadNodeImages(*r, bayer != 0);
   return r;
 }
 
 // The node's frame after upload: the view rendered and read back (same mesh).
 void nodePartialImage(benchmark::State& state) {
-  auto r = nodeRenderer(state.range(2) != 0, int(state.range(3)));
+  auto r = nodeRenderer(int(state.range(2)), int(state.range(3)));
   const Camera view = viewOf(int(state.range(0)), int(state.range(1)));
   std::vector<uint8_t> rgba;
   r->render(view, rgba);
@@ -120,6 +123,7 @@ BENCHMARK(nodePartialImage)
     ->Args({640, 480, 1, 0})
     ->Args({640, 480, 0, 1})
     ->Args({640, 480, 1, 1})
+    ->Args({640, 480, 2, 1})
     ->Args({1920, 1080, 0, 0})
     ->Args({1920, 1080, 1, 0})
     ->Args({1920, 1080, 0, 1})
@@ -169,18 +173,19 @@ void vertexVisibility(benchmark::State& state) {
 }
 BENCHMARK(vertexVisibility)->ArgName("generic")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// Uploading the node's 3 images of 1024x768: Bayer (1 byte a pixel) or RGBA (4).
+// Uploading the node's 3 images of 1024x768: RGBA (4 bytes a pixel, bayer 0), Bayer as its cells'
+// colours (1 byte a pixel, 1) or demosaiced at full resolution (2, 4 bytes a pixel).
 void uploadImages(benchmark::State& state) {
-  const bool bayer = state.range(0) != 0;
+  const int bayer = int(state.range(0));
   auto r = nodeRenderer(bayer);
   const double cpu = processCpuMs();
   for (auto _ : state) {
-    uploadNodeImages(*r, bayer);
+    uploadNodeImages(*r, bayer != 0);
     glFinish();  // the uploads done
   }
   state.counters["process_cpu_ms"] = (processCpuMs() - cpu) / double(state.iterations());
 }
-BENCHMARK(uploadImages)->ArgNames({"bayer"})->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(uploadImages)->ArgNames({"bayer"})->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // Clones: the cost of each extra one.
 void clones(benchmark::State& state) {
