@@ -27,9 +27,16 @@ MeshRefiner::MeshRefiner(const RefineConfig& config, int vertex_count,
   }
   const size_t samples = size_t(vertex_count) * config_.offset_count;
   data_.assign(samples, 0);
-  total_.assign(2 * size_t(config_.offset_count), 0);  // also the outward term's two rows
+  total_.assign(config_.offset_count, 0);
   offsets_m_.resize(config_.offset_count);
   for (int i = 0; i < config_.offset_count; ++i) offsets_m_[i] = float(config_.offsetAt(i));
+  // The outward term at each offset: on a camera's contour, then off it.
+  outward_.resize(2 * size_t(config_.offset_count));
+  for (int i = 0; i < config_.offset_count; ++i) {
+    const float t_rel = config_.t_max_m > 0 ? offsets_m_[i] / float(config_.t_max_m) : 0.0f;
+    outward_[i] = -float(config_.outward_weight) * t_rel;
+    outward_[config_.offset_count + i] = -float(config_.off_contour_outward_weight) * t_rel;
+  }
   previous_.assign(vertex_count, uint8_t(config_.zeroOffsetIndex()));
   current_.assign(vertex_count, uint8_t(config_.zeroOffsetIndex()));
 }
@@ -129,17 +136,9 @@ bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>
   const float unseen = colour_w * float(config_.unseen_colour);
   const float unit = float(1 << (8 - stats.colour_bits));
   const float sigma2 = float(config_.colour_sigma * config_.colour_sigma) / (unit * unit);
-  // The outward term at each offset, on a camera's contour and off it.
-  float* on_contour = total_.data();
-  float* off_contour = on_contour + m;
-  for (int i = 0; i < m; ++i) {
-    const float t_rel = config_.t_max_m > 0 ? offsets_m_[i] / float(config_.t_max_m) : 0.0f;
-    on_contour[i] = -float(config_.outward_weight) * t_rel;
-    off_contour[i] = -float(config_.off_contour_outward_weight) * t_rel;
-  }
   const size_t samples = size_t(vertex_count_) * m;
   for (int v = 0; v < vertex_count_; ++v) {
-    const float* outward = onContour(stats, v) ? on_contour : off_contour;
+    const float* outward = &outward_[onContour(stats, v) ? 0 : m];
     for (size_t i = 0, s = size_t(v) * m; i < size_t(m); ++i, ++s) {
       float e = outward[i];
       if (stats.outside[s] > 0) {

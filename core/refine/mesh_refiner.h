@@ -58,6 +58,9 @@ class MeshRefiner {
   int vertex_count_;
   std::vector<int> neighbour_start_, neighbours_;  // CSR adjacency
   std::vector<float> data_, total_, offsets_m_;
+  // The outward term at each offset (it depends on the config alone): offset_count values for the
+  // vertices on a camera's contour, then offset_count for the others.
+  std::vector<float> outward_;
   std::vector<uint8_t> previous_, current_;
   bool has_previous_ = false;
 };
