@@ -60,7 +60,9 @@ struct LumigraphParams {
   // of a node's CPU (1.2 ms wall, OpenCV on two threads) to demosaic and upload its three 1024x768
   // images against 0.17 ms as cells; its view costs the same (docs/lumigraph.md). kAuto: full
   // resolution on a GPU, cells on a software renderer (Mesa llvmpipe), where the CPU is the frame's
-  // budget.
+  // budget. Not yet measured on a GPU: ../shared/DESIGN.md §7 measured RGBA uploads four times
+  // slower than one byte a pixel on an H100, so the mosaic uploaded as it is and demosaiced in the
+  // shader would be the GPU's better form of this.
   enum class BayerImages { kAuto, kCells, kFullResolution };
   BayerImages bayer_images = BayerImages::kAuto;
 };
