@@ -2,7 +2,7 @@
 // The renderer's own cameras blended with the interpolated lumigraph weights: colour = their
 // (despilled) colours' weighted mean, alpha = their share of the weight of every camera of the
 // rig (1 when the renderer has them all; less where a foreground mask takes weight away). Images
-// are RGBA8, or the colours of a Bayer image's 2x2 cells.
+// are RGBA8, the colours of a Bayer image's 2x2 cells, or Bayer mosaics demosaiced here.
 // kOwnCameras is defined when compiling; own camera j's image is layer j of `images`.
 in float v_weight[kOwnCameras];
 in vec2 v_texel[kOwnCameras];
@@ -10,6 +10,13 @@ in float v_total;
 
 uniform sampler2DArray images;
 uniform vec2 texel_scale;  // image texel to texture coordinate of `images`
+#ifdef kMosaic
+// `images` holds Bayer mosaics (one byte a pixel; kMosaic defined when compiling, a program of its
+// own: a branch on a uniform costs llvmpipe as much as the demosaic): own camera j's of
+// mosaic_size[j] pixels, with R at mosaic_red[j] in each 2x2 cell.
+uniform ivec2 mosaic_red[kOwnCameras];
+uniform ivec2 mosaic_size[kOwnCameras];
+#endif
 // The own cameras' low-resolution foreground masks, when the renderer has them, each in the corner
 // of its layer (cameras of different sizes): a camera's weight scales by its mask where it samples.
 uniform sampler2DArray masks;
@@ -25,11 +32,49 @@ out vec4 colour;
 // among the four blended), a fragment is clearly off the actor.
 const float kClearlyOff = 0.05;
 
+#ifdef kMosaic
+// Own camera j's Bayer mosaic demosaiced at full resolution, bilinearly (each pixel's missing
+// colours the mean of its nearest pixels of that colour: OpenCV's demosaic, as `lumistage eval`
+// shows a camera's image), then interpolated bilinearly between the four pixels around the texel
+// (as a filtered texture of the demosaiced image). The 4x4 pixels around the texel in four
+// gathers; the image's outermost pixels are read as their neighbours further in (the gathers
+// stay on the image).
+vec3 sampleImage(vec2 texel, int j) {
+  ivec2 size = mosaic_size[j];
+  vec2 p = clamp(texel - 0.5, vec2(1.0), vec2(size - 2));
+  ivec2 base = min(ivec2(p), size - 3);
+  vec2 f = p - vec2(base);
+  // Each gather: (x0, y1), (x1, y1), (x1, y0), (x0, y0) of the 2x2 pixels around its corner.
+  vec2 corner = vec2(base) * texel_scale;
+  vec4 g00 = textureGather(images, vec3(corner, float(j)));
+  vec4 g10 = textureGather(images, vec3(corner + vec2(2.0, 0.0) * texel_scale, float(j)));
+  vec4 g01 = textureGather(images, vec3(corner + vec2(0.0, 2.0) * texel_scale, float(j)));
+  vec4 g11 = textureGather(images, vec3(corner + vec2(2.0) * texel_scale, float(j)));
+  float v[16] = float[16](g00.w, g00.z, g10.w, g10.z,  // rows base.y - 1 to base.y + 2,
+                          g00.x, g00.y, g10.x, g10.y,  // columns base.x - 1 to base.x + 2
+                          g01.w, g01.z, g11.w, g11.z,
+                          g01.x, g01.y, g11.x, g11.y);
+  vec3 c[4];
+  for (int k = 0; k < 4; ++k) {
+    int x = 1 + (k & 1), y = 1 + (k >> 1), i = 4 * y + x;
+    float own = v[i];
+    float across = 0.5 * (v[i - 1] + v[i + 1]), along = 0.5 * (v[i - 4] + v[i + 4]);
+    float plus = 0.5 * (across + along);
+    float diagonal = 0.25 * (v[i - 5] + v[i - 3] + v[i + 3] + v[i + 5]);
+    ivec2 site = (base + ivec2(x - 1, y - 1) - mosaic_red[j]) & 1;  // (0, 0): R, (1, 1): B
+    c[k] = site.x == site.y ? (site.x == 0 ? vec3(own, plus, diagonal) : vec3(diagonal, plus, own))
+                            : (site.x == 1 ? vec3(across, own, along) : vec3(along, own, across));
+  }
+  return mix(mix(c[0], c[1], f.x), mix(c[2], c[3], f.x), f.y);
+}
+
+#else
 // Bilinear in RGBA images, or, for Bayer images (the array holds their 2x2 cells' colours, cell
 // centres at texels 2c + 1), between the colours of the four nearest cells.
 vec3 sampleImage(vec2 texel, int layer) {
   return texture(images, vec3(texel * texel_scale, float(layer))).rgb;
 }
+#endif
 
 void main() {
   float own = 0.0, unmasked = 0.0, actor = 0.0, rim = 0.0;

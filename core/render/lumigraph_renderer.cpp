@@ -28,8 +28,10 @@ std::string blendDefines(int cameras, const std::vector<int>& own) {
 
 struct LumigraphRenderer::Programs {
   Programs(int cameras, const std::vector<int>& own)
-      : blend("lumigraph.vert", "lumigraph.frag", blendDefines(cameras, own)) {}
-  ShaderProgram blend;  // compiled for the renderer's rig and own cameras
+      : defines(blendDefines(cameras, own)), blend("lumigraph.vert", "lumigraph.frag", defines) {}
+  std::string defines;
+  ShaderProgram blend;                    // compiled for the renderer's rig and own cameras
+  std::unique_ptr<ShaderProgram> mosaic;  // the same with Bayer mosaics, once they come
 };
 
 namespace {
@@ -77,6 +79,8 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
       own_(std::move(own)),
       params_(params),
       active_(rig.cameraCount(), 1),
+      mosaic_red_(own_.size(), Eigen::Vector2i::Zero()),
+      mosaic_sizes_(own_.size(), Eigen::Vector2i::Ones()),
       despill_(own_.size(), 0.0f) {
   if (rig_.cameraCount() > kMaxCameras || rig_.cameraCount() == 0) {
     throw Error("LumigraphRenderer: the rig has " + std::to_string(rig_.cameraCount()) +
@@ -240,7 +244,7 @@ void LumigraphRenderer::setImage(int own_index, const ImageView& image) {
       staging_[4 * i + 2] = image.data[3 * i + 2];
       staging_[4 * i + 3] = 255;
     }
-    useImageFormat(false);
+    useImageFormat(ImageTexture::kRgba);
     uploadImage(own_index, image.width, image.height, staging_.data());
     return;
   }
@@ -253,28 +257,30 @@ void LumigraphRenderer::setImage(int own_index, const ImageView& image) {
       staging_[4 * i] = staging_[4 * i + 1] = staging_[4 * i + 2] = v;
       staging_[4 * i + 3] = 255;
     }
-    useImageFormat(false);
+    useImageFormat(ImageTexture::kRgba);
     uploadImage(own_index, image.width, image.height, staging_.data());
     return;
   }
   if (params_.bayer_images == LumigraphParams::BayerImages::kFullResolution) {
-    staging_.resize(size_t(image.width) * image.height * 4);
-    demosaicBayerToRgba(image, staging_.data());
-    useImageFormat(false);
-    uploadImage(own_index, image.width, image.height, staging_.data());
+    // The mosaic as it is, demosaiced by the shader.
+    const BayerLayout layout = bayerLayout(image.format);
+    mosaic_red_[own_index] = Eigen::Vector2i(layout.red_x, layout.red_y);
+    mosaic_sizes_[own_index] = Eigen::Vector2i(image.width, image.height);
+    useImageFormat(ImageTexture::kMosaic);
+    uploadImage(own_index, image.width, image.height, image.data);
     return;
   }
   // Bayer: a 2x2 cell's colour a texel.
   staging_.resize(size_t(image.width / 2) * (image.height / 2) * 4);
   bayerCellsToRgba(image, staging_.data());
-  useImageFormat(true);
+  useImageFormat(ImageTexture::kCells);
   uploadImage(own_index, image.width / 2, image.height / 2, staging_.data());
 }
 
 void LumigraphRenderer::setImageRgba(int own_index, const uint8_t* rgba, int width, int height) {
   if (own_index < 0 || own_index >= static_cast<int>(own_.size()))
     throw Error("LumigraphRenderer::setImage: no own camera " + std::to_string(own_index));
-  useImageFormat(false);
+  useImageFormat(ImageTexture::kRgba);
   uploadImage(own_index, width, height, rgba);
 }
 
@@ -315,30 +321,38 @@ void LumigraphRenderer::setMask(int own_index, std::span<const uint8_t> mask, in
   mask_sizes_[own_index] = mask_cells;
 }
 
-void LumigraphRenderer::useImageFormat(bool cells) {
-  if (images_ && cells_ == cells) return;
+void LumigraphRenderer::useImageFormat(ImageTexture kind) {
+  if (images_ && image_texture_ == kind) return;
+  if (kind == ImageTexture::kMosaic && !programs_->mosaic) {
+    programs_->mosaic = std::make_unique<ShaderProgram>("lumigraph.vert", "lumigraph.frag",
+                                                        programs_->defines + "\n#define kMosaic");
+  }
   glDeleteTextures(1, &images_);
   glGenTextures(1, &images_);
   glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
-  const int divisor = cells ? 2 : 1;
-  glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RGBA8, std::max(1, images_width_ / divisor),
-                 std::max(1, images_height_ / divisor), std::max<int>(1, own_.size()));
-  // Filtered: between pixels, or between the colours of the four nearest Bayer cells.
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  const int divisor = kind == ImageTexture::kCells ? 2 : 1;
+  glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, kind == ImageTexture::kMosaic ? GL_R8 : GL_RGBA8,
+                 std::max(1, images_width_ / divisor), std::max(1, images_height_ / divisor),
+                 std::max<int>(1, own_.size()));
+  // Filtered: between pixels, or between the colours of the four nearest Bayer cells; a mosaic's
+  // pixels are gathered unfiltered, the shader interpolates its demosaic.
+  const GLint filter = kind == ImageTexture::kMosaic ? GL_NEAREST : GL_LINEAR;
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
   glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  cells_ = cells;
+  image_texture_ = kind;
 }
 
-void LumigraphRenderer::uploadImage(int own_index, int width, int height, const uint8_t* rgba) {
-  const size_t bytes = size_t(width) * height * 4;
+void LumigraphRenderer::uploadImage(int own_index, int width, int height, const uint8_t* texels) {
+  const bool mosaic = image_texture_ == ImageTexture::kMosaic;
+  const size_t bytes = size_t(width) * height * (mosaic ? 1 : 4);
   glBindBuffer(GL_PIXEL_UNPACK_BUFFER, upload_buffer_);
-  glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(bytes), rgba, GL_STREAM_DRAW);
+  glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(bytes), texels, GL_STREAM_DRAW);
   glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, width, height, 1, GL_RGBA,
-                  GL_UNSIGNED_BYTE, nullptr);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, mosaic ? 1 : 4);
+  glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, own_index, width, height, 1,
+                  mosaic ? GL_RED : GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
   glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
 }
 
@@ -367,7 +381,8 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glCullFace(GL_BACK);
   glFrontFace(GL_CW);  // image rows go down the framebuffer: counter-clockwise turns clockwise
 
-  const ShaderProgram& p = programs_->blend;
+  const bool mosaic = image_texture_ == ImageTexture::kMosaic;
+  const ShaderProgram& p = mosaic ? *programs_->mosaic : programs_->blend;
   p.use();
   const int n = rig_.cameraCount();
   Eigen::Matrix<float, 9, kMaxCameras> rotations;
@@ -413,7 +428,11 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform2fv(p.uniform("mask_scales"), GLsizei(own_.size()), mask_scales_[0].data());
   // Texel to texture coordinate: a Bayer cell's centre, at texel 2c + 1, is the centre of cell
   // texel c of the half-size array.
-  if (cells_) {
+  if (mosaic) {
+    glUniform2iv(p.uniform("mosaic_red"), GLsizei(own_.size()), mosaic_red_[0].data());
+    glUniform2iv(p.uniform("mosaic_size"), GLsizei(own_.size()), mosaic_sizes_[0].data());
+  }
+  if (image_texture_ == ImageTexture::kCells) {
     glUniform2f(p.uniform("texel_scale"), 0.5f / float(std::max(1, images_width_ / 2)),
                 0.5f / float(std::max(1, images_height_ / 2)));
   } else {

@@ -53,16 +53,15 @@ struct LumigraphParams {
   // Leave-one-out +0.01 to +0.07 dB over the actor's mask and the matte alike (docs/lumigraph.md).
   float despill_angle_rad = 0.17f;
   // How Bayer images reach the shader: as their 2x2 cells' colours (R, the mean of the two G, B:
-  // half the camera's resolution each way, one byte a pixel to upload), or demosaiced at full
-  // resolution on the CPU (OpenCV's bilinear demosaic, as `lumistage eval` shows a camera's image)
-  // and uploaded as RGBA. Full resolution: leave-one-camera-out on Bayer sessions of the four
-  // reference clips +0.38 dB over the actor's mask (the true surface 27.7 -> 28.6 dB), for 2.3 ms
-  // of a node's CPU (1.2 ms wall, OpenCV on two threads) to demosaic and upload its three 1024x768
-  // images against 0.17 ms as cells; its view costs the same (docs/lumigraph.md). kAuto: full
-  // resolution on a GPU, cells on a software renderer (Mesa llvmpipe), where the CPU is the frame's
-  // budget. Not yet measured on a GPU: ../shared/DESIGN.md §7 measured RGBA uploads four times
-  // slower than one byte a pixel on an H100, so the mosaic uploaded as it is and demosaiced in the
-  // shader would be the GPU's better form of this.
+  // half the camera's resolution each way), or at full resolution: the mosaic uploaded as it is
+  // and demosaiced in the fragment shader (bilinearly, as OpenCV's demosaic with which `lumistage
+  // eval` shows a camera's image; four gathers a camera and fragment instead of one filtered
+  // read). Either uploads one byte a pixel. Full resolution: leave-one-camera-out on Bayer
+  // sessions of the four reference clips +0.38 dB over the actor's mask (the true surface 27.7 ->
+  // 28.6 dB). On an H200 a node's 640x480 view costs 0.19 ms against 0.18 ms, its three images
+  // upload in 0.55 ms either way; on Mesa llvmpipe the view costs 1.6 ms more CPU, which four
+  // nodes and the studio sharing the CPU cannot spare (docs/lumigraph.md). kAuto: full resolution
+  // on a GPU, cells on a software renderer.
   enum class BayerImages { kAuto, kCells, kFullResolution };
   BayerImages bayer_images = BayerImages::kAuto;
 };
@@ -101,10 +100,10 @@ class LumigraphRenderer {
                std::span<const uint16_t> visibility = {});
   // The image of own camera `own_index` (index into ownCameras()). Bayer images upload their
   // 2x2 cells' colours (R, the mean of the two G, B; as many bytes as the Bayer image), which the
-  // shader samples bilinearly: one filtered texture read a camera and fragment instead of four
-  // gathers; or, with params().bayer_images kFullResolution, their full-resolution demosaic as
-  // RGBA. rgb8 is widened to RGBA, mono8 to grey RGBA. All own images must share one kind, Bayer
-  // or not (a renderer's are one session's or one node's cameras).
+  // shader samples bilinearly, or, with params().bayer_images kFullResolution, the mosaic itself,
+  // which the shader demosaics. rgb8 is widened to RGBA, mono8 to grey RGBA. All own images must
+  // share one kind, Bayer or not (a renderer's are one session's or one node's cameras); the
+  // Bayer layouts may differ.
   void setImage(int own_index, const ImageView& image);
   // RGBA8 (rows top first) as setImage(rgb8) would take it.
   void setImageRgba(int own_index, const uint8_t* rgba, int width, int height);
@@ -130,14 +129,17 @@ class LumigraphRenderer {
   void render(const Camera& desired, std::vector<uint8_t>& rgba);
 
  private:
-  // The cameras' texture array, RGBA8: of the cameras' size, or of their Bayer cells (half the
-  // size); remade on a change.
-  void useImageFormat(bool cells);
+  // What the cameras' texture array holds: RGBA8 images of the cameras' size, their Bayer cells'
+  // colours (RGBA8, half the size), or their Bayer mosaics (R8, the cameras' size).
+  enum class ImageTexture { kRgba, kCells, kMosaic };
+  // The array for `kind`, remade on a change.
+  void useImageFormat(ImageTexture kind);
   // The mesh's vertices (with their rim dilations), triangles and masks into the GL buffers.
   void upload(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
               std::span<const Eigen::Vector3i> triangles, std::span<const uint16_t> visibility);
-  // width x height RGBA texels into the array's layer `own_index`, through the pixel-buffer object.
-  void uploadImage(int own_index, int width, int height, const uint8_t* rgba);
+  // width x height texels (RGBA, or one byte for a mosaic) into the array's layer `own_index`,
+  // through the pixel-buffer object.
+  void uploadImage(int own_index, int width, int height, const uint8_t* texels);
 
   struct Programs;
   std::unique_ptr<Programs> programs_;
@@ -156,7 +158,9 @@ class LumigraphRenderer {
   std::vector<Eigen::Vector2i> mask_sizes_;
   std::vector<Eigen::Vector2f> mask_scales_;
   int images_width_ = 0, images_height_ = 0;
-  bool cells_ = false;            // the array holds Bayer cells' colours
+  ImageTexture image_texture_ = ImageTexture::kRgba;
+  // Per own camera, for a mosaic: where R sits in its 2x2 cell, and its image's size.
+  std::vector<Eigen::Vector2i> mosaic_red_, mosaic_sizes_;
   GLuint visibility_buffer_ = 0;  // one 16-bit camera mask a vertex (vertex attribute 3)
   GLsizeiptr visibility_capacity_ = 0;
   VertexVisibility visibility_;

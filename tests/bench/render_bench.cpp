@@ -128,6 +128,7 @@ BENCHMARK(nodePartialImage)
     ->Args({1920, 1080, 1, 0})
     ->Args({1920, 1080, 0, 1})
     ->Args({1920, 1080, 1, 1})
+    ->Args({1920, 1080, 2, 1})
     ->Unit(benchmark::kMillisecond);
 
 // A new mesh before the view: with its visibility computed by the renderer (the rig's 12 maps at
@@ -174,10 +175,11 @@ void vertexVisibility(benchmark::State& state) {
 BENCHMARK(vertexVisibility)->ArgName("generic")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Uploading the node's 3 images of 1024x768: RGBA (4 bytes a pixel, bayer 0), Bayer as its cells'
-// colours (1 byte a pixel, 1) or demosaiced at full resolution (2, 4 bytes a pixel).
+// colours (1 byte a pixel, 1) or as the mosaic for the shader to demosaic (2, 1 byte a pixel).
 void uploadImages(benchmark::State& state) {
   const int bayer = int(state.range(0));
   auto r = nodeRenderer(bayer);
+  state.SetLabel(reinterpret_cast<const char*>(glGetString(GL_RENDERER)));  // which OpenGL
   const double cpu = processCpuMs();
   for (auto _ : state) {
     uploadNodeImages(*r, bayer != 0);
