@@ -69,15 +69,17 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       "\"stage_ms\": {{{}}},\n"
       "  \"node_bytes_per_frame\": {:.1f},\n  \"raw_bytes_per_frame_per_node\": {:.1f},\n  "
       "\"node_bytes_per_s\": {:.0f},\n  \"frames\": {},\n"
-      "  \"frames_dropped\": {},\n  \"frames_refused\": {},\n  \"frames_held\": {},\n"
+      "  \"frames_dropped\": {},\n  \"frames_refused\": {},\n  \"frames_overtaken\": {},\n"
+      "  \"frames_unshown\": {},\n  \"frames_held\": {},\n"
       "  \"frames_incomplete\": {},\n  \"max_frames_in_flight\": {},\n"
       "  \"hull_agreement\": {:.4f},\n  \"refusals\": {},\n"
       "  \"view\": \"{}x{}\",\n  \"cpu_cores_studio\": {:.3f},\n  \"cpu_cores_nodes\": {:.3f},\n"
       "  \"machine\": {},\n  \"nodes\": [{}\n  ]\n}}\n",
       r.fps, r.latency_ms_p50, r.latency_ms_p95, stages, r.node_bytes_per_frame,
       r.raw_bytes_per_frame_per_node, r.node_bytes_per_s, r.frames, r.frames_dropped,
-      r.frames_refused, r.frames_held, r.frames_incomplete, max_in_flight, r.hull_agreement,
-      r.refusals, view.width, view.height, cpu.studio_cores, cpu.nodes_cores, machine, nodes);
+      r.frames_refused, r.frames_overtaken, r.frames_unshown, r.frames_held, r.frames_incomplete,
+      max_in_flight, r.hull_agreement, r.refusals, view.width, view.height, cpu.studio_cores,
+      cpu.nodes_cores, machine, nodes);
 }
 
 // Stops the take, waits (at most 30 s) for every node to close its part, and says how each went.
@@ -299,10 +301,11 @@ void addRunCommand(CLI::App& app) {
     const CpuUse cpu{(processCpuSeconds() - cpu_start) / wall_s,
                      (nodes_cpu - nodes_cpu_start) / wall_s};
     fmt::print(
-        "{} frames in all ({} dropped, {} of them held back without a node's image; {} shown "
-        "without one), {:.1f} frames a second; latency {:.1f} ms (median), {:.1f} ms (95%)\n",
-        r.frames, r.frames_dropped, r.frames_held, r.frames_incomplete, r.fps, r.latency_ms_p50,
-        r.latency_ms_p95);
+        "{} frames in all ({} dropped: {} at admission, {} overtaken by newer frames, {} without "
+        "a node's image, {} of these held back for one; {} shown without one), {:.1f} frames a "
+        "second; latency {:.1f} ms (median), {:.1f} ms (95%)\n",
+        r.frames, r.frames_dropped, r.frames_refused, r.frames_overtaken, r.frames_unshown,
+        r.frames_held, r.frames_incomplete, r.fps, r.latency_ms_p50, r.latency_ms_p95);
     for (const auto& [stage, ms] : r.stage_ms) fmt::print("  {:<16} {:8.3f} ms\n", stage, ms);
     fmt::print(
         "bytes per frame per node {:.0f} against {:.0f} raw ({:.4f}), {:.1f} MB/s a node; {} "

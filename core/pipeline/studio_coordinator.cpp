@@ -407,7 +407,7 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
   // The frames in flight belong to the old count; the poses still being fitted for them find no
   // frame to go to.
   for (auto it = frames_.begin(); it != frames_.end();) {
-    if (counting_) ++frames_dropped_;
+    if (counting_) ++frames_dropped_, ++frames_overtaken_;
     it = retireFrame(it);
   }
   refused_.fill(-1);
@@ -533,7 +533,7 @@ void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
   // A frame still waiting for the tracker is pushed out by this one, and dropped.
   if (std::optional<MocapJob> stale = mocap_jobs_.push(std::move(job))) {
     if (const auto it = frames_.find(stale->frame_id); it != frames_.end()) {
-      if (counting_) ++frames_dropped_;
+      if (counting_) ++frames_dropped_, ++frames_overtaken_;
       retireFrame(it);
       refused_[next_refused_++ % refused_.size()] = stale->frame_id;  // late silhouettes too
     }
@@ -754,6 +754,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   updateDeadlines();
   if (counting_ && !shown && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
     ++frames_dropped_;
+    ++frames_unshown_;
     frames_held_ += hold;
   } else if (counting_ && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
     combine_ms_.add((combined - start) / 1e6);
@@ -789,7 +790,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   }
   // Older frames still open will never be shown: they are dropped.
   for (auto it = frames_.begin(); it != frames_.end() && it->first <= frame_id;) {
-    if (it->first < frame_id && counting_) ++frames_dropped_;
+    if (it->first < frame_id && counting_) ++frames_dropped_, ++frames_overtaken_;
     it = retireFrame(it);
   }
   newest_done_ = frame_id;
@@ -889,6 +890,8 @@ RunReport StudioCoordinator::report() const {
   r.frames = frames_done_;
   r.frames_dropped = frames_dropped_;
   r.frames_refused = frames_refused_;
+  r.frames_overtaken = frames_overtaken_;
+  r.frames_unshown = frames_unshown_;
   r.frames_incomplete = frames_incomplete_;
   r.frames_held = frames_held_;
   r.peak_frames_begun = peak_frames_begun_;

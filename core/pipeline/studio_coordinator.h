@@ -111,6 +111,11 @@ struct RunReport {
   int64_t frames_dropped = 0;  // never shown: refused, overtaken, or reached by no node's image
   int64_t frames_refused =
       0;  // of the dropped: at admission, before any work (max_frames_in_flight)
+  // Of the dropped, after admission: overtaken (pushed out of the tracker's queue by a newer frame,
+  // still open when a newer one was shown, or in flight when the cameras' frame ids moved), or
+  // finished unshown (no node's image reached it, or held back: frames_held). Every dropped frame
+  // is refused, overtaken or unshown.
+  int64_t frames_overtaken = 0, frames_unshown = 0;
   // Shown without some awaited node's image (no whole frame for hold_incomplete); and, of the
   // dropped, held back for that.
   int64_t frames_incomplete = 0, frames_held = 0;
@@ -383,7 +388,8 @@ class StudioCoordinator {
   std::vector<uint8_t> decoded_;  // a partial image, reused
   PoseData last_pose_;
   int64_t last_pose_frame_ = -1;
-  int64_t frames_done_ = 0, frames_dropped_ = 0, frames_refused_ = 0;
+  int64_t frames_done_ = 0, frames_dropped_ = 0, frames_refused_ = 0, frames_overtaken_ = 0;
+  int64_t frames_unshown_ = 0;
   int64_t frames_incomplete_ = 0, frames_held_ = 0;
   int64_t last_whole_ns_ = 0;  // when a frame with every awaited node's images was last shown
   // When recent frames' poses and offsets went out, kept past the frames: late answers are timed.

@@ -474,7 +474,8 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
     for (const char* key :
          {"\"fps\": ", "\"latency_ms_p50\": ", "\"latency_ms_p95\": ", "\"stage_ms\": {",
           "\"node_bytes_per_frame\": ", "\"raw_bytes_per_frame_per_node\": 153600.0",
-          "\"frames\": 20", "\"frames_dropped\": ", "\"mocap\": "}) {
+          "\"frames\": 20", "\"frames_dropped\": ", "\"frames_overtaken\": ",
+          "\"frames_unshown\": ", "\"mocap\": "}) {
       EXPECT_NE(text.find(key), std::string::npos) << key << " in " << text;
     }
     fs::remove(json);

@@ -184,6 +184,10 @@ TEST(DistributedPipeline, NodesStreamDropOutAndRejoinAndStrangersAreRefused) {
   EXPECT_GE(report.peak_frames_begun, 1);
   EXPECT_LE(report.peak_frames_begun, 2);
   EXPECT_LE(report.frames_refused, report.frames_dropped);
+  // Every dropped frame has its cause counted.
+  EXPECT_EQ(report.frames_refused + report.frames_overtaken + report.frames_unshown,
+            report.frames_dropped);
+  EXPECT_LE(report.frames_held, report.frames_unshown);
 
   // Clones in the preview: the nodes draw the actor twice more, with the captured texture.
   const size_t alone = coverage(1);

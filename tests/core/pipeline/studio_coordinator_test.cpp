@@ -114,6 +114,9 @@ TEST(StudioCoordinator, AFrameNoNodesImageReachedIsDroppedNotDone) {
   studio.runFor(milliseconds(300));  // past the statistics' deadline
   EXPECT_EQ(studio.framesDone(), 0);
   EXPECT_EQ(studio.report().frames_dropped, 1);
+  EXPECT_EQ(studio.report().frames_unshown, 1);  // dropped for that cause, and no other
+  EXPECT_EQ(studio.report().frames_refused, 0);
+  EXPECT_EQ(studio.report().frames_overtaken, 0);
   EXPECT_TRUE(studio.lastImage(0).rgba.empty());
 
   // Frame 2: the node answers every stage, and the frame is done with its image.
@@ -455,6 +458,31 @@ TEST(StudioCoordinator, AFrameLateAfterANewerOneBeganIsDropped) {
   }
   EXPECT_NE(std::find(posed.begin(), posed.end(), 11), posed.end());
   EXPECT_EQ(std::find(posed.begin(), posed.end(), 10), posed.end()) << "frame 10 posed after 11";
+  EXPECT_EQ(two.studio.report().frames_refused, 1);  // counted as dropped at admission
+}
+
+// A frame still waiting for the node's statistics when a newer frame is shown will never be: it
+// is dropped as overtaken (the drops' causes add up, and `lumistage run` says them).
+TEST(StudioCoordinator, AFrameStillOpenWhenANewerOneIsShownIsOvertaken) {
+  StudioCoordinatorOptions options;
+  options.deadline = milliseconds(5000);  // frame 1 does not reach its deadline in this test
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(2, options);
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint());
+  ASSERT_TRUE(node.send(1, SilhouettesData{}));
+  ASSERT_TRUE(node.await<PoseData>(studio));  // and no statistics for it
+  ASSERT_TRUE(node.send(2, SilhouettesData{}));
+  ASSERT_TRUE(node.await<PoseData>(studio));
+  RefinementStatistics stats;
+  stats.reset(10, options.refine.offset_count, options.refine.colour_bits);
+  ASSERT_TRUE(node.send(2, statisticsMessage(stats, options.refine)));
+  ASSERT_TRUE(node.await<OffsetsData>(studio));
+  ASSERT_TRUE(node.send(2, onePixelImage(studio.view(), 200)));
+  EXPECT_EQ(framesDoneAfter(studio, 1, 300), 1);
+  const RunReport r = studio.report();
+  EXPECT_EQ(r.frames_dropped, 1);
+  EXPECT_EQ(r.frames_overtaken, 1);
+  EXPECT_EQ(r.frames_refused + r.frames_unshown, 0);
 }
 
 // A node that is heard (heartbeats) but sends no silhouettes (its cameras unplugged) while the
