@@ -543,8 +543,8 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   if (!s.view.isNull())
     view_->setPixmap(QPixmap::fromImage(s.view).scaled(view_->size(), Qt::KeepAspectRatio));
   summary_->setText(tr("<b>%1 fps</b> &middot; latency %2 ms (median), %3 ms (95%) &middot; %4 "
-                       "frames, %5 dropped (%10 on arrival, to keep latency, %11 without a node's "
-                       "image), %9 in flight "
+                       "frames, %5 dropped (%10 on arrival, to keep latency, %11 overtaken by "
+                       "newer frames, %12 without a node's image), %9 in flight "
                        "&middot; %6 KB a frame per node against %7 KB raw &middot; %8 unknown "
                        "nodes refused")
                         .arg(r.fps, 0, 'f', 1)
@@ -557,7 +557,8 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
                         .arg(r.refusals)
                         .arg(r.frames_in_flight)
                         .arg(r.frames_refused)
-                        .arg(r.frames_held) +
+                        .arg(r.frames_overtaken)
+                        .arg(r.frames_unshown) +
                     (notice_.isEmpty() ? QString() : "<br>" + notice_.toHtmlEscaped()));
   stages_->setRowCount(static_cast<int>(r.stage_ms.size()));
   int stage_row = 0;
