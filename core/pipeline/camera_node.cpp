@@ -507,9 +507,13 @@ void CameraNode::learnScreens(const Set& set) {
 
 std::unique_lock<std::mutex> CameraNode::lockSource() {
   source_waiters_.fetch_add(1, std::memory_order_acq_rel);
-  std::unique_lock lock(source_mutex_);
-  source_waiters_.fetch_sub(1, std::memory_order_acq_rel);
-  return lock;
+  // Counted out once the mutex is held, or if taking it throws (the capture thread would wait for
+  // this thread for ever).
+  struct CountedOut {
+    std::atomic<int>& waiters;
+    ~CountedOut() { waiters.fetch_sub(1, std::memory_order_acq_rel); }
+  } counted_out{source_waiters_};
+  return std::unique_lock(source_mutex_);
 }
 
 void CameraNode::followFrameIds(int64_t offset) {
