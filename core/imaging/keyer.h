@@ -63,8 +63,8 @@ class GreenScreenKeyer {
     return isForeground(colourAt(image, x, y), x, y);
   }
   // The same for the colour `c` already read at (x, y).
-  bool isForeground(const Rgb& c, int /*x*/, int /*y*/) const {
-    return greenExcess(c) < threshold_;
+  bool isForeground(const Rgb& c, int x, int y) const {
+    return isForegroundLevel(float(greenExcess(c)), x, y);
   }
   // How much the pixel (x, y), of colour `c`, looks like the screen: its green excess. A pixel that
   // the actor covers in part mixes the two colours, so this is nearly linear in the screen's share

@@ -407,7 +407,7 @@ bool StudioCoordinator::acceptFrameId(NodeState& node, int64_t frame_id) {
   // The frames in flight belong to the old count; the poses still being fitted for them find no
   // frame to go to.
   for (auto it = frames_.begin(); it != frames_.end();) {
-    if (counting_) ++frames_dropped_, ++frames_overtaken_;
+    if (counting_) ++frames_overtaken_;
     it = retireFrame(it);
   }
   refused_.fill(-1);
@@ -516,7 +516,7 @@ void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
   // newer one out of the tracker's queue.
   if (newer_begun ||
       (options_.max_frames_in_flight > 0 && begun >= options_.max_frames_in_flight)) {
-    if (counting_) ++frames_dropped_, ++frames_refused_;
+    if (counting_) ++frames_refused_;
     retireFrame(frames_.find(frame_id));                     // the callers hold no iterator to it
     refused_[next_refused_++ % refused_.size()] = frame_id;  // its late silhouettes are ignored
     return;
@@ -533,7 +533,7 @@ void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
   // A frame still waiting for the tracker is pushed out by this one, and dropped.
   if (std::optional<MocapJob> stale = mocap_jobs_.push(std::move(job))) {
     if (const auto it = frames_.find(stale->frame_id); it != frames_.end()) {
-      if (counting_) ++frames_dropped_, ++frames_overtaken_;
+      if (counting_) ++frames_overtaken_;
       retireFrame(it);
       refused_[next_refused_++ % refused_.size()] = stale->frame_id;  // late silhouettes too
     }
@@ -753,7 +753,6 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   if (drawn) incomplete_share_ = 0.9 * incomplete_share_ + 0.1 * double(!whole);
   updateDeadlines();
   if (counting_ && !shown && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
-    ++frames_dropped_;
     ++frames_unshown_;
     frames_held_ += hold;
   } else if (counting_ && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) {
@@ -790,7 +789,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
   }
   // Older frames still open will never be shown: they are dropped.
   for (auto it = frames_.begin(); it != frames_.end() && it->first <= frame_id;) {
-    if (it->first < frame_id && counting_) ++frames_dropped_, ++frames_overtaken_;
+    if (it->first < frame_id && counting_) ++frames_overtaken_;
     it = retireFrame(it);
   }
   newest_done_ = frame_id;
@@ -888,7 +887,7 @@ void StudioCoordinator::run(const std::atomic<bool>& stop) {
 RunReport StudioCoordinator::report() const {
   RunReport r;
   r.frames = frames_done_;
-  r.frames_dropped = frames_dropped_;
+  r.frames_dropped = frames_refused_ + frames_overtaken_ + frames_unshown_;
   r.frames_refused = frames_refused_;
   r.frames_overtaken = frames_overtaken_;
   r.frames_unshown = frames_unshown_;

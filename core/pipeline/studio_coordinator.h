@@ -388,8 +388,8 @@ class StudioCoordinator {
   std::vector<uint8_t> decoded_;  // a partial image, reused
   PoseData last_pose_;
   int64_t last_pose_frame_ = -1;
-  int64_t frames_done_ = 0, frames_dropped_ = 0, frames_refused_ = 0, frames_overtaken_ = 0;
-  int64_t frames_unshown_ = 0;
+  // The frames dropped, by cause (RunReport).
+  int64_t frames_done_ = 0, frames_refused_ = 0, frames_overtaken_ = 0, frames_unshown_ = 0;
   int64_t frames_incomplete_ = 0, frames_held_ = 0;
   int64_t last_whole_ns_ = 0;  // when a frame with every awaited node's images was last shown
   // When recent frames' poses and offsets went out, kept past the frames: late answers are timed.

@@ -82,7 +82,6 @@ bool MeshRefiner::onContour(const RefinementStatistics& stats, int v) {
 }
 
 float MeshRefiner::dataError(const RefinementStatistics& stats, size_t s, int i) const {
-  const float t_rel = config_.t_max_m > 0 ? offsets_m_[i] / float(config_.t_max_m) : 0.0f;
   const int v = int(s / size_t(config_.offset_count));
   const bool contour = onContour(stats, v);
   float colour;
@@ -97,8 +96,8 @@ float MeshRefiner::dataError(const RefinementStatistics& stats, size_t s, int i)
     colour = windowColour(stats, s, windowPoints(stats), window, sigma2);
   }
   const float bonus = contour && lastInside(stats, v) == i ? float(config_.contour_weight) : 0.0f;
-  const double outward = contour ? config_.outward_weight : config_.off_contour_outward_weight;
-  return float(config_.outside_weight) * float(stats.outside[s]) - float(outward) * t_rel +
+  const float outward = outward_[(contour ? 0 : size_t(config_.offset_count)) + size_t(i)];
+  return float(config_.outside_weight) * float(stats.outside[s]) + outward +
          float(config_.colour_weight) * colour - bonus;
 }
 
