@@ -138,4 +138,8 @@ bool BackgroundModel::isForegroundLevel(float level, int x, int y) const {
   return level < 0 && level * level > limit2_[blockOf(x, y)];
 }
 
+bool BackgroundModel::isPureForegroundLevel(float level, int x, int y, float purity) const {
+  return level < 0 && purity * purity * level * level > limit2_[blockOf(x, y)];
+}
+
 }  // namespace lumistage

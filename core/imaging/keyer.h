@@ -76,6 +76,11 @@ class GreenScreenKeyer {
   bool isForegroundLevel(float level, int /*x*/, int /*y*/) const {
     return level < float(threshold_);
   }
+  // Whether the level is the actor's with a margin: under `purity` (in (0, 1]) times the
+  // threshold, where a pixel the screen covers in part (more of its green excess) is not.
+  bool isPureForegroundLevel(float level, int /*x*/, int /*y*/, float purity) const {
+    return level < purity * float(threshold_);
+  }
   static int greenExcess(const Rgb& c) { return c.g - (c.r > c.b ? c.r : c.b); }
   // Learns from a frame of the empty stage, or of the stage with the actor (a person rarely fills
   // the view): sets the threshold at three quarters of the 1st percentile of the screen's green
@@ -137,6 +142,10 @@ class BackgroundModel {
   // Whether a background level (interpolated between pixels, say) near pixel (x, y) is the
   // actor's, by the bound of the pixel's block: isForeground() of a colour is this of its level.
   bool isForegroundLevel(float level, int x, int y) const;
+  // Whether the level is the actor's with a margin: its distance from the empty stage over the
+  // block's bound divided by `purity` (in (0, 1]), which a pixel the stage shows through in part
+  // does not reach (GreenScreenKeyer::isPureForegroundLevel).
+  bool isPureForegroundLevel(float level, int x, int y, float purity) const;
   int frames() const { return frames_; }
 
  private:

@@ -16,7 +16,7 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
                            "smooth_iterations", "depth_map_step",  "depth_tolerance_m",
                            "min_facing_cos",    "colour_bits",     "window_points",
                            "window_m",          "contour_weight",  "contour_cos",
-                           "contour_probe_m"});
+                           "contour_probe_m",   "colour_purity"});
   auto number = [&](const char* name, double& value, double lo, double hi, const char* expected) {
     if (!node[name]) return;
     const std::string path = YamlReader::child(key, name);
@@ -57,6 +57,7 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
   number("contour_weight", config.contour_weight, 0, 1e6, "expected a weight >= 0");
   number("contour_cos", config.contour_cos, 0, 1, "expected a cosine in [0, 1]");
   number("contour_probe_m", config.contour_probe_m, 0, 0.5, "expected metres in [0, 0.5]");
+  number("colour_purity", config.colour_purity, 0.01, 1, "expected a share in [0.01, 1]");
   return config;
 }
 

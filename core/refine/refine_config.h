@@ -82,6 +82,16 @@ struct RefineConfig {
   // its projection sideways). 1 or 3; three times the nodes' samples and statistics.
   int window_points = 3;
   double window_m = 0.01;
+  // A point's colour is read between pixels from the pixels (Bayer cells) around its projection
+  // that the key holds well inside the actor: their background level (green excess) under
+  // colour_purity of the key's bound (GreenScreenKeyer::isPureForegroundLevel); where none is,
+  // from those keyed as the actor. A pixel the screen covers in part keys as the actor up to the
+  // bound, its colour mixed with the screen's, and a Bayer cell on a silhouette's edge mixes its
+  // channels from both sides: such colours made the rim's points look inconsistent and pulled
+  // vertices inside the actor. Leave-one-camera-out on Bayer sessions of the four reference
+  // clips +0.4 dB over the actor's mask, +0.2 dB matte; RGB the same (docs/lumigraph.md). In
+  // (0, 1]; 1: every pixel keyed as the actor.
+  double colour_purity = 0.4;
   // The contour term (beyond the paper). The visual hull touches the actor along each camera's
   // contour generator: where a camera sees a vertex edge-on with nothing behind it, the hull's
   // crossing along the normal is the surface; elsewhere (between the legs, under the arms) it is

@@ -76,45 +76,68 @@ class PixelGrid {
   int red_ = 0, blue_ = 0, green_red_row_ = 0, green_blue_row_ = 0;
 };
 
-// The key's background level (GreenScreenKeyer::backgroundLevel) bilinear between the four
-// neighbours `n` of colours `c`.
+// The key's background levels (GreenScreenKeyer::backgroundLevel) of the four neighbours `n` of
+// colours `c`.
 template <typename Key>
-float backgroundLevelBetween(const Key& key, const Neighbours& n, const Rgb c[4]) {
-  const auto at = [&](int k, int x, int y) { return float(key.backgroundLevel(c[k], x, y)); };
-  return (1 - n.fy) * ((1 - n.fx) * at(0, n.x0, n.y0) + n.fx * at(1, n.x1, n.y0)) +
-         n.fy * ((1 - n.fx) * at(2, n.x0, n.y1) + n.fx * at(3, n.x1, n.y1));
+void backgroundLevels(const Key& key, const Neighbours& n, const Rgb c[4], float levels[4]) {
+  levels[0] = float(key.backgroundLevel(c[0], n.x0, n.y0));
+  levels[1] = float(key.backgroundLevel(c[1], n.x1, n.y0));
+  levels[2] = float(key.backgroundLevel(c[2], n.x0, n.y1));
+  levels[3] = float(key.backgroundLevel(c[3], n.x1, n.y1));
 }
 
-// The same at pixel position (u, w).
+// Bilinear between the four neighbours' levels.
+float levelBetween(const Neighbours& n, const float levels[4]) {
+  return (1 - n.fy) * ((1 - n.fx) * levels[0] + n.fx * levels[1]) +
+         n.fy * ((1 - n.fx) * levels[2] + n.fx * levels[3]);
+}
+
+// The key's background level at pixel position (u, w), bilinear between the pixels around it.
 template <typename Key>
 float interpolatedBackgroundLevel(const Key& key, const PixelGrid& grid, float u, float w) {
   const Neighbours n = grid.around(u, w);
   Rgb c[4];
   grid.colours(n, c);
-  return backgroundLevelBetween(key, n, c);
+  float levels[4];
+  backgroundLevels(key, n, c, levels);
+  return levelBetween(n, levels);
 }
 
 // The bilinear weights in fixed point: a whole pixel weighs kWeightOne.
 constexpr int kWeightBits = 6, kWeightOne = 1 << (2 * kWeightBits);
 
 // The actor's colour at a point keyed as the actor, whose four neighbours `n` have colours `c`, on
-// the statistics' scale (`shift` bits dropped): bilinear between the neighbours keyed as the actor,
-// their weights renormalised, so that the screen's colour beside a silhouette does not make the
-// rim's points look inconsistent; the nearest pixel's (ix, iy) where none is (a background model
-// whose blocks' bounds differ around the point). The nearest pixel alone put a point's projection
-// up to half a pixel off in every camera, a colour error that the variance counts as
-// inconsistency: leave-one-camera-out +0.25 to +0.37 dB (docs/lumigraph.md).
+// the statistics' scale (`shift` bits dropped): bilinear between the neighbours the key holds
+// well inside the actor (RefineConfig::colour_purity), or where none is, between those keyed as
+// the actor, their weights renormalised, so that the screen's colour beside a silhouette (and in
+// the pixels it covers in part) does not make the rim's points look inconsistent; the nearest
+// pixel's (ix, iy) where none is either (a background model whose blocks' bounds differ around
+// the point). The nearest pixel alone put a point's projection up to half a pixel off in every
+// camera, a colour error that the variance counts as inconsistency: leave-one-camera-out +0.25 to
+// +0.37 dB (docs/lumigraph.md).
 template <typename Key>
 void interpolatedColour(const Key& key, const PixelGrid& grid, const Neighbours& n, const Rgb c[4],
-                        int ix, int iy, int shift, uint32_t rgb[3]) {
+                        const float levels[4], int ix, int iy, int shift, float purity,
+                        uint32_t rgb[3]) {
   constexpr float kScale = float(1 << kWeightBits);
   const int wx = int(n.fx * kScale + 0.5f), wy = int(n.fy * kScale + 0.5f);
   constexpr int kOne = 1 << kWeightBits;
   const int xs[4] = {n.x0, n.x1, n.x0, n.x1}, ys[4] = {n.y0, n.y0, n.y1, n.y1};
   const int weights[4] = {(kOne - wx) * (kOne - wy), wx * (kOne - wy), (kOne - wx) * wy, wx * wy};
+  bool pure[4], actor[4];
+  bool any_pure = false;
+  for (int k = 0; k < 4; ++k) {
+    pure[k] = key.isPureForegroundLevel(levels[k], xs[k], ys[k], purity);
+    any_pure = any_pure || pure[k];
+  }
+  const bool* counted = pure;
+  if (!any_pure) {
+    for (int k = 0; k < 4; ++k) actor[k] = key.isForegroundLevel(levels[k], xs[k], ys[k]);
+    counted = actor;
+  }
   int sum = 0, r = 0, g = 0, b = 0;
   for (int k = 0; k < 4; ++k) {
-    const int wk = key.isForeground(c[k], xs[k], ys[k]) ? weights[k] : 0;
+    const int wk = counted[k] ? weights[k] : 0;
     sum += wk, r += wk * c[k].r, g += wk * c[k].g, b += wk * c[k].b;
   }
   if (sum == kWeightOne) {
@@ -314,6 +337,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
   const Eigen::Vector3f centre = input.camera->centre().cast<float>();
   const float max_x = float(image.width) - 0.5f, max_y = float(image.height) - 0.5f;
   const int shift = 8 - config_.colour_bits;
+  const float purity = float(config_.colour_purity);
   const int offsets = config_.offset_count;
   const float tolerance = float(config_.depth_tolerance_m);
   const float min_cos = float(config_.min_facing_cos);
@@ -384,7 +408,9 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
       const Neighbours around = grid.around(u, w);
       Rgb colours[4];
       grid.colours(around, colours);
-      if (!key.isForegroundLevel(backgroundLevelBetween(key, around, colours), ix, iy)) {
+      float levels[4];
+      backgroundLevels(key, around, colours, levels);
+      if (!key.isForegroundLevel(levelBetween(around, levels), ix, iy)) {
         ++out.outside[s];
         if (previous_inside && v < first_window) {
           uint8_t& edge = out.edges[s - 1];
@@ -398,7 +424,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
       previous = Eigen::Vector2f(u, w);
       if (!visible) continue;
       uint32_t rgb[3];
-      interpolatedColour(key, grid, around, colours, ix, iy, shift, rgb);
+      interpolatedColour(key, grid, around, colours, levels, ix, iy, shift, purity, rgb);
       const uint32_t r = rgb[0], g = rgb[1], b = rgb[2];
       ++out.colour_count[s];
       out.sums[3 * s] = uint16_t(out.sums[3 * s] + r);

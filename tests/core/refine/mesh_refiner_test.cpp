@@ -531,6 +531,77 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
   }
 }
 
+// A pixel (a Bayer cell) the screen covers in part keys as the actor up to the key's threshold,
+// its colour mixed with the screen's: a point's colour leaves it out where a pixel the key holds
+// well inside the actor is beside it (RefineConfig::colour_purity). The actor is uniform, the
+// column (cell) on its edge 40% screen (green excess 20 against the threshold's 30), so every
+// colour read between the last actor pixel and that column is the actor's own; with every pixel
+// keyed as the actor taken (colour_purity 1) the mix shows.
+TEST(RefinementSampler, LeavesPixelsTheScreenCoversInPartOutOfTheColours) {
+  const Rig rig = testing::smallRing();
+  const Camera& camera = rig.camera(0);
+  const Eigen::Vector3d centre(0, 0, 1.1);
+  const Eigen::Vector2d middle = *camera.project(centre);
+  const int edge_x = 2 * ((int(std::lround(middle.x())) + 12) / 2);  // a Bayer cell's first
+  const uint8_t actor[3] = {100, 60, 120}, screen[3] = {40, 200, 60};
+  uint8_t mixed[3];
+  for (int k = 0; k < 3; ++k) mixed[k] = uint8_t(std::lround(0.6 * actor[k] + 0.4 * screen[k]));
+  std::vector<uint8_t> rgba(size_t(camera.width()) * camera.height() * 4);
+  for (size_t p = 0; p < size_t(camera.width()) * camera.height(); ++p) {
+    const int x = int(p % camera.width());
+    const uint8_t* c = x < edge_x ? actor : (x < edge_x + 2 ? mixed : screen);
+    std::copy(c, c + 3, &rgba[4 * p]);
+    rgba[4 * p + 3] = 255;
+  }
+  const GreenScreenKeyer keyer;
+  ASSERT_TRUE(keyer.isForeground(Rgb{mixed[0], mixed[1], mixed[2]}, 0, 0));
+  const TriangleMesh sphere = testing::icosphere(centre, 0.2, 3);
+  for (const PixelFormat format : {PixelFormat::kRgb8, PixelFormat::kBayerRggb8}) {
+    SCOPED_TRACE(format == PixelFormat::kRgb8 ? "rgb8" : "bayer");
+    const bool bayer = format != PixelFormat::kRgb8;
+    Image image;
+    rgbaToImage(rgba.data(), camera.width(), camera.height(), format, image);
+    const std::vector<SamplerCamera> cameras = {{&camera, image.view(), &keyer, nullptr}};
+    // Pixel (cell) centres: the last actor one, and the mixed one.
+    const double last_actor = bayer ? edge_x - 1.5 : edge_x - 1.0;
+    const double mixed_centre = bayer ? edge_x + 0.5 : edge_x;
+    for (const double purity : {0.4, 1.0}) {
+      SCOPED_TRACE(purity);
+      RefineConfig config;
+      config.colour_bits = 8;
+      config.window_points = 1;
+      config.colour_purity = purity;
+      RefinementSampler sampler(config);
+      RefinementStatistics stats;
+      sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
+      int beside = 0, mixed_in = 0;
+      for (int v = 0; v < sphere.vertexCount(); ++v) {
+        for (int i = 0; i < config.offset_count; ++i) {
+          const size_t s = size_t(v) * config.offset_count + i;
+          if (stats.colour_count[s] == 0) continue;
+          const Eigen::Vector3d p = sphere.positions.col(v).cast<double>() +
+                                    config.offsetAt(i) * sphere.normals.col(v).cast<double>();
+          const double u = camera.project(p)->x();
+          if (u <= last_actor + 0.05 || u >= mixed_centre - 0.05) continue;
+          ++beside;
+          mixed_in += stats.sums[3 * s + 1] > actor[1];
+          if (purity < 1) {
+            EXPECT_EQ(stats.sums[3 * s], actor[0]) << "vertex " << v << " offset " << i;
+            EXPECT_EQ(stats.sums[3 * s + 1], actor[1]);
+            EXPECT_EQ(stats.sums[3 * s + 2], actor[2]);
+          }
+        }
+      }
+      ASSERT_GT(beside, 10);
+      if (purity == 1) {
+        EXPECT_GT(mixed_in, beside / 2);
+      } else {
+        EXPECT_EQ(mixed_in, 0);
+      }
+    }
+  }
+}
+
 // The sampler projects a vertex's offsets along a parabola through the projections of the
 // range's ends and middle: through a strong lens, every sample still lands where the camera's own
 // projection puts it (the key alternates from one pixel column to the next, so a projection a

@@ -88,6 +88,13 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
   EXPECT_NE(errorFor("k.yaml", "  contour_weight: -1\n")
                 .find("k.yaml:5: refine.contour_weight: expected a weight >= 0"),
             std::string::npos);
+  // Which pixels' colours a point takes: a share of the key's bound, above 0.
+  std::ofstream(folder / "l.yaml") << head << "refine:\n  colour_purity: 1\n";
+  EXPECT_DOUBLE_EQ(loadStudioConfig(folder / "l.yaml").refine.colour_purity, 1.0);
+  EXPECT_LT(RefineConfig{}.colour_purity, 1.0);
+  EXPECT_NE(errorFor("m.yaml", "  colour_purity: 0\n")
+                .find("m.yaml:5: refine.colour_purity: expected a share in [0.01, 1]"),
+            std::string::npos);
   // The outward term off the contours: its own weight; the nodes mark the contours for it alone.
   std::ofstream(folder / "l.yaml") << head
                                    << "refine:\n  contour_weight: 0\n"
