@@ -213,6 +213,52 @@ TEST_F(KeyerTest, LowResolutionSilhouetteSamplesCellCentres) {
   EXPECT_GT(double(agree) / mask.size(), 0.99);
 }
 
+// A pure foreground level (the refinement's colours take only those pixels,
+// RefineConfig::colour_purity) is a foreground level with a margin: for the green-screen key and
+// for a background learnt from the empty stage alike, a colour mixed a little toward the
+// background is the actor's but not purely, one far from it is both, and at purity 1 the two
+// tests agree.
+TEST(Keyer, APureForegroundLevelIsTheActorsWithAMargin) {
+  const Rgb screen{40, 200, 60}, actor{150, 90, 80};
+  const auto mix = [&](double share) {  // `share` of the screen's colour in the actor's
+    return Rgb{int(std::lround(actor.r + share * (screen.r - actor.r))),
+               int(std::lround(actor.g + share * (screen.g - actor.g))),
+               int(std::lround(actor.b + share * (screen.b - actor.b)))};
+  };
+  const GreenScreenKeyer keyer;
+  Image empty;
+  empty.resize(PixelFormat::kRgb8, 32, 32);
+  for (size_t p = 0; p < size_t(32) * 32; ++p) {
+    const int noise = int(p % 3) - 1;  // the sensor's: -1, 0, +1
+    empty.pixels[3 * p] = uint8_t(screen.r + noise);
+    empty.pixels[3 * p + 1] = uint8_t(screen.g + noise);
+    empty.pixels[3 * p + 2] = uint8_t(screen.b - noise);
+  }
+  BackgroundModel model(32, 32);
+  model.add(empty.view());
+  model.learn();
+  const auto check = [&](const auto& key, const char* name) {
+    SCOPED_TRACE(name);
+    int foreground_only = 0, pure = 0;
+    for (double share = 0; share <= 1.0; share += 0.02) {
+      const float level = float(key.backgroundLevel(mix(share), 5, 5));
+      const bool fg = key.isForegroundLevel(level, 5, 5);
+      const bool strict = key.isPureForegroundLevel(level, 5, 5, 0.4f);
+      EXPECT_EQ(key.isPureForegroundLevel(level, 5, 5, 1.0f), fg) << share;
+      if (strict) {
+        EXPECT_TRUE(fg) << share;
+      }
+      foreground_only += fg && !strict;
+      pure += strict;
+    }
+    EXPECT_TRUE(key.isPureForegroundLevel(float(key.backgroundLevel(actor, 5, 5)), 5, 5, 0.4f));
+    EXPECT_GT(foreground_only, 0);
+    EXPECT_GT(pure, 0);
+  };
+  check(keyer, "green screen");
+  check(model, "learnt background");
+}
+
 TEST(Keyer, CellsAreKeyedByTheMeanOfThePixelsAroundTheirCentre) {
   // Pixel by pixel: 3x3 windows, whole and cut by the edges, against their plain mean; on Bayer,
   // the cells read once and weighted give the mean of the nine pixels' cell colours.
