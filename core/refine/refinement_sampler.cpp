@@ -124,17 +124,13 @@ void interpolatedColour(const Key& key, const PixelGrid& grid, const Neighbours&
   constexpr int kOne = 1 << kWeightBits;
   const int xs[4] = {n.x0, n.x1, n.x0, n.x1}, ys[4] = {n.y0, n.y0, n.y1, n.y1};
   const int weights[4] = {(kOne - wx) * (kOne - wy), wx * (kOne - wy), (kOne - wx) * wy, wx * wy};
-  bool pure[4], actor[4];
-  bool any_pure = false;
+  bool counted[4], any_pure = false;
   for (int k = 0; k < 4; ++k) {
-    pure[k] = key.isPureForegroundLevel(levels[k], xs[k], ys[k], purity);
-    any_pure = any_pure || pure[k];
+    counted[k] = key.isPureForegroundLevel(levels[k], xs[k], ys[k], purity);
+    any_pure = any_pure || counted[k];
   }
-  const bool* counted = pure;
-  if (!any_pure) {
-    for (int k = 0; k < 4; ++k) actor[k] = key.isForegroundLevel(levels[k], xs[k], ys[k]);
-    counted = actor;
-  }
+  if (!any_pure)
+    for (int k = 0; k < 4; ++k) counted[k] = key.isForegroundLevel(levels[k], xs[k], ys[k]);
   int sum = 0, r = 0, g = 0, b = 0;
   for (int k = 0; k < 4; ++k) {
     const int wk = counted[k] ? weights[k] : 0;

@@ -442,6 +442,22 @@ TEST(RefinementSampler, LocatesTheHullsEdgeBelowAPixel) {
   EXPECT_LT(located, 0.4 * halfway) << "located " << located << " m, halfway " << halfway << " m";
 }
 
+// Calls f(s, v, i, u) for every sample s (vertex v of `mesh`, offset i) that `camera` coloured, u
+// the column its point projects to.
+template <typename F>
+void forEachColouredSample(const RefinementStatistics& stats, const RefineConfig& config,
+                           const TriangleMesh& mesh, const Camera& camera, F&& f) {
+  for (int v = 0; v < mesh.vertexCount(); ++v) {
+    for (int i = 0; i < config.offset_count; ++i) {
+      const size_t s = size_t(v) * config.offset_count + i;
+      if (stats.colour_count[s] == 0) continue;
+      const Eigen::Vector3d p = mesh.positions.col(v).cast<double>() +
+                                config.offsetAt(i) * mesh.normals.col(v).cast<double>();
+      f(s, v, i, camera.project(p)->x());
+    }
+  }
+}
+
 // A point's colour is read between pixels (bilinear), from the pixels keyed as the actor only: on
 // an image whose red rises 4 levels a pixel to the right, the statistics hold each sample's red
 // as its projection's column gives it, not its nearest pixel's (up to 2 levels off, 4 between a
@@ -501,27 +517,20 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
     ASSERT_GT(turns, edge_x - 0.5);  // past where the nearest pixel's key turned
     double interpolated_error = 0, nearest_error = 0, furthest = 0;
     int inner = 0, beside_edge = 0;
-    for (int v = 0; v < sphere.vertexCount(); ++v) {
-      for (int i = 0; i < config.offset_count; ++i) {
-        const size_t s = size_t(v) * config.offset_count + i;
-        if (stats.colour_count[s] == 0) continue;
-        const Eigen::Vector3d p = sphere.positions.col(v).cast<double>() +
-                                  config.offsetAt(i) * sphere.normals.col(v).cast<double>();
-        const double u = camera.project(p)->x();
-        ASSERT_LT(u, turns + 1e-3) << "a sample keyed as the screen has a colour";
-        furthest = std::max(furthest, u);
-        if (u > edge_x - (bayer ? 1.5 : 1.0)) {
-          // Its right-hand neighbours are the screen: the colour is the actor's alone.
-          ++beside_edge;
-          EXPECT_EQ(stats.sums[3 * s + 1], 60) << "vertex " << v << " offset " << i;
-          EXPECT_EQ(stats.sums[3 * s + 2], 120);
-        } else if (std::abs(u - middle.x()) < 25) {
-          ++inner;
-          interpolated_error += std::abs(stats.sums[3 * s] - expected(u));
-          nearest_error += std::abs(nearest(u) - expected(u));
-        }
+    forEachColouredSample(stats, config, sphere, camera, [&](size_t s, int v, int i, double u) {
+      furthest = std::max(furthest, u);
+      if (u > edge_x - (bayer ? 1.5 : 1.0)) {
+        // Its right-hand neighbours are the screen: the colour is the actor's alone.
+        ++beside_edge;
+        EXPECT_EQ(stats.sums[3 * s + 1], 60) << "vertex " << v << " offset " << i;
+        EXPECT_EQ(stats.sums[3 * s + 2], 120);
+      } else if (std::abs(u - middle.x()) < 25) {
+        ++inner;
+        interpolated_error += std::abs(stats.sums[3 * s] - expected(u));
+        nearest_error += std::abs(nearest(u) - expected(u));
       }
-    }
+    });
+    ASSERT_LT(furthest, turns + 1e-3) << "a sample keyed as the screen has a colour";
     ASSERT_GT(inner, 200);
     ASSERT_GT(beside_edge, 10);
     EXPECT_GT(furthest, turns - 0.1);  // the key reaches as far as it should
@@ -575,23 +584,16 @@ TEST(RefinementSampler, LeavesPixelsTheScreenCoversInPartOutOfTheColours) {
       RefinementStatistics stats;
       sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
       int beside = 0, mixed_in = 0;
-      for (int v = 0; v < sphere.vertexCount(); ++v) {
-        for (int i = 0; i < config.offset_count; ++i) {
-          const size_t s = size_t(v) * config.offset_count + i;
-          if (stats.colour_count[s] == 0) continue;
-          const Eigen::Vector3d p = sphere.positions.col(v).cast<double>() +
-                                    config.offsetAt(i) * sphere.normals.col(v).cast<double>();
-          const double u = camera.project(p)->x();
-          if (u <= last_actor + 0.05 || u >= mixed_centre - 0.05) continue;
-          ++beside;
-          mixed_in += stats.sums[3 * s + 1] > actor[1];
-          if (purity < 1) {
-            EXPECT_EQ(stats.sums[3 * s], actor[0]) << "vertex " << v << " offset " << i;
-            EXPECT_EQ(stats.sums[3 * s + 1], actor[1]);
-            EXPECT_EQ(stats.sums[3 * s + 2], actor[2]);
-          }
+      forEachColouredSample(stats, config, sphere, camera, [&](size_t s, int v, int i, double u) {
+        if (u <= last_actor + 0.05 || u >= mixed_centre - 0.05) return;
+        ++beside;
+        mixed_in += stats.sums[3 * s + 1] > actor[1];
+        if (purity < 1) {
+          EXPECT_EQ(stats.sums[3 * s], actor[0]) << "vertex " << v << " offset " << i;
+          EXPECT_EQ(stats.sums[3 * s + 1], actor[1]);
+          EXPECT_EQ(stats.sums[3 * s + 2], actor[2]);
         }
-      }
+      });
       ASSERT_GT(beside, 10);
       if (purity == 1) {
         EXPECT_GT(mixed_in, beside / 2);
