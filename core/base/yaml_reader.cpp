@@ -98,6 +98,13 @@ void YamlReader::checkKeys(const YAML::Node& map, std::string_view key,
   }
 }
 
+bool YamlReader::boolean(const YAML::Node& value, std::string_view key) const {
+  const std::string text = value.IsScalar() ? value.Scalar() : std::string();
+  if (text != "true" && text != "false")
+    fail(value, key, "expected true or false, got " + describe(value));
+  return text == "true";
+}
+
 double YamlReader::number(const YAML::Node& value, std::string_view key) const {
   double out = 0;
   if (!value.IsScalar() || !YAML::convert<double>::decode(value, out) || !std::isfinite(out)) {

@@ -35,6 +35,7 @@ class YamlReader {
   double number(const YAML::Node& value, std::string_view key) const;  // finite only
   int integer(const YAML::Node& value, std::string_view key) const;
   std::string string(const YAML::Node& value, std::string_view key) const;
+  bool boolean(const YAML::Node& value, std::string_view key) const;  // true or false
 
   static std::string child(std::string_view parent, std::string_view key);
   static std::string item(std::string_view parent, size_t index);

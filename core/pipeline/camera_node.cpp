@@ -78,7 +78,12 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
         {&rig_.camera(cameras_[k]), set->frames[k].image.view(), &(*set->keyers)[k], nullptr});
     sampler_camera_index_.push_back(static_cast<int>(k));
   }
-  sampler_.sample(sampler_cameras_, positions_, normals_, body_.rest.triangles, refine_stats_);
+  // Seen through the surface the studio refined an earlier frame to, if a recent one (the frames
+  // in flight: usually one to three before this).
+  const bool surface = surface_frame_ >= 0 && message.frame_id >= surface_frame_ &&
+                       message.frame_id - surface_frame_ <= kSurfaceFrames;
+  sampler_.sample(sampler_cameras_, positions_, normals_, body_.rest.triangles, refine_stats_,
+                  surface ? std::span<const uint8_t>(surface_levels_) : std::span<const uint8_t>());
   told_sees_nobody_.resize(cameras_.size());
   for (size_t i = 0; i < sampler_cameras_.size(); ++i) {
     const int k = sampler_camera_index_[i];
@@ -665,6 +670,8 @@ std::vector<Message> CameraNode::partialImagesWithOffsets(const Message& message
         posed.positions.cols(), options_.refine.offsetLevels());
   }
   if (fits) {
+    surface_levels_.assign(offsets.offsets.begin(), offsets.offsets.end());
+    surface_frame_ = message.frame_id;
     applyOffsets(options_.refine, offsets.offsets, posed.positions, posed.normals, positions_);
     // The refined surface's own normals (the lumigraph's facing term and rim dilation): 0.1 dB
     // of leave-one-out over the posed mesh's.

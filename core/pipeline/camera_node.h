@@ -262,6 +262,12 @@ class CameraNode {
   };
   std::map<int64_t, Posed> posed_;  // frames awaiting their offsets (statistics thread's alone)
   bool told_offsets_ = false;       // said that the studio's offsets do not fit (that thread's)
+  // The studio's latest offsets that fit the mesh, and their frame (statistics thread's): the
+  // refinement's visibility in the frames after is that of the surface they make
+  // (RefinementSampler::sample), while they are at most kSurfaceFrames ids away.
+  std::vector<uint8_t> surface_levels_;
+  int64_t surface_frame_ = -1;
+  static constexpr int64_t kSurfaceFrames = 30;
   // Map nodes of frames done with, reused with their matrices: keeping a frame's posed mesh does
   // not allocate once warmed up.
   std::vector<std::map<int64_t, Posed>::node_type> spare_posed_;

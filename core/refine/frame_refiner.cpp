@@ -30,7 +30,8 @@ void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::M
     for (int c : node.cameras)
       if (c != left_out)
         inputs_.push_back({&rig_.camera(c), frames[c].image.view(), &keyers_[c], nullptr});
-    sampler_.sample(inputs_, positions, normals, triangles_, node_stats_);
+    // The visibility from the surface the last frame refined to, as the pipeline's nodes do.
+    sampler_.sample(inputs_, positions, normals, triangles_, node_stats_, offsets_);
     codec_.encode(node_stats_, wire_);
     wire_bytes_ += wire_.size();
     std::string error;

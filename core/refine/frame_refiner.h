@@ -15,7 +15,9 @@ namespace lumistage {
 // The whole refinement of one frame in one process, node by node as the distributed pipeline
 // does it (each node samples its own cameras, its statistics go through the compressed wire form,
 // the module combines and refines): for offline work on a session — evaluation, export. The
-// green-screen keyers learn the screen from the first frame's images.
+// green-screen keyers learn the screen from the first frame's images; from the second frame on,
+// the nodes' visibility comes from the surface the frame before was refined to (as the nodes have
+// the studio's offsets of an earlier frame), so frames are to be given in order.
 class FrameRefiner {
  public:
   FrameRefiner(const Rig& rig, const RefineConfig& config, int vertex_count,

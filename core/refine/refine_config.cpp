@@ -9,14 +9,32 @@ namespace lumistage {
 RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std::string_view key) {
   RefineConfig config;
   in.requireMap(node, key);
-  in.checkKeys(node, key, {"offset_count",      "t_max_m",         "t_inward_m",
-                           "outside_weight",    "outward_weight",  "off_contour_outward_weight",
-                           "colour_weight",     "colour_sigma",    "unseen_colour",
-                           "smooth_weight",     "temporal_weight", "tie_margin",
-                           "smooth_iterations", "depth_map_step",  "depth_tolerance_m",
-                           "min_facing_cos",    "colour_bits",     "window_points",
-                           "window_m",          "contour_weight",  "contour_cos",
-                           "contour_probe_m",   "colour_purity"});
+  in.checkKeys(node, key,
+               {"offset_count",
+                "t_max_m",
+                "t_inward_m",
+                "outside_weight",
+                "outward_weight",
+                "off_contour_outward_weight",
+                "colour_weight",
+                "colour_sigma",
+                "unseen_colour",
+                "smooth_weight",
+                "temporal_weight",
+                "tie_margin",
+                "smooth_iterations",
+                "depth_map_step",
+                "depth_tolerance_m",
+                "min_facing_cos",
+                "colour_bits",
+                "window_points",
+                "window_m",
+                "contour_weight",
+                "contour_cos",
+                "contour_probe_m",
+                "colour_purity",
+                "refined_depth_tolerance_m",
+                "despill"});
   auto number = [&](const char* name, double& value, double lo, double hi, const char* expected) {
     if (!node[name]) return;
     const std::string path = YamlReader::child(key, name);
@@ -47,6 +65,8 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
   integer("smooth_iterations", config.smooth_iterations, 0, 100, "expected 0 to 100");
   integer("depth_map_step", config.depth_map_step, 1, 64, "expected 1 to 64 pixels");
   number("depth_tolerance_m", config.depth_tolerance_m, 0, 1, "expected metres in [0, 1]");
+  number("refined_depth_tolerance_m", config.refined_depth_tolerance_m, 0, 1,
+         "expected metres in [0, 1]");
   number("min_facing_cos", config.min_facing_cos, -1, 1, "expected a cosine in [-1, 1]");
   integer("colour_bits", config.colour_bits, 1, 8, "expected 1 to 8 bits");
   integer("window_points", config.window_points, 1, 3, "expected 1 or 3 points");
@@ -58,6 +78,8 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
   number("contour_cos", config.contour_cos, 0, 1, "expected a cosine in [0, 1]");
   number("contour_probe_m", config.contour_probe_m, 0, 0.5, "expected metres in [0, 0.5]");
   number("colour_purity", config.colour_purity, 0.01, 1, "expected a share in [0.01, 1]");
+  if (node["despill"])
+    config.despill = in.boolean(node["despill"], YamlReader::child(key, "despill"));
   return config;
 }
 

@@ -57,8 +57,9 @@ struct RefineConfig {
   // between the legs, under the arms, on the loose shirt, where the hull is looser than the actor
   // and faint cloth left the outward term to carry the vertices past the surface (a quarter of
   // them more than 2 mm outside their best offset). 0.5 against 0.75: leave-one-camera-out on the
-  // four reference clips (docs/lumigraph.md).
-  double off_contour_outward_weight = 0.5;
+  // four reference clips (docs/lumigraph.md); 0.4 since the colours are despilled (`despill`),
+  // which no longer holds the rim a step inside the actor.
+  double off_contour_outward_weight = 0.4;
   double colour_weight = 1.0;
   double colour_sigma = 20.0;  // 8-bit levels
   double unseen_colour = 0.6;
@@ -72,6 +73,14 @@ struct RefineConfig {
   int depth_map_step = 8;
   double depth_tolerance_m = 0.03;
   double min_facing_cos = 0.1;
+  // Visibility from the refined surface (beyond the paper): where the nodes hold the refinement's
+  // offsets of an earlier frame (the studio sends every frame's for the render), the depth maps,
+  // the visibility tests and the contour marks are made on the posed mesh moved by them, a few
+  // millimetres from the actor instead of two centimetres, and a point may then lie no further
+  // than refined_depth_tolerance_m behind the map (depth_tolerance_m on the posed mesh alone, the
+  // first frames). Leave-one-camera-out on the four reference clips +0.07 dB over the mask, +0.09
+  // over the matte (docs/lumigraph.md).
+  double refined_depth_tolerance_m = 0.015;
   int colour_bits = 6;  // colours are summed at this many bits a channel (<= 8)
   // Colour consistency over a small window of the surface (beyond the paper): with 3 points, each
   // vertex is also sampled at two points window_m to either side of it on its tangent plane,
@@ -92,6 +101,13 @@ struct RefineConfig {
   // clips +0.4 dB over the actor's mask, +0.2 dB matte; RGB the same (docs/lumigraph.md). In
   // (0, 1]; 1: every pixel keyed as the actor.
   double colour_purity = 0.4;
+  // A green-screen camera's colours with their green limited to the larger of their red and blue
+  // (the renderer's despill, docs/lumigraph.md): the screen's light spills green on the actor's
+  // edges in the cameras that see them at a grazing angle and not in the others, and the colours
+  // agreed best a step inside the actor, where a grazing camera's ray meets the surface more
+  // squarely; the rim's vertices were drawn in (on the arms, +0.26 dB of leave-one-out where the
+  // best offsets were put in their place). No effect on a learnt background's cameras.
+  bool despill = true;
   // The contour term (beyond the paper). The visual hull touches the actor along each camera's
   // contour generator: where a camera sees a vertex edge-on with nothing behind it, the hull's
   // crossing along the normal is the surface; elsewhere (between the legs, under the arms) it is

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace lumistage {
 
@@ -274,8 +275,22 @@ Eigen::Vector3f windowDirection(const Eigen::Vector3f& normal) {
 void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
                                const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                                const std::vector<Eigen::Vector3i>& triangles,
-                               RefinementStatistics& out) {
+                               RefinementStatistics& out, std::span<const uint8_t> surface_levels) {
   const int n = static_cast<int>(positions.cols());
+  // The surface the depth maps are made of: the posed mesh, or the posed mesh moved by the given
+  // offsets.
+  const bool refined = surface_levels.size() == size_t(n) && n > 0;
+  if (refined) {
+    surface_m_.resize(size_t(n));
+    if (surface_positions_.cols() != n) surface_positions_.resize(3, n);
+    for (int v = 0; v < n; ++v) {
+      surface_m_[v] = float(config_.levelOffset(surface_levels[v]));
+      surface_positions_.col(v) = positions.col(v) + surface_m_[v] * normals.col(v);
+    }
+  }
+  const Eigen::Matrix3Xf& surface = refined ? surface_positions_ : positions;
+  const std::span<const float> surface_m =
+      refined ? std::span<const float>(surface_m_) : std::span<const float>();
   const Eigen::Matrix3Xf* points = &positions;
   const Eigen::Matrix3Xf* point_normals = &normals;
   constexpr int kPoints = RefineConfig::kWindowPoints;  // the vertex, one side, the other
@@ -303,15 +318,15 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
   sees_nobody_.assign(cameras.size(), 0);
   for (size_t k = 0; k < cameras.size(); ++k) {
     const SamplerCamera& c = cameras[k];
-    depth_maps_[k].render(*c.camera, positions, triangles, config_.depth_map_step);
+    depth_maps_[k].render(*c.camera, surface, triangles, config_.depth_map_step);
     const auto sampleWith = [&](const auto& key) {
       if (!seesTheSurface(c, key, depth_maps_[k])) {
         sees_nobody_[k] = 1;
         return;
       }
-      sampleCamera(c, key, depth_maps_[k], *points, *point_normals, out);
+      sampleCamera(c, key, depth_maps_[k], *points, *point_normals, surface_m, out);
       if (config_.marksContours())
-        markContour(*c.camera, depth_maps_[k], config_, positions, normals, out.contour);
+        markContour(*c.camera, depth_maps_[k], config_, surface, normals, out.contour);
     };
     static const GreenScreenKeyer kDefaultKeyer;
     if (c.background) {
@@ -327,6 +342,7 @@ template <typename Key>
 void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
                                      const DepthMap& depth, const Eigen::Matrix3Xf& positions,
                                      const Eigen::Matrix3Xf& normals,
+                                     std::span<const float> surface_m,
                                      RefinementStatistics& out) const {
   const ImageView& image = input.image;
   const FloatProjection projection(*input.camera);
@@ -335,8 +351,11 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
   const int shift = 8 - config_.colour_bits;
   const float purity = float(config_.colour_purity);
   const int offsets = config_.offset_count;
-  const float tolerance = float(config_.depth_tolerance_m);
+  const float tolerance =
+      float(surface_m.empty() ? config_.depth_tolerance_m : config_.refined_depth_tolerance_m);
   const float min_cos = float(config_.min_facing_cos);
+  // Spill suppression: a green screen's only.
+  const bool despill = config_.despill && std::is_same_v<Key, GreenScreenKeyer>;
   const int n = static_cast<int>(positions.cols());
   const int first_window = n / config_.pointsPerVertex();  // the points after the vertices
   const PixelGrid grid(image);
@@ -347,8 +366,10 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
     const Eigen::Vector3f to_camera = centre - x;
     bool visible = nrm.dot(to_camera) > min_cos * to_camera.norm() && c0.z() > 0;
     if (visible) {
-      const Eigen::Vector2f p = projection.pixel(c0);
-      visible = depth.visible(p.x(), p.y(), c0.z(), tolerance);
+      // Tested where the depth map's surface crosses the normal.
+      const Eigen::Vector3f c = surface_m.empty() ? c0 : c0 + surface_m[v % surface_m.size()] * d;
+      const Eigen::Vector2f p = projection.pixel(c);
+      visible = c.z() > 0 && depth.visible(p.x(), p.y(), c.z(), tolerance);
     }
     // A window point serves the colour term only: the cameras that do not see it say nothing
     // about it (a quarter less of a node's work, and leave-one-out as good).
@@ -421,6 +442,7 @@ void RefinementSampler::sampleCamera(const SamplerCamera& input, const Key& key,
       if (!visible) continue;
       uint32_t rgb[3];
       interpolatedColour(key, grid, around, colours, levels, ix, iy, shift, purity, rgb);
+      if (despill) rgb[1] = std::min(rgb[1], std::max(rgb[0], rgb[2]));
       const uint32_t r = rgb[0], g = rgb[1], b = rgb[2];
       ++out.colour_count[s];
       out.sums[3 * s] = uint16_t(out.sums[3 * s] + r);

@@ -35,7 +35,9 @@ Eigen::Vector3f windowDirection(const Eigen::Vector3f& normal);
 // depth-map lookup) by the cameras that see it (the others count nothing for it, not even outside
 // their silhouettes: a window point serves the colour term only). Segmentation is evaluated only at
 // the sampled pixels; visibility comes from a low-resolution depth map of the posed mesh per
-// camera (a vertex's visibility holds for all its offsets, as in the paper). A camera that keys
+// camera (a vertex's visibility holds for all its offsets, as in the paper), or of the posed mesh
+// moved by an earlier frame's offsets where the caller has them (`surface_levels`: nearer the
+// actor). A green-screen camera's colours are despilled (RefineConfig::despill). A camera that keys
 // almost none of the posed surface as the actor while the surface lies in its view (knocked toward
 // the wall, its key broken) is left out (seesNobody()): every sample would be outside its
 // silhouette and the hull term would carve the whole mesh away. After the first frame of a size,
@@ -46,9 +48,13 @@ class RefinementSampler {
   const RefineConfig& config() const { return config_; }
 
   // `positions` and `normals` (unit) of the posed mesh, `triangles` its faces. Overwrites `out`.
+  // `surface_levels`: the refinement's offsets (RefineConfig levels) of the mesh's vertices from an
+  // earlier frame, or empty (or of another size: ignored); with them, each camera's depth map, the
+  // visibility tests and the contour marks are made on the posed mesh moved by them, at
+  // RefineConfig::refined_depth_tolerance_m (the samples stay where they are).
   void sample(std::span<const SamplerCamera> cameras, const Eigen::Matrix3Xf& positions,
               const Eigen::Matrix3Xf& normals, const std::vector<Eigen::Vector3i>& triangles,
-              RefinementStatistics& out);
+              RefinementStatistics& out, std::span<const uint8_t> surface_levels = {});
 
   // Per camera of the last sample() call, in its order: 1 where the camera keyed fewer than
   // kMinSurfaceSeen of the posed vertices in its view as the actor (at least kMinProbesInView in
@@ -58,16 +64,21 @@ class RefinementSampler {
   static constexpr int kMinProbesInView = 16;
 
  private:
+  // `surface_m`: each vertex's offset along its normal to the surface whose depth map `depth` is
+  // (empty: the posed mesh's, at 0), looked up for a window point by its vertex.
   template <typename Key>
   void sampleCamera(const SamplerCamera& camera, const Key& key, const DepthMap& depth,
                     const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
-                    RefinementStatistics& out) const;
+                    std::span<const float> surface_m, RefinementStatistics& out) const;
 
   RefineConfig config_;
   std::vector<DepthMap> depth_maps_;
   std::vector<uint8_t> sees_nobody_;
   Eigen::Matrix3Xf window_positions_, window_normals_;  // the vertices and their window points
   std::vector<float> offsets_m_;
+  // The surface of `surface_levels`: each vertex's offset, and the moved vertices.
+  std::vector<float> surface_m_;
+  Eigen::Matrix3Xf surface_positions_;
 };
 
 }  // namespace lumistage

@@ -22,14 +22,27 @@ using namespace lumistage;
 struct Scene : testing::ReferenceFrame {
   // Per window points (1, 3) and node, compressed as nodes send it.
   std::vector<std::vector<uint8_t>> wire[4];
+  // Per window points, the offsets the module chose from the nodes' statistics on the posed mesh
+  // alone (a first frame): the surface the nodes see the frames after through, as in the pipeline
+  // (RefinementSampler::sample's surface_levels), and the wire above is sampled through it.
+  std::vector<uint8_t> surface[4];
 
   Scene() : ReferenceFrame(false) {
-    RefinementStatistics stats;
+    RefinementStatistics stats, combined;
     RefinementStatisticsCodec codec;
     for (int points : {1, 3}) {
-      RefinementSampler sampler(refineConfig(points));
+      const RefineConfig refine = refineConfig(points);
+      RefinementSampler sampler(refine);
+      combined.reset(points * generic.rest.vertexCount(), refine.offset_count, refine.colour_bits);
       for (int n = 0; n < config.rig.nodeCount(); ++n) {
         sampler.sample(camerasOf(n), positions, normals, generic.rest.triangles, stats);
+        combined.add(stats);
+      }
+      MeshRefiner(refine, generic.rest.vertexCount(), generic.rest.triangles)
+          .refine(combined, surface[points]);
+      for (int n = 0; n < config.rig.nodeCount(); ++n) {
+        sampler.sample(camerasOf(n), positions, normals, generic.rest.triangles, stats,
+                       surface[points]);
         wire[points].emplace_back();
         codec.encode(stats, wire[points].back());
       }
@@ -47,7 +60,8 @@ const Scene& scene() {
   return s;
 }
 
-// One node's whole share: depth maps of its 3 cameras, samples, the compressed wire form.
+// One node's whole share: depth maps of its 3 cameras (of the surface an earlier frame was refined
+// to), samples, the compressed wire form.
 void refineNodeSide(benchmark::State& state) {
   const Scene& s = scene();
   RefinementSampler sampler(s.refineConfig(int(state.range(0))));
@@ -56,7 +70,8 @@ void refineNodeSide(benchmark::State& state) {
   std::vector<uint8_t> wire, packed;
   const std::vector<SamplerCamera> cameras = s.camerasOf(0);
   for (auto _ : state) {
-    sampler.sample(cameras, s.positions, s.normals, s.generic.rest.triangles, stats);
+    sampler.sample(cameras, s.positions, s.normals, s.generic.rest.triangles, stats,
+                   s.surface[state.range(0)]);
     codec.encode(stats, wire);
     benchmark::DoNotOptimize(wire.data());
   }

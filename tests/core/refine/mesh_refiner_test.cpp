@@ -458,6 +458,15 @@ void forEachColouredSample(const RefinementStatistics& stats, const RefineConfig
   }
 }
 
+// A configuration whose statistics hold each camera's colour at a vertex as it read it: 8 bits a
+// channel, no window points.
+RefineConfig exactColours() {
+  RefineConfig config;
+  config.colour_bits = 8;
+  config.window_points = 1;
+  return config;
+}
+
 // A point's colour is read between pixels (bilinear), from the pixels keyed as the actor only: on
 // an image whose red rises 4 levels a pixel to the right, the statistics hold each sample's red
 // as its projection's column gives it, not its nearest pixel's (up to 2 levels off, 4 between a
@@ -489,9 +498,7 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
   }
   const GreenScreenKeyer keyer;
   const TriangleMesh sphere = testing::icosphere(centre, 0.2, 3);
-  RefineConfig config;
-  config.colour_bits = 8;
-  config.window_points = 1;
+  RefineConfig config = exactColours();
   for (const PixelFormat format : {PixelFormat::kRgb8, PixelFormat::kBayerRggb8}) {
     SCOPED_TRACE(format == PixelFormat::kRgb8 ? "rgb8" : "bayer");
     const bool bayer = format != PixelFormat::kRgb8;
@@ -576,9 +583,7 @@ TEST(RefinementSampler, LeavesPixelsTheScreenCoversInPartOutOfTheColours) {
     const double mixed_centre = bayer ? edge_x + 0.5 : edge_x;
     for (const double purity : {0.4, 1.0}) {
       SCOPED_TRACE(purity);
-      RefineConfig config;
-      config.colour_bits = 8;
-      config.window_points = 1;
+      RefineConfig config = exactColours();
       config.colour_purity = purity;
       RefinementSampler sampler(config);
       RefinementStatistics stats;
@@ -602,6 +607,122 @@ TEST(RefinementSampler, LeavesPixelsTheScreenCoversInPartOutOfTheColours) {
       }
     }
   }
+}
+
+// A green-screen camera's colours are despilled as the renderer's are (RefineConfig::despill): the
+// green limited to the larger of the red and the blue, since the screen's light spills green on
+// the actor's edges in the cameras that see them at a grazing angle and not in the others. A camera
+// keyed by a background learnt from the empty stage keeps its colours, and so does every camera
+// with the despill off.
+TEST(RefinementSampler, DespillsAGreenScreenCamerasColours) {
+  const Rig rig = testing::smallRing();
+  const Camera& camera = rig.camera(0);
+  const uint8_t actor[3] = {100, 120, 90}, screen[3] = {40, 200, 60};  // green excess 20 and 140
+  Image image, empty;
+  image.resize(PixelFormat::kRgb8, camera.width(), camera.height());
+  empty.resize(PixelFormat::kRgb8, camera.width(), camera.height());
+  for (size_t p = 0; p < size_t(camera.width()) * camera.height(); ++p) {
+    std::copy(actor, actor + 3, &image.pixels[3 * p]);
+    std::copy(screen, screen + 3, &empty.pixels[3 * p]);
+  }
+  const GreenScreenKeyer keyer;
+  ASSERT_TRUE(keyer.isForeground(image.view(), 0, 0));
+  BackgroundModel background(camera.width(), camera.height());
+  background.add(empty.view());
+  background.learn();
+  ASSERT_TRUE(background.isForeground(image.view(), 0, 0));
+  const TriangleMesh sphere = testing::icosphere(Eigen::Vector3d(0, 0, 1.1), 0.2, 2);
+  for (const bool despill : {true, false}) {
+    for (const bool green_screen : {true, false}) {
+      SCOPED_TRACE(::testing::Message()
+                   << "despill " << despill << ", green screen " << green_screen);
+      RefineConfig config = exactColours();
+      config.despill = despill;
+      RefinementSampler sampler(config);
+      RefinementStatistics stats;
+      const std::vector<SamplerCamera> cameras = {{&camera, image.view(),
+                                                   green_screen ? &keyer : nullptr,
+                                                   green_screen ? nullptr : &background}};
+      sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
+      const int green = despill && green_screen ? actor[0] : actor[1];
+      int coloured = 0;
+      forEachColouredSample(stats, config, sphere, camera, [&](size_t s, int v, int i, double) {
+        ++coloured;
+        EXPECT_EQ(stats.sums[3 * s], actor[0]) << "vertex " << v << " offset " << i;
+        EXPECT_EQ(stats.sums[3 * s + 1], green) << "vertex " << v << " offset " << i;
+        EXPECT_EQ(stats.sums[3 * s + 2], actor[2]) << "vertex " << v << " offset " << i;
+      });
+      EXPECT_GT(coloured, 100);
+    }
+  }
+}
+
+// One mesh of two: a's vertices, then b's.
+TriangleMesh joined(const TriangleMesh& a, const TriangleMesh& b) {
+  TriangleMesh both;
+  both.positions.resize(3, a.vertexCount() + b.vertexCount());
+  both.normals.resize(3, a.vertexCount() + b.vertexCount());
+  both.positions << a.positions, b.positions;
+  both.normals << a.normals, b.normals;
+  both.triangles = a.triangles;
+  for (const Eigen::Vector3i& t : b.triangles)
+    both.triangles.push_back(t.array() + a.vertexCount());
+  return both;
+}
+
+// Given an earlier frame's offsets (`surface_levels`), the sampler sees the actor through the
+// surface they make: a small sphere in front of a large one hides part of it from the camera; the
+// offsets that shrink the small sphere to a fifth of its radius uncover what it no longer hides,
+// and the samples stay where they were (their colours and keys are the posed mesh's points').
+// Offsets of another mesh's size are ignored.
+TEST_F(EllipsoidScene, SeesThroughTheSurfaceOfAnEarlierFramesOffsets) {
+  const Camera& camera = rig_->camera(0);
+  const Eigen::Vector3d ahead = (shape_.centre - camera.centre()).normalized();
+  const TriangleMesh large = testing::icosphere(shape_.centre, 0.2, 3);
+  const TriangleMesh small = testing::icosphere(shape_.centre - 0.4 * ahead, 0.045, 2);
+  const int n = large.vertexCount();
+  const TriangleMesh both = joined(large, small);
+  RefineConfig config;
+  config.depth_map_step = 2;
+  config.window_points = 1;
+  RefinementSampler sampler(config);
+  RefinementStatistics plain, through;
+  sampler.sample(cameras({0}), both.positions, both.normals, both.triangles, plain);
+  // The large sphere at its own place (level of offset 0), the small one 3.5 cm in.
+  std::vector<uint8_t> levels(size_t(both.vertexCount()), uint8_t(config.zeroLevel()));
+  std::fill(levels.begin() + n, levels.end(), uint8_t(0));
+  ASSERT_NEAR(config.levelOffset(0), -0.035, 1e-9);
+  sampler.sample(cameras({0}), both.positions, both.normals, both.triangles, through, levels);
+  const auto seen = [&](const RefinementStatistics& stats, int v) {
+    return stats.colour_count[size_t(v) * config.offset_count + config.zeroOffsetIndex()] > 0;
+  };
+  int hidden = 0, uncovered = 0;
+  for (int v = 0; v < n; ++v) {
+    const double facing = large.normals.col(v).cast<double>().dot(-ahead);
+    if (seen(plain, v)) {
+      // Nothing came in front (away from the rim, where the map's cells are coarse against the
+      // tighter refined_depth_tolerance_m).
+      if (facing > 0.5) {
+        EXPECT_TRUE(seen(through, v)) << "vertex " << v;
+      }
+    } else if (facing > 0.9) {
+      ++hidden;  // facing the camera, behind the small sphere
+      uncovered += seen(through, v);
+    }
+  }
+  ASSERT_GE(hidden, 5);
+  EXPECT_GE(uncovered, hidden / 2);
+  // The samples are the posed mesh's: where both see a point, its colour and key are the same.
+  for (size_t s = 0; s < plain.outside.size(); ++s) {
+    EXPECT_EQ(plain.outside[s], through.outside[s]) << "sample " << s;
+    if (plain.colour_count[s] > 0 && through.colour_count[s] > 0) {
+      EXPECT_EQ(plain.sums[3 * s], through.sums[3 * s]) << "sample " << s;
+    }
+  }
+  // Offsets of another mesh: as none.
+  levels.pop_back();
+  sampler.sample(cameras({0}), both.positions, both.normals, both.triangles, through, levels);
+  EXPECT_EQ(through.colour_count, plain.colour_count);
 }
 
 // The sampler projects a vertex's offsets along a parabola through the projections of the
@@ -710,13 +831,7 @@ TEST_F(EllipsoidScene, MarksTheVerticesOnACamerasContour) {
   const TriangleMesh behind =
       testing::icosphere(shape_.centre + 0.6 * ahead + 0.25 * side, 0.25, 3);
   const int n = front.vertexCount();
-  TriangleMesh both;
-  both.positions.resize(3, 2 * n);
-  both.normals.resize(3, 2 * n);
-  both.positions << front.positions, behind.positions;
-  both.normals << front.normals, behind.normals;
-  both.triangles = front.triangles;
-  for (const Eigen::Vector3i& t : behind.triangles) both.triangles.push_back(t.array() + n);
+  const TriangleMesh both = joined(front, behind);
   RefineConfig config;
   config.depth_map_step = 4;
   config.contour_probe_m = 0.04;  // beyond a depth map's cell at 2 m on these small cameras

@@ -95,6 +95,21 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
   EXPECT_NE(errorFor("m.yaml", "  colour_purity: 0\n")
                 .find("m.yaml:5: refine.colour_purity: expected a share in [0.01, 1]"),
             std::string::npos);
+  // The spill suppression, on by default; true or false only. The refined surface's tolerance.
+  std::ofstream(folder / "n.yaml") << head
+                                   << "refine:\n  despill: false\n"
+                                      "  refined_depth_tolerance_m: 0.02\n";
+  const RefineConfig no_despill = loadStudioConfig(folder / "n.yaml").refine;
+  EXPECT_FALSE(no_despill.despill);
+  EXPECT_DOUBLE_EQ(no_despill.refined_depth_tolerance_m, 0.02);
+  EXPECT_TRUE(RefineConfig{}.despill);
+  EXPECT_LT(RefineConfig{}.refined_depth_tolerance_m, RefineConfig{}.depth_tolerance_m);
+  EXPECT_NE(errorFor("o.yaml", "  despill: 1\n")
+                .find("o.yaml:5: refine.despill: expected true or false, got '1'"),
+            std::string::npos);
+  EXPECT_NE(errorFor("p.yaml", "  refined_depth_tolerance_m: -0.01\n")
+                .find("p.yaml:5: refine.refined_depth_tolerance_m: expected metres in [0, 1]"),
+            std::string::npos);
   // The outward term off the contours: its own weight; the nodes mark the contours for it alone.
   std::ofstream(folder / "l.yaml") << head
                                    << "refine:\n  contour_weight: 0\n"
