@@ -239,7 +239,7 @@ bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>
   return true;
 }
 
-void applyOffsets(const RefineConfig& config, const std::vector<uint8_t>& offsets,
+void applyOffsets(const RefineConfig& config, std::span<const uint8_t> offsets,
                   const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                   Eigen::Matrix3Xf& out) {
   if (out.cols() != positions.cols()) out.resize(3, positions.cols());

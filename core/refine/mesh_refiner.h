@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/refine/refine_config.h"
@@ -67,7 +68,7 @@ class MeshRefiner {
 
 // The refined mesh: each vertex moved along its normal by its chosen offset level. `out` is resized
 // only when its size differs.
-void applyOffsets(const RefineConfig& config, const std::vector<uint8_t>& offsets,
+void applyOffsets(const RefineConfig& config, std::span<const uint8_t> offsets,
                   const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                   Eigen::Matrix3Xf& out);
 

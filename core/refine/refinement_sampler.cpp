@@ -4,6 +4,8 @@
 #include <cmath>
 #include <type_traits>
 
+#include "core/refine/mesh_refiner.h"
+
 namespace lumistage {
 
 namespace {
@@ -281,12 +283,9 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
   // offsets.
   const bool refined = surface_levels.size() == size_t(n) && n > 0;
   if (refined) {
-    surface_m_.resize(size_t(n));
-    if (surface_positions_.cols() != n) surface_positions_.resize(3, n);
-    for (int v = 0; v < n; ++v) {
-      surface_m_[v] = float(config_.levelOffset(surface_levels[v]));
-      surface_positions_.col(v) = positions.col(v) + surface_m_[v] * normals.col(v);
-    }
+    applyOffsets(config_, surface_levels, positions, normals, surface_positions_);
+    surface_m_.resize(size_t(n));  // for the window points, which lie off the vertices
+    for (int v = 0; v < n; ++v) surface_m_[v] = float(config_.levelOffset(surface_levels[v]));
   }
   const Eigen::Matrix3Xf& surface = refined ? surface_positions_ : positions;
   const std::span<const float> surface_m =

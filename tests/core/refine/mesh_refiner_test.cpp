@@ -467,6 +467,20 @@ RefineConfig exactColours() {
   return config;
 }
 
+// Calls f(bayer, cameras) with the camera filming `rgba` as an RGB image, then as a Bayer one,
+// keyed by `keyer`.
+template <typename F>
+void forEachFormat(const std::vector<uint8_t>& rgba, const Camera& camera,
+                   const GreenScreenKeyer& keyer, F&& f) {
+  for (const PixelFormat format : {PixelFormat::kRgb8, PixelFormat::kBayerRggb8}) {
+    SCOPED_TRACE(format == PixelFormat::kRgb8 ? "rgb8" : "bayer");
+    Image image;
+    rgbaToImage(rgba.data(), camera.width(), camera.height(), format, image);
+    f(format != PixelFormat::kRgb8,
+      std::vector<SamplerCamera>{{&camera, image.view(), &keyer, nullptr}});
+  }
+}
+
 // A point's colour is read between pixels (bilinear), from the pixels keyed as the actor only: on
 // an image whose red rises 4 levels a pixel to the right, the statistics hold each sample's red
 // as its projection's column gives it, not its nearest pixel's (up to 2 levels off, 4 between a
@@ -499,12 +513,7 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
   const GreenScreenKeyer keyer;
   const TriangleMesh sphere = testing::icosphere(centre, 0.2, 3);
   RefineConfig config = exactColours();
-  for (const PixelFormat format : {PixelFormat::kRgb8, PixelFormat::kBayerRggb8}) {
-    SCOPED_TRACE(format == PixelFormat::kRgb8 ? "rgb8" : "bayer");
-    const bool bayer = format != PixelFormat::kRgb8;
-    Image image;
-    rgbaToImage(rgba.data(), camera.width(), camera.height(), format, image);
-    const std::vector<SamplerCamera> cameras = {{&camera, image.view(), &keyer, nullptr}};
+  forEachFormat(rgba, camera, keyer, [&](bool bayer, const std::vector<SamplerCamera>& cameras) {
     RefinementSampler sampler(config);
     RefinementStatistics stats;
     sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
@@ -544,7 +553,7 @@ TEST(RefinementSampler, ReadsTheActorsColourBetweenPixels) {
     interpolated_error /= inner, nearest_error /= inner;
     EXPECT_LT(interpolated_error, 0.4) << "nearest pixel: " << nearest_error;
     EXPECT_GT(nearest_error, 0.8);
-  }
+  });
 }
 
 // A pixel (a Bayer cell) the screen covers in part keys as the actor up to the key's threshold,
@@ -572,12 +581,7 @@ TEST(RefinementSampler, LeavesPixelsTheScreenCoversInPartOutOfTheColours) {
   const GreenScreenKeyer keyer;
   ASSERT_TRUE(keyer.isForeground(Rgb{mixed[0], mixed[1], mixed[2]}, 0, 0));
   const TriangleMesh sphere = testing::icosphere(centre, 0.2, 3);
-  for (const PixelFormat format : {PixelFormat::kRgb8, PixelFormat::kBayerRggb8}) {
-    SCOPED_TRACE(format == PixelFormat::kRgb8 ? "rgb8" : "bayer");
-    const bool bayer = format != PixelFormat::kRgb8;
-    Image image;
-    rgbaToImage(rgba.data(), camera.width(), camera.height(), format, image);
-    const std::vector<SamplerCamera> cameras = {{&camera, image.view(), &keyer, nullptr}};
+  forEachFormat(rgba, camera, keyer, [&](bool bayer, const std::vector<SamplerCamera>& cameras) {
     // Pixel (cell) centres: the last actor one, and the mixed one.
     const double last_actor = bayer ? edge_x - 1.5 : edge_x - 1.0;
     const double mixed_centre = bayer ? edge_x + 0.5 : edge_x;
@@ -606,7 +610,7 @@ TEST(RefinementSampler, LeavesPixelsTheScreenCoversInPartOutOfTheColours) {
         EXPECT_EQ(mixed_in, 0);
       }
     }
-  }
+  });
 }
 
 // A green-screen camera's colours are despilled as the renderer's are (RefineConfig::despill): the
