@@ -188,6 +188,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     report.set("render", "loo_matte_psnr_db" + s, mean->matte_psnr_db);
     report.set("render", "loo_missed_pct" + s, mean->missed_pct);
     report.set("render", "loo_beyond_pct" + s, mean->beyond_pct);
+    report.set("render", "loo_missed_error_pct" + s, mean->missed_error_pct);
   }
   for (size_t c = 0; c < truth.per_camera.size(); ++c) {
     const std::string name = session.rig().camera(int(c)).name();

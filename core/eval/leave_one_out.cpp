@@ -17,7 +17,8 @@ namespace {
 class ScoreMean {
  public:
   void add(const ViewScore& s) {
-    const double v[kFigures] = {s.psnr_db, s.ssim, s.matte_psnr_db, s.missed_pct, s.beyond_pct};
+    const double v[kFigures] = {s.psnr_db,    s.ssim,       s.matte_psnr_db,
+                                s.missed_pct, s.beyond_pct, s.missed_error_pct};
     for (int k = 0; k < kFigures; ++k) {
       if (!std::isfinite(v[k])) continue;
       sum_[k] += v[k];
@@ -31,12 +32,12 @@ class ScoreMean {
       m[k] = count_[k] > 0 ? sum_[k] / count_[k] : std::numeric_limits<double>::quiet_NaN();
     ViewScore s;
     s.psnr_db = m[0], s.ssim = m[1], s.matte_psnr_db = m[2], s.missed_pct = m[3],
-    s.beyond_pct = m[4], s.pixels = pixels_;
+    s.beyond_pct = m[4], s.missed_error_pct = m[5], s.pixels = pixels_;
     return s;
   }
 
  private:
-  static constexpr int kFigures = 5;
+  static constexpr int kFigures = 6;
   double sum_[kFigures] = {};
   int count_[kFigures] = {};
   int64_t pixels_ = 0;

@@ -43,7 +43,7 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
     throw Error("compareOverMask: images of " + std::to_string(width) + "x" +
                 std::to_string(height) + " RGBA8 and a one-byte mask expected");
   ViewScore score;
-  double squared = 0, matte_squared = 0;
+  double squared = 0, matte_squared = 0, missed_squared = 0;
   int64_t missed = 0, beyond = 0;
   std::vector<double> a(n), b(n);
   for (size_t i = 0; i < n; ++i) {
@@ -68,10 +68,13 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
     a[i] = 0.299 * rendered[4 * i] + 0.587 * rendered[4 * i + 1] + 0.114 * rendered[4 * i + 2];
     b[i] = 0.299 * truth[4 * i] + 0.587 * truth[4 * i + 1] + 0.114 * truth[4 * i + 2];
     ++score.pixels;
+    double e = 0;
     for (int k = 0; k < 3; ++k) {
       const double d = double(rendered[4 * i + k]) - truth[4 * i + k];
-      squared += d * d;
+      e += d * d;
     }
+    squared += e;
+    if (!drawn) missed_squared += e;
   }
   const auto psnr = [](double squared, int64_t pixels) {
     const double mse = squared / (3.0 * pixels);
@@ -82,6 +85,7 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
     // take for a figure); the matte still charges what was drawn.
     constexpr double kUnmeasured = std::numeric_limits<double>::quiet_NaN();
     score.psnr_db = score.ssim = score.missed_pct = score.beyond_pct = kUnmeasured;
+    score.missed_error_pct = kUnmeasured;
     score.matte_psnr_db = beyond > 0 ? psnr(matte_squared, beyond) : kUnmeasured;
     return score;
   }
@@ -89,6 +93,7 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
   score.matte_psnr_db = psnr(matte_squared, score.pixels + beyond);
   score.missed_pct = 100.0 * missed / score.pixels;
   score.beyond_pct = 100.0 * beyond / score.pixels;
+  score.missed_error_pct = squared > 0 ? 100.0 * missed_squared / squared : 0.0;
   // SSIM of luma with 7x7 box windows.
   std::vector<double> aa(n), bb(n), ab(n), ma, mb, maa, mbb, mab;
   for (size_t i = 0; i < n; ++i) aa[i] = a[i] * a[i], bb[i] = b[i] * b[i], ab[i] = a[i] * b[i];

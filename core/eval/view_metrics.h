@@ -21,6 +21,10 @@ struct ViewScore {
   double matte_psnr_db = 0;
   double missed_pct = 0;  // the mask's pixels left undrawn (alpha 0), % of the mask
   double beyond_pct = 0;  // pixels drawn outside the mask, % of the mask
+  // Of the squared error over the mask (psnr_db's), the share on the pixels left undrawn, %: a
+  // pixel of the actor the render misses costs its whole colour (black against the actor), so a
+  // silhouette a pixel too tight can outweigh the texture's misregistration inside it.
+  double missed_error_pct = 0;
 };
 
 // `rendered` and `truth` RGBA8 (psnr_db and ssim ignore alpha: a pixel the renderer left empty is

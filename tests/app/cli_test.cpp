@@ -634,6 +634,12 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
   EXPECT_GT(reportNumber(text, "loo_missed_pct_unrefined"), reportNumber(text, "loo_missed_pct"))
       << text;
   EXPECT_GT(reportNumber(text, "loo_beyond_pct"), 0.0) << text;
+  // The unrefined mesh misses a fifth of the actor: most of its error is there, more than the
+  // refined mesh's share.
+  EXPECT_GT(reportNumber(text, "loo_missed_error_pct_unrefined"),
+            reportNumber(text, "loo_missed_error_pct"))
+      << text;
+  EXPECT_GT(reportNumber(text, "loo_missed_error_pct_unrefined"), 30.0) << text;
 
   // A camera whose view holds no actor (its truth masks empty) has nothing to score over the
   // mask: null, and the means are the other cameras' (not pulled down by a 0 dB).

@@ -37,6 +37,8 @@ TEST(ViewMetrics, MatteScoreCountsPixelsDrawnBeyondTheActorAndLeftUndrawn) {
   EXPECT_NEAR(score.matte_psnr_db, score.psnr_db, 1e-9);  // nothing drawn beyond the actor
   EXPECT_NEAR(score.missed_pct, 100.0 / 3, 1e-9);
   EXPECT_EQ(score.beyond_pct, 0);
+  // The undrawn pixel holds 3·100² of the 10² + 3·100² squared error.
+  EXPECT_NEAR(score.missed_error_pct, 100.0 * 3e4 / (100 + 3e4), 1e-9);
 
   // The screen pixel drawn in the screen's own colour, at a renderer's alpha of one half: the
   // mask-only score does not see it; the matte compares it with black, whole, as the studio's
@@ -48,6 +50,13 @@ TEST(ViewMetrics, MatteScoreCountsPixelsDrawnBeyondTheActorAndLeftUndrawn) {
   EXPECT_NEAR(score.matte_psnr_db, psnr(100 + 3 * 100 * 100 + beyond, 12), 1e-9);
   EXPECT_NEAR(score.beyond_pct, 100.0 / 3, 1e-9);
   EXPECT_LT(score.matte_psnr_db, score.psnr_db);
+  EXPECT_NEAR(score.missed_error_pct, 100.0 * 3e4 / (100 + 3e4), 1e-9);  // the mask's alone
+
+  // Every pixel of the actor drawn: none of the error is on missed pixels.
+  rendered[8] = rendered[9] = rendered[10] = 90, rendered[11] = 255;
+  score = compareOverMask(rendered, truth, mask, w, h);
+  EXPECT_EQ(score.missed_pct, 0);
+  EXPECT_EQ(score.missed_error_pct, 0);
 }
 
 // No actor in the view (an empty mask): nothing over the mask is measured (NaN, which the means
