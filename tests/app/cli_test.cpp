@@ -634,8 +634,8 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
   EXPECT_GT(reportNumber(text, "loo_missed_pct_unrefined"), reportNumber(text, "loo_missed_pct"))
       << text;
   EXPECT_GT(reportNumber(text, "loo_beyond_pct"), 0.0) << text;
-  // The unrefined mesh misses a fifth of the actor: most of its error is there, more than the
-  // refined mesh's share.
+  // The unrefined generic mesh leaves much of the actor undrawn: a large share of its error lies
+  // there, more than of the refined mesh's.
   EXPECT_GT(reportNumber(text, "loo_missed_error_pct_unrefined"),
             reportNumber(text, "loo_missed_error_pct"))
       << text;
