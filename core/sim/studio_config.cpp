@@ -47,12 +47,7 @@ StudioConfig loadStudioConfig(const std::filesystem::path& path) {
     positive("hip_width_scale", shape.hip_width_scale);
     positive("girth_scale", shape.girth_scale);
     positive("belly_scale", shape.belly_scale);
-    if (actor["clothing"]) {
-      const std::string value = in.string(actor["clothing"], "actor.clothing");
-      if (value != "true" && value != "false")
-        in.fail(actor["clothing"], "actor.clothing", "expected true or false");
-      config.actor.clothing = value == "true";
-    }
+    if (actor["clothing"]) config.actor.clothing = in.boolean(actor["clothing"], "actor.clothing");
     if (actor["vertices"]) {
       config.actor.target_vertices = in.integer(actor["vertices"], "actor.vertices");
       if (config.actor.target_vertices < 200 || config.actor.target_vertices > 200000) {

@@ -17,6 +17,11 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
       "format: lumistage-studio\nversion: 1\nrig: " +
       (std::filesystem::path(LUMISTAGE_TEST_RESOURCE_DIR) / "rigs" / "reference.yaml").string() +
       "\n";
+  // The refine section read from a file holding `refine`.
+  const auto refineFrom = [&](const char* name, const std::string& refine) {
+    std::ofstream(folder / name) << head << "refine:\n" << refine;
+    return loadStudioConfig(folder / name).refine;
+  };
   std::ofstream(folder / "a.yaml")
       << head
       << "refine:\n  t_max_m: 0.05\n  t_inward_m: 0.05\n  offset_count: 11\n"
@@ -37,10 +42,8 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
   EXPECT_NEAR(defaults.offsetAt(defaults.zeroOffsetIndex()), 0.0, 1e-12);
   EXPECT_NEAR(defaults.levelOffset(defaults.zeroLevel()), 0.0, 1e-12);
   // An asymmetric range: 2 cm in, 6 cm out, 9 offsets.
-  std::ofstream(folder / "g.yaml") << head
-                                   << "refine:\n  t_inward_m: 0.02\n  t_max_m: 0.06\n"
-                                      "  offset_count: 9\n";
-  const RefineConfig g = loadStudioConfig(folder / "g.yaml").refine;
+  const RefineConfig g =
+      refineFrom("g.yaml", "  t_inward_m: 0.02\n  t_max_m: 0.06\n  offset_count: 9\n");
   EXPECT_DOUBLE_EQ(g.offsetAt(0), -0.02);
   EXPECT_DOUBLE_EQ(g.offsetAt(8), 0.06);
   EXPECT_EQ(g.zeroOffsetIndex(), 2);
@@ -52,8 +55,7 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
             std::string::npos);
   // A file holding `refine`, and the error loading it gives.
   const auto errorFor = [&](const char* name, const std::string& refine) {
-    std::ofstream(folder / name) << head << "refine:\n" << refine;
-    return testing::errorOf([&] { loadStudioConfig(folder / name); });
+    return testing::errorOf([&] { refineFrom(name, refine); });
   };
   EXPECT_NE(errorFor("h.yaml", "  t_inward_m: -0.01\n")
                 .find("h.yaml:5: refine.t_inward_m: expected metres in [0, 0.5]"),
@@ -62,10 +64,9 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
                 .find("c.yaml:5: refine.colour_bits: expected 1 to 8 bits"),
             std::string::npos);
   // The colour window: 1 or 3 points, at most 5 cm to either side.
-  std::ofstream(folder / "d.yaml") << head << "refine:\n  window_points: 1\n  window_m: 0.02\n";
-  const StudioConfig d = loadStudioConfig(folder / "d.yaml");
-  EXPECT_EQ(d.refine.window_points, 1);
-  EXPECT_DOUBLE_EQ(d.refine.window_m, 0.02);
+  const RefineConfig d = refineFrom("d.yaml", "  window_points: 1\n  window_m: 0.02\n");
+  EXPECT_EQ(d.window_points, 1);
+  EXPECT_DOUBLE_EQ(d.window_m, 0.02);
   EXPECT_EQ(RefineConfig{}.window_points, 3);
   EXPECT_NE(errorFor("e.yaml", "  window_points: 2\n")
                 .find("e.yaml:5: refine.window_points: expected 1 or 3 points"),
@@ -74,10 +75,8 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
                 .find("f.yaml:5: refine.window_m: expected metres in [0, 0.05]"),
             std::string::npos);
   // The contour term: its weight, the facing that counts as edge-on and the probe's reach.
-  std::ofstream(folder / "i.yaml") << head
-                                   << "refine:\n  contour_weight: 0\n  contour_cos: 0.2\n"
-                                      "  contour_probe_m: 0.03\n";
-  const RefineConfig i = loadStudioConfig(folder / "i.yaml").refine;
+  const RefineConfig i =
+      refineFrom("i.yaml", "  contour_weight: 0\n  contour_cos: 0.2\n  contour_probe_m: 0.03\n");
   EXPECT_EQ(i.contour_weight, 0.0);
   EXPECT_DOUBLE_EQ(i.contour_cos, 0.2);
   EXPECT_DOUBLE_EQ(i.contour_probe_m, 0.03);
@@ -89,17 +88,14 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
                 .find("k.yaml:5: refine.contour_weight: expected a weight >= 0"),
             std::string::npos);
   // Which pixels' colours a point takes: a share of the key's bound, above 0.
-  std::ofstream(folder / "l.yaml") << head << "refine:\n  colour_purity: 1\n";
-  EXPECT_DOUBLE_EQ(loadStudioConfig(folder / "l.yaml").refine.colour_purity, 1.0);
+  EXPECT_DOUBLE_EQ(refineFrom("l.yaml", "  colour_purity: 1\n").colour_purity, 1.0);
   EXPECT_LT(RefineConfig{}.colour_purity, 1.0);
   EXPECT_NE(errorFor("m.yaml", "  colour_purity: 0\n")
                 .find("m.yaml:5: refine.colour_purity: expected a share in [0.01, 1]"),
             std::string::npos);
   // The spill suppression, on by default; true or false only. The refined surface's tolerance.
-  std::ofstream(folder / "n.yaml") << head
-                                   << "refine:\n  despill: false\n"
-                                      "  refined_depth_tolerance_m: 0.02\n";
-  const RefineConfig no_despill = loadStudioConfig(folder / "n.yaml").refine;
+  const RefineConfig no_despill =
+      refineFrom("n.yaml", "  despill: false\n  refined_depth_tolerance_m: 0.02\n");
   EXPECT_FALSE(no_despill.despill);
   EXPECT_DOUBLE_EQ(no_despill.refined_depth_tolerance_m, 0.02);
   EXPECT_TRUE(RefineConfig{}.despill);
@@ -111,10 +107,8 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
                 .find("p.yaml:5: refine.refined_depth_tolerance_m: expected metres in [0, 1]"),
             std::string::npos);
   // The outward term off the contours: its own weight; the nodes mark the contours for it alone.
-  std::ofstream(folder / "l.yaml") << head
-                                   << "refine:\n  contour_weight: 0\n"
-                                      "  off_contour_outward_weight: 0.3\n";
-  const RefineConfig l = loadStudioConfig(folder / "l.yaml").refine;
+  const RefineConfig l =
+      refineFrom("l.yaml", "  contour_weight: 0\n  off_contour_outward_weight: 0.3\n");
   EXPECT_DOUBLE_EQ(l.off_contour_outward_weight, 0.3);
   EXPECT_TRUE(l.marksContours());
   RefineConfig same = l;
