@@ -255,13 +255,16 @@ void recordView(benchmark::State& state) {
   std::vector<uint8_t> rgba;
   r->render(viewOf(640, 480), rgba);
   const std::filesystem::path file = std::filesystem::temp_directory_path() / "render_bench.avi";
-  {
-    ViewRecorder recorder(file, 30);
-    int64_t id = 0;
-    for (auto _ : state) recorder.add(id++, 640, 480, rgba);
-    state.counters["bytes_per_frame"] =
-        double(std::filesystem::file_size(file)) / double(std::max<int64_t>(1, id));
+  ViewRecorder recorder(file, 30);
+  int64_t id = 0;
+  for (auto _ : state) recorder.add(id++, 640, 480, rgba);
+  // The video takes its name once closed and read back whole (until then NAME.partial.avi).
+  if (!recorder.close()) {
+    state.SkipWithError(recorder.error().c_str());
+    return;
   }
+  state.counters["bytes_per_frame"] =
+      double(std::filesystem::file_size(file)) / double(std::max<int64_t>(1, id));
   std::filesystem::remove(file);
 }
 BENCHMARK(recordView)->Unit(benchmark::kMillisecond);
