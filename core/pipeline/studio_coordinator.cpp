@@ -869,6 +869,10 @@ void StudioCoordinator::pump() {
     std::optional<ReceivedMessage> received = endpoint_.receive(wait, mocap_ready_.fd());
     if (!received) break;
     onMessage(*received);
+    // A pose the tracker finished meanwhile goes out at once: it is the newest frame's path to
+    // the nodes, and the backlog behind it (older frames' statistics and images, a refinement
+    // or a blend each) would hold it for tens of milliseconds after a burst.
+    if (mocap_done_.size() > 0) takePoses();
   }
   takePoses();
   checkDeadlines(steadyNowNs());
