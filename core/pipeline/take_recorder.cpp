@@ -26,18 +26,24 @@ TakeRecorder::~TakeRecorder() {
     std::lock_guard lock(mutex_);
     close();
   }
-  if (finisher_.joinable()) finisher_.join();
+  for (Closing& c : closing_) c.thread.join();
 }
 
 void TakeRecorder::close() {
   closed_ = true;
   if (!recorder_) return;
-  if (finisher_.joinable()) finisher_.join();  // the take before (drained long since)
-  closing_ = std::move(recorder_);
-  closing_done_ = false;
-  finisher_ = std::thread([this, recorder = closing_.get()] {
-    recorder->stop();
-    closing_done_ = true;
+  // Takes closed before and written out by now: their threads have ended, joined at once. The
+  // take whose figures the status shows stays.
+  std::erase_if(closing_, [this](Closing& c) {
+    if (!c.done || c.recorder.get() == counted_) return false;
+    c.thread.join();
+    return true;
+  });
+  Closing& c = closing_.emplace_back();
+  c.recorder = std::move(recorder_);
+  c.thread = std::thread([&c] {
+    c.recorder->stop();
+    c.done = true;
   });
 }
 
@@ -174,7 +180,8 @@ TakeStatusData TakeRecorder::status() const {
     if (stats.failed) status.error = stats.last_error;
   }
   // Finished once nothing is left to write, this take's sets or a closed one's still draining.
-  status.finished = closed_ && closing_done_;
+  status.finished = closed_ && std::all_of(closing_.begin(), closing_.end(),
+                                           [](const Closing& c) { return c.done.load(); });
   return status;
 }
 

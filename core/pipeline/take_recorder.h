@@ -3,6 +3,7 @@
 #include <atomic>
 #include <cstdint>
 #include <filesystem>
+#include <list>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -57,7 +58,7 @@ class TakeRecorder {
   TakeStatusData status() const;
 
  private:
-  void close();  // under mutex_: the open take stops taking sets and drains on finisher_
+  void close();  // under mutex_: the open take stops taking sets and drains on a thread of its own
   void open(int64_t frame_id, const CameraFrame& first);  // under mutex_
 
   const std::filesystem::path folder_;
@@ -76,10 +77,16 @@ class TakeRecorder {
   bool closed_ = true;        // the take in status_ takes no more sets (none asked for yet)
   bool told_failed_ = false;  // said in the node's log that the take's writing failed
 
-  // The closed take, writing its queue out.
-  std::unique_ptr<SessionRecorder> closing_;
-  std::thread finisher_;
-  std::atomic<bool> closing_done_{true};
+  // The closed takes still writing their queues out, each on a thread of its own: closing one
+  // never waits for another (a take stopped while the one before still drains would otherwise
+  // hold the capture thread, in offer(), and the heartbeat, in status(), until that disk is
+  // done). Those done are let go at the next close.
+  struct Closing {
+    std::unique_ptr<SessionRecorder> recorder;
+    std::atomic<bool> done{false};
+    std::thread thread;
+  };
+  std::list<Closing> closing_;  // under mutex_; a list, so that each thread's entry stays put
 };
 
 }  // namespace lumistage

@@ -205,6 +205,54 @@ TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
   EXPECT_FALSE(fs::exists(folder / "takes" / "c" / "node3-2"));
 }
 
+// Takes stopped and started in quick succession, each closed while the ones before may still be
+// writing their queues (PNG, slower to write than the sets come): closing one does not wait for
+// another, every take's part ends whole with exactly its frames, and the node says the takes are
+// finished only once all of them are on the disk.
+TEST(Take, TakesClosedInQuickSuccessionAllEndWhole) {
+  RingRigSpec spec;  // three cameras, one a node, of noise that PNG is slow to write
+  spec.cameras = 3;
+  spec.cameras_per_node = 1;
+  spec.width = 320;
+  spec.height = 240;
+  const Rig rig = makeRingRig(spec);
+  const fs::path folder = testing::testFolder("take");
+  constexpr int kTakes = 6, kSets = 5;
+  const int camera = rig.nodes()[0].cameras[0];
+  std::vector<std::vector<CameraFrame>> sets;  // made first: offered as fast as cameras give them
+  for (int64_t f = 0; f < kTakes * kSets; ++f) sets.push_back(nodeSet(rig, 0, f));
+  {
+    TakeRecorder recorder(folder / "takes", rig, "node1", 30.0, ImageFiles::kPng);
+    for (int t = 0; t < kTakes; ++t) {
+      recorder.command({fmt::format("t{}", t), t * kSets});
+      for (int64_t f = t * kSets; f < (t + 1) * kSets; ++f) offerSet(recorder, f, sets[f]);
+      EXPECT_FALSE(recorder.status().finished) << t;  // open
+    }
+    recorder.command({});
+    const TakeStatusData status = finished(recorder);
+    EXPECT_TRUE(status.finished);
+    EXPECT_EQ(status.take, "");
+    EXPECT_EQ(status.error, "");
+    // Every take is on the disk once finished says so, before the recorder is gone.
+    for (int t = 0; t < kTakes; ++t) {
+      const SessionReader part(folder / "takes" / fmt::format("t{}", t) / "node1");
+      ASSERT_EQ(part.frameCount(), kSets) << t;
+      std::vector<CameraFrame> frames;
+      for (int i = 0; i < kSets; ++i) {
+        EXPECT_EQ(part.frameId(i), t * kSets + i);
+        part.readFrame(i, frames);
+        EXPECT_EQ(frames[0].image.pixels,
+                  frameImages(rig, PixelFormat::kMono8, t * kSets + i)[camera].pixels);
+      }
+    }
+    // Another round, the recorder destroyed while the last take may still be writing: it ends
+    // whole too.
+    recorder.command({"last", kTakes * kSets});
+    for (int64_t f = 0; f < kSets; ++f) offerSet(recorder, kTakes * kSets + f, sets[f]);
+  }
+  EXPECT_EQ(SessionReader(folder / "takes" / "last" / "node1").frameCount(), kSets);
+}
+
 // A merge cut short (here a full disk, as far as the merge's writes go) leaves nothing under its
 // name, where a shorter session used to open without a word; the parts stay whole, and the merge
 // done again puts the session in place.
