@@ -9,6 +9,7 @@
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/capture/session_reader.h"
 #include "core/capture/session_recorder.h"
 
 namespace lumistage {
@@ -68,6 +69,8 @@ void TakeRecorder::command(const RecordData& record) {
     counted_ = nullptr;
     status_ = {};
     told_failed_ = false;
+    next_id_ = record.first_frame;
+    missed_ = 0;
     status_.take = record.take;
     closed_ = record.take.empty();
     if (!record.take.empty() && folder_.empty()) {
@@ -93,8 +96,16 @@ void TakeRecorder::open(int64_t frame_id, const CameraFrame& first) {
   // joins them.
   std::filesystem::path part = folder_ / wanted_.take / node_;
   std::error_code ec;
-  for (int k = 2; k < 100 && std::filesystem::exists(part / "session.yaml", ec); ++k)
+  for (int k = 2; k < 100 && std::filesystem::exists(part / "session.yaml", ec); ++k) {
+    // The frames an earlier part holds were not missed by this one.
+    try {
+      const SessionReader earlier(part);
+      if (earlier.frameCount() > 0)
+        next_id_ = std::max(next_id_, earlier.frameId(earlier.frameCount() - 1) + 1);
+    } catch (const Error&) {  // unreadable: its frames are counted as missed
+    }
     part = folder_ / wanted_.take / (node_ + "-" + std::to_string(k));
+  }
   // The take's first frame beside the node's parts (<node>.first_frame, which the merge passes
   // over): parts there of another take of the same name (the studio restarted and offered its
   // first name again) are not continued, which would join both takes in the merge.
@@ -130,6 +141,12 @@ void TakeRecorder::open(int64_t frame_id, const CameraFrame& first) {
   }
 }
 
+void TakeRecorder::countMissed(int64_t until) {
+  if (until <= next_id_) return;
+  missed_ += until - next_id_;
+  next_id_ = until;
+}
+
 bool TakeRecorder::wants(int64_t frame_id) const {
   std::lock_guard lock(mutex_);
   return !wanted_.take.empty() && frame_id >= wanted_.first_frame && frame_id <= wanted_.last_frame;
@@ -139,12 +156,15 @@ void TakeRecorder::offer(int64_t frame_id, std::span<const CameraFrame* const> f
   std::lock_guard lock(mutex_);
   if (closed_ || wanted_.take.empty() || frames.empty() || frame_id < wanted_.first_frame) return;
   if (frame_id > wanted_.last_frame) {
+    countMissed(wanted_.last_frame + 1);
     close();
     spdlog::info("node {}: take {} closed after frame {}", node_, wanted_.take, wanted_.last_frame);
     return;
   }
   if (!recorder_) open(frame_id, *frames.front());
   if (!recorder_) return;
+  countMissed(frame_id);
+  next_id_ = std::max(next_id_, frame_id + 1);
   if (images_.empty()) recorder_->takeSpareImages(images_);  // a written set's buffers
   images_.resize(frames.size());
   for (size_t k = 0; k < frames.size(); ++k) images_[k] = frames[k]->image;  // reuses the buffers
@@ -175,7 +195,7 @@ TakeStatusData TakeRecorder::status() const {
   if (counted_ != nullptr) {
     const RecorderStats stats = counted_->stats();
     status.written = stats.written;
-    status.dropped = stats.dropped + stats.refused;
+    status.dropped = stats.dropped + stats.refused + missed_;
     status.bytes = stats.bytes;
     if (stats.failed) status.error = stats.last_error;
   }

@@ -74,8 +74,14 @@ class TakeRecorder {
   std::vector<Image> images_;                  // the set being queued, reused
   const SessionRecorder* counted_ = nullptr;   // the recorder of status_.take (open or closing)
   int64_t first_timestamp_ns_ = 0;
-  bool closed_ = true;        // the take in status_ takes no more sets (none asked for yet)
-  bool told_failed_ = false;  // said in the node's log that the take's writing failed
+  // The take's ids that never reached offer() (their sets lost before: a camera that delivered
+  // nothing, a capture that fell behind and missed the frames, a command heard late), counted
+  // with the dropped ones: ids below next_id_ were offered or counted.
+  int64_t next_id_ = 0;
+  int64_t missed_ = 0;
+  void countMissed(int64_t until);  // under mutex_: ids from next_id_ to `until` (excluded)
+  bool closed_ = true;              // the take in status_ takes no more sets (none asked for yet)
+  bool told_failed_ = false;        // said in the node's log that the take's writing failed
 
   // The closed takes still writing their queues out, each on a thread of its own: closing one
   // never waits for another (a take stopped while the one before still drains would otherwise
