@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <thread>
@@ -97,6 +98,7 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) 
       return false;
     }
     std::this_thread::sleep_until(Clock::time_point(std::chrono::nanoseconds(due_ns)));
+    if (tick_ >= 0) skipped_ += tick - tick_ - 1;
     tick_ = tick;
     next_set_ = static_cast<int>(tick % reader_.frameCount());
   }
@@ -145,6 +147,8 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) 
 CameraStats SessionSource::stats(int camera) const {
   CameraStats stats;
   stats.frames = delivered_.at(camera);
+  if (std::find(cameras_.begin(), cameras_.end(), camera) != cameras_.end())
+    stats.dropped = skipped_;
   const double seconds = std::chrono::duration<double>(last_delivery_ - first_delivery_).count();
   stats.frame_rate_hz = stats.frames > 1 && seconds > 0 ? (stats.frames - 1) / seconds : 0.0;
   stats.temperature_c = std::nan("");  // a recording has no sensor

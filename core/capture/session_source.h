@@ -73,6 +73,9 @@ class SessionSource : public FrameSource {
   bool finished_ = false;
   std::chrono::steady_clock::time_point start_;
   std::vector<int64_t> delivered_;
+  // synchronized: ticks passed without being served (a consumer too slow), which every camera
+  // missed, as a slow reader of real cameras misses frames: their stats() count them dropped.
+  int64_t skipped_ = 0;
   std::chrono::steady_clock::time_point first_delivery_, last_delivery_;
   std::string error_;
 };

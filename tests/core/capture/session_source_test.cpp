@@ -205,5 +205,30 @@ TEST(Replay, SynchronizedReplaysShowTheSameFrameAtTheSameInstant) {
   fs::remove_all(folder);
 }
 
+TEST(Replay, ASynchronizedReplayCountsTheTicksItsReaderMissedAsDropped) {
+  // A reader too slow for the cameras' rate misses their frames, as with real cameras, and the
+  // cameras' health says so: every tick that passed unserved is a frame dropped.
+  const fs::path folder = freshFolder("replay_sync_dropped");
+  const Rig rig = smallRig();
+  writeSession(folder, rig, PixelFormat::kMono8, 5);
+  ReplayOptions options = replay(ReplayMode::kFromMemory, false, size_t(1) << 30, {0, 2});
+  options.synchronized = true;
+  SessionSource source(folder, options);
+  CameraFrame frame;
+  ASSERT_TRUE(source.next(frame, std::chrono::milliseconds(200)));
+  ASSERT_TRUE(source.next(frame, std::chrono::milliseconds(200)));  // the set's second camera
+  const int64_t first = frame.frame_id;
+  for (int c : {0, 1, 2}) EXPECT_EQ(source.stats(c).dropped, 0) << c;
+  const double period_s = 1.0 / source.reader().fps();
+  std::this_thread::sleep_for(std::chrono::duration<double>(4.5 * period_s));
+  ASSERT_TRUE(source.next(frame, std::chrono::milliseconds(200)));
+  const int64_t missed = frame.frame_id - first - 1;
+  EXPECT_GE(missed, 3);
+  EXPECT_EQ(source.stats(0).dropped, missed);
+  EXPECT_EQ(source.stats(2).dropped, missed);
+  EXPECT_EQ(source.stats(1).dropped, 0);  // not replayed here
+  fs::remove_all(folder);
+}
+
 }  // namespace
 }  // namespace lumistage
