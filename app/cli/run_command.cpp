@@ -283,6 +283,13 @@ void addRunCommand(CLI::App& app) {
         fmt::print(stderr, "lumistage run: {}; see its message above\n", exit);
       }
     }
+    // The figures are of the frames asked for (--frames, --seconds): those the pipeline goes on
+    // with while the nodes close a take are not counted.
+    const RunReport r = studio.report();
+    const double wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    const CpuUse cpu{(processCpuSeconds() - cpu_start) / wall_s,
+                     (nodes_cpu - nodes_cpu_start) / wall_s};
     if (!take.empty() && !studio.take().take.empty()) finishTake(pipeline, a->record_take);
     bool recording_failed = pipeline.viewRecordingFailed();  // stopped by a failure (a full disk)
     if (std::unique_ptr<ViewRecorder> recorder = pipeline.stopRecordingView()) {
@@ -295,11 +302,6 @@ void addRunCommand(CLI::App& app) {
                    recorder->height(), recorder->fps());
       }
     }
-    const RunReport r = studio.report();
-    const double wall_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    const CpuUse cpu{(processCpuSeconds() - cpu_start) / wall_s,
-                     (nodes_cpu - nodes_cpu_start) / wall_s};
     fmt::print(
         "{} frames in all ({} dropped: {} at admission, {} overtaken by newer frames, {} without "
         "a node's image, {} of these held back for one; {} shown without one), {:.1f} frames a "

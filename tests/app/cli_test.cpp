@@ -451,11 +451,23 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
                                "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
   for (const char* security : {"", " --plain"}) {
     const fs::path json = folder / "run.json", video = folder / "view.avi";
+    // The plain run records a take too: its figures still count the 20 frames asked for, not
+    // those the pipeline goes on with while the nodes close the take.
+    const bool take = std::string(security) == " --plain";
+    const std::string take_args =
+        take ? " --record-take " + (folder / "takes" / "take-1").string() : "";
     const Result r = run(kCli + " run --session " + (folder / "session").string() +
                          " --frames 20 --seconds 30 --json " + json.string() + " --record-view " +
-                         video.string() + security);
+                         video.string() + security + take_args);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("20 frames in all"), std::string::npos) << r.output;
+    if (take) {
+      EXPECT_NE(r.output.find("take take-1: frames "), std::string::npos) << r.output;
+      for (const char* node : {"node1", "node2"}) {
+        EXPECT_NE(r.output.find(std::string("node ") + node + "    "), std::string::npos);
+        EXPECT_TRUE(fs::exists(folder / "takes" / "take-1" / node / "index.csv")) << node;
+      }
+    }
     // Each node learnt its cameras' screen.
     EXPECT_NE(r.output.find("node node1: camera cam01: green screen learnt, key threshold"),
               std::string::npos)
