@@ -86,7 +86,7 @@ void PipelineWorker::run() {
   try {
     LocalPipelineRun pipeline(options_);
     emit message((pipeline.nodesElsewhere()
-                      ? tr("Studio at %2: waiting for the rig's %1 nodes on the stage's PCs")
+                      ? tr("Studio at %2, listening for the rig's %1 nodes on the stage's PCs")
                       : tr("Pipeline running: %1 nodes, studio at %2"))
                      .arg(pipeline.nodeNames().size())
                      .arg(QString::fromStdString(pipeline.studio().endpoint())));
@@ -189,6 +189,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   qRegisterMetaType<lumistage::PipelineView>();
   summary_->setWordWrap(true);
   summary_->setObjectName("pipeline_summary");
+  source_->setObjectName("pipeline_source");
   table_->setObjectName("pipeline_nodes");
   source_->addItems({tr("Virtual studio (demo session)"), tr("Recorded session..."),
                      tr("Aravis cameras..."), tr("Nodes on the stage's PCs...")});
@@ -309,6 +310,12 @@ void PipelinePanel::startChosen() {
 
 void PipelinePanel::start(LocalRunOptions options) {
   stop();
+  // The source box says what runs, however it was started (here, or from the command line:
+  // --pipeline SESSION, --listen).
+  source_->setCurrentIndex(!options.listen.empty()                                    ? 3
+                           : options.session.empty()                                  ? 2
+                           : QString::fromStdString(options.session) == demo_session_ ? 0
+                                                                                      : 1);
   // Nodes started here record takes into the studio's folder; nodes on the stage's PCs into
   // their own (lumistage-node --takes).
   if (options.takes.empty() && options.listen.empty()) options.takes = takes_folder_.toStdString();

@@ -219,6 +219,9 @@ class MainWindowTest : public QObject {
     options.takes = dir.filePath("takes").toStdString();
     window.pipeline()->start(options);
     QVERIFY(window.pipeline()->running());
+    // Started as --pipeline SESSION starts it: the source box names a recorded session, not the
+    // demo's.
+    QCOMPARE(window.pipeline()->findChild<QComboBox*>("pipeline_source")->currentIndex(), 1);
     QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames >= 10, 20000);
     const lumistage::RunReport report = window.pipeline()->lastReport();
     QCOMPARE(static_cast<int>(report.nodes.size()), 2);
