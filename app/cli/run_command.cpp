@@ -55,14 +55,18 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
           "\"last_error\": \"{}\"}}",
           cameras.empty() ? "" : ", ", c.camera, c.frames, c.dropped, c.frame_rate_hz, error);
     }
+    // Figures a node never gave (it sent nothing, or no frame of it was shown) are null.
+    const auto measured = [](double v, int decimals) {
+      return v < 0 ? std::string("null") : fmt::format("{:.{}f}", v, decimals);
+    };
     nodes += fmt::format(
         "{}\n    {{\"name\": \"{}\", \"lost\": {}, \"messages\": {}, \"bytes\": {}, "
-        "\"bytes_per_frame\": {:.0f}, \"frames_missed\": {}, "
-        "\"times_lost\": {}, \"bad_messages\": {}, \"statistics_ms\": {:.2f}, "
-        "\"image_ms\": {:.2f}, \"cameras\": [{}]}}",
+        "\"bytes_per_frame\": {}, \"frames_missed\": {}, "
+        "\"times_lost\": {}, \"bad_messages\": {}, \"statistics_ms\": {}, "
+        "\"image_ms\": {}, \"cameras\": [{}]}}",
         nodes.empty() ? "" : ",", n.name, n.lost ? "true" : "false", n.messages, n.bytes,
-        n.bytes_per_frame, n.frames_missed, n.times_lost, n.bad_messages, n.statistics_ms,
-        n.image_ms, cameras);
+        measured(n.bytes_per_frame, 0), n.frames_missed, n.times_lost, n.bad_messages,
+        measured(n.statistics_ms, 2), measured(n.image_ms, 2), cameras);
   }
   return fmt::format(
       "{{\n  \"fps\": {:.3f},\n  \"latency_ms_p50\": {:.3f},\n  \"latency_ms_p95\": {:.3f},\n  "
@@ -319,11 +323,15 @@ void addRunCommand(CLI::App& app) {
     fmt::print("CPU: the studio {:.2f} cores, the nodes {:.2f} cores (over {:.1f} s)\n",
                cpu.studio_cores, cpu.nodes_cores, wall_s);
     for (const NodeReport& n : r.nodes) {
+      const std::string answers =
+          n.statistics_ms < 0 || n.image_ms < 0
+              ? std::string(n.messages == 0 ? "never heard from" : "no answer measured")
+              : fmt::format("answers in {:.1f} ms (statistics) and {:.1f} ms (image)",
+                            n.statistics_ms, n.image_ms);
       fmt::print(
-          "  node {:<8} {:<9} {} messages, missed {} frames, lost {} times, {} bad messages; "
-          "answers in {:.1f} ms (statistics) and {:.1f} ms (image)\n",
+          "  node {:<8} {:<9} {} messages, missed {} frames, lost {} times, {} bad messages; {}\n",
           n.name, n.lost ? "lost" : "streaming", n.messages, n.frames_missed, n.times_lost,
-          n.bad_messages, n.statistics_ms, n.image_ms);
+          n.bad_messages, answers);
       for (const CameraHealth& c : n.cameras) {
         fmt::print("      {:<8} {:6.1f} fps, {} frames, {} dropped{}\n", c.camera, c.frame_rate_hz,
                    c.frames, c.dropped, c.last_error.empty() ? "" : ", " + c.last_error);
