@@ -90,6 +90,8 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
 void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
   StudioCoordinator& studio = pipeline.studio();
   studio.stopTake();
+  // The studio goes on past the frames asked for, until the nodes have closed the take.
+  studio.setMaxFrames(0);
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   auto finished = [&] {
     for (const NodeReport& n : studio.report().nodes) {
@@ -218,8 +220,6 @@ void addRunCommand(CLI::App& app) {
       if (const std::string error = takeNameError(take); !error.empty())
         throw CLI::ValidationError("--record-take", error);
       options.takes = dir.parent_path();
-      // The studio keeps listening after the last frame, until the nodes have closed the take.
-      options.coordinator.max_frames = 0;
     }
     options.coordinator.max_frames_in_flight = a->max_in_flight;
     // The view's size, checked before the nodes start: at most what a node's message may carry
@@ -287,8 +287,8 @@ void addRunCommand(CLI::App& app) {
         fmt::print(stderr, "lumistage run: {}; see its message above\n", exit);
       }
     }
-    // The figures are of the frames asked for (--frames, --seconds): those the pipeline goes on
-    // with while the nodes close a take are not counted.
+    // The figures are of the frames asked for (--frames, --seconds), before the pipeline goes on
+    // while the nodes close a take.
     const RunReport r = studio.report();
     const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
