@@ -153,8 +153,8 @@ class StudioCoordinator {
   // same work as run(), in slices, so a caller on one thread can look at the state between them.
   void runFor(std::chrono::milliseconds duration);
   int64_t framesDone() const { return frames_done_; }
-  // Another limit for run() and runFor(); 0: none. Frames beyond the first limit that were shown
-  // meanwhile are not counted (report() keeps the figures of the frames asked for).
+  // Another limit for run(), runFor() and the frames counted; 0: none. While a limit holds, the
+  // frames shown beyond it are not counted: report() taken then gives the frames asked for.
   void setMaxFrames(int64_t frames) { options_.max_frames = frames; }
   RunReport report() const;
   // The virtual cameras the nodes render for, each a stream of blended images (default: view 0,
