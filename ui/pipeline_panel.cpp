@@ -22,6 +22,13 @@
 
 namespace lumistage {
 
+namespace {
+
+// The source box's entries, in order.
+enum SourceEntry { kDemoSession = 0, kRecordedSession, kAravisCameras, kStageNodes };
+
+}  // namespace
+
 void PipelineWorker::setView(const ViewData& view) {
   QMutexLocker lock(&mutex_);
   commands_.push_back([view](LocalPipelineRun& run) { run.studio().setView(view); });
@@ -193,7 +200,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   table_->setObjectName("pipeline_nodes");
   source_->addItems({tr("Virtual studio (demo session)"), tr("Recorded session..."),
                      tr("Aravis cameras..."), tr("Nodes on the stage's PCs...")});
-  source_->setItemData(3,
+  source_->setItemData(kStageNodes,
                        tr("The nodes run on the camera PCs (lumistage-node --studio, or their "
                           "systemd unit); the studio listens for them with the keys they were "
                           "given"),
@@ -260,20 +267,20 @@ void PipelinePanel::startChosen() {
   LocalRunOptions options;
   options.replay = "memory";
   switch (source_->currentIndex()) {
-    case 0:
+    case kDemoSession:
       if (demo_session_.isEmpty()) {
         emit demoSessionWanted();  // the studio makes it, then starts
         return;
       }
       options.session = demo_session_.toStdString();
       break;
-    case 1: {
+    case kRecordedSession: {
       const QString folder = QFileDialog::getExistingDirectory(this, tr("Recorded session to run"));
       if (folder.isEmpty()) return;
       options.session = folder.toStdString();
       break;
     }
-    case 3: {
+    case kStageNodes: {
       const QString rig = QFileDialog::getOpenFileName(this, tr("The stage's rig file"), {},
                                                        tr("Rig files (*.yaml *.yml)"));
       if (rig.isEmpty()) return;
@@ -291,7 +298,7 @@ void PipelinePanel::startChosen() {
       options.listen = listen.toStdString();
       break;
     }
-    default: {
+    default: {  // kAravisCameras
       const QString rig = QFileDialog::getOpenFileName(this, tr("The cameras' rig file"), {},
                                                        tr("Rig files (*.yaml *.yml)"));
       if (rig.isEmpty()) return;
@@ -312,10 +319,13 @@ void PipelinePanel::start(LocalRunOptions options) {
   stop();
   // The source box says what runs, however it was started (here, or from the command line:
   // --pipeline SESSION, --listen).
-  source_->setCurrentIndex(!options.listen.empty()                                    ? 3
-                           : options.session.empty()                                  ? 2
-                           : QString::fromStdString(options.session) == demo_session_ ? 0
-                                                                                      : 1);
+  SourceEntry entry = kAravisCameras;
+  if (!options.listen.empty())
+    entry = kStageNodes;
+  else if (!options.session.empty())
+    entry =
+        QString::fromStdString(options.session) == demo_session_ ? kDemoSession : kRecordedSession;
+  source_->setCurrentIndex(entry);
   // Nodes started here record takes into the studio's folder; nodes on the stage's PCs into
   // their own (lumistage-node --takes).
   if (options.takes.empty() && options.listen.empty()) options.takes = takes_folder_.toStdString();

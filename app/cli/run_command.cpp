@@ -43,6 +43,10 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
   std::string stages;
   for (const auto& [name, ms] : r.stage_ms)
     stages += fmt::format("{}\"{}\": {:.3f}", stages.empty() ? "" : ", ", name, ms);
+  // Figures a node never gave (it sent nothing, or no frame of it was shown) are null.
+  const auto measured = [](double v, int decimals) {
+    return v < 0 ? std::string("null") : fmt::format("{:.{}f}", v, decimals);
+  };
   std::string nodes;
   for (const NodeReport& n : r.nodes) {
     std::string cameras;
@@ -55,10 +59,6 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
           "\"last_error\": \"{}\"}}",
           cameras.empty() ? "" : ", ", c.camera, c.frames, c.dropped, c.frame_rate_hz, error);
     }
-    // Figures a node never gave (it sent nothing, or no frame of it was shown) are null.
-    const auto measured = [](double v, int decimals) {
-      return v < 0 ? std::string("null") : fmt::format("{:.{}f}", v, decimals);
-    };
     nodes += fmt::format(
         "{}\n    {{\"name\": \"{}\", \"lost\": {}, \"messages\": {}, \"bytes\": {}, "
         "\"bytes_per_frame\": {}, \"frames_missed\": {}, "
