@@ -9,6 +9,8 @@
 #include <QVBoxLayout>
 #include <algorithm>
 
+#include "ui/live_table.h"
+
 namespace lumistage {
 
 namespace {
@@ -111,9 +113,8 @@ HealthPanel::HealthPanel(QWidget* parent)
   table_->setSelectionMode(QAbstractItemView::SingleSelection);
   table_->setIconSize(QSize(48, 36));
   table_->verticalHeader()->setDefaultSectionSize(40);
-  table_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
-  table_->horizontalHeader()->setSectionResizeMode(kProblem, QHeaderView::Stretch);
   table_->horizontalHeader()->setMinimumSectionSize(40);
+  makeLiveTable(*table_, kProblem);
   setMinimumWidth(600);  // the problem in words must be readable
   legend_->setText(
       tr("<span style='color:#2ab02a'>&#9679; streaming</span> &nbsp; "
@@ -254,22 +255,20 @@ void HealthPanel::refresh() {
     Row& row = rows_[r];
     const HealthVerdict v = classifyHealth(input(row));
     const QColor colour = stateColour(v.state);
-    QTableWidgetItem* state = table_->item(r, kState);
-    state->setText(QString::fromUtf8(healthStateName(v.state)));
-    state->setForeground(Qt::white);
-    state->setBackground(colour);
-    table_->item(r, kProblem)->setText(QString::fromStdString(v.words));
-    table_->item(r, kProblem)
-        ->setForeground(v.state == HealthState::kStreaming ? palette().text().color() : colour);
-    table_->item(r, kFps)->setText(QString::number(row.fps, 'f', 1));
-    table_->item(r, kDropped)->setText(QString::number(row.dropped));
-    table_->item(r, kAnswer)
-        ->setText(row.answer_ms >= 0 ? QString::number(row.answer_ms, 'f', 1) : QString("-"));
-    table_->item(r, kBytes)->setText(row.bytes_per_frame >= 0
-                                         ? QString::number(row.bytes_per_frame / 1000, 'f', 1)
+    setLiveCell(*table_, r, kState, QString::fromUtf8(healthStateName(v.state)), Qt::white);
+    table_->item(r, kState)->setBackground(colour);
+    setLiveCell(*table_, r, kProblem, QString::fromStdString(v.words),
+                v.state == HealthState::kStreaming ? palette().text().color() : colour);
+    setLiveCell(*table_, r, kFps, QString::number(row.fps, 'f', 1));
+    setLiveCell(*table_, r, kDropped, QString::number(row.dropped));
+    setLiveCell(*table_, r, kAnswer,
+                row.answer_ms >= 0 ? QString::number(row.answer_ms, 'f', 1) : QString("-"));
+    setLiveCell(*table_, r, kBytes,
+                row.bytes_per_frame >= 0 ? QString::number(row.bytes_per_frame / 1000, 'f', 1)
                                          : QString("-"));
-    table_->item(r, kExposure)->setText("-");
+    setLiveCell(*table_, r, kExposure, "-");
   }
+  fitLiveColumns(*table_);
 }
 
 }  // namespace lumistage

@@ -19,6 +19,7 @@
 
 #include "core/body/human_model.h"
 #include "core/pipeline/posed_body.h"
+#include "ui/live_table.h"
 
 namespace lumistage {
 
@@ -210,13 +211,14 @@ PipelinePanel::PipelinePanel(QWidget* parent)
                                      tr("Dropped"), tr("Take"), tr("Last error")});
   table_->verticalHeader()->setVisible(false);
   table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
-  table_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
   table_->horizontalHeader()->setStretchLastSection(true);
+  makeLiveTable(*table_);
   stages_->setColumnCount(2);
   stages_->setHorizontalHeaderLabels({tr("Stage"), tr("ms (mean)")});
   stages_->verticalHeader()->setVisible(false);
   stages_->setEditTriggers(QAbstractItemView::NoEditTriggers);
   stages_->horizontalHeader()->setStretchLastSection(true);
+  makeLiveTable(*stages_);
   stages_->setMaximumWidth(260);
   auto* buttons = new QHBoxLayout;
   buttons->addWidget(new QLabel(tr("Source:"), this));
@@ -472,9 +474,9 @@ QString takeCell(const TakeStatusData& t) {
   return text;
 }
 
-// A stage of the report (as `lumistage run` and its JSON name it) in words, with what its time
-// covers and its key as tooltip.
-QTableWidgetItem* stageItem(const std::string& stage) {
+// A stage of the report (as `lumistage run` and its JSON name it) in words, and what its time
+// covers with its key (the tooltip).
+std::pair<QString, QString> stageWords(const std::string& stage) {
   static const std::map<std::string, std::pair<const char*, const char*>> kStages = {
       {"mocap",
        {QT_TR_NOOP("motion capture"),
@@ -495,14 +497,9 @@ QTableWidgetItem* stageItem(const std::string& stage) {
   };
   const QString key = QString::fromStdString(stage);
   const auto known = kStages.find(stage);
-  if (known == kStages.end()) {
-    auto* item = new QTableWidgetItem(key);
-    item->setToolTip(key);
-    return item;
-  }
-  auto* item = new QTableWidgetItem(PipelinePanel::tr(known->second.first));
-  item->setToolTip(QString("%1 (%2)").arg(PipelinePanel::tr(known->second.second), key));
-  return item;
+  if (known == kStages.end()) return {key, key};
+  return {PipelinePanel::tr(known->second.first),
+          QString("%1 (%2)").arg(PipelinePanel::tr(known->second.second), key)};
 }
 
 }  // namespace
@@ -580,8 +577,10 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   stages_->setRowCount(static_cast<int>(r.stage_ms.size()));
   int stage_row = 0;
   for (const auto& [stage, ms] : r.stage_ms) {
-    stages_->setItem(stage_row, 0, stageItem(stage));
-    stages_->setItem(stage_row, 1, new QTableWidgetItem(QString::number(ms, 'f', 2)));
+    const auto [words, tooltip] = stageWords(stage);
+    setLiveCell(*stages_, stage_row, 0, words);
+    stages_->item(stage_row, 0)->setToolTip(tooltip);
+    setLiveCell(*stages_, stage_row, 1, QString::number(ms, 'f', 2));
     ++stage_row;
   }
   int rows = 0;
@@ -593,25 +592,22 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
     const QColor state_colour = gone ? QColor(0xe3, 0x33, 0x33) : QColor(0x2a, 0xa0, 0x2a);
     const int count = std::max<int>(1, static_cast<int>(n.cameras.size()));
     for (int k = 0; k < count; ++k, ++row) {
-      auto set = [&](int column, const QString& text) {
-        table_->setItem(row, column, new QTableWidgetItem(text));
-      };
-      set(0, k == 0 ? QString::fromStdString(n.name) : QString());
-      set(1, k == 0 ? (gone ? tr("lost") : tr("streaming")) : QString());
-      table_->item(row, 1)->setForeground(state_colour);
-      if (k < static_cast<int>(n.cameras.size())) {
-        const CameraHealth& c = n.cameras[k];
-        set(2, QString::fromStdString(c.camera));
-        set(3, QString::number(c.frame_rate_hz, 'f', 1));
-        set(4, QString::number(c.frames));
-        set(5, QString::number(c.dropped));
-        set(7, QString::fromStdString(c.last_error));
-      }
-      set(6, k == 0 ? takeCell(n.take) : QString());
-      if (k == 0 && !n.take.error.empty())
-        table_->item(row, 6)->setForeground(QColor(0xe3, 0x33, 0x33));
+      const CameraHealth* c = k < static_cast<int>(n.cameras.size()) ? &n.cameras[k] : nullptr;
+      setLiveCell(*table_, row, 0, k == 0 ? QString::fromStdString(n.name) : QString());
+      setLiveCell(*table_, row, 1, k == 0 ? (gone ? tr("lost") : tr("streaming")) : QString(),
+                  state_colour);
+      setLiveCell(*table_, row, 2, c ? QString::fromStdString(c->camera) : QString());
+      setLiveCell(*table_, row, 3, c ? QString::number(c->frame_rate_hz, 'f', 1) : QString());
+      setLiveCell(*table_, row, 4, c ? QString::number(c->frames) : QString());
+      setLiveCell(*table_, row, 5, c ? QString::number(c->dropped) : QString());
+      setLiveCell(
+          *table_, row, 6, k == 0 ? takeCell(n.take) : QString(),
+          k == 0 && !n.take.error.empty() ? QColor(0xe3, 0x33, 0x33) : palette().text().color());
+      setLiveCell(*table_, row, 7, c ? QString::fromStdString(c->last_error) : QString());
     }
   }
+  fitLiveColumns(*table_);
+  fitLiveColumns(*stages_);
   emit snapshot(s);
 }
 

@@ -7,6 +7,7 @@
 #include <QElapsedTimer>
 #include <QFile>
 #include <QFileInfo>
+#include <QHeaderView>
 #include <QImage>
 #include <QLabel>
 #include <QLineEdit>
@@ -34,6 +35,7 @@
 #include "ui/camera_overlay_view.h"
 #include "ui/clone_panel.h"
 #include "ui/health_panel.h"
+#include "ui/live_table.h"
 #include "ui/overlay_panel.h"
 #include "ui/pipeline_panel.h"
 #include "ui/rig_panel.h"
@@ -128,6 +130,38 @@ class MainWindowTest : public QObject {
     QCOMPARE(table->item(0, 0)->text(), QString("cam01"));
     QCOMPARE(table->item(1, 1)->text(), QString("node2"));
     QCOMPARE(table->item(0, 11)->text(), QString("2.300"));
+  }
+
+  // A live table (camera health, the pipeline's nodes) tells its view of a cell only when the
+  // cell's text changed, and its columns fit their contents after each update, growing and
+  // shrinking as ResizeToContents would, the stretched column left to fill the rest.
+  void liveTablesRewriteOnlyWhatChangedAndFitTheirColumns() {
+    QTableWidget table(2, 3);
+    lumistage::makeLiveTable(table, 2);
+    table.resize(600, 200);
+    table.show();
+    int changes = 0;
+    connect(table.model(), &QAbstractItemModel::dataChanged, &table, [&] { ++changes; });
+    lumistage::setLiveCell(table, 0, 0, "1");
+    lumistage::setLiveCell(table, 1, 0, "2", Qt::red);
+    lumistage::fitLiveColumns(table);
+    const int narrow = table.columnWidth(0);
+    changes = 0;
+    lumistage::setLiveCell(table, 0, 0, "1");
+    lumistage::setLiveCell(table, 1, 0, "2", Qt::red);
+    QCOMPARE(changes, 0);  // the same text and colour: nothing for the view to redo
+    lumistage::setLiveCell(table, 0, 0, "a much wider cell than before");
+    QCOMPARE(changes, 1);
+    lumistage::setLiveCell(table, 1, 0, "2", Qt::blue);
+    QCOMPARE(changes, 2);
+    QCOMPARE(table.item(1, 0)->foreground().color(), QColor(Qt::blue));
+    lumistage::fitLiveColumns(table);
+    const int wide = table.columnWidth(0);
+    QVERIFY2(wide > narrow + 50, qPrintable(QString("%1 against %2").arg(wide).arg(narrow)));
+    lumistage::setLiveCell(table, 0, 0, "1");
+    lumistage::fitLiveColumns(table);
+    QCOMPARE(table.columnWidth(0), narrow);
+    QCOMPARE(table.horizontalHeader()->sectionResizeMode(2), QHeaderView::Stretch);
   }
 
   void stagePlanDrawsEveryNode() {
