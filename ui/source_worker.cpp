@@ -65,6 +65,7 @@ void SourceWorker::run() {
   using Clock = std::chrono::steady_clock;
   try {
     std::unique_ptr<FrameSource> source;
+    SessionSource* session = nullptr;  // a recording: only the images previewed are copied
     QString description = spec_.describe();
     if (spec_.kind == SourceSpec::Kind::kVirtualStudio) {
       const std::string config = spec_.path.isEmpty()
@@ -81,7 +82,9 @@ void SourceWorker::run() {
       // nodes replaying the session, so that overlays of the pipeline's body match the pictures.
       options.synchronized = true;
       options.cancel = &stop_;  // closing the window while the demo loads does not wait for it
-      source = std::make_unique<SessionSource>(spec_.path.toStdString(), options);
+      auto replay = std::make_unique<SessionSource>(spec_.path.toStdString(), options);
+      session = replay.get();
+      source = std::move(replay);
     } else {
       if (spec_.rig.isEmpty()) throw std::runtime_error("Aravis cameras need a rig file (--rig)");
       const Rig rig = loadRig(spec_.rig.toStdString());
@@ -96,12 +99,16 @@ void SourceWorker::run() {
     std::vector<Clock::time_point> last_preview(cameras);
     auto last_status = Clock::now();
     CameraFrame frame;
+    // A few previews a second per camera are plenty for a person; the rest is not drawn.
+    const auto due = [&](int camera) {
+      return Clock::now() - last_preview[camera] > std::chrono::milliseconds(250);
+    };
     while (!stop_ && !source->finished()) {
-      if (source->next(frame, std::chrono::milliseconds(100))) {
-        // A few previews a second per camera are plenty for a person; the rest is not drawn.
-        const auto now = Clock::now();
-        if (now - last_preview[frame.camera] > std::chrono::milliseconds(250)) {
-          last_preview[frame.camera] = now;
+      constexpr std::chrono::milliseconds kWait(100);
+      const bool wanted = !session || due(session->nextCamera());
+      if (session ? session->next(frame, kWait, wanted) : source->next(frame, kWait)) {
+        if (wanted && due(frame.camera)) {
+          last_preview[frame.camera] = Clock::now();
           emit this->frame(frame.camera, preview(frame.image), frame.frame_id);
         }
       }

@@ -13,10 +13,7 @@ namespace lumistage {
 
 namespace {
 
-void copyFrame(const CameraFrame& from, CameraFrame& to) {
-  to.camera = from.camera;
-  to.frame_id = from.frame_id;
-  to.timestamp_ns = from.timestamp_ns;
+void copyImage(const CameraFrame& from, CameraFrame& to) {
   to.image.resize(from.image.format, from.image.width, from.image.height);  // keeps the buffer
   std::memcpy(to.image.pixels.data(), from.image.pixels.data(), from.image.pixels.size());
 }
@@ -77,7 +74,7 @@ bool SessionSource::loadSet() {
   return true;
 }
 
-bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) {
+bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout, bool with_image) {
   using Clock = std::chrono::steady_clock;
   if (finished_) return false;
   const Clock::time_point now = Clock::now();
@@ -118,12 +115,12 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout) 
   if (next_camera_ == 0 && !loadSet()) return false;
 
   const int c = cameras_[next_camera_];
-  if (options_.mode == ReplayMode::kFromMemory) {
-    copyFrame(memory_[next_set_][c], frame);
-  } else {
+  frame.camera = c;
+  if (with_image && options_.mode == ReplayMode::kFromMemory) {
+    copyImage(memory_[next_set_][c], frame);
+  } else if (with_image) {
     // Swapped, not copied: the caller's old buffer receives the next decode.
     std::swap(frame.image, set_[c].image);
-    frame.camera = c;
   }
   frame.frame_id = options_.synchronized ? tick_ : reader_.frameId(next_set_) + loop_ * id_span_;
   frame.timestamp_ns = timestamp;

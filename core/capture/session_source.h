@@ -48,7 +48,16 @@ class SessionSource : public FrameSource {
   const Rig& rig() const override { return reader_.rig(); }
   // False on timeout (kRecordedRate: the next set is not due yet), at the end, or when a frame
   // cannot be decoded any more (stats().last_error says which file; finished() is then true).
-  bool next(CameraFrame& frame, std::chrono::milliseconds timeout) override;
+  bool next(CameraFrame& frame, std::chrono::milliseconds timeout) override {
+    return next(frame, timeout, true);
+  }
+  // The same, leaving `frame.image` as it was unless `with_image`: for a reader that wants a few
+  // of the images only (the studio's previews: copying every frame of a 12-camera session from
+  // memory took 0.08 of a core for previews of 4 a second). The frame's camera, id and time, and
+  // the camera's counts, are as next()'s.
+  bool next(CameraFrame& frame, std::chrono::milliseconds timeout, bool with_image);
+  // The camera whose frame the next call delivers.
+  int nextCamera() const { return cameras_[next_camera_]; }
   bool finished() const override { return finished_; }
   bool idsCountInstants() const override { return false; }
   CameraStats stats(int camera) const override;

@@ -89,6 +89,37 @@ TEST(Replay, LoopsWithIdsAndTimestampsGoingOn) {
   fs::remove_all(folder);
 }
 
+// The studio's previews want a few images only: a frame taken without its image leaves the
+// caller's buffer as it was, and moves on exactly as a whole one (camera, id, time, counts).
+TEST(Replay, FramesTakenWithoutTheirImagesMoveOnAsWholeOnes) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("replay_without_images");
+  constexpr int kFrames = 4;
+  record(folder, rig, PixelFormat::kRgb8, kFrames);
+  for (ReplayMode mode : {ReplayMode::kAsFastAsPossible, ReplayMode::kFromMemory}) {
+    SCOPED_TRACE(int(mode));
+    SessionSource source(folder, replay(mode));
+    CameraFrame frame;
+    const Image untouched = frameImages(rig, PixelFormat::kMono8, 7)[0];
+    for (int i = 0; i < kFrames * 3; ++i) {
+      const int set = i / 3, camera = i % 3;
+      ASSERT_EQ(source.nextCamera(), camera);
+      const bool with_image = i % 2 == 1;  // every other frame, so each camera has both kinds
+      if (!with_image) frame.image = untouched;
+      ASSERT_TRUE(source.next(frame, milliseconds(0), with_image));
+      EXPECT_EQ(frame.camera, camera);
+      EXPECT_EQ(frame.frame_id, set);
+      EXPECT_EQ(frame.timestamp_ns, set * kPeriodNs);
+      EXPECT_TRUE(
+          frame.image.pixels ==
+          (with_image ? frameImages(rig, PixelFormat::kRgb8, set)[camera] : untouched).pixels);
+    }
+    EXPECT_TRUE(source.finished());
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(source.stats(c).frames, kFrames);
+  }
+  fs::remove_all(folder);
+}
+
 TEST(Replay, FromMemoryOverTheLimitSaysHowMuchItWouldNeed) {
   const Rig rig = smallRig();
   const fs::path folder = freshFolder("replay_limit");
