@@ -36,8 +36,8 @@ struct ViewportLayers {
 // overlays drawn from the same camera. Left drag orbits, right or middle drag pans, the wheel
 // zooms; with Shift a left drag moves the clone under the cursor on the floor, with Ctrl it turns
 // it. Every change of the view is sent on (viewChanged) for the nodes to render. It paints on a
-// QOpenGLWidget where the platform has OpenGL, on a plain widget otherwise (Qt's offscreen
-// platform, for tests).
+// QOpenGLWidget where the platform has OpenGL on a GPU, on a plain widget otherwise (OpenGL on
+// the CPU, Qt's offscreen platform for tests, LUMISTAGE_VIEWPORT_RASTER set).
 class ViewportWidget : public QWidget {
   Q_OBJECT
 
