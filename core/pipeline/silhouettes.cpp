@@ -113,6 +113,31 @@ void bayerSilhouette(const GreenScreenKeyer& key, const ImageView& image, int st
   }
 }
 
+// keyCell on an RGB image at a step of 3 or more, where every cell's 3x3 window lies inside the
+// image: the window's three rows summed straight from the image, without meanColourAround's
+// bounds and colourAt's format per pixel (a quarter of a node's CPU on an RGB session, 24.8% in
+// perf, before). The same result as keyCell.
+void rgbSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step,
+                   LowResSilhouette& out) {
+  const size_t row_bytes = 3 * size_t(image.width);
+  for (int cy = 0; cy < out.height; ++cy) {
+    const int y = cy * step + step / 2;
+    const uint8_t* above = image.data + size_t(y - 1) * row_bytes;
+    const uint8_t* middle = above + row_bytes;
+    const uint8_t* below = middle + row_bytes;
+    for (int cx = 0; cx < out.width; ++cx) {
+      const int x = cx * step + step / 2;
+      const size_t first = 3 * size_t(x - 1);
+      int sum[3] = {0, 0, 0};
+      for (size_t i = first; i < first + 9; i += 3) {
+        for (int c = 0; c < 3; ++c) sum[c] += above[i + c] + middle[i + c] + below[i + c];
+      }
+      if (key.isForeground(Rgb{(sum[0] + 4) / 9, (sum[1] + 4) / 9, (sum[2] + 4) / 9}, x, y))
+        out.set(cx, cy);
+    }
+  }
+}
+
 }  // namespace
 
 void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
@@ -124,6 +149,10 @@ void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int 
   out.bits.assign((size_t(out.width) * out.height + 7) / 8, 0);
   if (isBayer(image.format) && step % 4 == 0 && image.width % 2 == 0 && image.height % 2 == 0) {
     bayerSilhouette(key, image, step, out);
+    return;
+  }
+  if (image.format == PixelFormat::kRgb8 && step >= 3) {
+    rgbSilhouette(key, image, step, out);
     return;
   }
   for (int y = 0; y < out.height; ++y) {

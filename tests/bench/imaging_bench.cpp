@@ -50,6 +50,27 @@ void nodeSilhouette(benchmark::State& state) {
 }
 BENCHMARK(nodeSilhouette)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
 
+// The same on an RGB camera (recorded sessions of the virtual studio, the demo's).
+void nodeSilhouetteRgb(benchmark::State& state) {
+  const lumistage::Image bayer = stageFrame();
+  lumistage::Image image;
+  image.resize(lumistage::PixelFormat::kRgb8, bayer.width, bayer.height);
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      const lumistage::Rgb c = lumistage::colourAt(bayer.view(), x, y);
+      uint8_t* p = &image.pixels[3 * (size_t(y) * image.width + x)];
+      p[0] = uint8_t(c.r), p[1] = uint8_t(c.g), p[2] = uint8_t(c.b);
+    }
+  }
+  const lumistage::GreenScreenKeyer keyer;
+  lumistage::LowResSilhouette silhouette;
+  for (auto _ : state) {
+    lumistage::computeSilhouette(keyer, image.view(), 0, int(state.range(0)), silhouette);
+    benchmark::DoNotOptimize(silhouette.bits.data());
+  }
+}
+BENCHMARK(nodeSilhouetteRgb)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
+
 // A camera's screen measured again, as a node does for each camera once every 30 frames
 // (CameraNode::checkScreens).
 void measureScreen(benchmark::State& state) {

@@ -79,6 +79,24 @@ TEST(VisualHullLocator, NodeSilhouettesAreTheKeyOfEveryCell) {
         EXPECT_LT(set, s.width * s.height) << pixelFormatName(format) << " step " << step;
       }
     }
+    // Every threshold the cells' excesses cross, so that a cell whose mean is rounded otherwise
+    // than keyCell rounds it flips somewhere.
+    for (PixelFormat format : {PixelFormat::kRgb8, PixelFormat::kBayerRggb8}) {
+      Image image;
+      rgbaToImage(rgba.data(), width, height, format, image);
+      for (int threshold = -60; threshold <= 60; ++threshold) {
+        const GreenScreenKeyer at(threshold);
+        for (int step : {4, 8}) {
+          LowResSilhouette s;
+          computeSilhouette(at, image.view(), 0, step, s);
+          for (int y = 0; y < s.height; ++y)
+            for (int x = 0; x < s.width; ++x)
+              ASSERT_EQ(s.at(x, y), keyCell(at, image.view(), x, y, step))
+                  << pixelFormatName(format) << " threshold " << threshold << " step " << step
+                  << " cell " << x << "," << y;
+        }
+      }
+    }
     // Thresholds beyond any green excess (a keyer made by hand) key every cell alike, in 16 bits
     // too: all the actor, or none of it.
     Image bayer;
