@@ -78,6 +78,8 @@ struct Image {
 // From the renderer's RGBA8 (rows top first) to what a camera would deliver.
 void rgbaToBayer(const uint8_t* rgba, int width, int height, BayerLayout layout, uint8_t* bayer);
 void rgbaToRgb(const uint8_t* rgba, int width, int height, uint8_t* rgb);
+// RGB8 widened to RGBA8 (alpha 255), as GPUs take it: `pixels` of them.
+void rgbToRgba(const uint8_t* rgb, size_t pixels, uint8_t* rgba);
 void rgbaToImage(const uint8_t* rgba, int width, int height, PixelFormat format, Image& out);
 
 // A Bayer image's 2x2 cells as RGBA8 (R, the mean of the two G rounded, B, 255), rows top first:

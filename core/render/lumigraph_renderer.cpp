@@ -238,12 +238,7 @@ void LumigraphRenderer::setImage(int own_index, const ImageView& image) {
     // Widened to RGBA (RGB uploads are slow: never RGB).
     const size_t n = size_t(image.width) * image.height;
     staging_.resize(n * 4);
-    for (size_t i = 0; i < n; ++i) {
-      staging_[4 * i] = image.data[3 * i];
-      staging_[4 * i + 1] = image.data[3 * i + 1];
-      staging_[4 * i + 2] = image.data[3 * i + 2];
-      staging_[4 * i + 3] = 255;
-    }
+    rgbToRgba(image.data, n, staging_.data());
     useImageFormat(ImageTexture::kRgba);
     uploadImage(own_index, image.width, image.height, staging_.data());
     return;

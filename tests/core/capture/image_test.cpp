@@ -31,6 +31,21 @@ TEST(Image, EveryBayerLayoutMosaicsAndReadsBackTheColour) {
   }
 }
 
+TEST(Image, RgbWidensToRgbaWithOpaqueAlpha) {
+  for (size_t pixels : {size_t(0), size_t(1), size_t(2), size_t(257)}) {
+    std::vector<uint8_t> rgb(3 * pixels);
+    for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = uint8_t(i * 37 + 11);
+    // One byte more than the pixels need, which the conversion must leave alone.
+    std::vector<uint8_t> rgba(4 * pixels + 1, 7);
+    rgbToRgba(rgb.data(), pixels, rgba.data());
+    for (size_t p = 0; p < pixels; ++p) {
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(rgba[4 * p + c], rgb[3 * p + c]) << p << " " << c;
+      EXPECT_EQ(rgba[4 * p + 3], 255) << p;
+    }
+    EXPECT_EQ(rgba.back(), 7);
+  }
+}
+
 TEST(Image, BayerLayoutsPutRedWhereTheirNamesSay) {
   // R=1, G=2, B=3 everywhere: the first cell reads as the name's first two rows.
   std::vector<uint8_t> rgba(2 * 2 * 4);
