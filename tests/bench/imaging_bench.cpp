@@ -38,15 +38,18 @@ void lowResolutionSilhouette(benchmark::State& state) {
 }
 BENCHMARK(lowResolutionSilhouette)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
 
-// The same packed into bits, as a node computes it (computeSilhouette).
-void nodeSilhouette(benchmark::State& state) {
-  const lumistage::Image image = stageFrame();
+// The same packed into bits, as a node computes it (computeSilhouette), at the step state.range(0).
+void keyNodeSilhouette(benchmark::State& state, const lumistage::Image& image) {
   const lumistage::GreenScreenKeyer keyer;
   lumistage::LowResSilhouette silhouette;
   for (auto _ : state) {
     lumistage::computeSilhouette(keyer, image.view(), 0, int(state.range(0)), silhouette);
     benchmark::DoNotOptimize(silhouette.bits.data());
   }
+}
+
+void nodeSilhouette(benchmark::State& state) {
+  keyNodeSilhouette(state, stageFrame());
 }
 BENCHMARK(nodeSilhouette)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
 
@@ -62,12 +65,7 @@ void nodeSilhouetteRgb(benchmark::State& state) {
       p[0] = uint8_t(c.r), p[1] = uint8_t(c.g), p[2] = uint8_t(c.b);
     }
   }
-  const lumistage::GreenScreenKeyer keyer;
-  lumistage::LowResSilhouette silhouette;
-  for (auto _ : state) {
-    lumistage::computeSilhouette(keyer, image.view(), 0, int(state.range(0)), silhouette);
-    benchmark::DoNotOptimize(silhouette.bits.data());
-  }
+  keyNodeSilhouette(state, image);
 }
 BENCHMARK(nodeSilhouetteRgb)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
 
