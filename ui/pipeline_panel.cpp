@@ -556,12 +556,12 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   const RunReport& r = s.report;
   if (!s.view.isNull())
     view_->setPixmap(QPixmap::fromImage(s.view).scaled(view_->size(), Qt::KeepAspectRatio));
-  summary_->setText(tr("<b>%1 fps</b> &middot; latency %2 ms (median), %3 ms (95%) &middot; %4 "
-                       "frames, %5 dropped (%10 on arrival, to keep latency, %11 overtaken by "
-                       "newer frames, %12 without a node's image), %9 in flight "
+  summary_->setText(tr("<b>%1 fps</b> (%13 since the start) &middot; latency %2 ms (median), %3 "
+                       "ms (95%) &middot; %4 frames, %5 dropped (%10 on arrival, to keep latency, "
+                       "%11 overtaken by newer frames, %12 without a node's image), %9 in flight "
                        "&middot; %6 KB a frame per node against %7 KB raw &middot; %8 unknown "
                        "nodes refused")
-                        .arg(r.fps, 0, 'f', 1)
+                        .arg(r.fps_recent, 0, 'f', 1)
                         .arg(r.latency_ms_p50, 0, 'f', 1)
                         .arg(r.latency_ms_p95, 0, 'f', 1)
                         .arg(r.frames)
@@ -572,7 +572,8 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
                         .arg(r.frames_in_flight)
                         .arg(r.frames_refused)
                         .arg(r.frames_overtaken)
-                        .arg(r.frames_unshown) +
+                        .arg(r.frames_unshown)
+                        .arg(r.fps, 0, 'f', 1) +
                     (notice_.isEmpty() ? QString() : "<br>" + notice_.toHtmlEscaped()));
   stages_->setRowCount(static_cast<int>(r.stage_ms.size()));
   int stage_row = 0;

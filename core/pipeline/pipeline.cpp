@@ -23,4 +23,10 @@ double quantile(std::vector<double>& values, double q) {
   return values[at];
 }
 
+double eventsPerSecond(const std::vector<double>& times_ns) {
+  if (times_ns.size() < 2) return 0;
+  const auto [first, last] = std::minmax_element(times_ns.begin(), times_ns.end());
+  return *last > *first ? double(times_ns.size() - 1) / ((*last - *first) / 1e9) : 0;
+}
+
 }  // namespace lumistage

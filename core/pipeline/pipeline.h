@@ -70,6 +70,9 @@ class RecentSamples {
 };
 // The q-th quantile (0..1) of `values` (modified: partially sorted).
 double quantile(std::vector<double>& values, double q);
+// The rate of events at the steady-clock times `times_ns` (any order): (n - 1) over the time from
+// the first to the last, a second; 0 for fewer than two or no time between them.
+double eventsPerSecond(const std::vector<double>& times_ns);
 
 // Stages on their own threads, joined by bounded queues (see BoundedQueue): while one stage works
 // on frame f, the stage before it works on f+1 and the one after on f-1, as in the paper's

@@ -778,6 +778,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     frames_incomplete_ += !whole;
     if (start_ns_ == 0) start_ns_ = now;
     last_done_ns_ = now;
+    recent_done_ns_.add(double(now));
     for (auto& [name, node] : nodes_) {
       if (!node.report.lost && !frame.silhouette_nodes.count(name)) ++node.report.frames_missed;
       if (node.index >= 0 && size_t(node.index) < frame.node_bytes.size() &&
@@ -901,6 +902,7 @@ RunReport StudioCoordinator::report() const {
   r.fps = frames_done_ > 1 && last_done_ns_ > start_ns_
               ? (frames_done_ - 1) / ((last_done_ns_ - start_ns_) / 1e9)
               : 0;
+  r.fps_recent = eventsPerSecond(recent_done_ns_.values());
   std::vector<double> latencies = latencies_ms_.values();
   r.latency_ms_p50 = quantile(latencies, 0.5);
   r.latency_ms_p95 = quantile(latencies, 0.95);

@@ -100,7 +100,9 @@ struct FrameTiming {
 
 // What `lumistage run` prints and writes as JSON.
 struct RunReport {
-  double fps = 0;
+  double fps = 0;         // frames shown a second since the first (the run's rate)
+  double fps_recent = 0;  // the same over the last kRecentFrames shown (the rate now)
+  static constexpr size_t kRecentFrames = 60;
   double latency_ms_p50 = 0, latency_ms_p95 = 0;  // node capture to frame done
   std::map<std::string, double> stage_ms;         // mean per stage
   // What a node sends for a frame shown (its silhouettes, statistics and images), mean over the
@@ -385,6 +387,7 @@ class StudioCoordinator {
   std::vector<std::pair<int64_t, float>> timeline_;  // done (steady ns), latency (ms)
   RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_, refine_ms_,
       visibility_ms_;
+  RecentSamples recent_done_ns_{RunReport::kRecentFrames};  // when the latest frames were shown
   std::vector<ViewData> views_;
   std::map<int, BlendedImage> last_images_;
   std::function<void(int, const BlendedImage&)> blended_sink_;

@@ -50,6 +50,19 @@ TEST(Wakeup, APollOnItsDescriptorEndsWhenNotifiedAndNotAfterClear) {
 
 // Four stages that each wait until all four are busy at once: it passes only if four frames are
 // in flight simultaneously, each in its own stage.
+TEST(RecentSamples, EventsPerSecondOverTheLatestOnly) {
+  EXPECT_EQ(eventsPerSecond({}), 0);
+  EXPECT_EQ(eventsPerSecond({5e9}), 0);
+  EXPECT_EQ(eventsPerSecond({5e9, 5e9}), 0);
+  // Ten a second for a while, then two a second: the ring of the latest 5 tells the rate now.
+  RecentSamples times(5);
+  double t = 0;
+  for (int i = 0; i < 20; ++i) times.add(t += 0.1e9);
+  EXPECT_DOUBLE_EQ(eventsPerSecond(times.values()), 10.0);
+  for (int i = 0; i < 5; ++i) times.add(t += 0.5e9);
+  EXPECT_DOUBLE_EQ(eventsPerSecond(times.values()), 2.0);
+}
+
 TEST(Pipeline, FourFramesInFlightInFourStages) {
   std::mutex mutex;
   std::condition_variable all_busy;
