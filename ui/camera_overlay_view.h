@@ -24,6 +24,7 @@ class CameraOverlayView : public QWidget {
   const Camera& camera() const { return camera_; }
   void setImage(const QImage& image);  // any size: stretched over the camera's pixels
   bool hasImage() const { return !image_.isNull(); }
+  const QImage& image() const { return image_; }
   void setCaption(const QString& caption);
   const QString& caption() const { return caption_; }
   void showSilhouette(bool on) {

@@ -96,6 +96,9 @@ MainWindow::MainWindow(QWidget* parent)
           &ViewportWidget::showView);
   connect(pipeline_panel_, &PipelinePanel::snapshot, health_panel_, &HealthPanel::showSnapshot);
   connect(pipeline_panel_, &PipelinePanel::snapshot, overlay_panel_, &OverlayPanel::showSnapshot);
+  connect(overlay_panel_, &OverlayPanel::cameraSelected, this, [this](int camera) {
+    if (source_worker_) source_worker_->watchCamera(camera);
+  });
   connect(pipeline_panel_, &PipelinePanel::demoSessionWanted, this, &MainWindow::startDemo);
   connect(viewport_panel_, &ViewportPanel::recordingRequested, this, [this](const QString& file) {
     if (pipeline_panel_->startRecording(file)) return;
@@ -279,6 +282,8 @@ void MainWindow::startSource(const SourceSpec& spec) {
   connect(worker, &SourceWorker::frame, camera_grid_, &CameraGridPanel::showFrame);
   connect(worker, &SourceWorker::frame, health_panel_, &HealthPanel::showFrame);
   connect(worker, &SourceWorker::frame, overlay_panel_, &OverlayPanel::showFrame);
+  connect(worker, &SourceWorker::watchedFrame, overlay_panel_, &OverlayPanel::showWatchedFrame);
+  worker->watchCamera(overlay_panel_->selectedCamera());
   connect(worker, &SourceWorker::frame, calibration_panel_, &CalibrationPanel::showFrame);
   connect(worker, &SourceWorker::status, camera_grid_, &CameraGridPanel::showStatus);
   connect(worker, &SourceWorker::status, health_panel_, &HealthPanel::showStatus);

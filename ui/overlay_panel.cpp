@@ -56,6 +56,7 @@ void OverlayPanel::setRig(const Rig& rig) {
 
 bool OverlayPanel::selectCamera(int camera) {
   if (camera < 0 || camera >= rig_.cameraCount()) return false;
+  if (camera == selected_) return true;  // also the grid's echo of the row set below
   selected_ = camera;
   if (grid_->currentRow() != camera) grid_->setCurrentRow(camera);
   view_->setCamera(rig_.camera(camera));
@@ -63,6 +64,7 @@ bool OverlayPanel::selectCamera(int camera) {
                         .arg(QString::fromStdString(rig_.camera(camera).name()),
                              QString::fromStdString(rig_.camera(camera).node())));
   showBestPicture();
+  emit cameraSelected(camera);
   return true;
 }
 
@@ -81,11 +83,26 @@ void OverlayPanel::showBestPicture() {
   view_->setImage(best->image);
 }
 
+// A second of the watched camera's frames at 30 Hz: more than the pipeline's latency, so that the
+// frame the latest body was placed for is among them.
+constexpr int kRecentPictures = 32;
+
+void OverlayPanel::keepPicture(int camera, const QImage& preview, qint64 frame_id) {
+  QVector<Picture>& pictures = recent_[camera];
+  if (!pictures.isEmpty() && pictures.back().frame_id == frame_id) return;  // came by both signals
+  pictures.push_back({frame_id, preview});
+  while (pictures.size() > kRecentPictures) pictures.removeFirst();
+}
+
+void OverlayPanel::showWatchedFrame(int camera, const QImage& preview, qint64 frame_id) {
+  if (camera < 0 || camera >= recent_.size()) return;
+  keepPicture(camera, preview, frame_id);
+  if (camera == selected_ && pose_frame_ < 0) showBestPicture();
+}
+
 void OverlayPanel::showFrame(int camera, const QImage& preview, qint64 frame_id) {
   if (camera < 0 || camera >= recent_.size()) return;
-  QVector<Picture>& pictures = recent_[camera];
-  pictures.push_back({frame_id, preview});
-  while (pictures.size() > 16) pictures.removeFirst();
+  keepPicture(camera, preview, frame_id);
   // The grid's thumbnails once a second are plenty.
   QListWidgetItem* item = grid_->item(camera);
   if (item && (item->data(Qt::UserRole).toLongLong() == 0 ||

@@ -15,7 +15,9 @@ namespace lumistage {
 // Skeleton overlay: any camera's image with the actor's silhouette, the projected skeleton and
 // the projected mesh of the body the pipeline placed. The camera is picked from a grid of all.
 // The picture shown is the camera's preview nearest the frame the body was placed for (the
-// studio's previews and the nodes replay a session in step, with the same frame ids).
+// studio's previews and the nodes replay a session in step, with the same frame ids): the chosen
+// camera's every frame comes (watchedFrame), so on a moving actor the body and the picture are of
+// one instant, not up to an eighth of a second apart as with 4 previews a second.
 class OverlayPanel : public QWidget {
   Q_OBJECT
 
@@ -27,8 +29,13 @@ class OverlayPanel : public QWidget {
   int selectedCamera() const { return selected_; }
   CameraOverlayView* view() const { return view_; }
 
+ signals:
+  void cameraSelected(int camera);
+
  public slots:
   void showFrame(int camera, const QImage& preview, qint64 frame_id);
+  // The chosen camera's every frame (SourceWorker::watchedFrame).
+  void showWatchedFrame(int camera, const QImage& preview, qint64 frame_id);
   void showSnapshot(const lumistage::PipelineSnapshot& snapshot);
 
  private:
@@ -36,12 +43,13 @@ class OverlayPanel : public QWidget {
   QListWidget* grid_;
   CameraOverlayView* view_;
   void showBestPicture();
+  void keepPicture(int camera, const QImage& preview, qint64 frame_id);
 
   struct Picture {
     qint64 frame_id;
     QImage image;
   };
-  QVector<QVector<Picture>> recent_;  // per camera, the last few previews
+  QVector<QVector<Picture>> recent_;  // per camera, its latest previews
   int selected_ = -1;
   qint64 pose_frame_ = -1;
 };

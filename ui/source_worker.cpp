@@ -105,11 +105,17 @@ void SourceWorker::run() {
     };
     while (!stop_ && !source->finished()) {
       constexpr std::chrono::milliseconds kWait(100);
-      const bool wanted = !session || due(session->nextCamera());
+      const bool wanted =
+          !session || session->nextCamera() == watched_ || due(session->nextCamera());
       if (session ? session->next(frame, kWait, wanted) : source->next(frame, kWait)) {
-        if (wanted && due(frame.camera)) {
-          last_preview[frame.camera] = Clock::now();
-          emit this->frame(frame.camera, preview(frame.image), frame.frame_id);
+        const bool watched = frame.camera == watched_, previewed = due(frame.camera);
+        if (wanted && (watched || previewed)) {
+          const QImage picture = preview(frame.image);
+          if (watched) emit watchedFrame(frame.camera, picture, frame.frame_id);
+          if (previewed) {
+            last_preview[frame.camera] = Clock::now();
+            emit this->frame(frame.camera, picture, frame.frame_id);
+          }
         }
       }
       if (Clock::now() - last_status > std::chrono::seconds(1)) {

@@ -43,6 +43,9 @@ class SourceWorker : public QObject {
  public:
   explicit SourceWorker(SourceSpec spec) : spec_(std::move(spec)) {}
   void stop() { stop_ = true; }
+  // The camera whose every frame is previewed too (watchedFrame): the skeleton overlay's, which
+  // draws the body placed for one frame over that frame's picture. -1: none. Any thread.
+  void watchCamera(int camera) { watched_ = camera; }
 
   // A quarter-size RGB preview of a camera image (Bayer: one colour per 2x2 cell, decimated).
   static QImage preview(const Image& image);
@@ -53,13 +56,17 @@ class SourceWorker : public QObject {
  signals:
   void opened(std::shared_ptr<const lumistage::Rig> rig, QString description);
   void failed(QString error);
+  // A few previews a second a camera (4), for every panel.
   void frame(int camera, QImage preview, qint64 frame_id);
+  // Every frame of the watched camera.
+  void watchedFrame(int camera, QImage preview, qint64 frame_id);
   void status(QVector<lumistage::CameraStatus> cameras);
   void finished();
 
  private:
   SourceSpec spec_;
   std::atomic<bool> stop_{false};
+  std::atomic<int> watched_{-1};
 };
 
 }  // namespace lumistage

@@ -22,6 +22,7 @@
 #include <QThread>
 #include <QToolButton>
 #include <QtTest>
+#include <atomic>
 
 #include "core/calib/calibration_report.h"
 #include "core/capture/session_reader.h"
@@ -666,6 +667,71 @@ class MainWindowTest : public QObject {
     const QImage mask = lumistage::CameraOverlayView::keySilhouette(image);
     QCOMPARE(qAlpha(mask.pixel(0, 0)), 0);
     QVERIFY(qAlpha(mask.pixel(1, 0)) > 0);
+  }
+
+  // The body placed for a frame is drawn over that frame's own picture: the chosen camera's every
+  // frame reaches the overlay, a few a second (4) reach it for the others, and a frame that comes
+  // by both ways is kept once.
+  void overlayDrawsTheBodyOverThePictureOfItsFrame() {
+    MainWindow window;
+    QCOMPARE(window.openRig(reference_), QString());
+    lumistage::OverlayPanel* overlay = window.overlay();
+    QSignalSpy selected(overlay, &lumistage::OverlayPanel::cameraSelected);
+    QVERIFY(overlay->selectCamera(3));
+    QCOMPARE(selected.size(), 1);
+    QCOMPARE(selected.front().front().toInt(), 3);
+    const auto picture = [](qint64 frame) {
+      QImage image(4, 3, QImage::Format_RGB888);
+      image.fill(QColor(int(frame % 256), 100, 50));
+      return image;
+    };
+    for (qint64 frame = 100; frame < 130; ++frame) {
+      overlay->showWatchedFrame(3, picture(frame), frame);
+      if (frame % 8 == 0) overlay->showFrame(3, picture(frame), frame);  // the same frame again
+    }
+    for (qint64 pose_frame : {117, 104, 129}) {
+      lumistage::PipelineSnapshot snapshot;
+      snapshot.pose_frame = pose_frame;
+      overlay->showSnapshot(snapshot);
+      QCOMPARE(overlay->view()->image().pixelColor(0, 0).red(), int(pose_frame));
+    }
+  }
+
+  void theSourceSendsEveryFrameOfTheWatchedCamera() {
+    QTemporaryDir dir;
+    writeSession(dir.filePath("session"), 3, 3, 30.0, 6);
+    lumistage::SourceSpec spec;
+    QCOMPARE(lumistage::SourceSpec::parse("session:" + dir.filePath("session"), spec), QString());
+    lumistage::SourceWorker worker(spec);
+    worker.watchCamera(1);
+    QVector<qint64> watched, previewed;
+    int other_camera_watched = 0;
+    std::atomic<int> watched_count{0};
+    connect(&worker, &lumistage::SourceWorker::watchedFrame, &worker,
+            [&](int camera, const QImage&, qint64 frame) {
+              (camera == 1 ? watched.push_back(frame) : void(++other_camera_watched));
+              ++watched_count;
+            });
+    connect(&worker, &lumistage::SourceWorker::frame, &worker,
+            [&](int camera, const QImage&, qint64 frame) {
+              if (camera == 1) previewed.push_back(frame);
+            });
+    QThread thread;
+    worker.moveToThread(&thread);
+    connect(&thread, &QThread::started, &worker, &lumistage::SourceWorker::run);
+    thread.start();
+    // Direct connections: the lambdas run on the worker's thread; what they kept is read here once
+    // it has ended.
+    QTRY_VERIFY_WITH_TIMEOUT(watched_count >= 20, 20000);
+    worker.stop();
+    thread.quit();
+    QVERIFY(thread.wait(5000));
+    QCOMPARE(other_camera_watched, 0);
+    for (int i = 1; i < watched.size(); ++i) QVERIFY(watched[i] > watched[i - 1]);
+    // The previews of camera 1 are some of its frames, a few a second.
+    QVERIFY2(previewed.size() < watched.size(),
+             qPrintable(QString("%1 against %2").arg(previewed.size()).arg(watched.size())));
+    for (qint64 frame : previewed) QVERIFY(watched.contains(frame));
   }
 
   void layoutIsRememberedBetweenRuns() {
