@@ -12,7 +12,6 @@
 #include <QMouseEvent>
 #include <QOffscreenSurface>
 #include <QOpenGLContext>
-#include <QOpenGLFunctions>
 #include <QOpenGLWidget>
 #include <QPainter>
 #include <QPainterPath>
@@ -26,6 +25,7 @@
 #include <cmath>
 
 #include "core/base/atomic_file.h"
+#include "core/render/egl_context.h"
 #include "ui/stage_plan_view.h"
 
 namespace lumistage {
@@ -121,12 +121,10 @@ bool openGLOnTheCpu() {
     surface.create();
     QOpenGLContext context;
     if (!context.create() || !context.makeCurrent(&surface)) return true;  // no OpenGL at all
-    const auto* name = context.functions()->glGetString(GL_RENDERER);
-    const QString renderer =
-        QString::fromLatin1(name ? reinterpret_cast<const char*>(name) : "").toLower();
+    // GLVND dispatches to Qt's current context as to the renderer's EGL one.
+    const bool software = currentRendererIsSoftware();
     context.doneCurrent();
-    return renderer.contains("llvmpipe") || renderer.contains("softpipe") ||
-           renderer.contains("software");
+    return software;
   }();
   return on_cpu;
 }
