@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -16,6 +15,7 @@
 #include "app/cli/checks.h"
 #include "app/cli/progress.h"
 #include "core/base/error.h"
+#include "core/base/stop_signal.h"
 #include "core/capture/aravis_source.h"
 #include "core/capture/frame_grouper.h"
 #include "core/capture/session_reader.h"
@@ -28,8 +28,6 @@
 namespace lumistage {
 
 namespace {
-
-std::atomic<bool> g_stop{false};
 
 // The virtual cameras hold every frame they loop in memory: a loop that would take more than half
 // of this machine's memory is refused before anything is loaded or rendered, naming how many
@@ -51,10 +49,6 @@ void checkLoopFits(const Rig& rig, PixelFormat format, int frames) {
       "({:.0f} MiB); at most --frames {} fit",
       frames, frames, rig.cameraCount(), needed / 1048576.0, limit / 1048576.0,
       int(limit / double(std::max<size_t>(1, set_bytes)))));
-}
-
-void onSignal(int) {
-  g_stop = true;
 }
 
 double cpuSeconds() {
@@ -151,11 +145,10 @@ void addCameraCommands(CLI::App& app) {
     }
     fmt::print("serving; stop with Ctrl-C\n");
     std::fflush(stdout);
-    std::signal(SIGINT, onSignal);
-    std::signal(SIGTERM, onSignal);
+    const std::atomic<bool>& stop = stopOnSignals();
     const auto start = std::chrono::steady_clock::now();
-    while (!g_stop && (v->seconds <= 0 || std::chrono::steady_clock::now() - start <
-                                              std::chrono::duration<double>(v->seconds))) {
+    while (!stop && (v->seconds <= 0 || std::chrono::steady_clock::now() - start <
+                                            std::chrono::duration<double>(v->seconds))) {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
   });
@@ -245,8 +238,9 @@ void addCameraCommands(CLI::App& app) {
     CameraFrame frame;
     FrameSet set;
     int64_t bytes = 0, incomplete = 0, first_timestamp = -1;
-    std::signal(SIGINT, onSignal);
-    while (!g_stop && !source->finished() &&
+    // Ctrl-C, SIGTERM or SIGHUP ends the stream in order: the recording is finished and whole.
+    const std::atomic<bool>& stop = stopOnSignals();
+    while (!stop && !source->finished() &&
            std::chrono::steady_clock::now() - start < std::chrono::duration<double>(s->seconds)) {
       if (!source->next(frame, std::chrono::milliseconds(200))) continue;
       bytes += static_cast<int64_t>(frame.image.pixels.size());

@@ -1,7 +1,9 @@
 #include "app/cli/render_command.h"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -13,6 +15,7 @@
 #include "app/cli/progress.h"
 #include "core/base/error.h"
 #include "core/base/output_path.h"
+#include "core/base/stop_signal.h"
 #include "core/body/ply_mesh.h"
 #include "core/capture/session_reader.h"
 #include "core/eval/leave_one_out.h"
@@ -126,7 +129,17 @@ void addRenderCommand(CLI::App& app) {
     std::vector<uint8_t> rgba;
     cv::Mat bgr;
     double ms = -1;
+    // Ctrl-C (SIGTERM, SIGHUP) ends the render between frames: the video begun is removed, and an
+    // older one of that name is left as it was.
+    const std::atomic<bool>& stop = stopOnSignals();
     for (int i = 0; i < frames; ++i) {
+      if (stop) {
+        video.release();
+        if (isatty(STDERR_FILENO)) fmt::print(stderr, "\n");  // below the progress bar
+        throw Error(fmt::format(
+            "stopped by {} after {} of {} frames: {}", stopSignalName(stopSignal()), i, frames,
+            std::filesystem::exists(out) ? "the old file is left as it was" : "nothing written"));
+      }
       const auto start = std::chrono::steady_clock::now();
       session.readFrame(i, images);
       inputs.set(renderer, images);  // images and foreground masks, as the nodes give theirs

@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -17,6 +18,7 @@
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/base/output_path.h"
+#include "core/base/stop_signal.h"
 #include "core/pipeline/local_run.h"
 #include "core/render/view_recorder.h"
 
@@ -268,9 +270,11 @@ void addRunCommand(CLI::App& app) {
                  a->plain ? "plain" : "CURVE", pipeline.nodeNames().size());
     }
     // Run in slices, watching the clock and the node processes: a node that exits (bad session,
-    // wrong key file...) is reported; when none is left, stop.
+    // wrong key file...) is reported; when none is left, stop. Ctrl-C (or SIGTERM, SIGHUP) stops
+    // the run as its end would: the take closed, the view's recording finished, the figures told.
+    const std::atomic<bool>& stop = stopOnSignals();
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);
-    while (std::chrono::steady_clock::now() < end && pipeline.anyNodeRunning() &&
+    while (!stop && std::chrono::steady_clock::now() < end && pipeline.anyNodeRunning() &&
            (a->frames <= 0 || studio.framesDone() < a->frames)) {
       pipeline.runFor(std::chrono::milliseconds(100));
       nodes_cpu = std::max(nodes_cpu, pipeline.nodeCpuSeconds());
@@ -286,6 +290,11 @@ void addRunCommand(CLI::App& app) {
       for (const std::string& exit : pipeline.takeExits()) {
         fmt::print(stderr, "lumistage run: {}; see its message above\n", exit);
       }
+    }
+    if (stop) {
+      fmt::print("lumistage run: stopped by {} after {} frames; closing (again to quit at once)\n",
+                 stopSignalName(stopSignal()), studio.framesDone());
+      std::fflush(stdout);
     }
     // The figures are of the frames asked for (--frames, --seconds), before the pipeline goes on
     // while the nodes close a take.

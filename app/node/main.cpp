@@ -5,11 +5,11 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
-#include <csignal>
 #include <exception>
 #include <thread>
 
 #include "app/node/node_monitor.h"
+#include "core/base/stop_signal.h"
 #include "core/body/human_model.h"
 #include "core/capture/aravis_source.h"
 #include "core/capture/session_source.h"
@@ -17,15 +17,6 @@
 #include "core/geometry/rig_file.h"
 #include "core/net/curve_keys.h"
 #include "core/pipeline/camera_node.h"
-
-namespace {
-
-std::atomic<bool> g_stop{false};
-void onSignal(int) {
-  g_stop = true;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -174,26 +165,26 @@ int main(int argc, char** argv) {
     }
     lumistage::CameraNode camera_node(rig, node.name, std::move(source), endpoint,
                                       lumistage::loadGenericHuman(), node_options);
-    std::signal(SIGINT, onSignal);
-    std::signal(SIGTERM, onSignal);
+    // SIGINT, SIGTERM or SIGHUP: the node closes its take and stops (a second one ends it at once).
+    std::atomic<bool>& stop = lumistage::stopOnSignals();
     fmt::print("node {}: {} cameras, serving {}\n", node.name, node.cameras.size(), studio);
     std::fflush(stdout);
     if (monitor) {
       // The node works on its own threads; the window lives on this one (GLFW wants the main
       // thread). Closing the window stops the node.
-      std::thread worker([&camera_node] { camera_node.run(g_stop); });
+      std::thread worker([&camera_node, &stop] { camera_node.run(stop); });
       bool monitor_failed = false;
       try {
-        lumistage::runNodeMonitor(camera_node, rig, node.name, g_stop, monitor_screenshot);
+        lumistage::runNodeMonitor(camera_node, rig, node.name, stop, monitor_screenshot);
       } catch (const std::exception& e) {
         fmt::print(stderr, "lumistage-node: {}\n", e.what());
         monitor_failed = true;
       }
-      g_stop = true;
+      stop = true;
       worker.join();
       if (monitor_failed) return 2;  // as asked it could not run (no display): not a clean stop
     } else {
-      camera_node.run(g_stop);
+      camera_node.run(stop);
     }
     fmt::print("node {}: sent {} frame sets, {:.1f} MB\n", node.name, camera_node.setsSent(),
                camera_node.bytesSent() / 1e6);

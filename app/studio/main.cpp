@@ -4,6 +4,7 @@
 #include <QDir>
 #include <QElapsedTimer>
 #include <QMessageBox>
+#include <QSocketNotifier>
 #include <QTimer>
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include <functional>
 
 #include "core/base/resource_path.h"
+#include "core/base/stop_signal.h"
 #include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
 #include "ui/clone_panel.h"
@@ -137,6 +139,20 @@ int main(int argc, char** argv) {
 
   lumistage::MainWindow window;
   window.show();
+  // Ctrl-C in its terminal, SIGTERM (a logout, a service manager) or SIGHUP closes the studio as
+  // its close button does: a recording of the view finished, the nodes it started stopped after
+  // closing their take, its temporary keys removed. A second one ends it at once.
+  lumistage::stopOnSignals();
+  if (const int fd = lumistage::stopSignalDescriptor(); fd >= 0) {
+    auto* notifier = new QSocketNotifier(fd, QSocketNotifier::Read, &app);
+    QObject::connect(notifier, &QSocketNotifier::activated, &app, [notifier, &window] {
+      notifier->setEnabled(false);
+      std::fprintf(stderr, "lumistage-studio: stopped by %s; closing\n",
+                   lumistage::stopSignalName(lumistage::stopSignal()));
+      window.close();
+      QApplication::quit();
+    });
+  }
   if (!rig_path.isEmpty()) {
     if (const QString error = window.openRig(rig_path); !error.isEmpty()) {
       std::fprintf(stderr, "lumistage-studio: %s\n", qPrintable(error));

@@ -100,6 +100,9 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
       // forked must outlive the run: the run is owned where it was made.
       prctl(PR_SET_PDEATHSIG, SIGTERM);
       if (::getppid() != parent) _exit(0);  // the parent already died before prctl
+      // A process group of its own: a terminal's Ctrl-C reaches this process alone, which stops
+      // the nodes in order (their takes closed first), not the nodes behind its back.
+      ::setpgid(0, 0);
       execv(node_binary.c_str(), argv.data());
       _exit(127);
     }

@@ -1,6 +1,7 @@
 // The command-line tools run as a user runs them: real processes, real files.
 #include <arpa/inet.h>
 #include <assimp/scene.h>
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
@@ -11,7 +12,9 @@
 #include <algorithm>
 #include <array>
 #include <assimp/Importer.hpp>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -23,6 +26,9 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <utility>
+#include <vector>
 
 #include "core/base/atomic_file.h"
 #include "core/body/bvh.h"
@@ -779,6 +785,197 @@ TEST(Cli, ExportWritesTheCaptureAsBvhGltfAndPlyThatReadBack) {
   EXPECT_NE(r.output.find("nothing"), std::string::npos) << r.output;
   fs::remove_all(folder);
 }
+
+}  // namespace
+}  // namespace lumistage
+
+// Ctrl-C, SIGTERM and SIGHUP stop the programs in order: what they write is finished or removed,
+// the processes they started are stopped, their temporary files go.
+namespace lumistage {
+namespace {
+
+// A program started as from a terminal: a process group of its own (the terminal's foreground
+// job, which its Ctrl-C reaches whole), the signals' default actions, its output to a file.
+// Killed with its group however the test ends.
+class Started {
+ public:
+  Started(std::vector<std::string> args, const fs::path& log,
+          const std::vector<std::pair<std::string, std::string>>& environment = {})
+      : log_(log) {
+    pid_ = fork();
+    if (pid_ == 0) {
+      ::setpgid(0, 0);
+      for (const int signal : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal, SIG_DFL);
+      for (const auto& [name, value] : environment) ::setenv(name.c_str(), value.c_str(), 1);
+      const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(out, STDOUT_FILENO);
+      dup2(out, STDERR_FILENO);
+      std::vector<char*> argv;
+      for (std::string& arg : args) argv.push_back(arg.data());
+      argv.push_back(nullptr);
+      execv(argv[0], argv.data());
+      _exit(127);
+    }
+    ::setpgid(pid_, pid_);  // (also here: the test may signal the group before the child runs)
+  }
+  ~Started() {
+    if (pid_ <= 0) return;
+    ::kill(-pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+  }
+  pid_t pid() const { return pid_; }
+  std::string output() const {
+    std::ifstream in(log_);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  // Whether the output says `text` within `seconds`.
+  bool waitForOutput(const std::string& text, double seconds) const {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) {
+      if (output().find(text) != std::string::npos) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+  }
+  // The exit code once it ends within `seconds`; -(the signal) if a signal ended it; 1000 if it
+  // did not end.
+  int waitForExit(double seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) {
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return 1000;
+  }
+
+ private:
+  fs::path log_;
+  pid_t pid_ = -1;
+};
+
+// The processes whose command line holds `text`.
+int processesWith(const std::string& text) {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream in(entry.path() / "cmdline");
+    std::string line((std::istreambuf_iterator<char>(in)), {});
+    std::replace(line.begin(), line.end(), '\0', ' ');
+    count += line.find(text) != std::string::npos;
+  }
+  return count;
+}
+
+// The temporary key stores a run made for its nodes (LocalPipelineRun) that are still there.
+int temporaryKeyStores(pid_t pid) {
+  int count = 0;
+  const std::string prefix = "lumistage_run_keys_" + std::to_string(pid) + "_";
+  for (const auto& entry : fs::directory_iterator(fs::temp_directory_path()))
+    count += entry.path().filename().string().rfind(prefix, 0) == 0;
+  return count;
+}
+
+// Ctrl-C in the terminal of a run that records a take and the view: the terminal signals the
+// run's process group; the run stops its nodes itself, after they closed the take, finishes the
+// view's video, reports, and removes the key store it made.
+TEST(Cli, RunStoppedByCtrlCClosesItsTakeAndVideoAndStopsItsNodes) {
+  const fs::path folder = tempPath("ctrl_c");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
+                               "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
+  const fs::path video = folder / "view.avi", take = folder / "takes" / "take-1";
+  Started pipeline(
+      {kCli, "run", "--session", (folder / "session").string(), "--frames", "100000", "--seconds",
+       "120", "--record-view", video.string(), "--record-take", take.string()},
+      folder / "pipeline.log");
+  for (const char* node : {"node1", "node2"}) {
+    ASSERT_TRUE(pipeline.waitForOutput(std::string("node ") + node + ": recording take take-1", 60))
+        << pipeline.output();
+  }
+  ASSERT_EQ(temporaryKeyStores(pipeline.pid()), 1) << "the run's own key store, while it runs";
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // a few frame sets in the take
+  ASSERT_EQ(::kill(-pipeline.pid(), SIGINT), 0);
+  ASSERT_EQ(pipeline.waitForExit(60), 0) << pipeline.output();
+  const std::string out = pipeline.output();
+  EXPECT_NE(out.find("lumistage run: stopped by SIGINT (Ctrl-C) after "), std::string::npos) << out;
+  EXPECT_NE(out.find("take take-1: frames "), std::string::npos) << out;
+  EXPECT_EQ(out.find("not closed"), std::string::npos) << out;
+  for (const char* node : {"node1", "node2"}) {
+    EXPECT_NE(out.find(std::string("node ") + node + ": sent "), std::string::npos) << out;
+    const std::string index = readFile(take / node / "index.csv");
+    EXPECT_GE(std::count(index.begin(), index.end(), '\n'), 3) << node << ": " << index;
+  }
+  EXPECT_NE(out.find("recorded the view to " + video.string()), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(folder / "view.partial.avi"));
+  cv::VideoCapture capture(video.string(), cv::CAP_OPENCV_MJPEG);
+  cv::Mat first;
+  EXPECT_TRUE(capture.read(first)) << "the view's video does not read back";
+  EXPECT_EQ(temporaryKeyStores(pipeline.pid()), 0);
+  EXPECT_EQ(processesWith((folder / "session").string()), 0) << "a node is left running";
+  // The parts join into a session: the take is whole.
+  const Result merged =
+      run(kCli + " session merge " + take.string() + " --out " + (folder / "merged").string());
+  EXPECT_EQ(merged.exit_code, 0) << merged.output;
+  fs::remove_all(folder);
+}
+
+// Ctrl-C during a render: no torn video is left, and the command says it did not finish.
+TEST(Cli, RenderStoppedByCtrlCLeavesNoVideo) {
+  const fs::path folder = tempPath("render_ctrl_c");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240",
+                               "actor:\n  vertices: 2000\n", "--frames 120"));
+  const fs::path video = folder / "orbit.mp4";
+  // 1920x1080: the render's 120 frames take seconds, the signal a moment.
+  Started render({kCli, "render", "--session", (folder / "session").string(), "--width", "1920",
+                  "--height", "1080", "--out", video.string()},
+                 folder / "render.log");
+  // (The progress goes to stderr, unbuffered: a tenth of the frames rendered.)
+  ASSERT_TRUE(render.waitForOutput("render: 12/120", 60)) << render.output();
+  ASSERT_EQ(::kill(-render.pid(), SIGINT), 0);
+  ASSERT_EQ(render.waitForExit(60), 1) << render.output();
+  EXPECT_NE(render.output().find("stopped by SIGINT (Ctrl-C) after "), std::string::npos)
+      << render.output();
+  EXPECT_NE(render.output().find(" of 120 frames: nothing written"), std::string::npos)
+      << render.output();
+  EXPECT_FALSE(fs::exists(video));
+  for (const auto& entry : fs::directory_iterator(folder))
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  fs::remove_all(folder);
+}
+
+#ifdef LUMISTAGE_STUDIO
+// SIGTERM to the studio (a logout, a service manager) closes it as its close button does: the
+// pipeline's nodes stopped in order, its key store removed, the window's layout remembered.
+TEST(Cli, StudioStoppedBySigtermClosesAsItsWindowWould) {
+  const fs::path folder = tempPath("studio_sigterm");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
+                               "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
+  Started studio(
+      {LUMISTAGE_STUDIO, "--source", "none", "--pipeline", (folder / "session").string()},
+      folder / "studio.log",
+      {{"QT_QPA_PLATFORM", "offscreen"}, {"XDG_CONFIG_HOME", (folder / "config").string()}});
+  for (const char* node : {"node1", "node2"}) {
+    ASSERT_TRUE(studio.waitForOutput(std::string("node ") + node + ": 2 cameras, serving", 60))
+        << studio.output();
+  }
+  ASSERT_EQ(temporaryKeyStores(studio.pid()), 1) << studio.output();
+  ASSERT_EQ(::kill(studio.pid(), SIGTERM), 0);
+  ASSERT_EQ(studio.waitForExit(60), 0) << studio.output();
+  const std::string out = studio.output();
+  EXPECT_NE(out.find("lumistage-studio: stopped by SIGTERM; closing"), std::string::npos) << out;
+  for (const char* node : {"node1", "node2"})
+    EXPECT_NE(out.find(std::string("node ") + node + ": sent "), std::string::npos) << out;
+  EXPECT_EQ(temporaryKeyStores(studio.pid()), 0);
+  EXPECT_EQ(processesWith((folder / "session").string()), 0) << "a node is left running";
+  EXPECT_NE(readFile(folder / "config" / "Lumistage" / "Studio.conf").find("geometry"),
+            std::string::npos);
+  fs::remove_all(folder);
+}
+#endif
 
 }  // namespace
 }  // namespace lumistage
