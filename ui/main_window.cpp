@@ -342,7 +342,35 @@ void MainWindow::chooseRig() {
   }
 }
 
+QString MainWindow::recordingsUnderWay() const {
+  QStringList what;
+  const PipelineSnapshot& s = pipeline_panel_->lastSnapshot();
+  if (pipeline_panel_->running() && s.take_recording)
+    what << tr("the take %1").arg(QString::fromStdString(s.take.take));
+  if (viewport_panel_->recording())
+    what << (s.recording.isEmpty() ? tr("the view") : tr("the view to %1").arg(s.recording));
+  return what.join(tr(" and "));
+}
+
+void MainWindow::closeWithoutAsking() {
+  close_without_asking_ = true;
+  close();
+}
+
 void MainWindow::closeEvent(QCloseEvent* event) {
+  // A stray click on the window's close button must not end a take: ask first.
+  if (const QString what = recordingsUnderWay(); !what.isEmpty() && !close_without_asking_) {
+    const QMessageBox::StandardButton answer = QMessageBox::question(
+        this, tr("Recording"),
+        tr("Recording %1.\n\nClosing the studio stops recording; what was recorded so far "
+           "is kept. Close the studio?")
+            .arg(what),
+        QMessageBox::Close | QMessageBox::Cancel, QMessageBox::Cancel);
+    if (answer != QMessageBox::Close) {
+      event->ignore();
+      return;
+    }
+  }
   stopSource();
   pipeline_panel_->stop();
   demo_session_->cancel();

@@ -69,6 +69,12 @@ class MainWindow : public QMainWindow {
   void resetLayout();
   // The docks' default sizes for a window of `window`.
   void sizeDocks(const QSize& window);
+  // What is being recorded, in words ("the take take-003 and the view to /data/view.avi"); empty
+  // when nothing is. Closing the window while something is asks first.
+  QString recordingsUnderWay() const;
+  // Closes without that question: a signal (SIGTERM, Ctrl-C in the terminal) asked the studio to
+  // stop, and nobody may be there to answer.
+  void closeWithoutAsking();
 
  signals:
   void sourceFailed(QString error);
@@ -106,6 +112,7 @@ class MainWindow : public QMainWindow {
   QByteArray default_state_;
   QLabel* status_;
   QString report_error_;  // why the rig's calibration report was not used (empty: it was, or none)
+  bool close_without_asking_ = false;
 };
 
 }  // namespace lumistage

@@ -149,7 +149,7 @@ int main(int argc, char** argv) {
       notifier->setEnabled(false);
       std::fprintf(stderr, "lumistage-studio: stopped by %s; closing\n",
                    lumistage::stopSignalName(lumistage::stopSignal()));
-      window.close();
+      window.closeWithoutAsking();
       QApplication::quit();
     });
   }

@@ -13,6 +13,7 @@
 #include <QLineEdit>
 #include <QListWidget>
 #include <QMenu>
+#include <QMessageBox>
 #include <QMouseEvent>
 #include <QPushButton>
 #include <QSettings>
@@ -20,6 +21,7 @@
 #include <QTableWidget>
 #include <QTemporaryDir>
 #include <QThread>
+#include <QTimer>
 #include <QToolButton>
 #include <QtTest>
 #include <atomic>
@@ -732,6 +734,76 @@ class MainWindowTest : public QObject {
     QVERIFY2(previewed.size() < watched.size(),
              qPrintable(QString("%1 against %2").arg(previewed.size()).arg(watched.size())));
     for (qint64 frame : previewed) QVERIFY(watched.contains(frame));
+  }
+
+  // Answers the next message box that shows (within 10 s) with `button`; its text goes to *asked.
+  static void answerNextMessageBox(QMessageBox::StandardButton button, QString* asked) {
+    auto* timer = new QTimer;
+    auto* clock = new QElapsedTimer;
+    clock->start();
+    QObject::connect(timer, &QTimer::timeout, [timer, clock, button, asked] {
+      auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget());
+      if (!box && clock->elapsed() < 10000) return;
+      if (box) {
+        *asked = box->text();
+        box->button(button)->click();
+      }
+      timer->stop();
+      timer->deleteLater();
+      delete clock;
+    });
+    timer->start(20);
+  }
+
+  // A take and the view being recorded: closing the window asks first. Cancel keeps both
+  // recording; Close ends them, their files whole.
+  void closingWhileRecordingAsksFirst() {
+    QTemporaryDir dir;
+    writeStudioSession(dir.filePath("session"), 6);
+    MainWindow window;
+    window.show();
+    lumistage::LocalRunOptions options;
+    options.session = dir.filePath("session").toStdString();
+    options.node_binary = LUMISTAGE_NODE;
+    options.takes = dir.filePath("takes").toStdString();
+    window.pipeline()->start(options);
+    QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames >= 5, 20000);
+    QVERIFY(window.recordingsUnderWay().isEmpty());
+    QVERIFY(window.pipeline()->startTake("take-001"));
+    window.viewport()->record(true, dir.filePath("view.avi"));
+    auto written = [&] {  // frame sets in the take, by the node that wrote the fewest
+      int64_t least = std::numeric_limits<int64_t>::max();
+      for (const auto& node : window.pipeline()->lastReport().nodes)
+        least = std::min(least, node.take.take == "take-001" ? node.take.written : 0);
+      return least;
+    };
+    QTRY_VERIFY_WITH_TIMEOUT(
+        written() >= 2 && window.pipeline()->lastSnapshot().recorded_frames >= 2, 20000);
+    QString asked;
+    answerNextMessageBox(QMessageBox::Cancel, &asked);
+    QVERIFY(!window.close());
+    QVERIFY2(asked.contains("the take take-001") && asked.contains(dir.filePath("view.avi")),
+             qPrintable(asked));
+    QVERIFY(window.isVisible());
+    QVERIFY(window.pipeline()->running());
+    QVERIFY(window.viewport()->recording());
+    const int64_t recorded = window.pipeline()->lastSnapshot().recorded_frames;
+    const int64_t taken = written();
+    QTRY_VERIFY_WITH_TIMEOUT(
+        window.pipeline()->lastSnapshot().recorded_frames > recorded && written() > taken, 10000);
+    QVERIFY(window.pipeline()->lastSnapshot().take_recording);
+
+    asked.clear();
+    answerNextMessageBox(QMessageBox::Close, &asked);
+    QVERIFY(window.close());
+    QVERIFY(!asked.isEmpty());
+    QVERIFY(!window.isVisible());
+    QVERIFY(!window.pipeline()->running());
+    QVERIFY(QFileInfo(dir.filePath("view.avi")).size() > 1000);
+    for (const char* node : {"node1", "node2"}) {
+      const lumistage::SessionReader part((dir.filePath("takes/take-001/") + node).toStdString());
+      QVERIFY2(part.frameCount() > taken, node);
+    }
   }
 
   void layoutIsRememberedBetweenRuns() {
