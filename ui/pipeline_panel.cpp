@@ -17,6 +17,7 @@
 #include <exception>
 #include <map>
 
+#include "core/base/output_path.h"
 #include "core/body/human_model.h"
 #include "core/pipeline/posed_body.h"
 #include "ui/live_table.h"
@@ -24,6 +25,18 @@
 namespace lumistage {
 
 namespace {
+
+// Recording time in words: "2 h 05 min", "12 min", "40 s".
+QString durationWords(double seconds) {
+  const int64_t s = int64_t(seconds);
+  if (s >= 3600)
+    return QObject::tr("%1 h %2 min").arg(s / 3600).arg((s % 3600) / 60, 2, 10, QChar('0'));
+  if (s >= 60) return QObject::tr("%1 min").arg(s / 60);
+  return QObject::tr("%1 s").arg(s);
+}
+
+// Under this much recording time left on a node's disk, its Take cell turns red.
+constexpr double kLowDiskSeconds = 10 * 60;
 
 // The source box's entries, in order.
 enum SourceEntry { kDemoSession = 0, kRecordedSession, kAravisCameras, kStageNodes };
@@ -209,6 +222,10 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   table_->setColumnCount(8);
   table_->setHorizontalHeaderLabels({tr("Node"), tr("State"), tr("Camera"), tr("fps"), tr("Frames"),
                                      tr("Dropped"), tr("Take"), tr("Last error")});
+  table_->horizontalHeaderItem(6)->setToolTip(
+      tr("The node's part of the take, then the free space of the disk it records takes to and "
+         "how long that lasts at its cameras' rate (red under %1 minutes)")
+          .arg(int(kLowDiskSeconds / 60)));
   table_->verticalHeader()->setVisible(false);
   table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
   table_->horizontalHeader()->setStretchLastSection(true);
@@ -464,14 +481,26 @@ QString nextTakeName(const QString& name) {
   return name.left(name.size() - digits) + QString::number(number).rightJustified(digits, '0');
 }
 
-// A node's part of the take, for its row: sets written and dropped, or what went wrong.
-QString takeCell(const TakeStatusData& t) {
-  if (t.take.empty()) return {};
-  if (!t.error.empty()) return QString::fromStdString(t.error);
-  QString text = QObject::tr("%1 sets, %2 MB").arg(t.written).arg(t.bytes / 1e6, 0, 'f', 1);
-  if (t.dropped > 0) text += QObject::tr(", %1 dropped").arg(t.dropped);
-  if (t.finished) text += QObject::tr(", closed");
-  return text;
+// A node's part of the take, for its row: sets written and dropped, or what went wrong; then the
+// disk its takes go to: free space and how long it lasts at the cameras' rate.
+QString takeCell(const NodeReport& n) {
+  const TakeStatusData& t = n.take;
+  QStringList parts;
+  if (!t.error.empty()) {
+    parts << QString::fromStdString(t.error);
+  } else if (!t.take.empty()) {
+    QString text = QObject::tr("%1 sets, %2 MB").arg(t.written).arg(t.bytes / 1e6, 0, 'f', 1);
+    if (t.dropped > 0) text += QObject::tr(", %1 dropped").arg(t.dropped);
+    if (t.finished) text += QObject::tr(", closed");
+    parts << text;
+  }
+  if (t.free_bytes >= 0) {
+    QString disk = QObject::tr("%1 free").arg(QString::fromStdString(bytesInWords(t.free_bytes)));
+    if (n.take_seconds_left >= 0)
+      disk += QObject::tr(" (%1 of takes)").arg(durationWords(n.take_seconds_left));
+    parts << disk;
+  }
+  return parts.join(QStringLiteral(" · "));
 }
 
 // A stage of the report (as `lumistage run` and its JSON name it) in words, and what its time
@@ -514,12 +543,26 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   const QString takes = s.takes_folder.isEmpty()
                             ? tr("its own takes folder (lumistage-node --takes)")
                             : s.takes_folder.toHtmlEscaped();
+  // The disk that fills first, of those that say.
+  const NodeReport* fullest = nullptr;
+  for (const NodeReport& n : s.report.nodes) {
+    if (n.take_seconds_left >= 0 && (!fullest || n.take_seconds_left < fullest->take_seconds_left))
+      fullest = &n;
+  }
+  QString disk;
+  if (fullest) {
+    disk = tr("The fullest node's disk (%1) holds %2 of takes.")
+               .arg(QString::fromStdString(fullest->name).toHtmlEscaped(),
+                    durationWords(fullest->take_seconds_left));
+    if (fullest->take_seconds_left < kLowDiskSeconds)
+      disk = "<b style='color:#e33'>" + disk + "</b>";
+  }
   if (!take_error_.isEmpty()) {
     // Kept until the next try: the refusal, not the last take's figures.
   } else if (s.take.take.empty()) {
     take_status_->setText(tr("Takes are recorded by every node into %1/&lt;take&gt;/&lt;node&gt;/; "
-                             "lumistage session merge joins them.")
-                              .arg(takes));
+                             "lumistage session merge joins them. %2")
+                              .arg(takes, disk));
   } else {
     const QString take = QString::fromStdString(s.take.take);
     const QString folder = takes + "/" + take.toHtmlEscaped();
@@ -548,6 +591,7 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
     if (failed > 0)
       text += tr(" &middot; <b style='color:#e33'>%1 nodes failed: see the Take column</b>")
                   .arg(failed);
+    if (!disk.isEmpty()) text += " &middot; " + disk;
     take_status_->setText(text);
     // The take just stopped: offer the next name.
     if (was_recording && !s.take_recording && take_name_->text() == take)
@@ -601,9 +645,10 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
       setLiveCell(*table_, row, 3, c ? QString::number(c->frame_rate_hz, 'f', 1) : QString());
       setLiveCell(*table_, row, 4, c ? QString::number(c->frames) : QString());
       setLiveCell(*table_, row, 5, c ? QString::number(c->dropped) : QString());
-      setLiveCell(
-          *table_, row, 6, k == 0 ? takeCell(n.take) : QString(),
-          k == 0 && !n.take.error.empty() ? QColor(0xe3, 0x33, 0x33) : palette().text().color());
+      const bool alarm = !n.take.error.empty() ||
+                         (n.take_seconds_left >= 0 && n.take_seconds_left < kLowDiskSeconds);
+      setLiveCell(*table_, row, 6, k == 0 ? takeCell(n) : QString(),
+                  k == 0 && alarm ? QColor(0xe3, 0x33, 0x33) : palette().text().color());
       setLiveCell(*table_, row, 7, c ? QString::fromStdString(c->last_error) : QString());
     }
   }

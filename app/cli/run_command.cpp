@@ -107,9 +107,15 @@ void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
   fmt::print("take {}: frames {} to {}\n", take.take, take.first_frame, take.last_frame);
   for (const NodeReport& n : studio.report().nodes) {
     const TakeStatusData& t = n.take;
-    fmt::print("  node {:<8} {} frame sets, {:.1f} MB, {} dropped{}{}\n", n.name, t.written,
+    std::string disk;
+    if (t.free_bytes >= 0) {
+      disk = fmt::format("; its disk: {} free", bytesInWords(t.free_bytes));
+      if (n.take_seconds_left >= 0)
+        disk += fmt::format(", {:.0f} min of takes", n.take_seconds_left / 60);
+    }
+    fmt::print("  node {:<8} {} frame sets, {:.1f} MB, {} dropped{}{}{}\n", n.name, t.written,
                t.bytes / 1e6, t.dropped, t.finished ? "" : ", not closed",
-               t.error.empty() ? "" : ", " + t.error);
+               t.error.empty() ? "" : ", " + t.error, disk);
   }
   if (pipeline.nodesElsewhere()) {
     fmt::print(

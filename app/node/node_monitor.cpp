@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/base/error.h"
+#include "core/base/output_path.h"
 #include "core/imaging/keyer.h"
 
 namespace lumistage {
@@ -138,6 +139,9 @@ void runNodeMonitor(CameraNode& node, const Rig& rig, const std::string& node_na
                          t.take.c_str(), t.finished ? "closed" : "recording",
                          static_cast<long long>(t.written), static_cast<long long>(t.dropped),
                          t.bytes / 1e6, t.error.c_str());
+    }
+    if (state.take.free_bytes >= 0) {
+      ImGui::Text("takes' disk: %s free", bytesInWords(state.take.free_bytes).c_str());
     }
     for (int k = 0; k < cameras; ++k) {
       const Camera& camera = rig.camera(node.cameras()[k]);

@@ -1,5 +1,9 @@
 #include "core/base/output_path.h"
 
+#include <fmt/format.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 
@@ -45,6 +49,31 @@ std::string lowercaseExtension(const std::filesystem::path& file) {
   std::string extension = file.extension().string();
   for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
   return extension;
+}
+
+DiskSpace diskSpaceAt(const fs::path& path) {
+  std::error_code error;
+  fs::path at = fs::absolute(path, error);
+  if (error) return {};
+  for (;;) {
+    struct statvfs disk {};
+    if (::statvfs(at.c_str(), &disk) == 0) {
+      char host[256] = {};
+      ::gethostname(host, sizeof(host) - 1);
+      return {int64_t(disk.f_bavail) * int64_t(disk.f_frsize),
+              fmt::format("{}:{:x}", host, uint64_t(disk.f_fsid))};
+    }
+    if (!at.has_relative_path()) return {};  // not even the root
+    at = at.parent_path();
+  }
+}
+
+std::string bytesInWords(int64_t bytes) {
+  const double b = double(bytes);
+  if (b >= 1e12) return fmt::format("{:.2f} TB", b / 1e12);
+  if (b >= 1e9) return fmt::format("{:.1f} GB", b / 1e9);
+  if (b >= 1e6) return fmt::format("{:.0f} MB", b / 1e6);
+  return fmt::format("{:.0f} kB", b / 1e3);
 }
 
 }  // namespace lumistage

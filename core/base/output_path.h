@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <initializer_list>
 #include <string>
@@ -26,6 +27,19 @@ void refuseOutputOverInputs(std::string_view option, const std::filesystem::path
 // no folder nodir to write it into"): checked before a command's work, not after a minute's run.
 // An empty output is skipped.
 void requireOutputFolder(std::string_view option, const std::filesystem::path& output);
+
+// The disk that holds `path` (its nearest folder that exists: a takes folder not made yet is on its
+// parent's disk): the space free to this user, in bytes, and a name that is the same for every
+// path on that disk of this machine ("<host>:<filesystem id>"). -1 and empty when none can be
+// asked.
+struct DiskSpace {
+  int64_t free_bytes = -1;
+  std::string disk;
+};
+DiskSpace diskSpaceAt(const std::filesystem::path& path);
+
+// Bytes in words for a technician: "812 MB", "41.3 GB", "1.20 TB".
+std::string bytesInWords(int64_t bytes);
 
 // The file's extension in lower case (".MP4" -> ".mp4"), which chooses its format; empty for none.
 std::string lowercaseExtension(const std::filesystem::path& file);

@@ -50,8 +50,10 @@ struct BodyEncoder {
     const TakeStatusData& t = m.take;
     const auto take_name = b.CreateString(t.take);
     const auto take_error = b.CreateString(t.error);
-    const auto take = fb::CreateTakeStatus(b, take_name, t.first_frame, t.last_frame, t.written,
-                                           t.dropped, t.bytes, t.finished, take_error);
+    const auto disk = b.CreateString(t.disk);
+    const auto take =
+        fb::CreateTakeStatus(b, take_name, t.first_frame, t.last_frame, t.written, t.dropped,
+                             t.bytes, t.finished, take_error, t.free_bytes, disk);
     return {fb::Body::Heartbeat, fb::CreateHeartbeat(b, vector, m.bytes_sent, m.cpu, take).Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const FrameIdsData& m) const {
@@ -220,8 +222,17 @@ Check decodeHeartbeat(const fb::Heartbeat& in, const MessageLimits& limits, Hear
       if (std::string e = takeNameError(take); !e.empty()) return "heartbeat: take: " + e;
     }
     if (Check e = checkString(t->error(), "heartbeat: take error", limits); !e.empty()) return e;
-    out.take = {take,         t->first_frame(), t->last_frame(), t->written(),
-                t->dropped(), t->bytes(),       t->finished(),   copyString(t->error())};
+    if (Check e = checkString(t->disk(), "heartbeat: take disk", limits); !e.empty()) return e;
+    out.take = {take,
+                t->first_frame(),
+                t->last_frame(),
+                t->written(),
+                t->dropped(),
+                t->bytes(),
+                t->finished(),
+                copyString(t->error()),
+                std::max<int64_t>(-1, t->free_bytes()),
+                copyString(t->disk())};
   }
   return {};
 }

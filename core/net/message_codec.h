@@ -57,6 +57,12 @@ struct TakeStatusData {
   int64_t written = 0, dropped = 0, bytes = 0;
   bool finished = false;
   std::string error;
+  // Free space on the disk the node writes its takes to (whether or not one is recording);
+  // -1: unknown (a node without a takes folder, or one that does not say).
+  int64_t free_bytes = -1;
+  // The disk's name, the same for nodes that write to one disk (nodes on one PC): their takes
+  // share its free space.
+  std::string disk;
   bool operator==(const TakeStatusData&) const = default;
 };
 

@@ -922,6 +922,7 @@ RunReport StudioCoordinator::report() const {
   r.stage_ms["blend"] = mean(blend_ms_);
   r.hull_agreement = frames_done_ > 0 ? hull_agreement_sum_ / frames_done_ : 0;
   double per_second = 0, raw = 0;
+  std::map<std::string, double> take_bytes_per_s;  // by disk
   int64_t shown_bytes = 0, shown_frames = 0;
   int counted = 0;
   for (const RigNode& node : rig_.nodes()) {
@@ -931,15 +932,26 @@ RunReport StudioCoordinator::report() const {
         state.shown_frames > 0 ? double(state.shown_bytes) / double(state.shown_frames) : -1;
     shown_bytes += state.shown_bytes;
     shown_frames += state.shown_frames;
+    double node_raw = 0, rate_hz = 0;
     for (int c : node.cameras) {
-      raw +=
+      node_raw +=
           double(rig_.camera(c).width()) * rig_.camera(c).height() * options_.raw_bytes_per_pixel;
     }
+    for (const CameraHealth& c : state.report.cameras) rate_hz = std::max(rate_hz, c.frame_rate_hz);
+    // What a take of its cameras writes a second, on the disk it names (nodes on one PC share
+    // one: their rates add up below).
+    take_bytes_per_s[state.report.take.disk] += node_raw * rate_hz;
+    raw += node_raw;
     if (state.counted_to_ns > counting_since_ns_ && counting_since_ns_ > 0) {
       per_second +=
           double(state.counted_bytes) / ((state.counted_to_ns - counting_since_ns_) / 1e9);
       ++counted;
     }
+  }
+  for (NodeReport& n : r.nodes) {
+    const double bytes_per_s = n.take.disk.empty() ? 0 : take_bytes_per_s[n.take.disk];
+    if (n.take.free_bytes >= 0 && bytes_per_s > 0)
+      n.take_seconds_left = double(n.take.free_bytes) / bytes_per_s;
   }
   r.node_bytes_per_frame = shown_frames > 0 ? double(shown_bytes) / double(shown_frames) : 0;
   r.node_bytes_per_s = counted > 0 ? per_second / counted : 0;

@@ -82,6 +82,9 @@ struct NodeReport {
   // before the first.
   double bytes_per_frame = -1;
   TakeStatusData take;  // its recording of the take, from the latest heartbeat
+  // How long its takes' disk (take.free_bytes) lasts recording its cameras at the rate they
+  // deliver, raw, as takes are written; -1: unknown (no free space or no rate reported yet).
+  double take_seconds_left = -1;
 };
 
 // The pipeline's output for a frame: the nodes' partial images normalised and blended.

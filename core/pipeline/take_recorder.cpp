@@ -9,6 +9,7 @@
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/base/output_path.h"
 #include "core/capture/session_reader.h"
 #include "core/capture/session_recorder.h"
 
@@ -187,7 +188,20 @@ void TakeRecorder::offer(int64_t frame_id, std::span<const CameraFrame* const> f
   }
 }
 
+DiskSpace TakeRecorder::diskSpace() const {
+  if (folder_.empty()) return {};
+  std::lock_guard lock(disk_mutex_);
+  const auto now = std::chrono::steady_clock::now();
+  if (now - disk_asked_ >= std::chrono::seconds(1)) {
+    disk_ = diskSpaceAt(folder_);
+    disk_asked_ = now;
+  }
+  return disk_;
+}
+
 TakeStatusData TakeRecorder::status() const {
+  // Asked outside mutex_: a slow disk (a network mount) never holds up the capture's offer().
+  const DiskSpace disk = diskSpace();
   std::lock_guard lock(mutex_);
   TakeStatusData status = status_;
   status.first_frame = wanted_.first_frame;
@@ -202,6 +216,8 @@ TakeStatusData TakeRecorder::status() const {
   // Finished once nothing is left to write, this take's sets or a closed one's still draining.
   status.finished = closed_ && std::all_of(closing_.begin(), closing_.end(),
                                            [](const Closing& c) { return c.done.load(); });
+  status.free_bytes = disk.free_bytes;
+  status.disk = disk.disk;
   return status;
 }
 

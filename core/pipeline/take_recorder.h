@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <list>
@@ -11,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/base/output_path.h"
 #include "core/capture/frame_source.h"
 #include "core/capture/image_files.h"
 #include "core/geometry/rig.h"
@@ -54,7 +56,8 @@ class TakeRecorder {
   void offer(int64_t frame_id, std::span<const CameraFrame* const> frames);
   // Whether a take asks for this frame (any thread).
   bool wants(int64_t frame_id) const;
-  // For heartbeats (any thread).
+  // For heartbeats (any thread). With the free space of the takes' disk, asked at most once a
+  // second (the monitor window asks at its frame rate).
   TakeStatusData status() const;
 
  private:
@@ -74,6 +77,11 @@ class TakeRecorder {
   std::vector<Image> images_;                  // the set being queued, reused
   const SessionRecorder* counted_ = nullptr;   // the recorder of status_.take (open or closing)
   int64_t first_timestamp_ns_ = 0;
+  // The takes' disk and its free space, and when they were asked (under disk_mutex_).
+  DiskSpace diskSpace() const;
+  mutable std::mutex disk_mutex_;
+  mutable DiskSpace disk_;
+  mutable std::chrono::steady_clock::time_point disk_asked_{};
   // The take's ids that never reached offer() (their sets lost before: a camera that delivered
   // nothing, a capture that fell behind and missed the frames, a command heard late), counted
   // with the dropped ones: ids below next_id_ were offered or counted.

@@ -282,6 +282,14 @@ class MainWindowTest : public QObject {
     QVERIFY(take_button && take_name && take_status);
     QVERIFY(take_button->isEnabled());
     QCOMPARE(take_name->text(), QString("take-001"));
+    // Before any take: each node's disk, its free space and how long that lasts at its cameras'
+    // rate (the two nodes share this machine's disk), in the Take column and under the buttons.
+    QTRY_VERIFY_WITH_TIMEOUT(
+        window.pipeline()->table()->item(0, 6)->text().contains(" free (") &&
+            window.pipeline()->table()->item(0, 6)->text().contains(" of takes)"),
+        5000);
+    QVERIFY2(take_status->text().contains("holds") && take_status->text().contains("of takes"),
+             qPrintable(take_status->text()));
     // A name that is not a folder name is refused at once, and says why.
     take_name->setText("take one");
     take_button->click();

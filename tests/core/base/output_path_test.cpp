@@ -2,6 +2,7 @@
 #include "core/base/output_path.h"
 
 #include <gtest/gtest.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -57,6 +58,35 @@ TEST(OutputPath, AnOutputOverOrInsideAnInputIsRefused) {
         << e.what();
   }
   fs::remove_all(dir);
+}
+
+// The disk a takes folder is on, before the folder is made: its parent's, named after this
+// machine, and another filesystem is another disk.
+TEST(DiskSpace, AFolderNotMadeYetIsOnItsParentsDisk) {
+  const fs::path dir = fs::temp_directory_path() / ("lumistage_disk_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const DiskSpace here = diskSpaceAt(dir), later = diskSpaceAt(dir / "takes" / "take-001");
+  struct statvfs disk {};
+  ASSERT_EQ(::statvfs(dir.c_str(), &disk), 0);
+  const double free = double(disk.f_bavail) * double(disk.f_frsize);
+  ASSERT_GT(free, 0);
+  EXPECT_NEAR(double(here.free_bytes), free, 0.01 * free);
+  EXPECT_NEAR(double(later.free_bytes), free, 0.01 * free);
+  EXPECT_EQ(later.disk, here.disk);
+  char host[256] = {};
+  ASSERT_EQ(::gethostname(host, sizeof(host) - 1), 0);
+  EXPECT_EQ(here.disk.rfind(std::string(host) + ":", 0), 0u) << here.disk;
+  const DiskSpace proc = diskSpaceAt("/proc");
+  EXPECT_FALSE(proc.disk.empty());
+  EXPECT_NE(proc.disk, here.disk);
+  fs::remove_all(dir);
+}
+
+TEST(DiskSpace, BytesInWordsForATechnician) {
+  EXPECT_EQ(bytesInWords(812'400'000), "812 MB");
+  EXPECT_EQ(bytesInWords(41'340'000'000), "41.3 GB");
+  EXPECT_EQ(bytesInWords(1'204'000'000'000), "1.20 TB");
+  EXPECT_EQ(bytesInWords(52'000), "52 kB");
 }
 
 }  // namespace

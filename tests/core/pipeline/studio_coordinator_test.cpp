@@ -369,6 +369,43 @@ TEST(StudioCoordinator, ANodeBackFromLostReportsItsTakeAnew) {
   EXPECT_EQ(take().written, 3);
 }
 
+// How long each node's takes' disk lasts at its cameras' rate: nodes on one PC write to one disk,
+// so its free space lasts for their rates together; a node that does not say has no figure.
+TEST(StudioCoordinator, TakesDiskTimeCountsTheNodesThatShareADisk) {
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, {});
+  StudioCoordinator& studio = *made;
+  ScriptedNode node1(studio.endpoint(), "node1"), node2(studio.endpoint(), "node2");
+  const auto secondsLeft = [&](const std::string& name) {
+    for (const NodeReport& n : studio.report().nodes)
+      if (n.name == name) return n.take_seconds_left;
+    return -2.0;
+  };
+  // Each node: one 160x120 camera of one byte a pixel at 25 frames a second, 480 kB/s; disks
+  // with ten minutes of that free.
+  constexpr int64_t kTenMinutes = int64_t(160) * 120 * 25 * 600;
+  const auto heartbeat = [&](ScriptedNode& node, const std::string& camera, const std::string& disk,
+                             int64_t free) {
+    HeartbeatData h;
+    h.cameras.push_back({camera, 100, 0, 25.f, ""});
+    h.take.free_bytes = free;
+    h.take.disk = disk;
+    ASSERT_TRUE(node.send(0, h));
+  };
+  heartbeat(node1, "cam01", "stage-pc:1", kTenMinutes);
+  heartbeat(node2, "cam02", "stage-pc:1", kTenMinutes);
+  studio.runFor(milliseconds(200));
+  EXPECT_NEAR(secondsLeft("node1"), 300, 1);  // one disk, both nodes' takes
+  EXPECT_NEAR(secondsLeft("node2"), 300, 1);
+  heartbeat(node2, "cam02", "node2-pc:1", kTenMinutes / 2);
+  studio.runFor(milliseconds(200));
+  EXPECT_NEAR(secondsLeft("node1"), 600, 1);  // a disk of its own
+  EXPECT_NEAR(secondsLeft("node2"), 300, 1);
+  heartbeat(node2, "cam02", "", -1);  // a node that records no takes
+  studio.runFor(milliseconds(200));
+  EXPECT_EQ(secondsLeft("node2"), -1);
+  EXPECT_NEAR(secondsLeft("node1"), 600, 1);
+}
+
 // The next pose the studio sends `node`, for a frame at or after `frame_id`.
 std::optional<int64_t> nextPoseFrame(ScriptedNode& node, StudioCoordinator& studio,
                                      int64_t frame_id) {

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <thread>
 
+#include "core/base/output_path.h"
 #include "core/capture/session_reader.h"
 #include "core/capture/take_merge.h"
 #include "core/pipeline/take_recorder.h"
@@ -56,6 +57,13 @@ TEST(Take, NodesRecordTheAskedFramesAndTheirPartsMergeBitExact) {
   std::vector<std::unique_ptr<TakeRecorder>> nodes;
   for (const RigNode& node : rig.nodes())
     nodes.push_back(std::make_unique<TakeRecorder>(takes, rig, node.name, 30.0));
+  // Before any take, each says how much its disk holds, and which disk that is: the same one for
+  // the three nodes on this machine.
+  for (auto& node : nodes) {
+    EXPECT_NEAR(double(node->status().free_bytes), double(diskSpaceAt(folder).free_bytes),
+                0.01 * double(diskSpaceAt(folder).free_bytes));
+    EXPECT_EQ(node->status().disk, diskSpaceAt(folder).disk);
+  }
   for (auto& node : nodes) node->command({"take-1", 5});
   for (int64_t f = 0; f < 20; ++f) {
     if (f == 10) nodes[0].reset();  // node1's PC loses power after frame 9
@@ -154,6 +162,8 @@ TEST(Take, ANodeSaysWhyItRecordsNothingAndLosesNothing) {
   EXPECT_EQ(nowhere.status().error, "this node records no takes: start it with --takes FOLDER");
   EXPECT_TRUE(nowhere.status().finished);
   EXPECT_EQ(nowhere.status().written, 0);
+  EXPECT_EQ(nowhere.status().free_bytes, -1);  // no disk to tell of
+  EXPECT_TRUE(nowhere.status().disk.empty());
 
   // The take's folder holds files already (a take of that name, recorded before): untouched.
   const fs::path old = folder / "takes" / "take-1" / "node1";
