@@ -48,7 +48,7 @@ void writeSeeds(const std::string& dir) {
   bodies.push_back(FrameTimestampsData{{{"capture", 1}, {"sent", 2}}});
   bodies.push_back(RecordData{"take-1", 10, 20});
   HeartbeatData recording;
-  recording.take = {"take-1", 10, 20, 5, 1, 4096, false, ""};
+  recording.take = {"take-1", 10, 20, 5, 1, 4096, false, "", 123456789, "node1-pc:1"};
   bodies.push_back(recording);
   for (size_t i = 0; i < bodies.size(); ++i) {
     Message m;

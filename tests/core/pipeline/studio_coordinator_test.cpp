@@ -350,7 +350,7 @@ TEST(StudioCoordinator, ANodeBackFromLostReportsItsTakeAnew) {
     return TakeStatusData{};
   };
   HeartbeatData recording;
-  recording.take = TakeStatusData{"take-1", 10, 0, 12, 0, 1000, false, ""};
+  recording.take = TakeStatusData{"take-1", 10, 0, 12, 0, 1000, false, "", -1, ""};
   ASSERT_TRUE(node.send(0, recording));
   studio.runFor(milliseconds(100));
   EXPECT_EQ(take().written, 12);
