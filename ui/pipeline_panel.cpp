@@ -14,6 +14,7 @@
 #include <QTableWidget>
 #include <QThread>
 #include <QVBoxLayout>
+#include <algorithm>
 #include <exception>
 #include <map>
 
@@ -28,7 +29,7 @@ namespace {
 
 // Recording time in words: "2 h 05 min", "12 min", "40 s".
 QString durationWords(double seconds) {
-  const int64_t s = int64_t(seconds);
+  const int64_t s = int64_t(std::clamp(seconds, 0.0, 1e9));  // (a node's odd rate: no overflow)
   if (s >= 3600)
     return QObject::tr("%1 h %2 min").arg(s / 3600).arg((s % 3600) / 60, 2, 10, QChar('0'));
   if (s >= 60) return QObject::tr("%1 min").arg(s / 60);
