@@ -67,6 +67,9 @@ void PipelineWorker::startRecording(const QString& file) {
       return;
     }
     emit message(tr("Recording the view to %1").arg(file));
+    if (const ViewRecorder* recorder = run.viewRecording();
+        recorder && !recorder->leftover().empty())
+      emit message(QString::fromStdString(recorder->leftoverNotice()));
   });
 }
 

@@ -17,6 +17,7 @@
 #include "app/cli/run_command.h"
 #include "app/cli/session_commands.h"
 #include "app/cli/synth_command.h"
+#include "app/cli/video_commands.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"Lumistage: live free-viewpoint video of people from a calibrated camera stage"};
@@ -35,6 +36,7 @@ int main(int argc, char** argv) {
   lumistage::addExportCommand(app);
   lumistage::addRenderCommand(app);
   lumistage::addSessionCommands(app);
+  lumistage::addVideoCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

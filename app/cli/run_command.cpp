@@ -261,6 +261,8 @@ void addRunCommand(CLI::App& app) {
       pipeline.recordView(a->record_view, [](const std::string& error) {
         fmt::print(stderr, "lumistage run: recording stopped: {}\n", error);
       });
+      if (const std::string notice = pipeline.viewRecording()->leftoverNotice(); !notice.empty())
+        fmt::print("lumistage run: {}\n", notice);
     }
     // CPU use is measured from the first frame done: the nodes' start-up (loading a session into
     // memory, compiling shaders) is not the pipeline's load.

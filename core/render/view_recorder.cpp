@@ -1,7 +1,12 @@
 #include "core/render/view_recorder.h"
 
+#include <algorithm>
+#include <cstring>
+#include <fstream>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <string_view>
+#include <vector>
 
 #include "core/base/error.h"
 #include "core/base/output_path.h"
@@ -28,8 +33,146 @@ std::string finishPartialVideo(const std::filesystem::path& partial,
   return {};
 }
 
+namespace {
+
+uint32_t word(const char* p) {
+  uint32_t v = 0;
+  std::memcpy(&v, p, 4);
+  return v;  // little-endian, as RIFF is (and as this machine is)
+}
+uint32_t word(const std::string& d, size_t at) {
+  return word(d.data() + at);
+}
+void putWord(std::string& d, size_t at, uint32_t v) {
+  std::memcpy(d.data() + at, &v, 4);
+}
+bool isCode(const std::string& d, size_t at, const char* code) {
+  return d.compare(at, 4, code) == 0;
+}
+
+}  // namespace
+
+RecoveredVideo recoverPartialVideo(const std::filesystem::path& partial,
+                                   const std::filesystem::path& out) {
+  const std::string name = partial.string();
+  auto fail = [&](const std::string& why) {
+    return Error(name + ": " + why + "; not a recording of the view that can be recovered");
+  };
+  std::ifstream in(partial, std::ios::binary);
+  if (!in) throw Error(name + ": cannot read it");
+  std::error_code error;
+  const uint64_t file_size = std::filesystem::file_size(partial, error);
+  if (error) throw Error(name + ": cannot read it (" + error.message() + ")");
+  // The headers: RIFF AVI, then LIST hdrl, JUNK to the first 4 KB, LIST movi (OpenCV's writer);
+  // the sizes of RIFF and movi stay 0 until the recording closes.
+  std::string head(size_t(std::min<uint64_t>(file_size, 1 << 16)), '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  if (head.size() < 12 || !isCode(head, 0, "RIFF") || !isCode(head, 8, "AVI "))
+    throw fail("not an AVI file");
+  size_t at = 12, hdrl = 0, movi = 0;
+  while (at + 12 <= head.size()) {
+    if (isCode(head, at, "LIST") && isCode(head, at + 8, "hdrl")) hdrl = at;
+    if (isCode(head, at, "LIST") && isCode(head, at + 8, "movi")) {
+      movi = at;
+      break;
+    }
+    const uint32_t size = word(head, at + 4);
+    at += 8 + size_t(size) + (size & 1);
+  }
+  if (hdrl == 0 || movi == 0) throw fail("no header list and frame list where they belong");
+  if (word(head, movi + 4) != 0 || word(head, 4) != 0)
+    throw fail("it was closed: its sizes are written");
+  head.resize(movi + 12);  // what comes before the frames
+  const size_t avih = head.find("avih", hdrl), strh = head.find("strh", hdrl);
+  if (avih == std::string::npos || strh == std::string::npos || avih + 64 > movi ||
+      strh + 64 > movi || !isCode(head, strh + 8, "vids") || !isCode(head, strh + 12, "MJPG"))
+    throw fail("no Motion-JPEG video stream in its header");
+  const size_t dmlh = head.find("dmlh", hdrl);
+  RecoveredVideo r;
+  const uint32_t scale = word(head, strh + 8 + 20), rate = word(head, strh + 8 + 24);
+  r.fps = scale > 0 ? double(rate) / scale : 0;
+
+  // The frames: whole chunks holding a whole JPEG image (its start marker, and its end marker in
+  // the chunk's last bytes), up to the first that is not: cut by the end of the file, or zeros
+  // where the disk never got the data. Only their headers and ends are read.
+  std::vector<std::pair<uint64_t, uint32_t>> frames;  // chunk offset, data size
+  uint64_t end = movi + 12;
+  for (;;) {
+    char chunk[10], tail[16];
+    in.clear();
+    in.seekg(std::streamoff(end));
+    if (!in.read(chunk, 10)) break;
+    const std::string code(chunk, 4);
+    const uint32_t size = word(chunk + 4);
+    if ((code != "00dc" && code != "00db") || size < 16 || end + 8 + size > file_size ||
+        uint8_t(chunk[8]) != 0xff || uint8_t(chunk[9]) != 0xd8)
+      break;
+    in.seekg(std::streamoff(end + 8 + size - 16));
+    if (!in.read(tail, 16)) break;
+    if (std::string_view(tail, 16).find("\xff\xd9") == std::string_view::npos) break;
+    frames.emplace_back(end, size);
+    end += 8 + uint64_t(size) + (size & 1);
+  }
+  r.frames = int64_t(frames.size());
+  r.bytes_cut = int64_t(file_size - end);
+  if (frames.empty()) throw fail("not one whole frame in it");
+  if (end + 8 + 16 * frames.size() > 0xffffffffu)
+    throw fail("over 4 GB, more than an AVI's index can hold");
+  if (std::filesystem::exists(out, error))
+    throw Error(out.string() + ": exists; recover " + name + " under another name");
+
+  // What closing would have written: the frames as they are, their index, the sizes and counts.
+  const uint32_t n = uint32_t(frames.size());
+  constexpr uint32_t kHasIndex = 0x10, kKeyFrame = 0x10;
+  putWord(head, avih + 8 + 12, word(head, avih + 8 + 12) | kHasIndex);  // dwFlags
+  putWord(head, avih + 8 + 16, n);                                      // dwTotalFrames
+  putWord(head, strh + 8 + 32, n);                                      // dwLength
+  if (dmlh != std::string::npos && dmlh + 12 <= movi) putWord(head, dmlh + 8, n);
+  putWord(head, movi + 4, uint32_t(end - movi - 8));
+  std::string index = "idx1";
+  index.resize(8 + 16 * size_t(n));
+  putWord(index, 4, 16 * n);
+  for (uint32_t i = 0; i < n; ++i) {
+    const size_t e = 8 + 16 * size_t(i);
+    index.replace(e, 4, "00dc");
+    putWord(index, e + 4, kKeyFrame);
+    putWord(index, e + 8, uint32_t(frames[i].first - (movi + 8)));  // from the list's 'movi'
+    putWord(index, e + 12, frames[i].second);
+  }
+  putWord(head, 4, uint32_t(end + index.size() - 8));
+  // Written beside `out`, then renamed: a recovery cut short leaves nothing under the name.
+  const std::filesystem::path temporary = out.string() + ".recovering";
+  {
+    std::ofstream video(temporary, std::ios::binary | std::ios::trunc);
+    if (!video) throw Error(out.string() + ": cannot write there");
+    video.write(head.data(), std::streamsize(head.size()));
+    std::vector<char> buffer(1 << 20);
+    in.clear();
+    in.seekg(std::streamoff(movi + 12));
+    for (uint64_t left = end - (movi + 12); left > 0 && video;) {
+      const size_t step = size_t(std::min<uint64_t>(left, buffer.size()));
+      if (!in.read(buffer.data(), std::streamsize(step))) break;
+      video.write(buffer.data(), std::streamsize(step));
+      left -= step;
+    }
+    video.write(index.data(), std::streamsize(index.size()));
+    video.flush();
+    if (!video || uint64_t(video.tellp()) != end + index.size()) {
+      video.close();
+      std::filesystem::remove(temporary, error);
+      throw Error(out.string() + ": cannot write the whole video there (disk full?)");
+    }
+  }
+  std::filesystem::rename(temporary, out, error);
+  if (error) {
+    std::filesystem::remove(temporary, error);
+    throw Error(out.string() + ": cannot put the video in its place");
+  }
+  return r;
+}
+
 struct ViewRecorder::Impl {
-  std::filesystem::path file, partial;
+  std::filesystem::path file, partial, leftover;
   std::string error;
   double fps = 30;
   int max_gap = 30;
@@ -55,6 +198,12 @@ ViewRecorder::ViewRecorder(const std::filesystem::path& file, double fps, int ma
     throw Error(file.string() + ": cannot record the view: a folder has that name");
   impl_->file = file;
   impl_->partial = partialVideoPath(file);
+  // Left by a recording that never closed: kept for recoverPartialVideo, recorded beside.
+  for (int k = 2; std::filesystem::exists(impl_->partial, error); ++k) {
+    if (impl_->leftover.empty()) impl_->leftover = impl_->partial;
+    impl_->partial = file.parent_path() / (file.stem().string() + ".partial-" + std::to_string(k) +
+                                           file.extension().string());
+  }
   impl_->fps = fps;
   impl_->max_gap = std::max(0, max_gap_frames);
 }
@@ -120,7 +269,10 @@ bool ViewRecorder::close() {
   if (!r.writer.isOpened()) return true;  // nothing recorded: no file
   r.writer.release();
   r.error = finishPartialVideo(r.partial, r.file, r.written, cv::CAP_OPENCV_MJPEG);
-  if (!r.error.empty()) r.error += "; what was written is kept as " + r.partial.string();
+  if (!r.error.empty()) {
+    r.error += "; what was written is kept as " + r.partial.string() +
+               " (lumistage video recover makes a video of its whole frames)";
+  }
   return r.error.empty();
 }
 
@@ -130,6 +282,15 @@ const std::string& ViewRecorder::error() const {
 
 const std::filesystem::path& ViewRecorder::file() const {
   return impl_->file;
+}
+const std::filesystem::path& ViewRecorder::leftover() const {
+  return impl_->leftover;
+}
+std::string ViewRecorder::leftoverNotice() const {
+  const std::string left = impl_->leftover.string();
+  if (left.empty()) return {};
+  return left + ", left by a recording that never closed, is kept (lumistage video recover " +
+         left + " makes a video of it); this one is recorded beside it";
 }
 int64_t ViewRecorder::framesWritten() const {
   return impl_->written;

@@ -10,6 +10,21 @@ namespace lumistage {
 
 // Where a video is made until it is whole: NAME.partial.EXT beside NAME.EXT.
 std::filesystem::path partialVideoPath(const std::filesystem::path& file);
+
+// What recoverPartialVideo() made.
+struct RecoveredVideo {
+  int64_t frames = 0;     // whole frames, in the order recorded
+  double fps = 0;         // as the video was recorded
+  int64_t bytes_cut = 0;  // at the end, of a frame the crash cut short
+};
+// Makes a whole video `out` of a ViewRecorder's Motion-JPEG AVI that was never closed (the studio
+// or the run was killed, crashed or lost its power while recording): every whole frame up to the
+// first one the end of the file cuts or leaves unwritten, copied byte for byte, then the index and
+// the headers' frame counts that closing writes. `partial` is left as it is; `out` is written
+// beside its name and put in place whole. Throws Error naming the file and what is wrong (not
+// such a video, no whole frame in it, `out` exists).
+RecoveredVideo recoverPartialVideo(const std::filesystem::path& partial,
+                                   const std::filesystem::path& out);
 // Puts the closed video `partial` in `file`'s place if it reads back `frames` frames (through
 // OpenCV's reader `api`, 0: any); otherwise leaves both as they are. Empty when done, else why,
 // naming `file` (the caller says what became of the partial file).
@@ -26,7 +41,10 @@ std::string finishPartialVideo(const std::filesystem::path& partial,
 // another size than the first are scaled to it. The video is written beside its name
 // (`NAME.partial.avi`) and put in its place when closed, once it reads back whole: a full disk or a
 // crash never leaves a torn video under the name, nor replaces an older one with it (the partial
-// file is kept, and error() says why). Not thread-safe; add() reuses its conversion buffers.
+// file is kept, and error() says why). A partial file left by a recording that never closed (a
+// crash) is never written over: the recording goes to NAME.partial-2.avi (-3...) beside it, and
+// leftover() names it for recoverPartialVideo(). Not thread-safe; add() reuses its conversion
+// buffers.
 class ViewRecorder {
  public:
   // Throws Error naming the file when it cannot be written (no folder, no rights, not .avi).
@@ -49,6 +67,10 @@ class ViewRecorder {
   static constexpr int kFreeCheckFrames = 30;
 
   const std::filesystem::path& file() const;
+  // A partial file of the name left by a recording that never closed; empty when none. And that in
+  // words for the user, with how to recover it; empty when none.
+  const std::filesystem::path& leftover() const;
+  std::string leftoverNotice() const;
   int64_t framesWritten() const;  // repeats included
   double fps() const;
   int width() const;  // of the video (the first image's); 0 before it

@@ -923,6 +923,69 @@ TEST(Cli, RunStoppedByCtrlCClosesItsTakeAndVideoAndStopsItsNodes) {
   fs::remove_all(folder);
 }
 
+// A run recording the view is killed outright (SIGKILL, as a crash or a power cut would end it):
+// its partial video is recovered whole by lumistage video recover, and the next recording under
+// the name is made beside it rather than over it.
+TEST(Cli, AViewRecordingThatNeverClosedIsRecovered) {
+  const fs::path folder = tempPath("killed_recording");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
+                               "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
+  const fs::path video = folder / "view.avi", partial = folder / "view.partial.avi";
+  const std::vector<std::string> args = {kCli,
+                                         "run",
+                                         "--session",
+                                         (folder / "session").string(),
+                                         "--frames",
+                                         "100000",
+                                         "--seconds",
+                                         "120",
+                                         "--record-view",
+                                         video.string()};
+  {
+    Started pipeline(args, folder / "run.log");
+    ASSERT_TRUE(pipeline.waitForOutput("node node2: camera cam02: green screen", 60))
+        << pipeline.output();
+    // Frames enough to pass the video writer's buffer.
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (std::chrono::steady_clock::now() < end &&
+           (!fs::exists(partial) || fs::file_size(partial) < 300'000))
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    ASSERT_EQ(::kill(-pipeline.pid(), SIGKILL), 0);
+    EXPECT_EQ(pipeline.waitForExit(30), -SIGKILL);
+  }
+  ASSERT_TRUE(fs::exists(partial));
+  EXPECT_FALSE(fs::exists(video));
+  const Result r = run(kCli + " video recover " + partial.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path recovered = folder / "view-recovered.avi";
+  EXPECT_NE(r.output.find("recovered "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" fps) into " + recovered.string()), std::string::npos) << r.output;
+  const int frames = std::stoi(r.output.substr(r.output.find("recovered ") + 10));
+  EXPECT_GT(frames, 5) << r.output;
+  cv::VideoCapture capture(recovered.string(), cv::CAP_OPENCV_MJPEG);
+  ASSERT_TRUE(capture.isOpened());
+  EXPECT_EQ(int(capture.get(cv::CAP_PROP_FRAME_COUNT)), frames);
+  cv::Mat last;
+  for (int f = 0; f < frames; ++f) ASSERT_TRUE(capture.read(last)) << "frame " << f;
+  // Recording again to the name: the run says what it keeps, and records beside it.
+  const uintmax_t left = fs::file_size(partial);
+  std::vector<std::string> again = args;
+  again[5] = "20";  // --frames
+  const Result second = run([&] {
+    std::string command;
+    for (const std::string& arg : again) command += arg + " ";
+    return command;
+  }());
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_NE(second.output.find(partial.string() + ", left by a recording that never closed, is "
+                                                  "kept (lumistage video recover"),
+            std::string::npos)
+      << second.output;
+  EXPECT_EQ(fs::file_size(partial), left);
+  EXPECT_TRUE(fs::exists(video));
+  fs::remove_all(folder);
+}
+
 // Ctrl-C during a render: no torn video is left, and the command says it did not finish.
 TEST(Cli, RenderStoppedByCtrlCLeavesNoVideo) {
   const fs::path folder = tempPath("render_ctrl_c");

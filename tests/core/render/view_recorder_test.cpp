@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <opencv2/videoio.hpp>
 
 #include "core/base/atomic_file.h"
@@ -139,6 +140,81 @@ TEST(ViewRecorder, RefusesWhatItCannotWriteByName) {
   // Nothing is written before the first frame, and an empty recording leaves no file.
   { ViewRecorder recorder(dir / "empty.avi", 30); }
   EXPECT_FALSE(std::filesystem::exists(dir / "empty.avi"));
+}
+
+// The studio is killed while recording (SIGKILL: no destructor, no flush): the partial video has
+// no index and no counts. recoverPartialVideo makes a whole video of its whole frames, in order,
+// leaving the partial file as it was; a new recording under the name never writes over it.
+TEST(ViewRecorder, ARecordingThatNeverClosedIsRecoveredAndNeverWrittenOver) {
+  const std::filesystem::path dir = testFolder("view_recorder_crash");
+  const std::filesystem::path file = dir / "take.avi", partial = dir / "take.partial.avi";
+  constexpr int kFrames = 40;
+  testing::inChildProcess([&] {
+    ViewRecorder recorder(file, 25);
+    // The upper half grey level 5 i (frame i), the lower half noise (large frames: past the
+    // writer's buffer, most of them reach the disk before the kill).
+    std::vector<uint8_t> rgba(size_t(320) * 240 * 4, 255);
+    uint32_t x = 7;
+    for (int f = 0; f < kFrames; ++f) {
+      for (size_t p = 0; p < rgba.size(); p += 4) {
+        for (int c = 0; c < 3; ++c) {
+          rgba[p + c] = p < rgba.size() / 2 ? uint8_t(5 * f)
+                                            : uint8_t((x = x * 1664525u + 1013904223u) >> 24);
+        }
+      }
+      recorder.add(f, 320, 240, rgba);
+    }
+    std::raise(SIGKILL);
+    return 0;
+  });
+  ASSERT_TRUE(std::filesystem::exists(partial));
+  EXPECT_FALSE(std::filesystem::exists(file));
+  const std::string left = readFile(partial);
+  {
+    cv::VideoCapture torn(partial.string(), cv::CAP_OPENCV_MJPEG);  // what a crash leaves
+    EXPECT_FALSE(torn.isOpened() && torn.get(cv::CAP_PROP_FRAME_COUNT) > 0);
+  }
+
+  const std::filesystem::path recovered = dir / "recovered.avi";
+  const RecoveredVideo r = recoverPartialVideo(partial, recovered);
+  EXPECT_GE(r.frames, kFrames / 2);
+  EXPECT_LE(r.frames, kFrames);
+  EXPECT_EQ(r.fps, 25);
+  EXPECT_EQ(readFile(partial), left);
+  cv::VideoCapture video(recovered.string(), cv::CAP_OPENCV_MJPEG);
+  ASSERT_TRUE(video.isOpened());
+  EXPECT_EQ(int64_t(video.get(cv::CAP_PROP_FRAME_COUNT)), r.frames);
+  EXPECT_EQ(video.get(cv::CAP_PROP_FPS), 25);
+  cv::Mat frame;
+  int64_t read = 0;
+  while (video.read(frame)) {
+    ASSERT_EQ(frame.size(), cv::Size(320, 240));
+    EXPECT_NEAR(cv::mean(frame(cv::Rect(0, 0, 320, 110)))[1], 5.0 * double(read), 3) << read;
+    ++read;
+  }
+  EXPECT_EQ(read, r.frames);
+  EXPECT_NE(errorOf([&] { recoverPartialVideo(partial, recovered); }).find("exists"),
+            std::string::npos);
+
+  // Recording again under the name: beside the left partial file, which stays as it was.
+  {
+    ViewRecorder again(file, 25);
+    EXPECT_EQ(again.leftover(), partial);
+    EXPECT_TRUE(again.add(0, 64, 48, solid(64, 48, 220, 20, 20)));
+    EXPECT_TRUE(std::filesystem::exists(dir / "take.partial-2.avi"));
+    EXPECT_TRUE(again.close()) << again.error();
+  }
+  cv::Size size;
+  EXPECT_EQ(readBack(file, &size).size(), 1u);
+  EXPECT_EQ(readFile(partial), left);
+  // What is not such a recording says so.
+  writeFileAtomically(dir / "not.partial.avi", "RIFF....WAVEfmt ");
+  EXPECT_NE(errorOf([&] {
+              recoverPartialVideo(dir / "not.partial.avi", dir / "x.avi");
+            }).find("not.partial.avi: not an AVI file"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { recoverPartialVideo(recovered, dir / "y.avi"); }).find("it was closed"),
+            std::string::npos);
 }
 
 }  // namespace
