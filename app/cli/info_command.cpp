@@ -4,6 +4,7 @@
 
 #include "app/cli/machine_info.h"
 #include "core/base/resource_path.h"
+#include "core/capture/aravis_source.h"
 
 namespace lumistage {
 
@@ -20,6 +21,16 @@ void addInfoCommand(CLI::App& app) {
     fmt::print("machine:   {}, {} threads, {:.1f} GiB\n", m.cpu, m.cores, m.memory_gib);
     fmt::print("OpenGL:    {}{}\n", m.opengl,
                m.opengl_software ? " (software rendering: no GPU in use)" : "");
+    // For a camera PC: what the kernel lets a GigE Vision stream buffer, against the reference
+    // camera's image (1024x768, one byte a pixel).
+    const int64_t limit = receiveBufferLimit();
+    constexpr int64_t kReferenceImage = 1024 * 768;
+    if (limit >= 0) {
+      const std::string advice = receiveBufferAdvice(limit, kReferenceImage);
+      fmt::print("network:   net.core.rmem_max {} KB{}\n", limit / 1024,
+                 advice.empty() ? " (room for GigE Vision streams of 1024x768 cameras)"
+                                : "\n           " + advice);
+    }
   });
 }
 

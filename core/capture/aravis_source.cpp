@@ -13,6 +13,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -62,6 +63,24 @@ const char* statusName(ArvBufferStatus status) {
 
 }  // namespace
 
+int64_t receiveBufferLimit() {
+  std::ifstream in("/proc/sys/net/core/rmem_max");
+  int64_t bytes = -1;
+  if (!(in >> bytes)) return -1;
+  return bytes;
+}
+
+std::string receiveBufferAdvice(int64_t limit_bytes, int64_t image_bytes) {
+  if (limit_bytes < 0 || image_bytes <= 0 || limit_bytes >= 2 * image_bytes) return {};
+  return fmt::format(
+      "net.core.rmem_max is {} KB, less than two of the cameras' {} KB images: the kernel drops "
+      "a GigE Vision stream's packets whenever this PC is a moment late (resends, dropped "
+      "frames). Raise it: sudo sysctl -w net.core.rmem_max=33554432, and in "
+      "/etc/sysctl.d/60-lumistage.conf to keep it (packaging/deploying-nodes.md, GigE Vision "
+      "tuning)",
+      limit_bytes / 1024, image_bytes / 1024);
+}
+
 std::vector<AravisDeviceInfo> discoverAravisCameras() {
   arv_update_device_list();
   std::vector<AravisDeviceInfo> out;
@@ -85,6 +104,7 @@ struct AravisSource::Device {
   mutable std::mutex objects;
   int width = 0, height = 0;
   guint payload = 0;  // bytes of a frame, as the camera says
+  bool gige = false;  // a GigE Vision camera (its stream over UDP)
   std::thread thread;
   std::atomic<bool> control_lost{false};  // Aravis lost the camera's control channel
   // Counters, guarded by AravisSource::mutex_.
@@ -205,7 +225,8 @@ void AravisSource::openCamera(Device& d) {
     arv_camera_set_gain(d.camera, d.config.gain_db, &error);
     check("gain");
   }
-  if (arv_camera_is_gv_device(d.camera)) {
+  d.gige = arv_camera_is_gv_device(d.camera);
+  if (d.gige) {
     arv_camera_gv_auto_packet_size(d.camera, &error);
     g_clear_error(&error);  // not every camera negotiates; the default packet size works
   }
@@ -314,6 +335,13 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
   for (const std::string& f : failures)
     spdlog::warn("{}; the other cameras are served, this one is tried again every {} s", f,
                  std::chrono::duration_cast<std::chrono::seconds>(kRetryOpen).count());
+  int64_t largest = 0;
+  for (const auto& d : devices_) {
+    if (d->gige) largest = std::max<int64_t>(largest, d->payload);
+  }
+  if (const std::string advice = receiveBufferAdvice(receiveBufferLimit(), largest);
+      !advice.empty())
+    spdlog::warn("{}", advice);
   for (int c = 0; c < rig_.cameraCount(); ++c) {
     if (!devices_[c]->config.device.empty())
       devices_[c]->thread = std::thread(&AravisSource::receive, this, c);

@@ -25,6 +25,14 @@ struct AravisDeviceInfo {
   std::string protocol;  // "GigEVision", "USB3Vision", "Fake"
 };
 
+// The most a socket's receive buffer may hold (net.core.rmem_max), in bytes; -1 when unknown.
+int64_t receiveBufferLimit();
+// What to do when that limit cannot hold two of a GigE Vision camera's images of `image_bytes`
+// (the one arriving while the node takes the one before): Aravis sizes each stream's buffer to
+// an image, the kernel caps it at the limit, and the packets past it are lost whenever the node
+// is a moment late (resends, dropped frames). Empty when it can, or when the limit is unknown.
+std::string receiveBufferAdvice(int64_t limit_bytes, int64_t image_bytes);
+
 // Cameras Aravis can see: GigE Vision by broadcast discovery (which does not reach loopback:
 // open virtual cameras by address), USB3 Vision on the bus.
 std::vector<AravisDeviceInfo> discoverAravisCameras();

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <fstream>
 #include <map>
 #include <random>
 #include <thread>
@@ -77,6 +78,27 @@ TEST(Aravis, ABrokenFrameIsOneDropNotTwo) {
   dropped += drops.broken();
   dropped += drops.whole(11);
   EXPECT_EQ(dropped, 5);
+}
+
+// A receive buffer limit that cannot hold two images is named with the sysctl that raises it;
+// one that can says nothing. And the limit is what the kernel says.
+TEST(Aravis, ASmallReceiveBufferLimitIsToldWithItsRemedy) {
+  constexpr int64_t kImage = 1024 * 768;                           // the reference camera, Bayer
+  const std::string advice = receiveBufferAdvice(212992, kImage);  // a stock kernel's
+  EXPECT_NE(advice.find("net.core.rmem_max is 208 KB, less than two of the cameras' 768 KB "
+                        "images"),
+            std::string::npos)
+      << advice;
+  EXPECT_NE(advice.find("sudo sysctl -w net.core.rmem_max=33554432"), std::string::npos);
+  EXPECT_EQ(receiveBufferAdvice(2 * kImage, kImage), "");
+  EXPECT_NE(receiveBufferAdvice(2 * kImage - 1, kImage), "");
+  EXPECT_EQ(receiveBufferAdvice(-1, kImage), "");  // unknown: no advice
+  EXPECT_EQ(receiveBufferAdvice(1000, 0), "");     // no GigE Vision camera
+  std::ifstream in("/proc/sys/net/core/rmem_max");
+  int64_t limit = -1;
+  in >> limit;
+  EXPECT_EQ(receiveBufferLimit(), limit);
+  EXPECT_GT(limit, 0);
 }
 
 TEST(Aravis, VirtualCamerasStreamTheSyntheticFramesBitExact) {
