@@ -15,6 +15,7 @@
 #include "app/cli/checks.h"
 #include "app/cli/progress.h"
 #include "core/base/error.h"
+#include "core/base/output_path.h"
 #include "core/base/stop_signal.h"
 #include "core/capture/aravis_source.h"
 #include "core/capture/frame_grouper.h"
@@ -228,10 +229,22 @@ void addCameraCommands(CLI::App& app) {
       // A replayed session is recorded in its own format and at its own rate.
       const PixelFormat format =
           replayed ? replayed->pixelFormat() : pixelFormatOption(s->pixel_format);
-      recorder = std::make_unique<SessionRecorder>(
-          s->record, rig, format, replayed ? replayed->fps() : s->fps,
-          s->session.empty() ? "aravis" : "replay", 8, *parseImageFiles(s->image_files));
+      const double fps = replayed ? replayed->fps() : s->fps;
+      recorder = std::make_unique<SessionRecorder>(s->record, rig, format, fps,
+                                                   s->session.empty() ? "aravis" : "replay", 8,
+                                                   *parseImageFiles(s->image_files));
       grouper = std::make_unique<FrameGrouper>(rig.cameraCount());
+      // How long the disk lasts at the cameras' raw rate (PNM files are the raw bytes; PNG less).
+      double bytes_per_s = 0;
+      for (int c = 0; c < rig.cameraCount(); ++c)
+        bytes_per_s +=
+            double(rig.camera(c).width()) * rig.camera(c).height() * bytesPerPixel(format) * fps;
+      if (const DiskSpace disk = diskSpaceAt(s->record); disk.free_bytes >= 0 && bytes_per_s > 0) {
+        const double minutes = double(disk.free_bytes) / bytes_per_s / 60;
+        fmt::print("recording to {}: {} free, about {:.0f} min at the cameras' {:.0f} MB/s{}\n",
+                   s->record, bytesInWords(disk.free_bytes), minutes, bytes_per_s / 1e6,
+                   minutes < 10 ? " (little room: the recording stops when the disk is full)" : "");
+      }
     }
     const double cpu_start = cpuSeconds();
     const auto start = std::chrono::steady_clock::now();

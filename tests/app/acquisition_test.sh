@@ -25,6 +25,8 @@ done
 
 "$cli" stream --rig "$work/served/rig.yaml" --address 127.0.1.3 --fps 20 --seconds 3 --record "$work/recorded" > "$work/stream.log" 2>&1 || fail "stream: $(cat "$work/stream.log")"
 cat "$work/stream.log"
+# It said how long the disk lasts at the cameras' rate before recording.
+grep -q "^recording to $work/recorded: .* free, about [0-9]* min at the cameras' [0-9]* MB/s" "$work/stream.log" || fail "stream did not say how long the disk lasts"
 sets=$(($(wc -l < "$work/recorded/index.csv") - 1))
 [ "$sets" -ge 20 ] || fail "only $sets frame sets recorded in 3 s at 20 fps"
 
