@@ -931,18 +931,21 @@ TEST(Cli, AViewRecordingThatNeverClosedIsRecovered) {
   ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
                                "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
   const fs::path video = folder / "view.avi", partial = folder / "view.partial.avi";
-  const std::vector<std::string> args = {kCli,
-                                         "run",
-                                         "--session",
-                                         (folder / "session").string(),
-                                         "--frames",
-                                         "100000",
-                                         "--seconds",
-                                         "120",
-                                         "--record-view",
-                                         video.string()};
+  // The run, recording the view; `frames` for how many.
+  const auto runArgs = [&](const std::string& frames) {
+    return std::vector<std::string>{kCli,
+                                    "run",
+                                    "--session",
+                                    (folder / "session").string(),
+                                    "--frames",
+                                    frames,
+                                    "--seconds",
+                                    "120",
+                                    "--record-view",
+                                    video.string()};
+  };
   {
-    Started pipeline(args, folder / "run.log");
+    Started pipeline(runArgs("100000"), folder / "run.log");
     ASSERT_TRUE(pipeline.waitForOutput("node node2: camera cam02: green screen", 60))
         << pipeline.output();
     // Frames enough to pass the video writer's buffer.
@@ -969,13 +972,9 @@ TEST(Cli, AViewRecordingThatNeverClosedIsRecovered) {
   for (int f = 0; f < frames; ++f) ASSERT_TRUE(capture.read(last)) << "frame " << f;
   // Recording again to the name: the run says what it keeps, and records beside it.
   const uintmax_t left = fs::file_size(partial);
-  std::vector<std::string> again = args;
-  again[5] = "20";  // --frames
-  const Result second = run([&] {
-    std::string command;
-    for (const std::string& arg : again) command += arg + " ";
-    return command;
-  }());
+  std::string again;
+  for (const std::string& arg : runArgs("20")) again += arg + " ";
+  const Result second = run(again);
   ASSERT_EQ(second.exit_code, 0) << second.output;
   EXPECT_NE(second.output.find(partial.string() + ", left by a recording that never closed, is "
                                                   "kept (lumistage video recover"),
