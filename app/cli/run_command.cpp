@@ -183,6 +183,10 @@ void addRunCommand(CLI::App& app) {
                   "DIR/<node>/ from the first frame done to the end (lumistage session merge "
                   "DIR joins them)");
   run->callback([a] {
+    // Ctrl-C (or SIGTERM, SIGHUP) stops the run as its end would: the take closed, the view's
+    // recording finished, the figures told, the nodes stopped and the run's key store removed.
+    // Caught from the start: one that comes while the nodes start still stops them in order.
+    const std::atomic<bool>& stop = stopOnSignals();
     if (!a->listen.empty()) {
       if (!a->session.empty() || !a->address.empty())
         throw CLI::ValidationError(
@@ -278,9 +282,7 @@ void addRunCommand(CLI::App& app) {
                  a->plain ? "plain" : "CURVE", pipeline.nodeNames().size());
     }
     // Run in slices, watching the clock and the node processes: a node that exits (bad session,
-    // wrong key file...) is reported; when none is left, stop. Ctrl-C (or SIGTERM, SIGHUP) stops
-    // the run as its end would: the take closed, the view's recording finished, the figures told.
-    const std::atomic<bool>& stop = stopOnSignals();
+    // wrong key file...) is reported; when none is left, or a signal asks (above), stop.
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);
     while (!stop && std::chrono::steady_clock::now() < end && pipeline.anyNodeRunning() &&
            (a->frames <= 0 || studio.framesDone() < a->frames)) {

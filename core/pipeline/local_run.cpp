@@ -7,7 +7,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -23,6 +26,24 @@
 namespace lumistage {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kKeyStorePrefix = "lumistage_run_keys_";
+
+// The temporary key stores of runs that died without removing them (SIGKILL, a crash, a power
+// cut: their pid is gone): removed, so that their private keys do not stay in /tmp.
+void removeStaleKeyStores() {
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator(fs::temp_directory_path(), error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(kKeyStorePrefix, 0) != 0) continue;
+    const pid_t pid = pid_t(std::atol(name.c_str() + std::strlen(kKeyStorePrefix)));
+    if (pid <= 0 || (::kill(pid, 0) != 0 && errno == ESRCH)) fs::remove_all(entry.path(), error);
+  }
+}
+
+}  // namespace
 
 LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move(options)) {
   if (!options_.listen.empty()) {
@@ -53,9 +74,10 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
     endpoint.security = TransportSecurity::kPlain;
   } else {
     if (keys_.empty()) {
+      removeStaleKeyStores();
       temporary_keys_ = true;
       keys_ = fs::temp_directory_path() /
-              fmt::format("lumistage_run_keys_{}_{}", ::getpid(), static_cast<void*>(this));
+              fmt::format("{}{}_{}", kKeyStorePrefix, ::getpid(), static_cast<void*>(this));
       KeyStore(keys_).init(names_, true);
     }
     const KeyStore store(keys_);

@@ -944,8 +944,10 @@ TEST(Cli, AViewRecordingThatNeverClosedIsRecovered) {
                                     "--record-view",
                                     video.string()};
   };
+  pid_t killed = -1;
   {
     Started pipeline(runArgs("100000"), folder / "run.log");
+    killed = pipeline.pid();
     ASSERT_TRUE(pipeline.waitForOutput("node node2: camera cam02: green screen", 60))
         << pipeline.output();
     // Frames enough to pass the video writer's buffer.
@@ -958,6 +960,7 @@ TEST(Cli, AViewRecordingThatNeverClosedIsRecovered) {
   }
   ASSERT_TRUE(fs::exists(partial));
   EXPECT_FALSE(fs::exists(video));
+  EXPECT_EQ(temporaryKeyStores(killed), 1) << "what a killed run cannot remove";
   const Result r = run(kCli + " video recover " + partial.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const fs::path recovered = folder / "view-recovered.avi";
@@ -982,6 +985,8 @@ TEST(Cli, AViewRecordingThatNeverClosedIsRecovered) {
       << second.output;
   EXPECT_EQ(fs::file_size(partial), left);
   EXPECT_TRUE(fs::exists(video));
+  // The next run removed the killed one's key store (its process is gone): no private keys left.
+  EXPECT_EQ(temporaryKeyStores(killed), 0);
   fs::remove_all(folder);
 }
 
