@@ -88,6 +88,27 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       cpu.nodes_cores, machine, nodes);
 }
 
+// Once every node has told its takes' disk (true then): the disk that fills first, and a warning
+// when it holds less than the run may still record (`seconds`), as the take stops there.
+bool tellTakeDisk(const RunReport& r, double seconds) {
+  const NodeReport* fullest = nullptr;
+  for (const NodeReport& n : r.nodes) {
+    if (n.lost) continue;
+    if (n.take.free_bytes < 0 || n.take_seconds_left < 0) return false;
+    if (!fullest || n.take_seconds_left < fullest->take_seconds_left) fullest = &n;
+  }
+  if (!fullest) return false;
+  fmt::print("take: the fullest node's disk ({}, {} free) holds {:.0f} min of takes{}\n",
+             fullest->name, bytesInWords(fullest->take.free_bytes), fullest->take_seconds_left / 60,
+             fullest->take_seconds_left < seconds
+                 ? fmt::format("; less than the {:.0f} s this run may still record: the take "
+                               "stops there when it fills",
+                               seconds)
+                 : "");
+  std::fflush(stdout);
+  return true;
+}
+
 // Stops the take, waits (at most 30 s) for every node to close its part, and says how each went.
 void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
   StudioCoordinator& studio = pipeline.studio();
@@ -284,9 +305,18 @@ void addRunCommand(CLI::App& app) {
     // Run in slices, watching the clock and the node processes: a node that exits (bad session,
     // wrong key file...) is reported; when none is left, or a signal asks (above), stop.
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(a->seconds);
+    bool disk_told = take.empty();  // a take's disks: said once every node has told its own
     while (!stop && std::chrono::steady_clock::now() < end && pipeline.anyNodeRunning() &&
            (a->frames <= 0 || studio.framesDone() < a->frames)) {
       pipeline.runFor(std::chrono::milliseconds(100));
+      if (!disk_told && measuring) {
+        // What the run may still record: to --seconds, or --frames at the cameras' rate.
+        const double fps = pipeline.reportedFrameRate().value_or(pipeline.frameRate());
+        const double left_s =
+            std::min(std::chrono::duration<double>(end - std::chrono::steady_clock::now()).count(),
+                     fps > 0 ? double(a->frames - studio.framesDone()) / fps : a->seconds);
+        disk_told = tellTakeDisk(studio.report(), left_s);
+      }
       nodes_cpu = std::max(nodes_cpu, pipeline.nodeCpuSeconds());
       if (!measuring && studio.framesDone() > 0) {
         measuring = true;

@@ -897,7 +897,11 @@ TEST(Cli, RunStoppedByCtrlCClosesItsTakeAndVideoAndStopsItsNodes) {
         << pipeline.output();
   }
   ASSERT_EQ(temporaryKeyStores(pipeline.pid()), 1) << "the run's own key store, while it runs";
-  std::this_thread::sleep_for(std::chrono::seconds(1));  // a few frame sets in the take
+  // Once the nodes have told their disks, the run says how long the fullest lasts (the two share
+  // this machine's disk); a few frame sets are in the take by then.
+  ASSERT_TRUE(pipeline.waitForOutput("take: the fullest node's disk (node", 30))
+      << pipeline.output();
+  EXPECT_NE(pipeline.output().find(" min of takes"), std::string::npos) << pipeline.output();
   ASSERT_EQ(::kill(-pipeline.pid(), SIGINT), 0);
   ASSERT_EQ(pipeline.waitForExit(60), 0) << pipeline.output();
   const std::string out = pipeline.output();
