@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "app/node/node_monitor.h"
+#include "core/base/output_path.h"
 #include "core/base/stop_signal.h"
 #include "core/body/human_model.h"
 #include "core/capture/aravis_source.h"
@@ -168,6 +169,13 @@ int main(int argc, char** argv) {
     // SIGINT, SIGTERM or SIGHUP: the node closes its take and stops (a second one ends it at once).
     std::atomic<bool>& stop = lumistage::stopOnSignals();
     fmt::print("node {}: {} cameras, serving {}\n", node.name, node.cameras.size(), studio);
+    if (!takes.empty()) {
+      // For the log (journalctl): where takes go, and the room there (the studio shows it too).
+      const lumistage::DiskSpace disk = lumistage::diskSpaceAt(takes);
+      fmt::print("node {}: takes go to {}{}\n", node.name, takes,
+                 disk.free_bytes >= 0 ? " (" + lumistage::bytesInWords(disk.free_bytes) + " free)"
+                                      : std::string(" (its free space unknown)"));
+    }
     std::fflush(stdout);
     if (monitor) {
       // The node works on its own threads; the window lives on this one (GLFW wants the main

@@ -910,6 +910,11 @@ TEST(Cli, RunStoppedByCtrlCClosesItsTakeAndVideoAndStopsItsNodes) {
   EXPECT_EQ(out.find("not closed"), std::string::npos) << out;
   for (const char* node : {"node1", "node2"}) {
     EXPECT_NE(out.find(std::string("node ") + node + ": sent "), std::string::npos) << out;
+    // Each node's log says where its takes go, and the room there.
+    const size_t told = out.find(std::string("node ") + node + ": takes go to " +
+                                 (folder / "takes").string() + " (");
+    EXPECT_NE(told, std::string::npos) << out;
+    EXPECT_NE(out.substr(told, out.find('\n', told) - told).find(" free)"), std::string::npos);
     const std::string index = readFile(take / node / "index.csv");
     EXPECT_GE(std::count(index.begin(), index.end(), '\n'), 3) << node << ": " << index;
   }
