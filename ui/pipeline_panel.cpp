@@ -547,14 +547,8 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   const QString takes = s.takes_folder.isEmpty()
                             ? tr("its own takes folder (lumistage-node --takes)")
                             : s.takes_folder.toHtmlEscaped();
-  // The disk that fills first, of those that say.
-  const NodeReport* fullest = nullptr;
-  for (const NodeReport& n : s.report.nodes) {
-    if (n.take_seconds_left >= 0 && (!fullest || n.take_seconds_left < fullest->take_seconds_left))
-      fullest = &n;
-  }
-  QString disk;
-  if (fullest) {
+  QString disk;  // the disk that fills first, of those that say
+  if (const NodeReport* fullest = fullestTakeDisk(s.report)) {
     disk = tr("The fullest node's disk (%1) holds %2 of takes.")
                .arg(QString::fromStdString(fullest->name).toHtmlEscaped(),
                     durationWords(fullest->take_seconds_left));

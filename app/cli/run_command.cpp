@@ -91,12 +91,10 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
 // Once every node has told its takes' disk (true then): the disk that fills first, and a warning
 // when it holds less than the run may still record (`seconds`), as the take stops there.
 bool tellTakeDisk(const RunReport& r, double seconds) {
-  const NodeReport* fullest = nullptr;
   for (const NodeReport& n : r.nodes) {
-    if (n.lost) continue;
-    if (n.take.free_bytes < 0 || n.take_seconds_left < 0) return false;
-    if (!fullest || n.take_seconds_left < fullest->take_seconds_left) fullest = &n;
+    if (!n.lost && n.take_seconds_left < 0) return false;
   }
+  const NodeReport* fullest = fullestTakeDisk(r);
   if (!fullest) return false;
   fmt::print("take: the fullest node's disk ({}, {} free) holds {:.0f} min of takes{}\n",
              fullest->name, bytesInWords(fullest->take.free_bytes), fullest->take_seconds_left / 60,

@@ -889,6 +889,16 @@ void StudioCoordinator::run(const std::atomic<bool>& stop) {
   while (!stop && (options_.max_frames == 0 || frames_done_ < options_.max_frames)) pump();
 }
 
+const NodeReport* fullestTakeDisk(const RunReport& report) {
+  const NodeReport* fullest = nullptr;
+  for (const NodeReport& n : report.nodes) {
+    if (!n.lost && n.take_seconds_left >= 0 &&
+        (!fullest || n.take_seconds_left < fullest->take_seconds_left))
+      fullest = &n;
+  }
+  return fullest;
+}
+
 RunReport StudioCoordinator::report() const {
   RunReport r;
   r.frames = frames_done_;
@@ -940,7 +950,8 @@ RunReport StudioCoordinator::report() const {
     for (const CameraHealth& c : state.report.cameras) rate_hz = std::max(rate_hz, c.frame_rate_hz);
     // What a take of its cameras writes a second, on the disk it names (nodes on one PC share
     // one: their rates add up below).
-    take_bytes_per_s[state.report.take.disk] += node_raw * rate_hz;
+    if (!state.report.take.disk.empty())
+      take_bytes_per_s[state.report.take.disk] += node_raw * rate_hz;
     raw += node_raw;
     if (state.counted_to_ns > counting_since_ns_ && counting_since_ns_ > 0) {
       per_second +=
@@ -949,9 +960,9 @@ RunReport StudioCoordinator::report() const {
     }
   }
   for (NodeReport& n : r.nodes) {
-    const double bytes_per_s = n.take.disk.empty() ? 0 : take_bytes_per_s[n.take.disk];
-    if (n.take.free_bytes >= 0 && bytes_per_s > 0)
-      n.take_seconds_left = double(n.take.free_bytes) / bytes_per_s;
+    const auto shared = take_bytes_per_s.find(n.take.disk);
+    if (n.take.free_bytes >= 0 && shared != take_bytes_per_s.end() && shared->second > 0)
+      n.take_seconds_left = double(n.take.free_bytes) / shared->second;
   }
   r.node_bytes_per_frame = shown_frames > 0 ? double(shown_bytes) / double(shown_frames) : 0;
   r.node_bytes_per_s = counted > 0 ? per_second / counted : 0;

@@ -132,6 +132,10 @@ struct RunReport {
   int frames_in_flight = 0;           // frames begun and not yet done or given up
 };
 
+// The node whose takes' disk holds the least recording time (NodeReport::take_seconds_left), of
+// those streaming that have said (a lost node's figure is stale); nullptr when none has.
+const NodeReport* fullestTakeDisk(const RunReport& report);
+
 // The studio's side of the distributed pipeline (DESIGN.md §1), one frame at a time per stage but
 // several frames in flight: silhouettes of frame f from the nodes -> the motion capture module
 // places the body -> pose(f) to the nodes -> their per-vertex statistics -> the module combines
