@@ -155,9 +155,9 @@ void PipelineWorker::run() {
       // newest pose runs a few frames ahead of the newest image).
       const BlendedImage& blended = pipeline.studio().lastImage();
       if (!blended.rgba.empty() && blended.frame_id != shown.view_frame) {
-        shown.view =
-            QImage(blended.rgba.data(), blended.width, blended.height, QImage::Format_RGBA8888)
-                .copy();
+        shown.view = QImage(blended.rgba.data(), blended.width, blended.height,
+                            QImage::Format_RGBA8888_Premultiplied)
+                         .copy();
         shown.view_frame = blended.frame_id;
         placeBody(blended.pose, blended.frame_id);
         emit view(shown);

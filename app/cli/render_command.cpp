@@ -23,6 +23,7 @@
 #include "core/render/egl_context.h"
 #include "core/render/frame_inputs.h"
 #include "core/render/lumigraph_renderer.h"
+#include "core/render/silhouette_feather.h"
 #include "core/render/view_recorder.h"
 
 namespace lumistage {
@@ -150,6 +151,7 @@ void addRenderCommand(CLI::App& app) {
       renderer.setMesh(mesh.positions, mesh.normals, mesh.triangles);
       const Camera view = pathCamera(a->path, rig, double(i) / frames, a->width, a->height);
       renderer.render(view, clones, rgba);
+      finishSingleProcessView(rgba, view.width(), view.height());  // as the studio shows a view
       const cv::Mat image(view.height(), view.width(), CV_8UC4, rgba.data());
       cv::cvtColor(image, bgr, cv::COLOR_RGBA2BGR);
       video.write(bgr);

@@ -404,8 +404,10 @@ void addRunCommand(CLI::App& app) {
       if (image.rgba.empty())
         throw Error("no blended view to write: no frame had the nodes' partial images");
       cv::Mat rgba(image.height, image.width, CV_8UC4, const_cast<uint8_t*>(image.rgba.data())),
-          bgra;
-      cv::cvtColor(rgba, bgra, cv::COLOR_RGBA2BGRA);
+          straight, bgra;
+      // The view is premultiplied (its feathered silhouette); a PNG's alpha is not.
+      cv::cvtColor(rgba, straight, cv::COLOR_mRGBA2RGBA);
+      cv::cvtColor(straight, bgra, cv::COLOR_RGBA2BGRA);
       if (!cv::imwrite(a->image, bgra)) throw Error(a->image + ": cannot write the image");
       fmt::print("wrote {} (frame {})\n", a->image, image.frame_id);
     }

@@ -7,6 +7,7 @@
 
 #include "core/base/error.h"
 #include "core/imaging/keyer.h"
+#include "core/render/silhouette_feather.h"
 
 namespace lumistage {
 
@@ -47,15 +48,16 @@ ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uin
   int64_t missed = 0, beyond = 0;
   std::vector<double> a(n), b(n);
   for (size_t i = 0; i < n; ++i) {
-    // The matte: the render over black, every pixel it draws opaque, against the image through
-    // the mask. Opaque, as the studio's blend shows a view (PartialImageBlender): a renderer's
-    // alpha is its share of the cameras' weight, not how much of the pixel the actor covers.
-    const bool drawn = rendered[4 * i + 3] != 0;
-    if (mask[i] || drawn) {
+    // The matte: the render over black against the image through the mask. The render is a view
+    // as the studio shows it (finishSingleProcessView, PartialImageBlender): opaque where drawn,
+    // premultiplied where its silhouette is feathered, so its colour is the view over black.
+    // Missed and beyond count the pixels it covers at least half.
+    const bool drawn = rendered[4 * i + 3] >= 128;
+    if (mask[i] || rendered[4 * i + 3] != 0) {
       missed += mask[i] && !drawn;
       beyond += !mask[i] && drawn;
       for (int k = 0; k < 3; ++k) {
-        const double d = (drawn ? rendered[4 * i + k] : 0) - (mask[i] ? truth[4 * i + k] : 0);
+        const double d = double(rendered[4 * i + k]) - (mask[i] ? truth[4 * i + k] : 0);
         matte_squared += d * d;
       }
     }
@@ -143,6 +145,7 @@ ViewScore leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
   std::vector<uint8_t>& view = rendered ? *rendered : own;
   renderer.render(camera, view);
   renderer.setActive(std::vector<bool>(n, true));
+  finishSingleProcessView(view, camera.width(), camera.height());
   return compareOverMask(view, truth.at(left_out), masks.at(left_out), camera.width(),
                          camera.height());
 }

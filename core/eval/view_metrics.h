@@ -19,16 +19,17 @@ struct ViewScore {
   // pixel either covers, so that a pixel drawn beyond the actor costs as much as one of the actor
   // left undrawn.
   double matte_psnr_db = 0;
-  double missed_pct = 0;  // the mask's pixels left undrawn (alpha 0), % of the mask
-  double beyond_pct = 0;  // pixels drawn outside the mask, % of the mask
+  double missed_pct = 0;  // the mask's pixels not drawn (alpha under 128), % of the mask
+  double beyond_pct = 0;  // pixels drawn (alpha 128 or more) outside the mask, % of the mask
   // Of the squared error over the mask (psnr_db's), the share on the pixels left undrawn, %: a
   // pixel of the actor the render misses costs its whole colour (black against the actor), so a
   // silhouette a pixel too tight can outweigh the texture's misregistration inside it.
   double missed_error_pct = 0;
 };
 
-// `rendered` and `truth` RGBA8 (psnr_db and ssim ignore alpha: a pixel the renderer left empty is
-// black and counts as an error), `mask` one byte a pixel (non-zero: the actor), all width x height.
+// `rendered` and `truth` RGBA8, `rendered` a view as the studio shows it, premultiplied (its colour
+// is the view over black; psnr_db and ssim ignore alpha: a pixel the renderer left empty is black
+// and counts as an error), `mask` one byte a pixel (non-zero: the actor), all width x height.
 // An empty mask (no actor in the view) scores NaN over the mask, the matte over what was drawn.
 ViewScore compareOverMask(std::span<const uint8_t> rendered, std::span<const uint8_t> truth,
                           std::span<const uint8_t> mask, int width, int height);
@@ -43,7 +44,9 @@ void imageToRgba(const ImageView& image, std::vector<uint8_t>& rgba);
 std::vector<ViewScore> leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
                                    const std::vector<std::vector<uint8_t>>& truth,
                                    const std::vector<std::vector<uint8_t>>& masks);
-// The same for camera `left_out` alone; the view rendered into `rendered` when given.
+// The same for camera `left_out` alone; the view rendered into `rendered` when given. Views are
+// scored as the studio shows them: opaque where drawn, the silhouette feathered
+// (finishSingleProcessView).
 ViewScore leaveOneOut(LumigraphRenderer& renderer, const Rig& rig,
                       const std::vector<std::vector<uint8_t>>& truth,
                       const std::vector<std::vector<uint8_t>>& masks, int left_out,

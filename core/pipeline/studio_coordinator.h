@@ -91,8 +91,10 @@ struct NodeReport {
 struct BlendedImage {
   int64_t frame_id = -1;
   int width = 0, height = 0;
-  std::vector<uint8_t> rgba;  // alpha 255 where a camera contributed, 0 elsewhere
-  PoseData pose;              // the pose the nodes rendered it with (its frame's, not the newest)
+  // Premultiplied: alpha 255 where a camera contributed, the silhouette's feather (alpha < 255,
+  // featherSilhouette) beside it, 0 elsewhere.
+  std::vector<uint8_t> rgba;
+  PoseData pose;  // the pose the nodes rendered it with (its frame's, not the newest)
 };
 
 // When a frame was done, from the first counted frame, and its latency (for plots).

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "core/render/partial_image_codec.h"
+#include "core/render/silhouette_feather.h"
 
 namespace lumistage {
 
@@ -86,6 +87,7 @@ void PartialImageBlender::finish(std::vector<uint8_t>& rgba) const {
     }
     std::memset(out, 0, size_t(width_ - end) * 4);
   }
+  featherSilhouette(rgba, width_, height_, row_begin_, row_end_);
 }
 
 }  // namespace lumistage

