@@ -11,10 +11,10 @@ namespace lumistage {
 //   rgb = sum_n alpha_n rgb_n / sum_n alpha_n,  alpha = 255 where sum_n alpha_n > 0, else 0,
 // then the silhouette feathered by a pixel (featherSilhouette: premultiplied). With one image that
 // holds every camera (the single-process renderer) this is finishSingleProcessView of that image,
-// so both paths give the same picture to rounding. It touches only the
-// pixels the nodes drew (the actor covers a fraction of the view): images are added straight
-// from their wire encoding, and each row remembers the span it was drawn in, so that neither
-// reset() nor finish() walks the empty rest. A tight CPU loop: at 640x480 it costs less than
+// so both paths give the same picture to rounding. It touches only the pixels the nodes drew (the
+// actor covers a fraction of the view) and their neighbours: images are added straight from their
+// wire encoding, and each row remembers the span it was drawn in, so that neither reset() nor
+// finish() walks the empty rest. A tight CPU loop: at 640x480 it costs less than
 // uploading the images to a GPU would (see docs/lumigraph.md).
 class PartialImageBlender {
  public:
