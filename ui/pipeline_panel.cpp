@@ -67,9 +67,10 @@ void PipelineWorker::startRecording(const QString& file) {
       return;
     }
     emit message(tr("Recording the view to %1").arg(file));
-    if (const ViewRecorder* recorder = run.viewRecording();
-        recorder && !recorder->leftover().empty())
-      emit message(QString::fromStdString(recorder->leftoverNotice()));
+    if (const ViewRecorder* recorder = run.viewRecording()) {
+      if (const std::string notice = recorder->leftoverNotice(); !notice.empty())
+        emit message(QString::fromStdString(notice));
+    }
   });
 }
 

@@ -34,9 +34,7 @@ namespace {
 // of this machine's memory is refused before anything is loaded or rendered, naming how many
 // frames would fit.
 void checkLoopFits(const Rig& rig, PixelFormat format, int frames) {
-  size_t set_bytes = 0;
-  for (int c = 0; c < rig.cameraCount(); ++c)
-    set_bytes += size_t(rig.camera(c).width()) * rig.camera(c).height() * bytesPerPixel(format);
+  const size_t set_bytes = size_t(rig.pixelsPerSet()) * bytesPerPixel(format);
   double memory = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
   // In a container, its memory limit (cgroup v2) when lower.
   if (std::ifstream limit("/sys/fs/cgroup/memory.max"); limit) {
@@ -235,10 +233,7 @@ void addCameraCommands(CLI::App& app) {
                                                    *parseImageFiles(s->image_files));
       grouper = std::make_unique<FrameGrouper>(rig.cameraCount());
       // How long the disk lasts at the cameras' raw rate (PNM files are the raw bytes; PNG less).
-      double bytes_per_s = 0;
-      for (int c = 0; c < rig.cameraCount(); ++c)
-        bytes_per_s +=
-            double(rig.camera(c).width()) * rig.camera(c).height() * bytesPerPixel(format) * fps;
+      const double bytes_per_s = double(rig.pixelsPerSet()) * bytesPerPixel(format) * fps;
       if (const DiskSpace disk = diskSpaceAt(s->record); disk.free_bytes >= 0 && bytes_per_s > 0) {
         const double minutes = double(disk.free_bytes) / bytes_per_s / 60;
         fmt::print("recording to {}: {} free, about {:.0f} min at the cameras' {:.0f} MB/s{}\n",

@@ -41,11 +41,8 @@ SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions 
   }
   finished_ = frames == 0;
   if (options_.mode != ReplayMode::kFromMemory) return;
-  size_t set_bytes = 0;
-  for (int c : cameras_) {
-    const Camera& camera = reader_.rig().camera(c);
-    set_bytes += size_t(camera.width()) * camera.height() * bytesPerPixel(reader_.pixelFormat());
-  }
+  const size_t set_bytes =
+      size_t(reader_.rig().pixelsPerSet(cameras_)) * bytesPerPixel(reader_.pixelFormat());
   const size_t needed = set_bytes * size_t(frames);
   if (needed > options_.memory_limit_bytes) {
     throw Error(fmt::format(

@@ -89,6 +89,18 @@ std::optional<int> Rig::findNode(std::string_view name) const {
   return std::nullopt;
 }
 
+int64_t Rig::pixelsPerSet() const {
+  int64_t pixels = 0;
+  for (const Camera& c : cameras_) pixels += int64_t(c.width()) * c.height();
+  return pixels;
+}
+
+int64_t Rig::pixelsPerSet(std::span<const int> cameras) const {
+  int64_t pixels = 0;
+  for (int c : cameras) pixels += int64_t(camera(c).width()) * camera(c).height();
+  return pixels;
+}
+
 }  // namespace lumistage
 
 namespace lumistage {

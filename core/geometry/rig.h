@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -47,6 +49,10 @@ class Rig {
   int nodeCount() const { return static_cast<int>(nodes_.size()); }
   std::optional<int> findNode(std::string_view name) const;
   int nodeOfCamera(int camera_index) const { return node_of_camera_.at(camera_index); }
+  // The pixels of one image from each camera, or from each of `cameras` (indices): a frame set's
+  // size at one byte a pixel.
+  int64_t pixelsPerSet() const;
+  int64_t pixelsPerSet(std::span<const int> cameras) const;
 
   // The stage box the rig file gives (docs/rig-file.md), if it gives one; stageVolume() in
   // core/geometry/stage_volume.h is what to use. setStage throws std::invalid_argument for a box

@@ -942,11 +942,8 @@ RunReport StudioCoordinator::report() const {
         state.shown_frames > 0 ? double(state.shown_bytes) / double(state.shown_frames) : -1;
     shown_bytes += state.shown_bytes;
     shown_frames += state.shown_frames;
-    double node_raw = 0, rate_hz = 0;
-    for (int c : node.cameras) {
-      node_raw +=
-          double(rig_.camera(c).width()) * rig_.camera(c).height() * options_.raw_bytes_per_pixel;
-    }
+    const double node_raw = double(rig_.pixelsPerSet(node.cameras)) * options_.raw_bytes_per_pixel;
+    double rate_hz = 0;
     for (const CameraHealth& c : state.report.cameras) rate_hz = std::max(rate_hz, c.frame_rate_hz);
     // What a take of its cameras writes a second, on the disk it names (nodes on one PC share
     // one: their rates add up below).

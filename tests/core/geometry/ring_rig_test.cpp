@@ -55,5 +55,12 @@ TEST(RingRig, HeightsAlternateAndNodesAreDealtInTurn) {
   for (const Camera& c : rig.cameras()) EXPECT_NEAR(c.rotation()(0, 2), 0.0, 1e-12);
 }
 
+TEST(RingRig, AFrameSetHoldsEachCamerasPixels) {
+  const Rig rig = makeRingRig({});
+  EXPECT_EQ(rig.pixelsPerSet(), int64_t(12) * 1024 * 768);
+  EXPECT_EQ(rig.pixelsPerSet(rig.nodes()[0].cameras), int64_t(3) * 1024 * 768);
+  EXPECT_EQ(rig.pixelsPerSet(std::vector<int>{}), 0);
+}
+
 }  // namespace
 }  // namespace lumistage
