@@ -1,8 +1,10 @@
 #include "ui/main_window.h"
 
+#include <QAbstractButton>
 #include <QAction>
 #include <QCloseEvent>
 #include <QComboBox>
+#include <QCoreApplication>
 #include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
@@ -14,12 +16,15 @@
 #include <QStatusBar>
 #include <QTabWidget>
 #include <QThread>
+#include <QTimer>
 #include <algorithm>
 #include <exception>
+#include <filesystem>
 
 #include "core/calib/calibration_report.h"
 #include "core/geometry/rig_file.h"
 #include "core/geometry/stage_volume.h"
+#include "core/render/view_recorder.h"
 #include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
 #include "ui/clone_panel.h"
@@ -36,7 +41,11 @@ namespace lumistage {
 
 namespace {
 constexpr int kLayoutVersion = 2;  // of saveState: panels added since version 1
-}
+// The view's recording under way (its partial file) and the studio process recording it, kept in
+// the settings until the recording ends: found at start-up, the studio ended without closing it.
+constexpr char kOpenRecording[] = "recording/open";
+constexpr char kOpenRecordingPid[] = "recording/open_pid";
+}  // namespace
 
 MainWindow::MainWindow(QWidget* parent)
     : QMainWindow(parent),
@@ -109,6 +118,19 @@ MainWindow::MainWindow(QWidget* parent)
           &PipelinePanel::stopRecording);
   connect(pipeline_panel_, &PipelinePanel::recordingEnded, viewport_panel_,
           &ViewportPanel::recordingEnded);
+  connect(pipeline_panel_, &PipelinePanel::recordingStarted, this,
+          [this](const QString& partial, const QString& leftover) {
+            QSettings settings("Lumistage", "Studio");
+            settings.setValue(kOpenRecording, partial);
+            settings.setValue(kOpenRecordingPid, QCoreApplication::applicationPid());
+            if (!leftover.isEmpty() && !wasRecovered(leftover.toStdString()))
+              offerRecovery(leftover, false);
+          });
+  connect(pipeline_panel_, &PipelinePanel::recordingEnded, this, [] {
+    QSettings settings("Lumistage", "Studio");
+    settings.remove(kOpenRecording);
+    settings.remove(kOpenRecordingPid);
+  });
   connect(viewport_panel_->viewport(), &ViewportWidget::clonesChanged, clone_panel_,
           &ClonePanel::refresh);
   connect(clone_panel_, &ClonePanel::clonesChanged, this, [this] {
@@ -128,6 +150,7 @@ MainWindow::MainWindow(QWidget* parent)
   QAction* open = file->addAction(tr("&Open rig..."), this, &MainWindow::chooseRig);
   open->setShortcut(QKeySequence::Open);
   file->addAction(tr("Run the &demo (virtual studio)"), this, &MainWindow::startDemo);
+  file->addAction(tr("&Recover a recording of the view..."), this, &MainWindow::chooseRecording);
   file->addSeparator();
   QAction* quit = file->addAction(tr("&Quit"), this, &QWidget::close);
   quit->setShortcut(QKeySequence::Quit);
@@ -155,10 +178,27 @@ MainWindow::MainWindow(QWidget* parent)
   const int chosen = size->findData(
       settings.value("viewport/render_width", viewport_panel_->viewport()->renderWidth()).toInt());
   if (chosen >= 0) size->setCurrentIndex(chosen);
+
+  // A recording of the view that the last studio left open (killed, crashed, power lost): offered
+  // for recovery once the window is up. Not while the studio that records it still runs.
+  const QString left_open = settings.value(kOpenRecording).toString();
+  const qint64 pid = settings.value(kOpenRecordingPid).toLongLong();
+  const bool recording_elsewhere = pid != QCoreApplication::applicationPid() && pid > 0 &&
+                                   QFileInfo::exists(QString("/proc/%1").arg(pid));
+  if (!left_open.isEmpty() && !recording_elsewhere) {
+    settings.remove(kOpenRecording);
+    settings.remove(kOpenRecordingPid);
+    if (pid != QCoreApplication::applicationPid() && QFileInfo::exists(left_open))
+      QTimer::singleShot(0, this, [this, left_open] { offerRecovery(left_open, true); });
+  }
 }
 
 MainWindow::~MainWindow() {
   stopSource();
+  for (QThread* recovery : recoveries_) {  // a video half made would be left out of its place
+    recovery->wait();
+    delete recovery;
+  }
 }
 
 QDockWidget* MainWindow::addDock(const QString& title, const QString& name, QWidget* panel,
@@ -340,6 +380,73 @@ void MainWindow::chooseRig() {
   if (const QString error = openRig(path); !error.isEmpty()) {
     QMessageBox::warning(this, tr("Cannot open rig"), error);
   }
+}
+
+void MainWindow::chooseRecording() {
+  const QString partial = QFileDialog::getOpenFileName(
+      this, tr("Recover a recording of the view"), QString(),
+      tr("Recordings that never closed (*.partial.avi *.partial-*.avi);;Videos (*.avi)"));
+  if (!partial.isEmpty()) recoverRecording(partial);
+}
+
+void MainWindow::offerRecovery(const QString& partial, bool studio_ended) {
+  const QString video = QString::fromStdString(recoveredVideoPath(partial.toStdString()).string());
+  auto* box = new QMessageBox(
+      QMessageBox::Question, tr("Recover a recording"),
+      studio_ended ? tr("The studio ended while it was recording the view, without closing the "
+                        "video.")
+                   : tr("A recording of the view under this name never closed. The recording "
+                        "just started goes beside it."),
+      QMessageBox::Yes | QMessageBox::No, this);
+  box->setInformativeText(
+      tr("Recover its whole frames into\n%1?\n\nThe video left open, kept as it is:\n%2")
+          .arg(video, partial));
+  box->button(QMessageBox::Yes)->setText(tr("Recover"));
+  box->button(QMessageBox::No)->setText(tr("Not now"));
+  box->setDefaultButton(QMessageBox::Yes);
+  box->setAttribute(Qt::WA_DeleteOnClose);
+  connect(box, &QMessageBox::buttonClicked, this, [this, box, partial](QAbstractButton* button) {
+    if (box->standardButton(button) == QMessageBox::Yes) recoverRecording(partial);
+  });
+  box->open();
+}
+
+void MainWindow::recoverRecording(const QString& partial) {
+  const std::filesystem::path in = partial.toStdString();
+  const std::filesystem::path out = recoveredVideoPath(in);
+  const QString video = QString::fromStdString(out.string());
+  struct Outcome {
+    RecoveredVideo video;
+    QString error;
+  };
+  auto outcome = std::make_shared<Outcome>();
+  QThread* thread = QThread::create([in, out, outcome] {
+    try {
+      outcome->video = recoverPartialVideo(in, out);
+    } catch (const std::exception& e) {
+      outcome->error = QString::fromStdString(e.what());
+    }
+  });
+  recoveries_.append(thread);
+  connect(thread, &QThread::finished, this, [this, thread, outcome, video] {
+    recoveries_.removeOne(thread);
+    thread->deleteLater();
+    if (!outcome->error.isEmpty()) {
+      status_->setText(tr("Cannot recover the recording: %1").arg(outcome->error));
+      emit recordingRecovered(QString(), outcome->error);
+      return;
+    }
+    const RecoveredVideo& r = outcome->video;
+    status_->setText(
+        tr("Recovered %1 frames (%2 s) of the view into %3%4")
+            .arg(r.frames)
+            .arg(r.fps > 0 ? r.frames / r.fps : 0.0, 0, 'f', 1)
+            .arg(video)
+            .arg(r.bytes_cut > 0 ? tr("; the last frame, cut short, left out") : QString()));
+    emit recordingRecovered(video, QString());
+  });
+  status_->setText(tr("Recovering %1 into %2...").arg(partial, video));
+  thread->start();
 }
 
 QString MainWindow::recordingsUnderWay() const {

@@ -75,10 +75,20 @@ class MainWindow : public QMainWindow {
   // Closes without that question: a signal (SIGTERM, Ctrl-C in the terminal) asked the studio to
   // stop, and nobody may be there to answer.
   void closeWithoutAsking();
+  // Makes a whole video of a recording of the view that never closed (NAME.partial.avi, left when
+  // the studio was killed, crashed or lost power while recording) on a thread of its own:
+  // NAME-recovered.avi beside it (recoveredVideoPath), `partial` kept as it is. The status bar and
+  // recordingRecovered() say how it went. The studio offers it by itself: at start-up for the
+  // recording it had open when it last ended without closing it, and when a recording finds a
+  // partial file of its name left by an earlier one (File > Recover a recording of the view...
+  // for any other).
+  void recoverRecording(const QString& partial);
 
  signals:
   void sourceFailed(QString error);
   void demoFailed(QString error);
+  // recoverRecording() ended: the video made, or (video empty) why none was.
+  void recordingRecovered(QString video, QString error);
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -89,6 +99,10 @@ class MainWindow : public QMainWindow {
   QDockWidget* addDock(const QString& title, const QString& name, QWidget* panel,
                        Qt::DockWidgetArea area);
   void startDemoOn(const QString& session);
+  // Asks whether to recover `partial` (recoverRecording), without waiting for the answer.
+  // `studio_ended`: the studio ended while recording it; otherwise a new recording found it.
+  void offerRecovery(const QString& partial, bool studio_ended);
+  void chooseRecording();
 
   std::unique_ptr<Rig> rig_;
   QString rig_path_;
@@ -113,6 +127,7 @@ class MainWindow : public QMainWindow {
   QLabel* status_;
   QString report_error_;  // why the rig's calibration report was not used (empty: it was, or none)
   bool close_without_asking_ = false;
+  QList<QThread*> recoveries_;  // recoverRecording()'s, until they end
 };
 
 }  // namespace lumistage

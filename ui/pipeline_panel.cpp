@@ -70,6 +70,8 @@ void PipelineWorker::startRecording(const QString& file) {
     if (const ViewRecorder* recorder = run.viewRecording()) {
       if (const std::string notice = recorder->leftoverNotice(); !notice.empty())
         emit message(QString::fromStdString(notice));
+      emit recordingStarted(QString::fromStdString(recorder->partialFile().string()),
+                            QString::fromStdString(recorder->leftover().string()));
     }
   });
 }
@@ -380,6 +382,10 @@ void PipelinePanel::start(LocalRunOptions options) {
     notice_ = text;
     summary_->setText(text.toHtmlEscaped());
   });
+  connect(worker_, &PipelineWorker::recordingStarted, this,
+          [this](const QString& partial, const QString& leftover) {
+            if (thread_) emit recordingStarted(partial, leftover);
+          });
   connect(worker_, &PipelineWorker::recordingEnded, this, &PipelinePanel::recordingEnded);
   connect(worker_, &PipelineWorker::takeRefused, this, &PipelinePanel::refuseTake);
   start_button_->setEnabled(false);

@@ -79,6 +79,9 @@ class PipelineWorker : public QObject {
   void snapshot(lumistage::PipelineSnapshot snapshot);
   void view(lumistage::PipelineView view);
   void message(QString text);
+  // The view's recording started: the file it is written to until it closes, and a partial file
+  // of its name that an earlier recording left (empty: none).
+  void recordingStarted(QString partial, QString leftover);
   void recordingEnded();             // stopped, failed, or the pipeline stopped
   void takeRefused(QString reason);  // startTake(): why the take cannot start
   void finished();
@@ -132,6 +135,8 @@ class PipelinePanel : public QWidget {
   void snapshot(const lumistage::PipelineSnapshot& snapshot);
   void view(const lumistage::PipelineView& view);  // every frame the studio blends
   void started();
+  // A recording of the view started (PipelineWorker::recordingStarted).
+  void recordingStarted(QString partial, QString leftover);
   // A recording of the view ended: asked to, a write failed, or the pipeline stopped.
   void recordingEnded();
   // Asks the studio to make the virtual studio's demo session (a long action with progress).

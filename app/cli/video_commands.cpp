@@ -26,15 +26,12 @@ void addVideoCommands(CLI::App& app) {
       "copied as they are");
   recover->add_option("partial", a->partial, "the recording left behind: NAME.partial.avi")
       ->required();
-  recover->add_option("--out", a->out, "the video to write (default: NAME-recovered.avi)");
+  recover->add_option(
+      "--out", a->out,
+      "the video to write (default: NAME-recovered.avi, or -recovered-2.avi... where that exists)");
   recover->callback([a] {
-    std::filesystem::path out = a->out;
-    if (out.empty()) {
-      const std::filesystem::path in(a->partial);
-      std::string stem = in.stem().string();  // NAME.partial, NAME.partial-2
-      if (const size_t dot = stem.rfind(".partial"); dot != std::string::npos) stem.resize(dot);
-      out = in.parent_path() / (stem + "-recovered.avi");
-    }
+    const std::filesystem::path out =
+        a->out.empty() ? recoveredVideoPath(a->partial) : std::filesystem::path(a->out);
     if (lowercaseExtension(out) != ".avi")
       throw CLI::ValidationError("--out", out.string() + ": the video is an AVI: name it .avi");
     refuseOutputOverInputs("--out", out, {{"partial", a->partial}});

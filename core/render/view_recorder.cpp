@@ -18,6 +18,36 @@ std::filesystem::path partialVideoPath(const std::filesystem::path& file) {
   return file.parent_path() / (file.stem().string() + ".partial" + file.extension().string());
 }
 
+namespace {
+
+// NAME-recovered.avi (k = 1), NAME-recovered-K.avi, beside NAME.partial.avi or NAME.partial-J.avi.
+std::filesystem::path recoveredVideoPath(const std::filesystem::path& partial, int k) {
+  std::string stem = partial.stem().string();
+  if (const size_t dot = stem.rfind(".partial"); dot != std::string::npos) stem.resize(dot);
+  return partial.parent_path() /
+         (stem + "-recovered" + (k > 1 ? "-" + std::to_string(k) : std::string()) + ".avi");
+}
+
+}  // namespace
+
+std::filesystem::path recoveredVideoPath(const std::filesystem::path& partial) {
+  std::error_code error;
+  int k = 1;
+  while (std::filesystem::exists(recoveredVideoPath(partial, k), error)) ++k;
+  return recoveredVideoPath(partial, k);
+}
+
+bool wasRecovered(const std::filesystem::path& partial) {
+  std::error_code error;
+  const auto changed = std::filesystem::last_write_time(partial, error);
+  if (error) return false;
+  for (int k = 1;; ++k) {
+    const auto made = std::filesystem::last_write_time(recoveredVideoPath(partial, k), error);
+    if (error) return false;
+    if (made >= changed) return true;
+  }
+}
+
 std::string finishPartialVideo(const std::filesystem::path& partial,
                                const std::filesystem::path& file, int64_t frames, int api) {
   cv::VideoCapture check(partial.string(), api);
@@ -282,6 +312,9 @@ const std::string& ViewRecorder::error() const {
 
 const std::filesystem::path& ViewRecorder::file() const {
   return impl_->file;
+}
+const std::filesystem::path& ViewRecorder::partialFile() const {
+  return impl_->partial;
 }
 const std::filesystem::path& ViewRecorder::leftover() const {
   return impl_->leftover;

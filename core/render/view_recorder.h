@@ -25,6 +25,12 @@ struct RecoveredVideo {
 // such a video, no whole frame in it, `out` exists).
 RecoveredVideo recoverPartialVideo(const std::filesystem::path& partial,
                                    const std::filesystem::path& out);
+// Where recoverPartialVideo() should write `partial`'s video: NAME-recovered.avi beside it for
+// NAME.partial.avi or NAME.partial-K.avi, or NAME-recovered-2.avi (-3...) when that exists.
+std::filesystem::path recoveredVideoPath(const std::filesystem::path& partial);
+// Whether a video recovered from `partial` (NAME-recovered.avi, -2...) lies beside it, made after
+// `partial` last changed.
+bool wasRecovered(const std::filesystem::path& partial);
 // Puts the closed video `partial` in `file`'s place if it reads back `frames` frames (through
 // OpenCV's reader `api`, 0: any); otherwise leaves both as they are. Empty when done, else why,
 // naming `file` (the caller says what became of the partial file).
@@ -67,6 +73,9 @@ class ViewRecorder {
   static constexpr int kFreeCheckFrames = 30;
 
   const std::filesystem::path& file() const;
+  // Where the video is written until it is closed and put in file()'s place (NAME.partial.avi,
+  // or NAME.partial-K.avi beside a leftover one).
+  const std::filesystem::path& partialFile() const;
   // A partial file of the name left by a recording that never closed; empty when none. And that in
   // words for the user, with how to recover it; empty when none.
   const std::filesystem::path& leftover() const;

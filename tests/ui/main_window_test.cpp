@@ -15,8 +15,10 @@
 #include <QMenu>
 #include <QMessageBox>
 #include <QMouseEvent>
+#include <QProcess>
 #include <QPushButton>
 #include <QSettings>
+#include <QSignalSpy>
 #include <QSlider>
 #include <QTableWidget>
 #include <QTemporaryDir>
@@ -32,6 +34,7 @@
 #include "core/geometry/epipolar.h"
 #include "core/geometry/rig_file.h"
 #include "core/geometry/ring_rig.h"
+#include "core/render/view_recorder.h"
 #include "core/sim/virtual_studio.h"
 #include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
@@ -381,15 +384,31 @@ class MainWindowTest : public QObject {
     // Why, still said under the figures the frames since have rewritten.
     const QString summary = window.pipeline()->findChild<QLabel*>("pipeline_summary")->text();
     QVERIFY2(summary.contains("fps") && summary.contains("taken.avi"), qPrintable(summary));
+    // A partial file of the name, left by a recording that never closed: kept, the recording goes
+    // beside it, and the studio offers to recover it (not now). The settings name the recording
+    // under way until it ends, for a studio started after this one died.
+    writeLeftOpenRecording(dir.filePath("last.partial.avi"), 4);
+    QString offered;
+    answerNextMessageBox(QMessageBox::No, &offered);
     // Stopping the pipeline ends a recording: the file is finished, the button goes up.
     viewport->record(true, dir.filePath("last.avi"));
     QTRY_VERIFY_WITH_TIMEOUT(viewport->viewport()->snapshot().recorded_frames >= 2, 10000);
+    QTRY_VERIFY_WITH_TIMEOUT(!offered.isEmpty(), 10000);
+    QVERIFY2(offered.contains("under this name never closed") &&
+                 offered.contains(dir.filePath("last.partial.avi")) &&
+                 offered.contains(dir.filePath("last-recovered.avi")),
+             qPrintable(offered));
+    QCOMPARE(QSettings("Lumistage", "Studio").value("recording/open").toString(),
+             dir.filePath("last.partial-2.avi"));
 
     QVERIFY(!viewport->viewport()->snapshot().view.isNull());
     window.pipeline()->stop();
     QVERIFY(!window.pipeline()->running());
     QVERIFY(!viewport->recording());
     QVERIFY(QFileInfo(dir.filePath("last.avi")).size() > 1000);
+    QVERIFY(QFile::exists(dir.filePath("last.partial.avi")));
+    QVERIFY(!QFile::exists(dir.filePath("last-recovered.avi")));
+    QVERIFY(!QSettings("Lumistage", "Studio").contains("recording/open"));
     // The panel says how the recording ended, and no node is shown streaming any more.
     auto* summary_label = window.pipeline()->findChild<QLabel*>("pipeline_summary");
     QTRY_VERIFY_WITH_TIMEOUT(
@@ -753,7 +772,7 @@ class MainWindowTest : public QObject {
       auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget());
       if (!box && clock->elapsed() < 10000) return;
       if (box) {
-        *asked = box->text();
+        *asked = box->text() + "\n" + box->informativeText();
         box->button(button)->click();
       }
       timer->stop();
@@ -761,6 +780,93 @@ class MainWindowTest : public QObject {
       delete clock;
     });
     timer->start(20);
+  }
+
+  // A recording of the view as a studio killed while recording leaves it (NAME.partial.avi: no
+  // index, no counts in its headers): a closed one's, its index cut off and its sizes zeroed.
+  static void writeLeftOpenRecording(const QString& partial, int frames) {
+    const QString made = QFileInfo(partial).absolutePath() + "/made.avi";
+    {
+      lumistage::ViewRecorder recorder(made.toStdString(), 25);
+      std::vector<uint8_t> rgba(size_t(64) * 48 * 4, 255);
+      for (int f = 0; f < frames; ++f) {
+        std::fill(rgba.begin(), rgba.end(), uint8_t(10 * f));
+        QVERIFY(recorder.add(f, 64, 48, rgba));
+      }
+      QVERIFY(recorder.close());
+    }
+    QFile in(made);
+    QVERIFY(in.open(QIODevice::ReadOnly));
+    QByteArray d = in.readAll();
+    in.close();
+    QVERIFY(QFile::remove(made));
+    const qsizetype movi = d.indexOf("movi") - 8, index = d.lastIndexOf("idx1");
+    QVERIFY(movi > 0 && index > movi);
+    d.truncate(index);
+    for (const qsizetype at : {qsizetype(4), movi + 4}) d.replace(at, 4, QByteArray(4, '\0'));
+    QFile out(partial);
+    QVERIFY(out.open(QIODevice::WriteOnly));
+    QCOMPARE(out.write(d), d.size());
+  }
+
+  // The studio ended while recording the view (killed, crashed, power lost: its settings still
+  // name the recording it had open). The next studio offers to recover it, once, and makes a
+  // whole video of it beside it; one that a studio still running records is left alone.
+  void aRecordingLeftOpenIsOfferedForRecovery() {
+    QTemporaryDir dir;
+    const QString partial = dir.filePath("view.partial.avi");
+    writeLeftOpenRecording(partial, 12);
+    const auto leaveOpen = [&](qint64 pid) {
+      QSettings settings("Lumistage", "Studio");
+      settings.setValue("recording/open", partial);
+      settings.setValue("recording/open_pid", pid);
+    };
+    QProcess running;  // the studio recording it, still running
+    running.start("sleep", {"60"});
+    QVERIFY(running.waitForStarted());
+    leaveOpen(running.processId());
+    {
+      MainWindow window;
+      window.show();
+      QTest::qWait(300);
+      QVERIFY(!QApplication::activeModalWidget());
+    }
+    QCOMPARE(QSettings("Lumistage", "Studio").value("recording/open").toString(), partial);
+    running.kill();  // and now gone
+    QVERIFY(running.waitForFinished());
+
+    QString asked;
+    answerNextMessageBox(QMessageBox::Yes, &asked);
+    MainWindow window;
+    QSignalSpy recovered(&window, &MainWindow::recordingRecovered);
+    window.show();
+    QTRY_COMPARE_WITH_TIMEOUT(recovered.count(), 1, 20000);
+    const QString video = dir.filePath("view-recovered.avi");
+    QVERIFY2(asked.contains("ended while it was recording the view") &&
+                 asked.contains("into\n" + video + "?") && asked.contains(":\n" + partial),
+             qPrintable(asked));
+    QCOMPARE(recovered[0][0].toString(), video);
+    QCOMPARE(recovered[0][1].toString(), QString());
+    const QString status = window.findChild<QLabel*>("status")->text();
+    QVERIFY2(status.contains("Recovered 12 frames (0.5 s) of the view into " + video),
+             qPrintable(status));
+    QVERIFY(QFileInfo(video).size() > QFileInfo(partial).size());  // its index written
+    QVERIFY(QFile::exists(partial));
+    QVERIFY(!QSettings("Lumistage", "Studio").contains("recording/open"));
+    {
+      MainWindow again;  // asked once
+      again.show();
+      QTest::qWait(300);
+      QVERIFY(!QApplication::activeModalWidget());
+    }
+    // What is not such a recording says why.
+    window.recoverRecording(video);
+    QTRY_COMPARE_WITH_TIMEOUT(recovered.count(), 2, 20000);
+    QCOMPARE(recovered[1][0].toString(), QString());
+    QVERIFY2(recovered[1][1].toString().contains("it was closed"),
+             qPrintable(recovered[1][1].toString()));
+    QVERIFY(window.findChild<QLabel*>("status")->text().startsWith(
+        "Cannot recover the recording: " + video));
   }
 
   // A take and the view being recorded: closing the window asks first. Cancel keeps both

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <csignal>
 #include <opencv2/videoio.hpp>
 
@@ -195,6 +196,19 @@ TEST(ViewRecorder, ARecordingThatNeverClosedIsRecoveredAndNeverWrittenOver) {
   EXPECT_EQ(read, r.frames);
   EXPECT_NE(errorOf([&] { recoverPartialVideo(partial, recovered); }).find("exists"),
             std::string::npos);
+  // Where the studio and `lumistage video recover` put it by default: NAME-recovered.avi, then
+  // -2...; and whether it was made since the partial file last changed.
+  EXPECT_EQ(recoveredVideoPath(partial), dir / "take-recovered.avi");
+  EXPECT_EQ(recoveredVideoPath(dir / "take.partial-3.avi"), dir / "take-recovered.avi");
+  EXPECT_FALSE(wasRecovered(partial));
+  EXPECT_EQ(recoverPartialVideo(partial, recoveredVideoPath(partial)).frames, r.frames);
+  EXPECT_TRUE(wasRecovered(partial));
+  EXPECT_EQ(recoveredVideoPath(partial), dir / "take-recovered-2.avi");
+  std::filesystem::last_write_time(
+      partial,
+      std::filesystem::last_write_time(dir / "take-recovered.avi") + std::chrono::hours(1));
+  EXPECT_FALSE(wasRecovered(partial));  // changed since
+  EXPECT_FALSE(wasRecovered(dir / "none.partial.avi"));
 
   // Recording again under the name: beside the left partial file, which stays as it was.
   {
