@@ -11,6 +11,7 @@
 #include <QMutexLocker>
 #include <QPixmap>
 #include <QPushButton>
+#include <QSettings>
 #include <QTableWidget>
 #include <QThread>
 #include <QVBoxLayout>
@@ -119,7 +120,7 @@ void PipelineWorker::run() {
                      .arg(pipeline.nodeNames().size())
                      .arg(QString::fromStdString(pipeline.studio().endpoint())));
     // The body the studio places, to draw over the views: the generic human (as the nodes use).
-    const SkinnedMesh human = loadGenericHuman();
+    const SkinnedMesh human = loadGenericHuman(options_.body);
     Pose pose;
     std::vector<Eigen::Affine3f> transforms;
     const auto start = std::chrono::steady_clock::now();
@@ -206,6 +207,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
       table_(new QTableWidget(this)),
       stages_(new QTableWidget(this)),
       source_(new QComboBox(this)),
+      body_(new QComboBox(this)),
       start_button_(new QPushButton(tr("Start"), this)),
       stop_button_(new QPushButton(tr("Stop"), this)),
       take_name_(new QLineEdit("take-001", this)),
@@ -226,6 +228,19 @@ PipelinePanel::PipelinePanel(QWidget* parent)
                           "systemd unit); the studio listens for them with the keys they were "
                           "given"),
                        Qt::ToolTipRole);
+  body_->setObjectName("pipeline_body");
+  body_->addItem(tr("Standard body"), int(BodyDetail::kStandard));
+  body_->addItem(tr("Fine body"), int(BodyDetail::kFine));
+  body_->setToolTip(
+      tr("The generic human the studio and its nodes pose and refine. Standard (about 2000 "
+         "vertices): four nodes and the studio on one PC keep up. Fine (about 4000): sharper views "
+         "for twice the nodes' work, for nodes on PCs of their own, each started with --body "
+         "fine"));
+  const bool fine = QSettings("Lumistage", "Studio").value("pipeline/body").toString() == "fine";
+  setBody(fine ? BodyDetail::kFine : BodyDetail::kStandard);
+  connect(body_, &QComboBox::currentIndexChanged, this, [this] {
+    QSettings("Lumistage", "Studio").setValue("pipeline/body", bodyDetailName(body()));
+  });
   table_->setColumnCount(8);
   table_->setHorizontalHeaderLabels({tr("Node"), tr("State"), tr("Camera"), tr("fps"), tr("Frames"),
                                      tr("Dropped"), tr("Take"), tr("Last error")});
@@ -247,6 +262,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   auto* buttons = new QHBoxLayout;
   buttons->addWidget(new QLabel(tr("Source:"), this));
   buttons->addWidget(source_);
+  buttons->addWidget(body_);
   buttons->addWidget(start_button_);
   buttons->addWidget(stop_button_);
   buttons->addSpacing(24);
@@ -287,6 +303,14 @@ PipelinePanel::PipelinePanel(QWidget* parent)
 
 PipelinePanel::~PipelinePanel() {
   stop();
+}
+
+void PipelinePanel::setBody(BodyDetail body) {
+  body_->setCurrentIndex(body_->findData(int(body)));
+}
+
+BodyDetail PipelinePanel::body() const {
+  return BodyDetail(body_->currentData().toInt());
 }
 
 void PipelinePanel::startChosen() {
@@ -352,6 +376,8 @@ void PipelinePanel::start(LocalRunOptions options) {
     entry =
         QString::fromStdString(options.session) == demo_session_ ? kDemoSession : kRecordedSession;
   source_->setCurrentIndex(entry);
+  options.body = body();
+  body_->setEnabled(false);  // the nodes pose it until they stop
   // Nodes started here record takes into the studio's folder; nodes on the stage's PCs into
   // their own (lumistage-node --takes).
   if (options.takes.empty() && options.listen.empty()) options.takes = takes_folder_.toStdString();
@@ -406,6 +432,7 @@ void PipelinePanel::stop() {
   thread_ = nullptr;
   worker_ = nullptr;
   start_button_->setEnabled(true);
+  body_->setEnabled(true);
   stop_button_->setEnabled(false);
   take_button_->setEnabled(false);
   take_button_->setText(tr("Record take"));

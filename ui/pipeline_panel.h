@@ -108,8 +108,14 @@ class PipelinePanel : public QWidget {
   explicit PipelinePanel(QWidget* parent = nullptr);
   ~PipelinePanel() override;
 
+  // Starts the pipeline with the generic human chosen beside the source (options.body is set
+  // from it), stopping any running one.
   void start(LocalRunOptions options);
   void stop();
+  // The generic human the studio and the nodes it starts pose, from the next start on; remembered
+  // between runs (the nodes on the stage's PCs must be started with the same --body).
+  void setBody(BodyDetail body);
+  BodyDetail body() const;
   bool running() const { return thread_ != nullptr; }
   const RunReport& lastReport() const { return last_.report; }
   const PipelineSnapshot& lastSnapshot() const { return last_; }
@@ -153,6 +159,7 @@ class PipelinePanel : public QWidget {
   QTableWidget* table_;
   QTableWidget* stages_;
   QComboBox* source_;
+  QComboBox* body_;
   QPushButton* start_button_;
   QPushButton* stop_button_;
   QLineEdit* take_name_;

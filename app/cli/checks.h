@@ -28,4 +28,16 @@ inline CLI::Validator within(double lo, double hi) {
       fmt::format("[{} - {}]", lo, hi));
 }
 
+// --body standard|fine: which generic human the studio and its nodes pose and refine
+// (BodyDetail); every process of a stage must be given the same.
+inline CLI::Option* addBodyOption(CLI::App& app, std::string& body) {
+  return app
+      .add_option("--body", body,
+                  "the generic human posed and refined: standard (about 2000 vertices: four nodes "
+                  "and the studio on one PC) or fine (about 4000: nodes on PCs of their own; "
+                  "sharper views, twice the nodes' work); the studio and every node alike")
+      ->check(CLI::IsMember({"standard", "fine"}))
+      ->capture_default_str();
+}
+
 }  // namespace lumistage

@@ -207,7 +207,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
 
 void addEvalCommand(CLI::App& app) {
   struct Args {
-    std::string session, json, config, loo_pictures;
+    std::string session, json, config, loo_pictures, body = "standard";
     int cameras = 0, frames = 0, loo_frames = 3;
     bool quiet = false;
   };
@@ -231,6 +231,7 @@ void addEvalCommand(CLI::App& app) {
   eval->add_option("--loo-pictures", args->loo_pictures,
                    "folder to write every scored view into, beside the camera's image and their "
                    "error map (<frame>_<camera>.png)");
+  addBodyOption(*eval, args->body);
   eval->add_flag("--quiet", args->quiet, "no report on standard output");
   eval->callback([args] {
     refuseOutputOverInputs("--json", args->json, {{"--session", args->session}});
@@ -267,7 +268,8 @@ void addEvalCommand(CLI::App& app) {
                               session.rig().cameraCount()));
     mocap.camera_count = args->cameras;
     mocap.max_frames = args->frames;
-    const SkinnedMesh generic = loadGenericHuman();
+    const SkinnedMesh generic = loadGenericHuman(parseBodyDetail(args->body));
+    report.set("mocap", "body_vertices", double(generic.rest.vertexCount()));
     const MocapEvalResult tracked = evaluateMocap(session, generic, mocap, report);
     SurfaceEvaluationOptions surface;
     if (!args->config.empty()) surface.refine = loadStudioConfig(args->config).refine;

@@ -152,7 +152,7 @@ void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
 void addRunCommand(CLI::App& app) {
   struct Args {
     std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size,
-                                     record_view, record_take, listen;
+                                     record_view, record_take, listen, body = "standard";
     int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
     int64_t frames = 150;
     double seconds = 60;
@@ -186,6 +186,7 @@ void addRunCommand(CLI::App& app) {
       ->capture_default_str();
   run->add_option("--keys", a->keys,
                   "key store (lumistage keys init); default: fresh keys in a temporary folder");
+  addBodyOption(*run, a->body);
   run->add_flag("--plain", a->plain, "no CURVE encryption and authentication");
   run->add_option("--json", a->json, "write the figures as JSON");
   run->add_option("--plot", a->plot,
@@ -243,6 +244,7 @@ void addRunCommand(CLI::App& app) {
     options.plain = a->plain;
     options.keys = a->keys;
     options.listen = a->listen;
+    options.body = parseBodyDetail(a->body);
     options.coordinator.max_frames = a->frames;
     std::string take;
     if (!a->record_take.empty()) {

@@ -8,6 +8,7 @@
 #include <exception>
 #include <thread>
 
+#include "app/cli/checks.h"
 #include "app/node/node_monitor.h"
 #include "core/base/output_path.h"
 #include "core/base/stop_signal.h"
@@ -28,7 +29,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> devices;
   double fps = 25;
   bool plain = false, monitor = false;
-  std::string monitor_screenshot, takes;
+  std::string monitor_screenshot, takes, body = "standard";
   app.add_option("--rig", rig_path, "rig file (default with --session: the session's)");
   app.add_option("--node", node_name, "this node's name in the rig")->required();
   app.add_option("--session", session, "serve this node's cameras of a recorded session");
@@ -44,6 +45,7 @@ int main(int argc, char** argv) {
   app.add_option("--pixel-format", pixel_format, "of the Aravis cameras")->capture_default_str();
   app.add_option("--fps", fps, "frame rate asked of the Aravis cameras")->capture_default_str();
   app.add_option("--studio", studio, "the studio's endpoint, e.g. tcp://studio-pc:5570");
+  lumistage::addBodyOption(app, body);
   app.add_option("--keys", keys,
                  "key store folder (lumistage keys init): this node's key and the studio's");
   app.add_option("--takes", takes,
@@ -165,7 +167,8 @@ int main(int argc, char** argv) {
       endpoint.studio_public_key = store.studioPublicKey();
     }
     lumistage::CameraNode camera_node(rig, node.name, std::move(source), endpoint,
-                                      lumistage::loadGenericHuman(), node_options);
+                                      lumistage::loadGenericHuman(lumistage::parseBodyDetail(body)),
+                                      node_options);
     // SIGINT, SIGTERM or SIGHUP: the node closes its take and stops (a second one ends it at once).
     std::atomic<bool>& stop = lumistage::stopOnSignals();
     fmt::print("node {}: {} cameras, serving {}\n", node.name, node.cameras.size(), studio);

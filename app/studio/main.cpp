@@ -10,9 +10,11 @@
 #include <cstdlib>
 #include <exception>
 #include <functional>
+#include <optional>
 
 #include "core/base/resource_path.h"
 #include "core/base/stop_signal.h"
+#include "core/body/human_model.h"
 #include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
 #include "ui/clone_panel.h"
@@ -95,6 +97,12 @@ int main(int argc, char** argv) {
       "plain",
       "With --listen: plain TCP, neither encrypted nor authenticated, for a closed lab network "
       "only; the nodes must be started with --plain too.");
+  QCommandLineOption body_option(
+      "body",
+      "The generic human the pipeline poses and refines: standard (about 2000 vertices: four "
+      "nodes and the studio on one PC) or fine (about 4000: sharper views, twice the nodes' work; "
+      "nodes on PCs of their own, each started with --body fine). Remembered between runs.",
+      "detail");
   QCommandLineOption demo_option(
       "demo",
       "The demo: film the virtual studio once (a short session, kept in the cache folder), replay "
@@ -117,6 +125,7 @@ int main(int argc, char** argv) {
   parser.addOption(listen_option);
   parser.addOption(keys_option);
   parser.addOption(plain_option);
+  parser.addOption(body_option);
   parser.addOption(screenshot_option);
   parser.process(app);
   if (int(parser.isSet(pipeline_option)) + int(parser.isSet(listen_option)) +
@@ -137,7 +146,18 @@ int main(int argc, char** argv) {
     }
   }
 
+  std::optional<lumistage::BodyDetail> body;
+  if (parser.isSet(body_option)) {
+    try {
+      body = lumistage::parseBodyDetail(parser.value(body_option).toStdString());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "lumistage-studio: --body: %s\n", e.what());
+      return 2;
+    }
+  }
+
   lumistage::MainWindow window;
+  if (body) window.pipeline()->setBody(*body);
   window.show();
   // Ctrl-C in its terminal, SIGTERM (a logout, a service manager) or SIGHUP closes the studio as
   // its close button does: a recording of the view finished, the nodes it started stopped after

@@ -215,8 +215,23 @@ SkinnedMesh makeHumanModel(const HumanModelSpec& spec) {
   return out;
 }
 
-SkinnedMesh loadGenericHuman() {
-  const std::filesystem::path path = resourcePath("body/generic_human.glb");
+int bodyDetailVertices(BodyDetail detail) {
+  return detail == BodyDetail::kFine ? 4000 : 2000;
+}
+
+const char* bodyDetailName(BodyDetail detail) {
+  return detail == BodyDetail::kFine ? "fine" : "standard";
+}
+
+BodyDetail parseBodyDetail(const std::string& name) {
+  if (name == "standard") return BodyDetail::kStandard;
+  if (name == "fine") return BodyDetail::kFine;
+  throw Error("body '" + name + "': standard or fine expected");
+}
+
+SkinnedMesh loadGenericHuman(BodyDetail detail) {
+  const std::filesystem::path path = resourcePath(
+      detail == BodyDetail::kFine ? "body/generic_human_fine.glb" : "body/generic_human.glb");
   SkinnedMesh mesh = loadSkinnedMesh(path);
   try {
     checkHumanJointOrder(mesh.skeleton, path.string());

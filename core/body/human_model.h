@@ -1,5 +1,7 @@
 #pragma once
 
+#include <string>
+
 #include "core/body/human_skeleton.h"
 #include "core/body/skinned_mesh.h"
 
@@ -24,10 +26,24 @@ struct HumanModelSpec {
 // smoothed over the mesh) and per-vertex materials. Deterministic.
 SkinnedMesh makeHumanModel(const HumanModelSpec& spec = {});
 
-// The generic human as shipped: resources/body/generic_human.glb, written once by
-// `lumistage body generate` (makeHumanModel with the defaults) and read from there at run time,
-// so that a studio can replace it with any rigged mesh. Throws Error when the file is missing or
-// malformed.
-SkinnedMesh loadGenericHuman();
+// How finely the shipped generic human is tessellated. The studio and every node must pose the
+// same one (a node told offsets for another says so and leaves them unused).
+//   kStandard, about 2000 vertices: four nodes and the studio sharing one PC refine and render it
+//     at video rate;
+//   kFine, about 4000: for nodes on PCs of their own (the reference rig's). Views left out score
+//     0.2 dB higher over the actor's mask and 0.65 dB as the studio shows them (docs/lumigraph.md),
+//     for twice the nodes' refinement and render work and twice the studio's refinement module.
+enum class BodyDetail { kStandard, kFine };
+// makeHumanModel's target_vertices for each.
+int bodyDetailVertices(BodyDetail detail);
+// "standard", "fine"; parseBodyDetail throws Error naming what it expected.
+const char* bodyDetailName(BodyDetail detail);
+BodyDetail parseBodyDetail(const std::string& name);
+
+// The generic human as shipped: resources/body/generic_human.glb (generic_human_fine.glb for
+// kFine), written once by `lumistage body generate [--vertices 4000]` (makeHumanModel with the
+// defaults but bodyDetailVertices) and read from there at run time, so that a studio can replace
+// it with any rigged mesh. Throws Error when the file is missing or malformed.
+SkinnedMesh loadGenericHuman(BodyDetail detail = BodyDetail::kStandard);
 
 }  // namespace lumistage

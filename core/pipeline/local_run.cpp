@@ -87,7 +87,8 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
   // The nodes pose the generic human: the refinement's smoothness needs its triangles, the
   // visibility the studio sends them its posed and refined vertices.
   if (!options_.coordinator.body)
-    options_.coordinator.body = std::make_shared<const SkinnedMesh>(loadGenericHuman());
+    options_.coordinator.body =
+        std::make_shared<const SkinnedMesh>(loadGenericHuman(options_.body));
   studio_ =
       std::make_unique<StudioCoordinator>(rig_, endpoint, kHumanJointCount, options_.coordinator);
 
@@ -105,6 +106,7 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
                   {"--session", options_.session.string(), "--replay", options_.replay});
     }
     if (!options_.takes.empty()) args.insert(args.end(), {"--takes", options_.takes.string()});
+    args.insert(args.end(), {"--body", bodyDetailName(options_.body)});
     if (options_.plain) {
       args.push_back("--plain");
     } else {

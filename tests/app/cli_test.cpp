@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -343,6 +344,9 @@ TEST(Cli, NumbersOutOfRangeAreRefusedByTheirOption) {
       {" virtual-cameras --config " + std::string(LUMISTAGE_TEST_RESOURCE_DIR) +
            "/studio/reference.yaml --frames 100000",
        "--frames 100000: 100000 frames of 12 cameras need"},
+      // A generic human that is not shipped.
+      {" run --session /nonexistent/session --body coarse",
+       "--body: coarse not in {standard,fine}"},
       // Where a run would write, checked before it starts, not after its minute.
       {" run --session /nonexistent/session --json /nonexistent/r.json",
        "--json /nonexistent/r.json: no folder /nonexistent to write it into"},
@@ -366,6 +370,30 @@ TEST(Cli, RunFailsWhenANodeProcessDies) {
   EXPECT_NE(r.output.find("node node2 exited (signal 9)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("frames in all"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("1 node process failed during the run"), std::string::npos) << r.output;
+  fs::remove_all(folder);
+}
+
+// --body fine: the studio and the nodes it starts pose the finer generic human alike (a node
+// given offsets for another mesh says so and renders nothing), and each node sends the
+// refinement twice the statistics.
+TEST(Cli, RunPosesTheFineBodyInTheStudioAndItsNodes) {
+  const fs::path folder = tempPath("fine_body");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
+                               "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
+  std::map<std::string, double> bytes;
+  for (const std::string body : {"standard", "fine"}) {
+    const fs::path json = folder / (body + ".json");
+    const Result r = run(kCli + " run --session " + (folder / "session").string() +
+                         " --frames 12 --seconds 60 --body " + body + " --json " + json.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("12 frames in all"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("not used"), std::string::npos) << r.output;
+    const std::string text = readFile(json);
+    const size_t at = text.find("\"node_bytes_per_frame\": ");
+    ASSERT_NE(at, std::string::npos) << text;
+    bytes[body] = std::stod(text.substr(at + 24));
+  }
+  EXPECT_GT(bytes["fine"], 1.5 * bytes["standard"]) << bytes["fine"] << " " << bytes["standard"];
   fs::remove_all(folder);
 }
 

@@ -38,6 +38,7 @@ done
 
 expect_file lumistage-common usr/bin/lumistage
 expect_file lumistage-common usr/share/lumistage/resources/body/generic_human.glb
+expect_file lumistage-common usr/share/lumistage/resources/body/generic_human_fine.glb
 expect_file lumistage-common usr/share/lumistage/resources/rigs/reference.yaml
 expect_file lumistage-common usr/share/lumistage/shaders/studio_actor.vert
 expect_file lumistage-common usr/share/man/man1/lumistage.1.gz

@@ -28,6 +28,7 @@
 #include <QtTest>
 #include <atomic>
 
+#include "core/body/human_model.h"
 #include "core/calib/calibration_report.h"
 #include "core/capture/session_reader.h"
 #include "core/capture/session_writer.h"
@@ -918,6 +919,40 @@ class MainWindowTest : public QObject {
       const lumistage::SessionReader part((dir.filePath("takes/take-001/") + node).toStdString());
       QVERIFY2(part.frameCount() > taken, node);
     }
+  }
+
+  // The generic human chosen beside the source is remembered between runs, and a pipeline runs
+  // on the one chosen when it started (the choice is closed meanwhile).
+  void bodyChoiceIsRememberedAndHeldWhileThePipelineRuns() {
+    const auto choice = [](MainWindow& w) {
+      return w.pipeline()->findChild<QComboBox*>("pipeline_body");
+    };
+    {
+      MainWindow window;
+      QCOMPARE(window.pipeline()->body(), lumistage::BodyDetail::kStandard);
+      QCOMPARE(choice(window)->currentText(), QString("Standard body"));
+      choice(window)->setCurrentIndex(choice(window)->findText("Fine body"));
+      QCOMPARE(window.pipeline()->body(), lumistage::BodyDetail::kFine);
+    }
+    QTemporaryDir dir;
+    writeStudioSession(dir.filePath("session"), 4);
+    MainWindow window;
+    QCOMPARE(window.pipeline()->body(), lumistage::BodyDetail::kFine);
+    lumistage::LocalRunOptions options;
+    options.session = dir.filePath("session").toStdString();
+    options.node_binary = LUMISTAGE_NODE;
+    window.pipeline()->start(options);
+    QVERIFY(!choice(window)->isEnabled());
+    // The nodes pose the fine body as the studio does: its offsets are used, views come.
+    QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames >= 3, 30000);
+    QVERIFY(!window.pipeline()->lastSnapshot().view.isNull());
+    QCOMPARE(window.pipeline()->lastSnapshot().mesh->positions.cols(),
+             lumistage::loadGenericHuman(lumistage::BodyDetail::kFine).rest.vertexCount());
+    window.pipeline()->stop();
+    QVERIFY(choice(window)->isEnabled());
+    window.pipeline()->setBody(lumistage::BodyDetail::kStandard);
+    QCOMPARE(QSettings("Lumistage", "Studio").value("pipeline/body").toString(),
+             QString("standard"));
   }
 
   void layoutIsRememberedBetweenRuns() {

@@ -8,6 +8,7 @@
 
 #include "core/geometry/ring_rig.h"
 #include "core/tracking/pose_tracker.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -91,10 +92,15 @@ TEST(HumanModel, ActorDiffersFromTheGenericHuman) {
 namespace lumistage {
 namespace {
 
-TEST(HumanModel, ShippedGenericHumanIsTheGeneratedOne) {
-  // resources/body/generic_human.glb is written by `lumistage body generate`; it must not drift.
-  const SkinnedMesh shipped = loadGenericHuman();
-  const SkinnedMesh generated = makeHumanModel();
+class ShippedGenericHuman : public ::testing::TestWithParam<BodyDetail> {};
+
+TEST_P(ShippedGenericHuman, IsTheGeneratedOne) {
+  // resources/body/generic_human.glb and generic_human_fine.glb are written by `lumistage body
+  // generate [--vertices 4000]`; they must not drift.
+  const SkinnedMesh shipped = loadGenericHuman(GetParam());
+  HumanModelSpec spec;
+  spec.target_vertices = bodyDetailVertices(GetParam());
+  const SkinnedMesh generated = makeHumanModel(spec);
   ASSERT_EQ(shipped.rest.vertexCount(), generated.rest.vertexCount());
   ASSERT_EQ(shipped.skeleton.jointCount(), generated.skeleton.jointCount());
   EXPECT_EQ(checkClosedManifold(shipped.rest), "");
@@ -118,6 +124,24 @@ TEST(HumanModel, ShippedGenericHumanIsTheGeneratedOne) {
     worst = std::max(worst, std::sqrt((b.colwise() - a.col(v)).colwise().squaredNorm().minCoeff()));
   }
   EXPECT_LT(worst, 1e-4f);
+}
+
+INSTANTIATE_TEST_SUITE_P(HumanModel, ShippedGenericHuman,
+                         ::testing::Values(BodyDetail::kStandard, BodyDetail::kFine),
+                         [](const ::testing::TestParamInfo<BodyDetail>& info) {
+                           return std::string(bodyDetailName(info.param));
+                         });
+
+TEST(HumanModel, BodyDetailsAreNamedAndTheFineOneHasTwiceTheVertices) {
+  for (const BodyDetail detail : {BodyDetail::kStandard, BodyDetail::kFine})
+    EXPECT_EQ(parseBodyDetail(bodyDetailName(detail)), detail);
+  EXPECT_NE(
+      testing::errorOf([] { parseBodyDetail("coarse"); }).find("body 'coarse': standard or fine"),
+      std::string::npos);
+  const int standard = loadGenericHuman(BodyDetail::kStandard).rest.vertexCount();
+  const int fine = loadGenericHuman(BodyDetail::kFine).rest.vertexCount();
+  EXPECT_GT(fine, 1.8 * standard);
+  EXPECT_LT(fine, 2.2 * standard);
 }
 
 // A generic human whose file lists the hips' children in another order (another exporter): the
