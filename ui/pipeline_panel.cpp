@@ -119,8 +119,8 @@ void PipelineWorker::run() {
                       : tr("Pipeline running: %1 nodes, studio at %2"))
                      .arg(pipeline.nodeNames().size())
                      .arg(QString::fromStdString(pipeline.studio().endpoint())));
-    // The body the studio places, to draw over the views: the generic human (as the nodes use).
-    const SkinnedMesh human = loadGenericHuman(options_.body);
+    // The body the studio places, to draw over the views (as the nodes pose it).
+    const SkinnedMesh& human = pipeline.body();
     Pose pose;
     std::vector<Eigen::Affine3f> transforms;
     const auto start = std::chrono::steady_clock::now();
@@ -236,7 +236,8 @@ PipelinePanel::PipelinePanel(QWidget* parent)
          "vertices): four nodes and the studio on one PC keep up. Fine (about 4000): sharper views "
          "for twice the nodes' work, for nodes on PCs of their own, each started with --body "
          "fine"));
-  const bool fine = QSettings("Lumistage", "Studio").value("pipeline/body").toString() == "fine";
+  const bool fine = QSettings("Lumistage", "Studio").value("pipeline/body").toString() ==
+                    bodyDetailName(BodyDetail::kFine);
   setBody(fine ? BodyDetail::kFine : BodyDetail::kStandard);
   connect(body_, &QComboBox::currentIndexChanged, this, [this] {
     QSettings("Lumistage", "Studio").setValue("pipeline/body", bodyDetailName(body()));

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <string>
 
+#include "core/body/human_model.h"
+
 namespace lumistage {
 
 // A number from `lo` to `hi` (both included), finite: CLI::Range lets NaN through (its comparisons
@@ -28,16 +30,18 @@ inline CLI::Validator within(double lo, double hi) {
       fmt::format("[{} - {}]", lo, hi));
 }
 
-// --body standard|fine: which generic human the studio and its nodes pose and refine
-// (BodyDetail); every process of a stage must be given the same.
-inline CLI::Option* addBodyOption(CLI::App& app, std::string& body) {
+// --body standard|fine: which generic human the studio and its nodes pose and refine; every
+// process of a stage must be given the same.
+inline CLI::Option* addBodyOption(CLI::App& app, BodyDetail& body) {
   return app
-      .add_option("--body", body,
-                  "the generic human posed and refined: standard (about 2000 vertices: four nodes "
-                  "and the studio on one PC) or fine (about 4000: nodes on PCs of their own; "
-                  "sharper views, twice the nodes' work); the studio and every node alike")
-      ->check(CLI::IsMember({"standard", "fine"}))
-      ->capture_default_str();
+      .add_option_function<std::string>(
+          "--body", [&body](const std::string& name) { body = parseBodyDetail(name); },
+          "the generic human posed and refined: standard (about 2000 vertices: four nodes and the "
+          "studio on one PC) or fine (about 4000: nodes on PCs of their own; sharper views, twice "
+          "the nodes' work); the studio and every node alike")
+      ->check(
+          CLI::IsMember({bodyDetailName(BodyDetail::kStandard), bodyDetailName(BodyDetail::kFine)}))
+      ->default_str(bodyDetailName(body));
 }
 
 }  // namespace lumistage

@@ -207,7 +207,8 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
 
 void addEvalCommand(CLI::App& app) {
   struct Args {
-    std::string session, json, config, loo_pictures, body = "standard";
+    std::string session, json, config, loo_pictures;
+    BodyDetail body = BodyDetail::kStandard;
     int cameras = 0, frames = 0, loo_frames = 3;
     bool quiet = false;
   };
@@ -268,7 +269,7 @@ void addEvalCommand(CLI::App& app) {
                               session.rig().cameraCount()));
     mocap.camera_count = args->cameras;
     mocap.max_frames = args->frames;
-    const SkinnedMesh generic = loadGenericHuman(parseBodyDetail(args->body));
+    const SkinnedMesh generic = loadGenericHuman(args->body);
     report.set("mocap", "body_vertices", double(generic.rest.vertexCount()));
     const MocapEvalResult tracked = evaluateMocap(session, generic, mocap, report);
     SurfaceEvaluationOptions surface;

@@ -152,7 +152,8 @@ void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
 void addRunCommand(CLI::App& app) {
   struct Args {
     std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size,
-                                     record_view, record_take, listen, body = "standard";
+                                     record_view, record_take, listen;
+    BodyDetail body = BodyDetail::kStandard;
     int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
     int64_t frames = 150;
     double seconds = 60;
@@ -244,7 +245,7 @@ void addRunCommand(CLI::App& app) {
     options.plain = a->plain;
     options.keys = a->keys;
     options.listen = a->listen;
-    options.body = parseBodyDetail(a->body);
+    options.body = a->body;
     options.coordinator.max_frames = a->frames;
     std::string take;
     if (!a->record_take.empty()) {

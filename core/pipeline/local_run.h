@@ -92,6 +92,9 @@ class LocalPipelineRun {
   // Whether a recording stopped on a failure and was not ended yet.
   bool viewRecordingFailed() const { return view_recorder_ && view_recorder_failed_; }
   StudioCoordinator& studio() { return *studio_; }
+  // The body mesh the studio and its nodes pose (options' coordinator.body, or the generic human
+  // of options' body).
+  const SkinnedMesh& body() const { return *options_.coordinator.body; }
   const Rig& rig() const { return rig_; }
   const std::vector<std::string>& nodeNames() const { return names_; }
 
