@@ -175,7 +175,7 @@ bool MeshRefiner::refine(const RefinementStatistics& stats, std::vector<uint8_t>
     current_[v] = uint8_t(choose(total));
   }
   // Smoothness: iterated conditional modes, each vertex in turn against its neighbours' choices.
-  const float smooth = float(config_.smooth_weight);
+  const float smooth = float(config_.smoothWeightFor(vertex_count_));
   for (int sweep = 0; smooth > 0 && sweep < config_.smooth_iterations; ++sweep) {
     bool changed = false;
     for (int v = 0; v < vertex_count_; ++v) {

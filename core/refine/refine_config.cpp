@@ -20,6 +20,7 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
                 "colour_sigma",
                 "unseen_colour",
                 "smooth_weight",
+                "smooth_reference_vertices",
                 "temporal_weight",
                 "tie_margin",
                 "smooth_iterations",
@@ -60,6 +61,8 @@ RefineConfig readRefineConfig(const YamlReader& in, const YAML::Node& node, std:
   number("colour_sigma", config.colour_sigma, 0.1, 255, "expected 8-bit levels in [0.1, 255]");
   number("unseen_colour", config.unseen_colour, 0, 1, "expected a value in [0, 1]");
   number("smooth_weight", config.smooth_weight, 0, 1e6, "expected a weight >= 0");
+  integer("smooth_reference_vertices", config.smooth_reference_vertices, 0, 1 << 22,
+          "expected a vertex count >= 0");
   number("temporal_weight", config.temporal_weight, 0, 1e6, "expected a weight >= 0");
   number("tie_margin", config.tie_margin, 0, 1e6, "expected a margin >= 0");
   integer("smooth_iterations", config.smooth_iterations, 0, 100, "expected 0 to 100");

@@ -26,7 +26,8 @@ class YamlReader;
 //                     across the cameras that see the point (visibility from low-res depth
 //                     maps); 1 when the point is outside the hull, unseen_colour when fewer than
 //                     two cameras see it;
-//   smooth_weight   x mean over neighbours of ((t - t_neighbour) / t_max)², and
+//   smooth_weight   x mean over neighbours of ((t - t_neighbour) / t_max)² (the weight in
+//                     proportion to the mesh's vertices: smoothWeightFor()), and
 //   temporal_weight x ((t - t_previous_frame) / t_max)²: beyond the paper, against ragged
 //                     surfaces and shimmer on a still actor;
 //   contour_weight  x -1 at a vertex's last sample inside the hull, where a camera sees the vertex
@@ -66,6 +67,16 @@ struct RefineConfig {
   // 2 since the colours are despilled (1.5 before): leave-one-camera-out on the four reference
   // clips +0.01 dB over the mask, +0.03 matte, +0.06 strict matte (docs/lumigraph.md).
   double smooth_weight = 2.0;
+  // The smoothness's weight follows the mesh's density: smooth_weight holds for a mesh of this
+  // many vertices (the standard generic human's), a mesh of n vertices takes smooth_weight x n /
+  // smooth_reference_vertices (smoothWeightFor()). A body's surface is the same whatever its
+  // tessellation, so its edges are shorter by the square root of the ratio, a given slope of the
+  // offsets makes differences between neighbours shorter by as much, and the term squares them.
+  // The fine body (4054 vertices) so takes 4.2: leave-one-camera-out on the four reference clips,
+  // eight frames a clip, +0.04 dB over the mask, +0.08 matte, +0.15 strict matte against 2
+  // (docs/lumigraph.md).
+  // 0: smooth_weight for any mesh.
+  int smooth_reference_vertices = 1930;
   double temporal_weight = 1.0;
   double tie_margin = 0.05;
   int smooth_iterations = 3;
@@ -129,6 +140,12 @@ struct RefineConfig {
   // the contour term or the outward term's split needs them.
   bool marksContours() const {
     return contour_weight > 0 || off_contour_outward_weight != outward_weight;
+  }
+
+  // The smoothness's weight for a mesh of `vertices` vertices (smooth_reference_vertices).
+  double smoothWeightFor(int vertices) const {
+    return smooth_reference_vertices > 0 ? smooth_weight * vertices / smooth_reference_vertices
+                                         : smooth_weight;
   }
 
   double offsetAt(int index) const {

@@ -21,6 +21,7 @@ RefineConfig noTerms() {
   c.outside_weight = c.outward_weight = c.colour_weight = c.smooth_weight = c.temporal_weight = 0;
   c.off_contour_outward_weight = c.contour_weight = 0;
   c.tie_margin = 0;
+  c.smooth_reference_vertices = 0;  // the tests' few vertices: weights as given
   return c;
 }
 
@@ -292,6 +293,12 @@ TEST(MeshRefiner, SmoothnessPullsAnAmbiguousVertexToItsNeighbours) {
   ASSERT_TRUE(with.refine(stats, offsets));
   EXPECT_EQ(offsets[0], kStep * 15);
   for (int v = 1; v < 7; ++v) EXPECT_EQ(offsets[v], kStep * 15);
+  // The weight follows the mesh's density: set for a mesh of 700 vertices, this fan's 7 take a
+  // hundredth of it, and vertex 0 keeps its own colours' offset.
+  c.smooth_reference_vertices = 700;
+  MeshRefiner sparse(c, 7, triangles);
+  ASSERT_TRUE(sparse.refine(stats, offsets));
+  EXPECT_EQ(offsets[0], kStep * 5);
 }
 
 TEST(MeshRefiner, TemporalTermKeepsAStillVertexWhereItWas) {

@@ -5,6 +5,7 @@
 
 #include <fstream>
 
+#include "core/body/human_model.h"
 #include "core/sim/studio_config.h"
 #include "tests/test_util.h"
 
@@ -118,6 +119,29 @@ TEST(RefineConfig, ReadFromTheStudioConfigOverTheDefaults) {
   EXPECT_NE(errorFor("m.yaml", "  off_contour_outward_weight: -0.5\n")
                 .find("m.yaml:5: refine.off_contour_outward_weight: expected a weight >= 0"),
             std::string::npos);
+  // The smoothness's reference density: the weight as given at it, in proportion elsewhere; 0
+  // turns the scaling off.
+  const RefineConfig r =
+      refineFrom("r.yaml", "  smooth_weight: 3\n  smooth_reference_vertices: 1000\n");
+  EXPECT_EQ(r.smooth_reference_vertices, 1000);
+  EXPECT_DOUBLE_EQ(r.smoothWeightFor(1000), 3.0);
+  EXPECT_DOUBLE_EQ(r.smoothWeightFor(4000), 12.0);
+  EXPECT_DOUBLE_EQ(refineFrom("s.yaml", "  smooth_reference_vertices: 0\n").smoothWeightFor(4000),
+                   RefineConfig{}.smooth_weight);
+  EXPECT_NE(errorFor("t.yaml", "  smooth_reference_vertices: -1\n")
+                .find("t.yaml:5: refine.smooth_reference_vertices: expected a vertex count >= 0"),
+            std::string::npos);
+}
+
+// The default smoothness is set for the standard generic human, and the fine one takes it in
+// proportion to its vertices: about twice as strong.
+TEST(RefineConfig, TheSmoothnessIsSetForTheStandardBodyAndFollowsTheFineOnesDensity) {
+  const RefineConfig config;
+  const int standard = loadGenericHuman(BodyDetail::kStandard).rest.vertexCount();
+  const int fine = loadGenericHuman(BodyDetail::kFine).rest.vertexCount();
+  EXPECT_EQ(config.smooth_reference_vertices, standard);
+  EXPECT_DOUBLE_EQ(config.smoothWeightFor(standard), config.smooth_weight);
+  EXPECT_GT(config.smoothWeightFor(fine), 2 * config.smooth_weight);
 }
 
 }  // namespace
