@@ -815,16 +815,20 @@ void StudioCoordinator::updateDeadlines() {
       const std::vector<double>& values = (node.*answers).values();
       if (!awaited(node) || values.size() < 8) continue;
       quantile_scratch_.assign(values.begin(), values.end());
-      slowest_ms = std::max(slowest_ms, quantile(quantile_scratch_, 0.75));
+      slowest_ms = std::max(slowest_ms, quantile(quantile_scratch_, 0.9));
     }
     return std::clamp(int64_t(1.25 * slowest_ms * 1e6), base, most);
   };
-  if (incomplete_share_ < 0.25) {
+  if (!following_ && incomplete_share_ < 0.25) {
     statistics_deadline_ns_ = image_deadline_ns_ = base;
     return;
   }
   statistics_deadline_ns_ = follow(&NodeState::statistics_answers);
   image_deadline_ns_ = follow(&NodeState::image_answers);
+  // They follow until the nodes answer within `deadline` again, not until the frames are whole
+  // again: they are whole because the deadlines follow, and going back at once made a slow node
+  // miss again, a frame in three or four (its three fellows' work and the studio's lost).
+  following_ = statistics_deadline_ns_ > base || image_deadline_ns_ > base;
 }
 
 void StudioCoordinator::checkDeadlines(int64_t now_ns) {

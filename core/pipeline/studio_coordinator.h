@@ -39,9 +39,12 @@ struct StudioCoordinatorOptions {
   std::chrono::milliseconds hold_incomplete{500};
   // While a quarter or more of the recent frames lack a node's image (an overloaded node whose
   // answers come after `deadline` every frame: holes in the view), the statistics' and the images'
-  // deadlines follow the nodes' answers: 1.25 times the slowest awaited node's 75th percentile of
-  // its last 32 answers (late ones too), never below `deadline` nor above this. Otherwise they are
-  // `deadline`: a node now and then late costs no latency.
+  // deadlines follow the nodes' answers: 1.25 times the slowest awaited node's 90th percentile of
+  // its last 32 answers (late ones too), never below `deadline` nor above this, until the nodes
+  // answer within `deadline` again. Otherwise they are `deadline`: a node now and then late costs
+  // no latency. (The 75th percentile, left as soon as the frames were whole again, still lost a
+  // node's answers in a third of the frames of an overloaded machine, each frame's other nodes'
+  // work with them: docs/lumigraph.md.)
   std::chrono::milliseconds max_deadline{480};
   int64_t max_frames = 0;  // stop after this many complete frames; 0: never
   // A frame begins (motion capture) only while fewer frames than this are between motion capture
@@ -418,6 +421,7 @@ class StudioCoordinator {
   void updateDeadlines();
   int64_t statistics_deadline_ns_ = 0, image_deadline_ns_ = 0;
   double incomplete_share_ = 0;  // of the recent frames drawn, those without some node's image
+  bool following_ = false;       // the deadlines follow the nodes' answers (updateDeadlines)
   std::vector<double> quantile_scratch_;
   int64_t counting_since_ns_ = 0;  // when counting_ became true (steady clock)
   int peak_frames_begun_ = 0;
