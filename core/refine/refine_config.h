@@ -74,8 +74,7 @@ struct RefineConfig {
   // offsets makes differences between neighbours shorter by as much, and the term squares them.
   // The fine body (4054 vertices) so takes 4.2: leave-one-camera-out on the four reference clips,
   // eight frames a clip, +0.04 dB over the mask, +0.08 matte, +0.15 strict matte against 2
-  // (docs/lumigraph.md).
-  // 0: smooth_weight for any mesh.
+  // (docs/lumigraph.md). 0: smooth_weight for any mesh.
   int smooth_reference_vertices = 1930;
   double temporal_weight = 1.0;
   double tie_margin = 0.05;
