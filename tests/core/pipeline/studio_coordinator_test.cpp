@@ -742,7 +742,9 @@ TEST(StudioCoordinator, TheDeadlinesStretchToANodeThatAnswersLate) {
     const bool used = offsets && offsets->frame_id == f;
     if (used && first_with_node2 < 0) first_with_node2 = f;
     if (!used && first_with_node2 > 0) without_node2_after.push_back(f);
-    if (used) ASSERT_TRUE(two.node2.send(f, onePixelImage(studio.view(), 100)));
+    if (used) {
+      ASSERT_TRUE(two.node2.send(f, onePixelImage(studio.view(), 100)));
+    }
     studio.runFor(milliseconds(300));  // the frame done or given up
   }
   EXPECT_GT(first_with_node2, 1) << "the late node's statistics were used from the start";
