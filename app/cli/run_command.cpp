@@ -78,14 +78,17 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       "  \"frames_dropped\": {},\n  \"frames_refused\": {},\n  \"frames_overtaken\": {},\n"
       "  \"frames_unshown\": {},\n  \"frames_held\": {},\n"
       "  \"frames_incomplete\": {},\n  \"max_frames_in_flight\": {},\n"
+      "  \"statistics_deadline_ms\": {:.1f},\n  \"image_deadline_ms\": {:.1f},\n"
+      "  \"deadlines_following\": {},\n"
       "  \"hull_agreement\": {:.4f},\n  \"refusals\": {},\n"
       "  \"view\": \"{}x{}\",\n  \"cpu_cores_studio\": {:.3f},\n  \"cpu_cores_nodes\": {:.3f},\n"
       "  \"machine\": {},\n  \"nodes\": [{}\n  ]\n}}\n",
       r.fps, r.latency_ms_p50, r.latency_ms_p95, stages, r.node_bytes_per_frame,
       r.raw_bytes_per_frame_per_node, r.node_bytes_per_s, r.frames, r.frames_dropped,
       r.frames_refused, r.frames_overtaken, r.frames_unshown, r.frames_held, r.frames_incomplete,
-      max_in_flight, r.hull_agreement, r.refusals, view.width, view.height, cpu.studio_cores,
-      cpu.nodes_cores, machine, nodes);
+      max_in_flight, r.statistics_deadline_ms, r.image_deadline_ms,
+      r.deadlines_following ? "true" : "false", r.hull_agreement, r.refusals, view.width,
+      view.height, cpu.studio_cores, cpu.nodes_cores, machine, nodes);
 }
 
 // Once every node has told its takes' disk (true then): the disk that fills first, and a warning
@@ -363,6 +366,9 @@ void addRunCommand(CLI::App& app) {
         r.frames, r.frames_dropped, r.frames_refused, r.frames_overtaken, r.frames_unshown,
         r.frames_held, r.frames_incomplete, r.fps, r.latency_ms_p50, r.latency_ms_p95);
     for (const auto& [stage, ms] : r.stage_ms) fmt::print("  {:<16} {:8.3f} ms\n", stage, ms);
+    fmt::print("deadlines now: statistics {:.0f} ms, images {:.0f} ms{}\n",
+               r.statistics_deadline_ms, r.image_deadline_ms,
+               r.deadlines_following ? " (stretched to a late node's answers)" : "");
     fmt::print(
         "bytes per frame per node {:.0f} against {:.0f} raw ({:.4f}), {:.1f} MB/s a node; {} "
         "refusals\n",

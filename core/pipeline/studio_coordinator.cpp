@@ -912,6 +912,9 @@ RunReport StudioCoordinator::report() const {
   r.frames_unshown = frames_unshown_;
   r.frames_incomplete = frames_incomplete_;
   r.frames_held = frames_held_;
+  r.statistics_deadline_ms = double(statistics_deadline_ns_) / 1e6;
+  r.image_deadline_ms = double(image_deadline_ns_) / 1e6;
+  r.deadlines_following = following_;
   r.peak_frames_begun = peak_frames_begun_;
   r.fps = frames_done_ > 1 && last_done_ns_ > start_ns_
               ? (frames_done_ - 1) / ((last_done_ns_ - start_ns_) / 1e9)

@@ -130,6 +130,10 @@ struct RunReport {
   // dropped, held back for that.
   int64_t frames_incomplete = 0, frames_held = 0;
   int peak_frames_begun = 0;  // the most frames between motion capture and done at once
+  // The statistics' and the images' deadlines now (ms): StudioCoordinatorOptions::deadline, or
+  // longer while they follow a late node's answers (deadlines_following; max_deadline).
+  double statistics_deadline_ms = 0, image_deadline_ms = 0;
+  bool deadlines_following = false;
   double hull_agreement = 0;  // share of posed vertices seen inside the silhouettes
   std::vector<NodeReport> nodes;
   int64_t refusals = 0;

@@ -516,12 +516,14 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
     EXPECT_EQ(avi.substr(8, 4), "AVI ");
     EXPECT_NE(avi.find("MJPG"), std::string::npos);
     fs::remove(video);
+    EXPECT_NE(r.output.find("deadlines now: statistics "), std::string::npos) << r.output;
     const std::string text = readFile(json);
     for (const char* key :
          {"\"fps\": ", "\"latency_ms_p50\": ", "\"latency_ms_p95\": ", "\"stage_ms\": {",
           "\"node_bytes_per_frame\": ", "\"raw_bytes_per_frame_per_node\": 153600.0",
-          "\"frames\": 20", "\"frames_dropped\": ", "\"frames_overtaken\": ",
-          "\"frames_unshown\": ", "\"mocap\": "}) {
+          "\"frames\": 20",
+          "\"frames_dropped\": ", "\"frames_overtaken\": ", "\"frames_unshown\": ", "\"mocap\": ",
+          "\"statistics_deadline_ms\": ", "\"image_deadline_ms\": ", "\"deadlines_following\": "}) {
       EXPECT_NE(text.find(key), std::string::npos) << key << " in " << text;
     }
     fs::remove(json);

@@ -730,6 +730,8 @@ TEST(StudioCoordinator, TheDeadlinesStretchToANodeThatAnswersLate) {
   StudioCoordinator& studio = two.studio;
   int64_t first_with_node2 = -1;
   std::vector<int64_t> without_node2_after;
+  EXPECT_EQ(studio.report().statistics_deadline_ms, 100.0);
+  EXPECT_FALSE(studio.report().deadlines_following);
   for (int64_t f = 1;; ++f) {
     if (first_with_node2 < 0 ? f > 16 : f > first_with_node2 + 12) break;
     ASSERT_TRUE(two.posed(f));
@@ -751,6 +753,13 @@ TEST(StudioCoordinator, TheDeadlinesStretchToANodeThatAnswersLate) {
   ASSERT_NE(first_with_node2, -1) << "the late node's statistics were never used";
   EXPECT_EQ(without_node2_after, std::vector<int64_t>{})
       << "the deadline went back while the node was still late";
+  // The report says so: the statistics' deadline past node2's 200 ms, the images' (node1's and
+  // node2's, at once) the base.
+  const RunReport report = studio.report();
+  EXPECT_TRUE(report.deadlines_following);
+  EXPECT_GT(report.statistics_deadline_ms, 200.0);
+  EXPECT_LE(report.statistics_deadline_ms, 480.0);
+  EXPECT_EQ(report.image_deadline_ms, 100.0);
 }
 
 }  // namespace
