@@ -572,6 +572,36 @@ std::pair<QString, QString> stageWords(const std::string& stage) {
 
 }  // namespace
 
+QString pipelineSummary(const RunReport& r) {
+  QString text =
+      PipelinePanel::tr(
+          "<b>%1 fps</b> (%13 since the start) &middot; latency %2 ms (median), %3 ms (95%) "
+          "&middot; %4 frames, %5 dropped (%10 on arrival, to keep latency, %11 overtaken by newer "
+          "frames, %12 without a node's image), %9 in flight &middot; %6 KB a frame per node "
+          "against %7 KB raw &middot; %8 unknown nodes refused")
+          .arg(r.fps_recent, 0, 'f', 1)
+          .arg(r.latency_ms_p50, 0, 'f', 1)
+          .arg(r.latency_ms_p95, 0, 'f', 1)
+          .arg(r.frames)
+          .arg(r.frames_dropped)
+          .arg(r.node_bytes_per_frame / 1000, 0, 'f', 1)
+          .arg(r.raw_bytes_per_frame_per_node / 1000, 0, 'f', 0)
+          .arg(r.refusals)
+          .arg(r.frames_in_flight)
+          .arg(r.frames_refused)
+          .arg(r.frames_overtaken)
+          .arg(r.frames_unshown)
+          .arg(r.fps, 0, 'f', 1);
+  if (r.deadlines_following) {
+    text += PipelinePanel::tr(
+                " &middot; <span style='color:#c60'>waiting for a late node: its "
+                "statistics up to %1 ms, its images up to %2 ms</span>")
+                .arg(r.statistics_deadline_ms, 0, 'f', 0)
+                .arg(r.image_deadline_ms, 0, 'f', 0);
+  }
+  return text;
+}
+
 void PipelinePanel::show(const PipelineSnapshot& s) {
   if (!thread_) return;  // still queued from a pipeline stopped since
   const bool was_recording = last_.take_recording;
@@ -633,24 +663,7 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   const RunReport& r = s.report;
   if (!s.view.isNull())
     view_->setPixmap(QPixmap::fromImage(s.view).scaled(view_->size(), Qt::KeepAspectRatio));
-  summary_->setText(tr("<b>%1 fps</b> (%13 since the start) &middot; latency %2 ms (median), %3 "
-                       "ms (95%) &middot; %4 frames, %5 dropped (%10 on arrival, to keep latency, "
-                       "%11 overtaken by newer frames, %12 without a node's image), %9 in flight "
-                       "&middot; %6 KB a frame per node against %7 KB raw &middot; %8 unknown "
-                       "nodes refused")
-                        .arg(r.fps_recent, 0, 'f', 1)
-                        .arg(r.latency_ms_p50, 0, 'f', 1)
-                        .arg(r.latency_ms_p95, 0, 'f', 1)
-                        .arg(r.frames)
-                        .arg(r.frames_dropped)
-                        .arg(r.node_bytes_per_frame / 1000, 0, 'f', 1)
-                        .arg(r.raw_bytes_per_frame_per_node / 1000, 0, 'f', 0)
-                        .arg(r.refusals)
-                        .arg(r.frames_in_flight)
-                        .arg(r.frames_refused)
-                        .arg(r.frames_overtaken)
-                        .arg(r.frames_unshown)
-                        .arg(r.fps, 0, 'f', 1) +
+  summary_->setText(pipelineSummary(r) +
                     (notice_.isEmpty() ? QString() : "<br>" + notice_.toHtmlEscaped()));
   stages_->setRowCount(static_cast<int>(r.stage_ms.size()));
   int stage_row = 0;

@@ -49,6 +49,11 @@ struct PipelineSnapshot : PipelineView {
   QString takes_folder;  // where the nodes write their parts of a take
 };
 
+// The pipeline panel's line of figures (rich text): the rate now and since the start, latency,
+// frames and why they were dropped, frames in flight, bytes a node, unknown nodes refused; and,
+// while the deadlines are stretched to a late node's answers, how long the studio waits for it.
+QString pipelineSummary(const RunReport& report);
+
 // Runs a LocalPipelineRun on its own thread (move to a QThread, call run()), reporting a snapshot
 // five times a second, the view with every frame the studio blends (at the cameras' rate: a
 // director dragging the camera sees video, not slides), and the node processes that exit. Commands

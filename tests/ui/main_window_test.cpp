@@ -171,6 +171,26 @@ class MainWindowTest : public QObject {
     QCOMPARE(table.horizontalHeader()->sectionResizeMode(2), QHeaderView::Stretch);
   }
 
+  // The pipeline's figures say how long the studio waits for a late node, and only while it
+  // does: the deadlines stretched to its answers are the latency a technician sees grow.
+  void thePipelinesFiguresSayWhenTheStudioWaitsForALateNode() {
+    lumistage::RunReport r;
+    r.fps = r.fps_recent = 9.5;
+    r.frames = 120;
+    r.statistics_deadline_ms = r.image_deadline_ms = 120;
+    const QString plain = lumistage::pipelineSummary(r);
+    QVERIFY2(plain.contains("9.5 fps") && plain.contains("120 frames"), qPrintable(plain));
+    QVERIFY2(!plain.contains("late node"), qPrintable(plain));
+    r.deadlines_following = true;
+    r.statistics_deadline_ms = 199.4;
+    r.image_deadline_ms = 127;
+    const QString waiting = lumistage::pipelineSummary(r);
+    QVERIFY2(waiting.startsWith(plain) &&
+                 waiting.contains("waiting for a late node: its statistics up to 199 ms, its "
+                                  "images up to 127 ms"),
+             qPrintable(waiting));
+  }
+
   void stagePlanDrawsEveryNode() {
     MainWindow window;
     window.resize(1000, 800);
