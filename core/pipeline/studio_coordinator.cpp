@@ -819,16 +819,16 @@ void StudioCoordinator::updateDeadlines() {
     }
     return std::clamp(int64_t(1.25 * slowest_ms * 1e6), base, most);
   };
-  if (!following_ && incomplete_share_ < 0.25) {
+  // Once stretched, they follow until the nodes answer within `deadline` again (follow() gives
+  // the base then), not until the frames are whole again: they are whole because the deadlines
+  // follow, and going back at once made a slow node miss again, a frame in three or four (its
+  // three fellows' work and the studio's lost).
+  if (!deadlinesFollowing() && incomplete_share_ < 0.25) {
     statistics_deadline_ns_ = image_deadline_ns_ = base;
     return;
   }
   statistics_deadline_ns_ = follow(&NodeState::statistics_answers);
   image_deadline_ns_ = follow(&NodeState::image_answers);
-  // They follow until the nodes answer within `deadline` again, not until the frames are whole
-  // again: they are whole because the deadlines follow, and going back at once made a slow node
-  // miss again, a frame in three or four (its three fellows' work and the studio's lost).
-  following_ = statistics_deadline_ns_ > base || image_deadline_ns_ > base;
 }
 
 void StudioCoordinator::checkDeadlines(int64_t now_ns) {
@@ -914,7 +914,7 @@ RunReport StudioCoordinator::report() const {
   r.frames_held = frames_held_;
   r.statistics_deadline_ms = double(statistics_deadline_ns_) / 1e6;
   r.image_deadline_ms = double(image_deadline_ns_) / 1e6;
-  r.deadlines_following = following_;
+  r.deadlines_following = deadlinesFollowing();
   r.peak_frames_begun = peak_frames_begun_;
   r.fps = frames_done_ > 1 && last_done_ns_ > start_ns_
               ? (frames_done_ - 1) / ((last_done_ns_ - start_ns_) / 1e9)

@@ -425,7 +425,11 @@ class StudioCoordinator {
   void updateDeadlines();
   int64_t statistics_deadline_ns_ = 0, image_deadline_ns_ = 0;
   double incomplete_share_ = 0;  // of the recent frames drawn, those without some node's image
-  bool following_ = false;       // the deadlines follow the nodes' answers (updateDeadlines)
+  // Whether the deadlines are stretched past `deadline` to a late node's answers.
+  bool deadlinesFollowing() const {
+    const int64_t base = std::chrono::nanoseconds(options_.deadline).count();
+    return statistics_deadline_ns_ > base || image_deadline_ns_ > base;
+  }
   std::vector<double> quantile_scratch_;
   int64_t counting_since_ns_ = 0;  // when counting_ became true (steady clock)
   int peak_frames_begun_ = 0;
