@@ -1,12 +1,17 @@
 #version 430 core
-// The renderer's own cameras blended with the interpolated lumigraph weights: colour = their
-// (despilled) colours' weighted mean, alpha = their share of the weight of every camera of the
-// rig (1 when the renderer has them all; less where a foreground mask takes weight away). Images
+// The renderer's own cameras blended with the interpolated lumigraph weights, each divided by its
+// expected misregistration here: colour = their (despilled) colours' weighted mean, alpha = their
+// share of the undivided weight of every camera of the rig, on a log scale (shareAlpha). Images
 // are RGBA8, the colours of a Bayer image's 2x2 cells, or Bayer mosaics demosaiced here.
 // kOwnCameras is defined when compiling; own camera j's image is layer j of `images`.
 in float v_weight[kOwnCameras];
 in vec2 v_texel[kOwnCameras];
 in float v_total;
+in vec2 v_shift[kOwnCameras];  // own camera j's texel moved by misregistration_m along the ray
+
+uniform float misregistration_m;
+uniform float misregistration_noise;  // colour difference (0 to 1) below which it counts little
+const float kMaxShift = 4.0;          // pixels
 
 uniform sampler2DArray images;
 uniform vec2 texel_scale;  // image texel to texture coordinate of `images`
@@ -76,6 +81,15 @@ vec3 sampleImage(vec2 texel, int layer) {
 }
 #endif
 
+// A share of the weight (0 to 1) as the alpha byte, on a logarithmic scale: 255 + 16 log2(share),
+// rounded, at least 1 (a share of 1 is 255, each step 4.4% less, the least 2^-15.9), which
+// PartialImageBlender decodes. The misregistration's factor takes a node's share down to a few
+// thousandths where every camera sees an edge; 8-bit linear shares that small set the nodes'
+// proportions to a level or two of 255.
+float shareAlpha(float share) {
+  return clamp(floor(255.0 + 16.0 * log2(share) + 0.5), 1.0, 255.0) / 255.0;
+}
+
 void main() {
   float own = 0.0, unmasked = 0.0, actor = 0.0, rim = 0.0;
   vec3 rgb = vec3(0.0), rgb_rim = vec3(0.0);
@@ -83,6 +97,16 @@ void main() {
     float w = v_weight[j];
     if (w <= 0.0) continue;
     vec3 c = sampleImage(v_texel[j], j);
+    if (misregistration_m > 0.0) {
+      // The camera's expected error were the surface misregistration_m off along the desired ray:
+      // its colour against the texels that far to either side along its shift (LumigraphParams).
+      vec2 s = v_shift[j];
+      float len = length(s);
+      if (len > kMaxShift) s *= kMaxShift / len;
+      vec3 a = sampleImage(v_texel[j] + s, j) - c, b = sampleImage(v_texel[j] - s, j) - c;
+      float e2 = 0.5 * (dot(a, a) + dot(b, b));
+      w /= 1.0 + e2 / (misregistration_noise * misregistration_noise);
+    }
     c.g = mix(c.g, min(c.g, max(c.r, c.b)), despill[j]);
     unmasked += w;
     float m = 1.0;
@@ -103,7 +127,7 @@ void main() {
   if (v_total <= 0.0 || unmasked <= 0.0) {
     colour = vec4(0.0);
   } else if (own > 0.0) {
-    colour = vec4(rgb / own, max(own / v_total, 1.0 / 255.0));  // a masked share stays drawn
+    colour = vec4(rgb / own, shareAlpha(own / v_total));  // a masked share stays drawn
   } else if (use_masks != 0 && (actor < kClearlyOff || rim <= 0.0)) {
     // A cell or more off the actor in every own camera (the generic mesh's foot beside the shoe, a
     // mis-posed hand): nothing of the actor is there. Discarded, it writes no depth either, so
@@ -113,6 +137,6 @@ void main() {
     // Just off the actor in every own camera (the cells' rim): the cameras' colours weighted by
     // their masks there (those nearest to seeing the actor count most), at a sixteenth of the share, so that a node whose cameras see the actor there outweighs it in the studio's
     // blend, and the silhouette's edge is still drawn where no camera does.
-    colour = vec4(rgb_rim / rim, max(unmasked / v_total / 16.0, 1.0 / 255.0));
+    colour = vec4(rgb_rim / rim, shareAlpha(unmasked / v_total / 16.0));
   }
 }

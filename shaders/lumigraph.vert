@@ -8,6 +8,8 @@
 //   t        = (k+1)-th smallest candidate angle, or max_angle with at most k candidates
 //   w_i      = max(0, 1 - angle_i / t) / max(angle_i, epsilon) * smoothstep(min_facing, 1, facing_i)
 //              for the k candidates of smallest angle, 0 for every other camera.
+// And for the own cameras the shift of the texture coordinate were p misregistration_m further
+// along the desired ray, by which the fragment shader divides each camera's weight.
 // The desired view rasterises p + dilation * n (texture coordinates and weights stay p's): the flat
 // triangles between vertices cut inside a curved surface's silhouette (LumigraphParams).
 // The weights are computed in the captured actor's frame: a clone's desired camera is brought
@@ -47,10 +49,12 @@ uniform float view_skew;
 uniform vec3 view_radial;
 uniform vec2 view_tangential;
 uniform vec2 view_size;
+uniform float misregistration_m;  // LumigraphParams; 0: off
 
 out float v_weight[kOwnCameras];  // of the own cameras
 out vec2 v_texel[kOwnCameras];    // pixel coordinates + 0.5 (texel space of the camera's image)
 out float v_total;                // the weight of every camera of the rig
+out vec2 v_shift[kOwnCameras];   // the texel moved by misregistration_m along the desired ray
 
 vec2 projectPixel(vec3 c, vec4 fc, float s, vec3 radial, vec2 tangential) {
   vec2 x = c.xy / c.z;
@@ -119,9 +123,16 @@ void main() {
     int i = kOwn[j];
     v_weight[j] = weight[i];
     v_texel[j] = vec2(-1.0);
+    v_shift[j] = vec2(0.0);
     vec3 c = rotations[i] * p + translations[i];
     if (c.z <= 0.05) continue;
     vec2 pixel = projectPixel(c, focal_centres[i], skews[i], radials[i], tangentials[i]);
+    // Where the camera would read were the surface misregistration_m further along the desired
+    // ray (the fragment shader weighs the camera by how its image changes over that shift).
+    vec3 further = rotations[i] * (p - misregistration_m * normalize(to_desired)) + translations[i];
+    if (misregistration_m > 0.0 && further.z > 0.05)
+      v_shift[j] =
+          projectPixel(further, focal_centres[i], skews[i], radials[i], tangentials[i]) - pixel;
     if (all(greaterThanEqual(pixel, vec2(-0.5))) && all(lessThanEqual(pixel, image_sizes[i] - 0.5)))
       v_texel[j] = pixel + 0.5;
   }

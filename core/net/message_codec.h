@@ -30,8 +30,10 @@ namespace lumistage {
 // and offsets eighths of a step (a version 4 studio would refuse the statistics and misplace every
 // vertex); 6: refinement statistics' values as differences and the cameras' disagreement (a
 // version 5 studio would read wrong colours); 7: refinement statistics end with the vertices'
-// contour bits (a version 6 studio would refuse every node's statistics).
-inline constexpr uint16_t kProtocolVersion = 7;
+// contour bits (a version 6 studio would refuse every node's statistics); 8: a partial image's
+// alpha is the node's share on a log scale (a version 7 studio would blend the nodes' images in
+// wrong proportions).
+inline constexpr uint16_t kProtocolVersion = 8;
 
 struct HelloData {
   std::string node_name;

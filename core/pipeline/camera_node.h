@@ -157,8 +157,8 @@ class CameraNode {
   std::vector<Message> partialImagesWithOffsets(const Message& offsets);
   // The node's partial lumigraph images of the (refined) posed surface, one per desired view,
   // rendered with OpenGL (LumigraphRenderer, its own cameras' images): colour = the weighted
-  // mean of its cameras, alpha = their share of the weight of all the rig's cameras (so the
-  // studio's normalisation is exact); alpha-run encoded. Empty when no OpenGL context could be
+  // mean of its cameras, alpha = their share of the weight of all the rig's cameras on a log
+  // scale (shareOfAlpha; the studio's normalisation weighs the nodes by it); alpha-run encoded. Empty when no OpenGL context could be
   // had (said once in the log). `visibility`: the studio's masks of which cameras see each
   // vertex (VertexVisibility), or empty: the renderer computes them.
   std::vector<Message> partialImagesFor(const Set& set, int64_t frame_id,

@@ -437,6 +437,8 @@ void LumigraphRenderer::render(const Camera& desired, std::span<const Eigen::Aff
   glUniform1i(p.uniform("images"), 0);
   glUniform1i(p.uniform("masks"), 1);
   glUniform1i(p.uniform("use_masks"), masks_ ? 1 : 0);
+  glUniform1f(p.uniform("misregistration_m"), params_.misregistration_m);
+  glUniform1f(p.uniform("misregistration_noise"), params_.misregistration_noise);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D_ARRAY, images_);
   glActiveTexture(GL_TEXTURE1);

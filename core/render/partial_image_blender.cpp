@@ -1,6 +1,7 @@
 #include "core/render/partial_image_blender.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "core/render/partial_image_codec.h"
@@ -8,19 +9,36 @@
 
 namespace lumistage {
 
+namespace {
+
+// The alpha bytes' shares (shareOfAlpha).
+struct ShareWeights {
+  ShareWeights() {
+    for (int a = 0; a < 256; ++a) weight[a] = float(shareOfAlpha(uint8_t(a)));
+  }
+  float weight[256];
+};
+const ShareWeights kShareWeights;
+
+}  // namespace
+
+double shareOfAlpha(uint8_t alpha) {
+  return alpha == 0 ? 0.0 : std::exp2((double(alpha) - 255.0) / kAlphaStepsPerOctave);
+}
+
 void PartialImageBlender::reset(int width, int height) {
   added_ = 0;
   if (width == width_ && height == height_ && !sums_.empty()) {
     for (int y = 0; y < height_; ++y) {
       if (row_begin_[y] < row_end_[y]) {
-        uint32_t* row = sums_.data() + (size_t(y) * width_ + row_begin_[y]) * 4;
-        std::fill(row, row + size_t(row_end_[y] - row_begin_[y]) * 4, 0u);
+        float* row = sums_.data() + (size_t(y) * width_ + row_begin_[y]) * 4;
+        std::fill(row, row + size_t(row_end_[y] - row_begin_[y]) * 4, 0.0f);
       }
     }
   } else {
     width_ = width;
     height_ = height;
-    sums_.assign(size_t(width) * height * 4, 0);
+    sums_.assign(size_t(width) * height * 4, 0.0f);
     row_begin_.resize(height);
     row_end_.resize(height);
   }
@@ -32,11 +50,11 @@ void PartialImageBlender::accumulate(size_t first, const uint8_t* p, size_t coun
   while (count > 0) {
     const int y = int(first / width_), x = int(first % width_);
     const int n = int(std::min<size_t>(count, size_t(width_ - x)));
-    uint32_t* s = sums_.data() + first * 4;
+    float* s = sums_.data() + first * 4;
     int begin = width_, end = 0;
     for (int i = 0; i < n; ++i, s += 4, p += 4) {
-      const uint32_t a = p[3];
-      if (a == 0) continue;
+      if (p[3] == 0) continue;
+      const float a = kShareWeights.weight[p[3]];
       s[0] += a * p[0];
       s[1] += a * p[1];
       s[2] += a * p[2];
@@ -74,15 +92,17 @@ void PartialImageBlender::finish(std::vector<uint8_t>& rgba) const {
     uint8_t* row = rgba.data() + size_t(y) * width_ * 4;
     const int begin = std::min(row_begin_[y], width_), end = std::max(row_end_[y], begin);
     std::memset(row, 0, size_t(begin) * 4);
-    const uint32_t* s = sums_.data() + (size_t(y) * width_ + begin) * 4;
+    const float* s = sums_.data() + (size_t(y) * width_ + begin) * 4;
     uint8_t* out = row + size_t(begin) * 4;
     for (int x = begin; x < end; ++x, s += 4, out += 4) {
-      const uint32_t a = s[3];
+      const float a = s[3];
       if (a == 0) {
         out[0] = out[1] = out[2] = out[3] = 0;
         continue;
       }
-      for (int k = 0; k < 3; ++k) out[k] = static_cast<uint8_t>((s[k] + a / 2) / a);
+      const float inverse = 1.0f / a;
+      for (int k = 0; k < 3; ++k)
+        out[k] = static_cast<uint8_t>(std::min(255.0f, s[k] * inverse + 0.5f));
       out[3] = 255;
     }
     std::memset(out, 0, size_t(width_ - end) * 4);

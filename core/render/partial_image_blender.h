@@ -6,9 +6,17 @@
 
 namespace lumistage {
 
+// A partial image's alpha byte: 0 where the node drew nothing, else the node's share of the
+// lumigraph weight (LumigraphRenderer) on a logarithmic scale, kAlphaStepsPerOctave steps an
+// octave: share = 2^((alpha - 255) / 16), 255 a share of 1, each step 4.4% less, 1 the least
+// (2^-15.9). The shares that the misregistration's factor leaves where every camera sees an edge
+// are a few thousandths; linear bytes rounded their proportions to a level or two of 255.
+inline constexpr double kAlphaStepsPerOctave = 16;
+double shareOfAlpha(uint8_t alpha);
+
 // The studio's side of distributed lumigraph rendering: the nodes' partial images (RGBA8, alpha =
-// the node's share of the lumigraph weight, LumigraphRenderer) normalised per pixel and blended:
-//   rgb = sum_n alpha_n rgb_n / sum_n alpha_n,  alpha = 255 where sum_n alpha_n > 0, else 0,
+// the node's share of the lumigraph weight, shareOfAlpha) normalised per pixel and blended:
+//   rgb = sum_n share_n rgb_n / sum_n share_n,  alpha = 255 where any share > 0, else 0,
 // then the silhouette feathered by a pixel (featherSilhouette: premultiplied). With one image that
 // holds every camera (the single-process renderer) this is finishSingleProcessView of that image,
 // so both paths give the same picture to rounding. It touches only the pixels the nodes drew (the
@@ -37,7 +45,7 @@ class PartialImageBlender {
   void accumulate(size_t first, const uint8_t* rgba, size_t count);
 
   int width_ = 0, height_ = 0, added_ = 0;
-  std::vector<uint32_t> sums_;  // per pixel: sum of alpha * R, G, B, and sum of alpha
+  std::vector<float> sums_;  // per pixel: sum of share * R, G, B, and sum of share
   // Per row, the columns [begin, end) that hold every pixel added since reset (begin >= end:
   // none).
   std::vector<int> row_begin_, row_end_;

@@ -59,7 +59,10 @@ class LumigraphRendererTest : public ::testing::Test {
   Camera desiredView() const {
     const Camera& a = rig().camera(0);
     const Camera& b = rig().camera(1);
-    const Eigen::Vector3d centre = 0.5 * (a.centre() + b.centre());
+    return lookingAtTheActor(0.5 * (a.centre() + b.centre()));
+  }
+  // A virtual camera at `centre` looking at the middle of the stage, a metre up.
+  static Camera lookingAtTheActor(const Eigen::Vector3d& centre) {
     const Eigen::Vector3d z = (Eigen::Vector3d(0, 0, 1.0) - centre).normalized();
     const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
     Eigen::Matrix3d R;
@@ -147,6 +150,9 @@ TEST_F(LumigraphRendererTest, TheShadersDemosaicEqualsOpenCvs) {
   for (int c = 0; c < rig().cameraCount(); ++c) all.push_back(c);
   LumigraphParams params;
   params.bayer_images = LumigraphParams::BayerImages::kFullResolution;
+  // The images read as the weights' misregistration reads them would move a camera's weight by
+  // a level's difference at an edge: the demosaic alone is compared here.
+  params.misregistration_m = 0;
   LumigraphRenderer mosaics(rig(), all, params), demosaiced(rig(), all, params);
   for (LumigraphRenderer* r : {&mosaics, &demosaiced})
     r->setMesh(frame_->surface.positions, frame_->surface.normals, frame_->surface.triangles);
@@ -369,31 +375,65 @@ TEST_F(LumigraphRendererTest, MonochromeImagesStayGrey) {
 
 TEST_F(LumigraphRendererTest, NodeWeightsSumToOneAndVanishForCamerasThatDoNotContribute) {
   const Camera desired = desiredView();
-  std::vector<std::vector<uint8_t>> partials;
+  // The geometric weights alone (no misregistration's factor, which divides each camera's weight
+  // by what its image shows) are shares of the rig's total: the nodes' sum to one.
+  LumigraphParams geometric;
+  geometric.misregistration_m = 0;
+  std::vector<std::vector<uint8_t>> partials, divided;
   for (const RigNode& node : rig().nodes()) {
     partials.emplace_back();
-    makeRenderer(node.cameras)->render(desired, partials.back());
+    makeRenderer(node.cameras, geometric)->render(desired, partials.back());
+    divided.emplace_back();
+    makeRenderer(node.cameras)->render(desired, divided.back());
   }
   std::vector<uint8_t> local;
-  makeRenderer()->render(desired, local);
+  makeRenderer({}, geometric)->render(desired, local);
   ASSERT_GT(covered(local), 5000);
-  int64_t off = 0, inside = 0, rounded_down = 0;
+  int64_t off = 0, inside = 0, rounded_down = 0, more = 0, less = 0;
   for (size_t i = 0; i < local.size() / 4; ++i) {
-    int sum = 0;
-    for (const auto& p : partials) sum += p[4 * i + 3];
+    double sum = 0, sum_divided = 0;
+    for (const auto& p : partials) sum += shareOfAlpha(p[4 * i + 3]);
+    for (const auto& p : divided) sum_divided += shareOfAlpha(p[4 * i + 3]);
     if (local[4 * i + 3] == 0) {
       EXPECT_EQ(sum, 0) << "pixel " << i;  // no surface, or no camera sees it: no weight
+      EXPECT_EQ(sum_divided, 0) << "pixel " << i;
       continue;
     }
     // Own share / total of the same interpolated weights: 1, but where the total falls toward 0
-    // (a vertex no camera sees, on the rim) their float ratio may round one level down.
+    // (a vertex no camera sees, on the rim) their float ratio may round one step down.
     EXPECT_GE(local[4 * i + 3], 254) << "pixel " << i;
     rounded_down += local[4 * i + 3] != 255;
     ++inside;
-    off += std::abs(sum - 255) > 2;  // shares of 255, each rounded
+    off += std::abs(sum - 1) > 0.03;  // shares each rounded to 2.2%
+    // Divided, a camera weighs less: the shares' sum falls where the images show edges.
+    more += sum_divided > sum * 1.03 + 1e-6;
+    less += sum_divided < 0.5 * sum;
   }
   EXPECT_EQ(off, 0) << "of " << inside;
   EXPECT_LT(rounded_down * 1000, inside);
+  EXPECT_EQ(more, 0) << "of " << inside;
+  EXPECT_GT(less * 20, inside) << "of " << inside;  // the shirt's stripes, the band, the hair
+  EXPECT_LT(less * 2, inside) << "of " << inside;   // not the flat skin and cloth
+  // Where the images are flat, every camera keeps its whole weight.
+  const Camera& any = rig().camera(0);
+  const std::vector<uint8_t> flat(size_t(any.width()) * any.height() * 4, 128);
+  std::vector<std::vector<uint8_t>> flat_partials;
+  for (const RigNode& node : rig().nodes()) {
+    LumigraphRenderer renderer(rig(), node.cameras);
+    renderer.setMesh(frame_->surface.positions, frame_->surface.normals, frame_->surface.triangles);
+    for (size_t j = 0; j < node.cameras.size(); ++j)
+      renderer.setImageRgba(int(j), flat.data(), any.width(), any.height());
+    flat_partials.emplace_back();
+    renderer.render(desired, flat_partials.back());
+  }
+  int64_t flat_off = 0;
+  for (size_t i = 0; i < local.size() / 4; ++i) {
+    if (local[4 * i + 3] == 0) continue;
+    double sum = 0;
+    for (const auto& p : flat_partials) sum += shareOfAlpha(p[4 * i + 3]);
+    flat_off += std::abs(sum - 1) > 0.03;
+  }
+  EXPECT_EQ(flat_off, 0) << "of " << inside;
   // Cameras 6 and 7 face the desired view from the other side of the stage: with three cameras
   // blended, never among the nearest in angle, their weight is zero everywhere. (With four, a
   // point on the rim that only five cameras face may take one of them: 2 pixels of this view.)
@@ -402,6 +442,46 @@ TEST_F(LumigraphRendererTest, NodeWeightsSumToOneAndVanishForCamerasThatDoNotCon
   std::vector<uint8_t> behind;
   makeRenderer({6, 7}, three)->render(desired, behind);
   EXPECT_EQ(covered(behind), 0);
+}
+
+// A camera's weight is divided by the error its image would bring were the surface a few
+// millimetres off along the desired ray: a desired camera above camera 0 moves camera 0's texels
+// vertically for such an error, so an image of horizontal stripes gives its weight away on their
+// edges, one of vertical stripes (the same image turned) keeps it.
+TEST_F(LumigraphRendererTest, ACameraGivesWayWhereItsImageWouldMisregister) {
+  const Camera& input = rig().camera(0);
+  const Camera desired = lookingAtTheActor(input.centre() + Eigen::Vector3d(0, 0, 1.2));
+  const int w = input.width(), h = input.height();
+  const auto shareBelowHalf = [&](bool horizontal) {
+    std::vector<uint8_t> stripes(size_t(w) * h * 4, 255);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        if (((horizontal ? y : x) / 4) % 2) std::fill_n(&stripes[(size_t(y) * w + x) * 4], 3, 0);
+    const auto render = [&](const LumigraphParams& params) {
+      LumigraphRenderer renderer(rig(), {0}, params);
+      renderer.setMesh(frame_->surface.positions, frame_->surface.normals,
+                       frame_->surface.triangles);
+      renderer.setImageRgba(0, stripes.data(), w, h);
+      std::vector<uint8_t> partial;
+      renderer.render(desired, partial);
+      return partial;
+    };
+    // Against the same camera's share with the misregistration off.
+    LumigraphParams geometric;
+    geometric.misregistration_m = 0;
+    const std::vector<uint8_t> partial = render({}), undivided = render(geometric);
+    int64_t drawn = 0, halved = 0;
+    for (size_t i = 3; i < partial.size(); i += 4) {
+      if (undivided[i] == 0) continue;
+      ++drawn;
+      halved += shareOfAlpha(partial[i]) < 0.5 * shareOfAlpha(undivided[i]);
+    }
+    EXPECT_GT(drawn, 3000);
+    return double(halved) / double(std::max<int64_t>(drawn, 1));
+  };
+  const double across = shareBelowHalf(true), along = shareBelowHalf(false);
+  EXPECT_GT(across, 0.2);  // 0.42 here: the texels within the shift of an edge
+  EXPECT_LT(along, 0.02);  // 0 here
 }
 
 TEST_F(LumigraphRendererTest, DistributedImageEqualsTheSingleProcessImage) {
@@ -747,14 +827,19 @@ TEST(PartialImageCodec, RoundTripsExactly) {
 TEST(PartialImageBlender, NormalisesAlphasPerPixel) {
   PartialImageBlender blender;
   blender.reset(2, 1);
-  const std::vector<uint8_t> a = {100, 0, 0, 51, 0, 0, 0, 0}, b = {200, 30, 0, 204, 0, 0, 0, 0};
+  // Shares of a half (16 steps an octave below 255) and of one: (100 / 2 + 200) / 1.5 = 167 and
+  // 30 / 1.5 = 20.
+  const std::vector<uint8_t> a = {100, 0, 0, 239, 0, 0, 0, 0}, b = {200, 30, 0, 255, 0, 0, 0, 0};
+  EXPECT_DOUBLE_EQ(shareOfAlpha(239), 0.5);
+  EXPECT_DOUBLE_EQ(shareOfAlpha(255), 1.0);
+  EXPECT_DOUBLE_EQ(shareOfAlpha(0), 0.0);
   blender.add(a);
   blender.add(b);
   EXPECT_FALSE(blender.add(std::vector<uint8_t>(4, 1)));
   std::vector<uint8_t> out;
   blender.finish(out);
   // The empty pixel beside it is feathered: 4/255 of the colour, premultiplied.
-  EXPECT_EQ(out, (std::vector<uint8_t>{180, 24, 0, 255, 3, 0, 0, 4}));
+  EXPECT_EQ(out, (std::vector<uint8_t>{167, 20, 0, 255, 3, 0, 0, 4}));
 }
 
 TEST(PartialImageBlender, BlendsFromTheWireAndForgetsTheLastFrame) {
@@ -786,7 +871,8 @@ TEST(PartialImageBlender, BlendsFromTheWireAndForgetsTheLastFrame) {
   EXPECT_EQ(runs, whole);
   EXPECT_EQ(whole[4 * 8 + 3], 255);
   EXPECT_LT(whole[4 * 22 + 3], 128);  // not drawn, only feathered beside pixel 21
-  EXPECT_EQ(whole[4 * 8], (10 * 8 * 100 + 200 * 28 + 64) / 128);
+  const double share_a = shareOfAlpha(100), share_b = shareOfAlpha(28);
+  EXPECT_NEAR(whole[4 * 8], (10 * 8 * share_a + 200 * share_b) / (share_a + share_b), 0.51);
 
   // The next frame draws b alone: nothing of a is left, neither where b is empty nor where both
   // drew.
