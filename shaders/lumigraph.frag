@@ -3,7 +3,8 @@
 // expected misregistration here: colour = their (despilled) colours' weighted mean, alpha = their
 // share of the undivided weight of every camera of the rig, on a log scale (shareAlpha). Images
 // are RGBA8, the colours of a Bayer image's 2x2 cells, or Bayer mosaics demosaiced here.
-// kOwnCameras is defined when compiling; own camera j's image is layer j of `images`.
+// kOwnCameras and kAlphaStepsPerOctave are defined when compiling; own camera j's image is layer
+// j of `images`.
 in float v_weight[kOwnCameras];
 in vec2 v_texel[kOwnCameras];
 in float v_total;
@@ -81,13 +82,13 @@ vec3 sampleImage(vec2 texel, int layer) {
 }
 #endif
 
-// A share of the weight (0 to 1) as the alpha byte, on a logarithmic scale: 255 + 16 log2(share),
-// rounded, at least 1 (a share of 1 is 255, each step 4.4% less, the least 2^-15.9), which
-// PartialImageBlender decodes. The misregistration's factor takes a node's share down to a few
+// A share of the weight (0 to 1) as the alpha byte, on a logarithmic scale: 255 +
+// kAlphaStepsPerOctave log2(share), rounded, at least 1 (shareOfAlpha, which PartialImageBlender
+// decodes, defines it and compiles the steps in). The misregistration's factor takes a node's share down to a few
 // thousandths where every camera sees an edge; 8-bit linear shares that small set the nodes'
 // proportions to a level or two of 255.
 float shareAlpha(float share) {
-  return clamp(floor(255.0 + 16.0 * log2(share) + 0.5), 1.0, 255.0) / 255.0;
+  return clamp(floor(255.0 + kAlphaStepsPerOctave * log2(share) + 0.5), 1.0, 255.0) / 255.0;
 }
 
 void main() {

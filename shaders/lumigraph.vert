@@ -117,6 +117,8 @@ void main() {
     sum = 1.0;
   }
   v_total = sum;
+  // Where the surface would be were it misregistration_m further along the desired ray.
+  vec3 further = p - misregistration_m * normalize(to_desired);
   // Texture coordinates of the own cameras, where the vertex is on their image (occluded or not:
   // across a triangle whose other corners they see, the coordinates stay those of the surface).
   for (int j = 0; j < kOwnCameras; ++j) {
@@ -127,12 +129,12 @@ void main() {
     vec3 c = rotations[i] * p + translations[i];
     if (c.z <= 0.05) continue;
     vec2 pixel = projectPixel(c, focal_centres[i], skews[i], radials[i], tangentials[i]);
-    // Where the camera would read were the surface misregistration_m further along the desired
-    // ray (the fragment shader weighs the camera by how its image changes over that shift).
-    vec3 further = rotations[i] * (p - misregistration_m * normalize(to_desired)) + translations[i];
-    if (misregistration_m > 0.0 && further.z > 0.05)
+    // Where the camera would read there (the fragment shader weighs the camera by how its image
+    // changes over that shift).
+    vec3 c_further = rotations[i] * further + translations[i];
+    if (misregistration_m > 0.0 && c_further.z > 0.05)
       v_shift[j] =
-          projectPixel(further, focal_centres[i], skews[i], radials[i], tangentials[i]) - pixel;
+          projectPixel(c_further, focal_centres[i], skews[i], radials[i], tangentials[i]) - pixel;
     if (all(greaterThanEqual(pixel, vec2(-0.5))) && all(lessThanEqual(pixel, image_sizes[i] - 0.5)))
       v_texel[j] = pixel + 0.5;
   }

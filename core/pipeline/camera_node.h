@@ -158,9 +158,10 @@ class CameraNode {
   // The node's partial lumigraph images of the (refined) posed surface, one per desired view,
   // rendered with OpenGL (LumigraphRenderer, its own cameras' images): colour = the weighted
   // mean of its cameras, alpha = their share of the weight of all the rig's cameras on a log
-  // scale (shareOfAlpha; the studio's normalisation weighs the nodes by it); alpha-run encoded. Empty when no OpenGL context could be
-  // had (said once in the log). `visibility`: the studio's masks of which cameras see each
-  // vertex (VertexVisibility), or empty: the renderer computes them.
+  // scale (shareOfAlpha; the studio's normalisation weighs the nodes by it); alpha-run encoded.
+  // Empty when no OpenGL context could be had (said once in the log). `visibility`: the studio's
+  // masks of which cameras see each vertex (VertexVisibility), or empty: the renderer computes
+  // them.
   std::vector<Message> partialImagesFor(const Set& set, int64_t frame_id,
                                         const std::vector<ViewData>& views,
                                         const Eigen::Vector3d& pivot,

@@ -7,6 +7,7 @@
 
 #include "core/base/error.h"
 #include "core/render/egl_context.h"
+#include "core/render/partial_image_blender.h"
 #include "core/render/shader_program.h"
 
 namespace lumistage {
@@ -21,7 +22,8 @@ std::string blendDefines(int cameras, const std::vector<int>& own) {
   std::string list;
   for (int c : own) list += (list.empty() ? "" : ", ") + std::to_string(c);
   return "#define kCameras " + std::to_string(cameras) + "\n#define kOwnCameras " +
-         std::to_string(own.size()) + "\n#define kOwnCameraList " + list;
+         std::to_string(own.size()) + "\n#define kOwnCameraList " + list +
+         "\n#define kAlphaStepsPerOctave " + std::to_string(kAlphaStepsPerOctave);
 }
 
 }  // namespace
