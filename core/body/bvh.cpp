@@ -1,6 +1,7 @@
 #include "core/body/bvh.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cctype>
@@ -208,6 +209,8 @@ class Parser {
   // The motion section, line by line: a frame line must hold exactly one value per channel.
   void parseMotion(BvhFile& out, int motion_line) {
     size_t l = static_cast<size_t>(motion_line);  // index of the line after MOTION
+    double announced = 0;                         // 'Frames:'
+    int frames_line = 0;
     auto nextLine = [&](const char* what) -> std::pair<std::string_view, int> {
       while (l < lines_.size()) {
         std::string_view line = lines_[l++];
@@ -238,12 +241,8 @@ class Parser {
       }
       const double n = number({words[1], number_}, "Frames");
       if (n < 0 || n != std::floor(n)) fail(number_, "expected a whole number of frames");
-      // A frame a line: no more frames than the file has lines (before making room for them).
-      if (n > double(lines_.size())) {
-        fail(number_, fmt::format("'Frames: {}' announces more frames than the file's {} lines",
-                                  words[1], lines_.size()));
-      }
-      out.frames.resize(static_cast<size_t>(n));
+      announced = n;
+      frames_line = number_;
     }
     {
       auto [line, number_] = nextLine("'Frame Time: seconds'");
@@ -254,30 +253,27 @@ class Parser {
       out.frame_time_s = number({words[2], number_}, "Frame Time");
       if (out.frame_time_s <= 0) fail(number_, "expected a positive Frame Time");
     }
-    for (size_t f = 0; f < out.frames.size(); ++f) {
-      if (l >= lines_.size() ||
-          std::all_of(lines_.begin() + static_cast<long>(l), lines_.end(),
-                      [](std::string_view s) { return s.find_first_not_of(" \t") == s.npos; })) {
-        fail(lastLine(), fmt::format("truncated: expected {} frames after 'Frames:', found {}",
-                                     out.frames.size(), f));
-      }
-      auto [line, number_] = nextLine("a frame line");
-      auto words = split(line);
+    // Every non-blank line from here is a frame, whatever 'Frames:' announced: real files hold
+    // more lines than it says (an exporter that counted before the take ended) or fewer (a copy cut
+    // short). What is there is read, and the disagreement is told.
+    for (; l < lines_.size(); ++l) {
+      if (lines_[l].find_first_not_of(" \t\r") == std::string_view::npos) continue;
+      const int number_ = static_cast<int>(l) + 1;
+      const auto words = split(lines_[l]);
       if (static_cast<int>(words.size()) != out.value_count) {
-        fail(number_, fmt::format("frame {} has {} values, expected {} (one per channel)", f + 1,
-                                  words.size(), out.value_count));
+        fail(number_, fmt::format("frame {} has {} values, expected {} (one per channel)",
+                                  out.frames.size() + 1, words.size(), out.value_count));
       }
-      out.frames[f].resize(words.size());
-      for (size_t v = 0; v < words.size(); ++v) {
-        out.frames[f][v] = number({words[v], number_}, "a channel value");
-      }
+      std::vector<double>& frame = out.frames.emplace_back(words.size());
+      for (size_t v = 0; v < words.size(); ++v)
+        frame[v] = number({words[v], number_}, "a channel value");
     }
-    while (l < lines_.size()) {
-      if (lines_[l].find_first_not_of(" \t") != std::string_view::npos) {
-        fail(static_cast<int>(l) + 1,
-             fmt::format("more frame lines than 'Frames: {}' announced", out.frames.size()));
-      }
-      ++l;
+    if (out.frames.empty())
+      fail(lastLine(),
+           fmt::format("truncated: expected {} frames after 'Frames:', found none", announced));
+    if (double(out.frames.size()) != announced) {
+      spdlog::warn("{}:{}: 'Frames: {}' announces {} frames, the file holds {}: reading the {}",
+                   file_, frames_line, announced, announced, out.frames.size(), out.frames.size());
     }
   }
 
