@@ -8,6 +8,7 @@
 #include "app/cli/body_commands.h"
 #include "app/cli/calibrate_commands.h"
 #include "app/cli/camera_commands.h"
+#include "app/cli/corpus_command.h"
 #include "app/cli/eval_command.h"
 #include "app/cli/export_command.h"
 #include "app/cli/info_command.h"
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
   lumistage::addInfoCommand(app);
   lumistage::addCalibrateCommands(app);
   lumistage::addEvalCommand(app);
+  lumistage::addCorpusCommand(app);
   lumistage::addExportCommand(app);
   lumistage::addRenderCommand(app);
   lumistage::addSessionCommands(app);

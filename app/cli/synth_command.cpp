@@ -9,9 +9,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "app/cli/corpus_command.h"
 #include "app/cli/progress.h"
+#include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/capture/session_writer.h"
+#include "core/sim/stage_draw.h"
 #include "core/sim/virtual_studio.h"
 
 namespace lumistage {
@@ -52,14 +55,22 @@ void addSynthCommand(CLI::App& app) {
     std::string config, out, sheet;
     int frames = 120;
     bool bayer = false;
+    int64_t seed = -1;
+    StageDrawOptions draw;
   };
   auto args = std::make_shared<Args>();
   CLI::App* synth = app.add_subcommand(
       "synth", "Film the virtual studio: write a session of images, rig and ground truth");
-  synth
-      ->add_option("--config", args->config,
-                   "studio config (YAML), e.g. resources/studio/reference.yaml")
-      ->required();
+  CLI::Option* config = synth->add_option(
+      "--config", args->config, "studio config (YAML), e.g. resources/studio/reference.yaml");
+  CLI::Option* seed =
+      synth
+          ->add_option("--seed", args->seed,
+                       "or a stage drawn at random from this seed (rig, actor, motion, look: the "
+                       "corpus's; its config is written beside the session as studio.yaml)")
+          ->check(CLI::Range(int64_t(0), int64_t(0xffffffff)));
+  config->excludes(seed);
+  addStageDrawOptions(*synth, args->draw);
   synth->add_option("--frames", args->frames, "number of frames")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
@@ -69,7 +80,12 @@ void addSynthCommand(CLI::App& app) {
   synth->add_option("--contact-sheet", args->sheet,
                     "also write the middle frame's views, side by side, here (PNG)");
   synth->callback([args] {
-    StudioConfig config = loadStudioConfig(args->config);
+    if (args->config.empty() == (args->seed < 0))
+      throw Error("synth: give a studio config (--config) or a seed to draw a stage from (--seed)");
+    args->draw.frames = args->frames;
+    StudioConfig config = args->seed >= 0 ? drawStage(uint32_t(args->seed), args->draw)
+                                          : loadStudioConfig(args->config);
+    if (args->seed >= 0) fmt::print("stage {}: {}\n", args->seed, describeStage(config));
     if (args->bayer) config.pixel_format = PixelFormat::kBayerRggb8;
     const auto setup_start = Clock::now();
     VirtualStudio studio(std::move(config), args->frames);
@@ -82,6 +98,9 @@ void addSynthCommand(CLI::App& app) {
         millisecondsSince(setup_start));
 
     const std::unique_ptr<SessionWriter> writer = openStudioSession(studio, args->out);
+    if (args->seed >= 0)
+      writeFileAtomically(writer->folder() / "studio.yaml",
+                          formatStudioConfig(studio.config(), "rig.yaml"));
     StudioFrame frame;
     std::vector<Image> images;
     double render_ms = 0, write_ms = 0;

@@ -12,6 +12,13 @@ JointLimits limits(Eigen::Vector3d lower, Eigen::Vector3d upper) {
 
 }  // namespace
 
+double statureOf(const BodyShape& shape) {
+  // makeHumanSkeleton's head joint stands 0.71 s + 0.84 s legs high (s = height / 1.75), the crown
+  // 0.20 s above it: 1.75 s for the generic legs.
+  const double s = shape.height_m / 1.75;
+  return s * (0.91 + 0.84 * shape.leg_length_scale);
+}
+
 Skeleton makeHumanSkeleton(const BodyShape& shape) {
   const double s = shape.height_m / 1.75;
   const double arm = s * shape.arm_length_scale, leg = s * shape.leg_length_scale;

@@ -51,6 +51,11 @@ enum HumanJoint : int {
 // {right,left}_{clavicle,shoulder,elbow,wrist,hand,hip,knee,ankle,foot}.
 Skeleton makeHumanSkeleton(const BodyShape& shape = {});
 
+// How tall a body of this shape stands: the crown of its head above the floor in the rest pose
+// (the head joint and the head above it), whatever the legs' share. BodyShape::height_m is this
+// only for the generic legs (leg_length_scale 1).
+double statureOf(const BodyShape& shape);
+
 // Throws std::invalid_argument, naming `source` and the first joint out of place, unless `skeleton`
 // has the human skeleton's joints in its order (HumanJoint): the tracker and the nodes' posed body
 // index joints by that order, and a file that lists them otherwise (another exporter's order of a

@@ -6,6 +6,7 @@
 #include <ctime>
 
 #include "core/base/error.h"
+#include "core/body/human_skeleton.h"
 #include "core/eval/percentile.h"
 #include "core/imaging/keyer.h"
 #include "core/pipeline/silhouettes.h"
@@ -140,6 +141,8 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
       search_ms.empty() ? std::nan("") : *std::max_element(search_ms.begin(), search_ms.end()));
   // The calibrated height; the default shape is no measure when nobody was tracked.
   report.set(section, "actor_height_m", tracked > 0 ? tracker.shape().height_m : std::nan(""));
+  // How tall it stands (statureOf), which the truth's is measured against.
+  report.set(section, "actor_stature_m", tracked > 0 ? statureOf(tracker.shape()) : std::nan(""));
   return result;
 }
 

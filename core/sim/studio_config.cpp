@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/base/yaml_reader.h"
@@ -57,7 +59,8 @@ StudioConfig loadStudioConfig(const std::filesystem::path& path) {
   }
   if (const YAML::Node motion = root["motion"]) {
     in.requireMap(motion, "motion");
-    in.checkKeys(motion, "motion", {"clip", "bvh", "fps"});
+    in.checkKeys(motion, "motion",
+                 {"clip", "bvh", "fps", "start_s", "centre", "heading_deg", "offset_m"});
     if (motion["clip"]) {
       config.clip = in.string(motion["clip"], "motion.clip");
       bool known = false;
@@ -76,6 +79,24 @@ StudioConfig loadStudioConfig(const std::filesystem::path& path) {
       config.fps = in.number(motion["fps"], "motion.fps");
       if (!(config.fps > 0 && config.fps <= 240))
         in.fail(motion["fps"], "motion.fps", "expected frames per second in (0, 240]");
+    }
+    MotionPlacement& placement = config.placement;
+    if (motion["start_s"]) {
+      placement.start_s = in.number(motion["start_s"], "motion.start_s");
+      if (!(placement.start_s >= 0 && placement.start_s <= 3600))
+        in.fail(motion["start_s"], "motion.start_s", "expected seconds in [0, 3600]");
+    }
+    if (motion["centre"]) placement.centre = in.boolean(motion["centre"], "motion.centre");
+    if (motion["heading_deg"])
+      placement.heading_deg = in.number(motion["heading_deg"], "motion.heading_deg");
+    if (const YAML::Node offset = motion["offset_m"]) {
+      in.requireSequence(offset, "motion.offset_m", 2);
+      for (int i = 0; i < 2; ++i) {
+        placement.offset_m[i] = in.number(offset[i], YamlReader::item("motion.offset_m", i));
+        if (std::abs(placement.offset_m[i]) > 10)
+          in.fail(offset[i], YamlReader::item("motion.offset_m", i),
+                  "expected metres in [-10, 10]");
+      }
     }
   }
   if (const YAML::Node look = root["look"]) {
@@ -108,6 +129,40 @@ StudioConfig loadStudioConfig(const std::filesystem::path& path) {
     config.refine = readRefineConfig(in, refine, "refine");
   if (root["seed"]) config.seed = static_cast<uint32_t>(in.integer(root["seed"], "seed"));
   return config;
+}
+
+std::string formatStudioConfig(const StudioConfig& config, const std::string& rig_file) {
+  const BodyShape& shape = config.actor.shape;
+  const MotionPlacement& placement = config.placement;
+  const StudioLook& look = config.look;
+  std::string out =
+      "# A Lumistage virtual studio: see docs/virtual-studio.md.\n"
+      "format: lumistage-studio\n"
+      "version: 1\n";
+  out += fmt::format("rig: {}\n", rig_file);
+  out += fmt::format(
+      "actor:\n  height_m: {}\n  arm_length_scale: {}\n  leg_length_scale: {}\n"
+      "  shoulder_width_scale: {}\n  hip_width_scale: {}\n  girth_scale: {}\n"
+      "  belly_scale: {}\n  clothing: {}\n  vertices: {}\n",
+      shape.height_m, shape.arm_length_scale, shape.leg_length_scale, shape.shoulder_width_scale,
+      shape.hip_width_scale, shape.girth_scale, shape.belly_scale, config.actor.clothing,
+      config.actor.target_vertices);
+  out += "motion:\n";
+  if (config.bvh_file.empty())
+    out += fmt::format("  clip: {}\n", config.clip);
+  else
+    out += fmt::format("  bvh: '{}'\n", std::filesystem::absolute(config.bvh_file).string());
+  out += fmt::format(
+      "  fps: {}\n  start_s: {}\n  centre: {}\n  heading_deg: {}\n  offset_m: [{}, {}]\n",
+      config.fps, placement.start_s, placement.centre, placement.heading_deg,
+      placement.offset_m.x(), placement.offset_m.y());
+  out += fmt::format(
+      "look:\n  screen_green: [{}, {}, {}]\n  unevenness: {}\n  spill: {}\n"
+      "  noise_sigma: {}\n  pixel_format: {}\n",
+      look.screen_green.x(), look.screen_green.y(), look.screen_green.z(), look.unevenness,
+      look.spill, look.noise_sigma * 255.0, pixelFormatName(config.pixel_format));
+  out += fmt::format("seed: {}\n", config.seed);
+  return out;
 }
 
 }  // namespace lumistage

@@ -12,9 +12,11 @@ VirtualStudio::VirtualStudio(StudioConfig config, int frame_count)
   if (!config_.bvh_file.empty()) {
     clip_ = loadBvh(config_.bvh_file, actor_.skeleton);
   } else {
-    const double duration_s = std::max(1.0, frame_count / config_.fps);
+    const double duration_s = std::max(1.0, config_.placement.start_s + frame_count / config_.fps);
     clip_ = makeBuiltinClip(config_.clip, actor_.skeleton, config_.fps, duration_s);
   }
+  if (config_.placement != MotionPlacement{})
+    placeMotion(clip_, actor_.skeleton, config_.placement, frame_count, config_.fps);
   gl_ = std::make_unique<EglContext>();
   renderer_ = std::make_unique<StudioRenderer>(actor_);
 }
@@ -26,7 +28,7 @@ VirtualStudio::~VirtualStudio() {
 void VirtualStudio::renderFrame(int index, StudioFrame& frame) {
   frame.index = index;
   frame.time_s = index / config_.fps;
-  frame.pose = clip_.sample(frame.time_s);
+  frame.pose = clip_.sample(config_.placement.start_s + frame.time_s);
   actor_.skeleton.jointPositions(frame.pose, frame.joints);
   actor_.skeleton.skinningTransforms(frame.pose, transforms_);
   if (frame.surface.triangles.size() != actor_.rest.triangles.size())

@@ -479,6 +479,46 @@ TEST(Cli, SynthWritesACompleteSession) {
 namespace lumistage {
 namespace {
 
+// A stage drawn from a seed: its config is written beside the session and films the same stage
+// again; the corpus runs the seeds it is given and reports them.
+TEST(Cli, SynthDrawsAStageFromASeedThatItsConfigFilmsAgain) {
+  const fs::path folder = tempPath("seed");
+  fs::remove_all(folder);
+  Result r =
+      run(kCli + " synth --seed 11 --cameras 4-4 --frames 1 --out " + (folder / "drawn").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("stage 11: 4 cameras"), std::string::npos) << r.output;
+  ASSERT_TRUE(fs::exists(folder / "drawn" / "studio.yaml"));
+  r = run(kCli + " synth --config " + (folder / "drawn" / "studio.yaml").string() +
+          " --frames 1 --out " + (folder / "again").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto bytes = [](const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(bytes(folder / "drawn" / "truth" / "joints.csv"),
+            bytes(folder / "again" / "truth" / "joints.csv"));
+  EXPECT_EQ(bytes(folder / "drawn" / "rig.yaml"), bytes(folder / "again" / "rig.yaml"));
+
+  r = run(kCli + " synth --seed 3 --config " + (folder / "drawn" / "studio.yaml").string() +
+          " --out " + (folder / "both").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("excludes"), std::string::npos) << r.output;
+  r = run(kCli + " corpus --seeds 9-3 --out " + (folder / "corpus").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("--seeds '9-3': expected a number or a range FIRST-LAST"),
+            std::string::npos)
+      << r.output;
+  r = run(kCli + " corpus --seeds 4,2 --cameras 4-4 --frames 2 --out " +
+          (folder / "corpus").string() + " --json " + (folder / "corpus.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("2 stages: MPJPE mean"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(folder / "corpus" / "seed-4" / "studio.yaml"));
+  EXPECT_TRUE(fs::exists(folder / "corpus" / "seed-2" / "index.csv"));
+  EXPECT_NE(bytes(folder / "corpus.json").find("\"stages\": 2"), std::string::npos);
+  fs::remove_all(folder);
+}
+
 TEST(Cli, RunWritesTheFiguresAsJson) {
   const fs::path folder = tempPath("run");
   ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
