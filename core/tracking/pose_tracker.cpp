@@ -10,62 +10,11 @@
 #include <stdexcept>
 
 #include "core/geometry/stage_volume.h"
+#include "core/tracking/pose_tracker_impl.h"
 
 namespace lumistage {
 
 namespace {
-
-// A voxel's cell in a camera's silhouette, or kUnseen<T> where the camera does not see it: 16 bits
-// a cell while every camera has fewer than 65535 cells (1024x768 at step 4), 32 beyond (1920x1080).
-template <typename T>
-constexpr T kUnseen = std::numeric_limits<T>::max();
-
-// A capsule hung on joint `joint`: the segment from the joint to `b` (rest-aligned offset, turned
-// with the joint) and a radius.
-// A capsule hung on joint `joint`, along its segment: to its child `child`, or along `end_dir`
-// (1 m in the generic skeleton) for an end joint. The axis runs from fraction a_frac to b_frac of
-// the segment, shifted sideways by `lateral_m` (the torso is two capsules side by side); all
-// measured on the generic mesh, then scaled with the calibrated skeleton.
-struct Capsule {
-  int joint = 0;
-  int child = -1;
-  Eigen::Vector3d end_dir = Eigen::Vector3d::UnitZ();
-  double a_frac = 0, b_frac = 1;
-  Eigen::Vector3d lateral_m = Eigen::Vector3d::Zero();
-  double generic_radius_m = 0;
-  // For the current skeleton: the axis relative to the joint (rest-aligned frame).
-  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
-  double radius_m = 0;
-};
-
-struct Sample {  // an axis sample that must project inside every silhouette
-  int joint;
-  Eigen::Vector3d local;
-};
-
-// One degree of freedom of the fit: root translation axis, root rotation axis (applied on the
-// left, about the root), or one Euler angle of a joint.
-struct Dof {
-  enum Kind { kTranslation, kRootRotation, kEuler } kind;
-  int joint;
-  int axis;
-};
-
-Eigen::Matrix3d rotationOf(const Eigen::Vector3d& rotation_vector) {
-  const double a = rotation_vector.norm();
-  return a > 0 ? Eigen::AngleAxisd(a, rotation_vector / a).toRotationMatrix()
-               : Eigen::Matrix3d::Identity();
-}
-
-double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                       Eigen::Vector3d& closest) {
-  const Eigen::Vector3d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  double t = len2 > 0 ? (p - a).dot(ab) / len2 : 0.0;
-  t = std::clamp(t, 0.0, 1.0);
-  closest = a + t * ab;
-  return (p - closest).norm();
-}
 
 // Squared Euclidean distance transform in 1D (Felzenszwalb & Huttenlocher).
 void edt1d(const float* f, int n, float* d, int* v, float* z) {
@@ -103,128 +52,7 @@ void edt1d(const float* f, int n, float* d, int* v, float* z) {
 
 }  // namespace
 
-struct PoseTracker::Impl {
-  PoseTrackerOptions opt;
-  Rig rig;
-  int cameras = 0;
-  std::vector<int> cell_w, cell_h;
-  // Hull grid.
-  StageBox stage;
-  Eigen::Vector3d lower;
-  Eigen::Vector3i dims;
-  // [voxel * cameras + camera]: cell while every camera's cells fit in 16 bits, else cell_wide.
-  std::vector<uint16_t> cell;
-  std::vector<uint32_t> cell_wide;
-  // Blocks of kBlock^3 voxels, [block * cameras + camera]: a cell of one of the block's voxels and
-  // how far (in cells, rounded up) every other voxel's cell lies from it, or kUnseen where the
-  // camera does not see all of the block. A camera whose distance transform at that cell exceeds
-  // the reach carves the whole block away (the transform moves by at most a cell a cell), so the
-  // empty space around the actor is carved a block at a time instead of a voxel at a time.
-  static constexpr int kBlock = 4;
-  Eigen::Vector3i block_dims;
-  std::vector<uint32_t> block_cell;
-  std::vector<uint8_t> block_reach;
-  std::vector<uint8_t> occupied;
-  std::vector<Eigen::Vector3d> surface_all, hull;
-  // Silhouette distance transforms (cells), per camera; present[c] when this frame has one. Each
-  // is computed over the silhouette's bounding box grown by kDtMargin cells (dt_box: x0, y0, x1,
-  // y1, inclusive; empty when x1 < x0), where it is exact (no silhouette cell lies outside);
-  // every other cell holds kFarCells. About a quarter of the cells at step 4.
-  static constexpr int kDtMargin = 16;
-  static constexpr float kFarCells = 1000.0f;
-  std::vector<std::vector<float>> dt;
-  std::vector<Eigen::Array4i> dt_box;
-  std::vector<uint8_t> present;
-  std::vector<uint8_t> told_empty;  // per camera: said that its silhouette is left out
-  std::vector<float> dt_f, dt_d, dt_z, dt_col;
-  std::vector<int> dt_v;
-  // Body model.
-  Skeleton generic;
-  Skeleton skeleton;
-  BodyShape shape;
-  double foot_scale = 1.0;  // the feet's radii over the body's (shoes)
-  bool shape_calibrated = false;
-  double generic_head_z = 1, generic_top_z = 1;
-  std::vector<Capsule> capsules;
-  std::vector<Sample> samples;
-  std::vector<Dof> dofs;
-  std::vector<std::vector<int>> chain;  // dofs moving each joint, ascending
-  // Per evaluation.
-  std::vector<Eigen::Isometry3d> global;
-  std::vector<Eigen::Vector3d> dof_axis, dof_centre;
-  std::vector<Eigen::Vector3d> cap_a, cap_b;
-  // The capsules that can be nearest to each hull sample (ascending, in candidates from
-  // candidate_begin[i]): those within kCandidateMargin of the nearest when the lists were made,
-  // with the capsules then at candidate_a, candidate_b. While no capsule end has moved more than
-  // half the margin since, no other capsule can be nearest (a segment whose ends move by at most
-  // m moves at most m from any point): the fit's iterations look at 2 to 4 capsules a sample
-  // instead of all of them, and find the same nearest one.
-  static constexpr double kCandidateMargin = 0.10;
-  std::vector<uint8_t> candidates;
-  std::vector<int> candidate_begin;
-  std::vector<double> capsule_distance;  // of one sample to every capsule, while making them
-  std::vector<Eigen::Vector3d> candidate_a, candidate_b;
-  bool candidates_valid = false;
-  Eigen::MatrixXd H, H_new;
-  Eigen::VectorXd g, g_new, delta;
-  Eigen::MatrixXd damped;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt;
-  Pose candidate, predicted, fitted;
-  // Per joint, the residuals' normal equations in the joint's spatial terms (evaluate): every
-  // degree of freedom moves a point p by a x (p - c) (a turn about axis a through c) or by a (a
-  // shift), so a residual's Jacobian row over a joint's chain is S_d . w, with S_d = (c x a, a) or
-  // (a, 0) and w = (g, p x g) for its slope g = dr/dp. The residuals of a joint add w w^T and
-  // w r, and the chain's block of J^T J is S^T M S, once a joint: per residual 36 products
-  // instead of one for each pair of the chain's degrees of freedom (up to 24: about 300).
-  using Vector6d = Eigen::Matrix<double, 6, 1>;
-  std::vector<Eigen::Matrix<double, 6, 6>> joint_m;
-  std::vector<Vector6d> joint_g, dof_spatial;
-  std::vector<uint8_t> joint_used;
-  // Tracking state.
-  bool tracking = false;
-  int bad_frames = 0;
-  int empty_frames = 0;      // in a row: the hull too small for anyone
-  bool shape_given = false;  // by setShape(): kept whoever walks on
-  Pose pose, previous;
-  bool has_previous = false;
-  Pose prior_pose;
-  bool use_prior = false;
-  double prior_weight = 0;
-
-  Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTrackerOptions& o);
-  void buildModel(const SkinnedMesh& mesh);
-  void setShape(const BodyShape& s);
-  void prepareSilhouettes(const std::vector<const LowResSilhouette*>& silhouettes);
-  // Carves voxels [lo, hi] (inclusive) and samples the hull's surface; returns the volume.
-  double carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid, double* top_z);
-  template <typename T>
-  void makeBlocks(const std::vector<T>& table);
-  // The largest squared distance, in cells of camera c, of the cells of voxels first .. last from
-  // the first one's; -1 where the camera does not see one of them.
-  template <typename T>
-  int blockReach2(const std::vector<T>& table, const Eigen::Vector3i& first,
-                  const Eigen::Vector3i& last, int c) const;
-  static Eigen::Vector3i blocksOf(const Eigen::Vector3i& voxels) {
-    return (voxels.array() + kBlock - 1) / kBlock;
-  }
-  double evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h, Eigen::VectorXd& grad);
-  // Places the capsules for the pose in `global` (cap_a, cap_b) and remakes the hull samples'
-  // candidate capsules when they no longer hold.
-  void placeCapsules();
-  // The nearest capsule to hull sample i (its index, the signed distance to its surface, the
-  // closest point on its axis).
-  int nearestCapsule(size_t i, double& distance, Eigen::Vector3d& closest) const;
-  double fit(Pose& p, int iterations);
-  double fitRms(const Pose& p);
-  void apply(Pose& p, const Eigen::VectorXd& delta) const;
-  // `volume`: the stage's hull carved for it, m³.
-  bool initialise(TrackResult& out, double& volume);
-  // The calibrated proportions forgotten: the next initialisation calibrates anew.
-  void forgetShape() {
-    shape_calibrated = false;
-    foot_scale = 1.0;
-  }
-};
+using namespace tracker_detail;
 
 PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTrackerOptions& o)
     : opt(o), rig(r), cameras(r.cameraCount()), generic(mesh.skeleton) {
@@ -464,9 +292,11 @@ void PoseTracker::Impl::buildModel(const SkinnedMesh& mesh) {
   }
   generic_head_z = rest[kHead].z();
   generic_top_z = mesh.rest.positions.row(2).maxCoeff();
+  generic_bottom_z = mesh.rest.positions.row(2).minCoeff();
   cap_a.resize(capsules.size());
   cap_b.resize(capsules.size());
   setShape(BodyShape{});
+  makeLibrary();
 }
 
 void PoseTracker::Impl::setShape(const BodyShape& s) {
@@ -626,7 +456,7 @@ void PoseTracker::Impl::makeBlocks(const std::vector<T>& table) {
 }
 
 double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid,
-                                double* top_z) {
+                                double* top_z, double* bottom_z) {
   lo = lo.cwiseMax(Eigen::Vector3i::Zero());
   hi = hi.cwiseMin(dims - Eigen::Vector3i::Ones());
   surface_all.clear();
@@ -636,7 +466,7 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
   const size_t sx = 1, sy = size_t(dims.x()), sz = size_t(dims.x()) * dims.y();
   int count = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  double top = 0;
+  double top = 0, bottom = dims.z();
   // The camera that carved the last voxel away is asked first: neighbouring voxels mostly fall
   // outside the same silhouette.
   int first = 0;
@@ -675,6 +505,7 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
             ++count;
             sum += Eigen::Vector3d(x, y, z);
             top = std::max(top, double(z));
+            bottom = std::min(bottom, double(z));
           }
         }
       }
@@ -737,6 +568,7 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
   if (centroid && count > 0)
     *centroid = lower + opt.voxel_m * (sum / count + Eigen::Vector3d::Constant(0.5));
   if (top_z) *top_z = lower.z() + opt.voxel_m * (top + 1.0);
+  if (bottom_z) *bottom_z = lower.z() + opt.voxel_m * (count > 0 ? bottom : 0.0);
   return count * std::pow(opt.voxel_m, 3);
 }
 
@@ -1021,121 +853,6 @@ double PoseTracker::Impl::fitRms(const Pose& p) {
   return hull.empty() ? 1.0 : std::sqrt(sum / hull.size());
 }
 
-// Initialisation calibrates the body's proportions only on a hull that the best template fits
-// within this many times lost_rms_m.
-constexpr double kCalibrateWithin = 2.0;
-
-bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
-  Eigen::Vector3d centroid;
-  double top_z = 0;
-  volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z);
-  out.hull_points = int(hull.size());
-  if (volume < opt.min_volume_m3 || volume > opt.max_volume_m3 || top_z < 1.0) return false;
-  // The crown under the hull's top, which the generic human's proportions are scaled to.
-  const double crown_z = top_z - opt.hair_m;
-  if (!shape_calibrated) {
-    BodyShape s;
-    s.height_m = std::clamp(s.height_m * crown_z / generic_top_z, 1.3, 2.3);
-    setShape(s);
-  }
-  use_prior = false;
-  const int joints = skeleton.jointCount();
-  Pose best_pose;
-  double best = std::numeric_limits<double>::infinity();
-  const Eigen::Vector3d root = skeleton.restPositions()[0];
-  for (int arms = 0; arms < 2; ++arms) {
-    for (int heading = 0; heading < 4; ++heading) {
-      Pose p = Pose::rest(joints);
-      p.angles_rad[0] = Eigen::Vector3d(0, 0, heading * M_PI / 2);
-      p.root_translation_m = Eigen::Vector3d(centroid.x() - root.x(), centroid.y() - root.y(), 0);
-      if (arms == 1) {
-        p.angles_rad[kRightShoulder].y() = 0.8;
-        p.angles_rad[kLeftShoulder].y() = -0.8;
-      }
-      const double c = fit(p, opt.init_iterations);
-      if (c < best) best = c, best_pose = p;
-    }
-  }
-  // A hull that no template fits within twice the lost threshold (two people, a prop, a hull
-  // carved by two cameras) is no body whose proportions a search could find: failed at once,
-  // instead of 30 refits a frame (0.4 s a frame while nobody could be tracked).
-  const bool calibrating = opt.calibrate_shape && !shape_calibrated;
-  double rms = fitRms(best_pose);
-  if (calibrating && rms > kCalibrateWithin * opt.lost_rms_m) {
-    out.fit_rms_m = rms;
-    return false;
-  }
-  if (calibrating) {
-    // Coordinate search over the body's proportions, refitting the pose for every trial.
-    constexpr int kParams = 7;
-    // Which of them: the legs' length, the girth and the feet (shoes). The hull's top fixes the
-    // body's overall size, so a trial leg length trades the legs against the rest of the body
-    // (the pelvis moves, the top stays): searching the legs with a free height, or the arms,
-    // lowered the fit's cost but raised the joints' error (the capsules are too coarse to tell
-    // bone lengths apart on their own).
-    const int calibrated_params = 0x64;
-    double k[kParams] = {shape.height_m,
-                         shape.arm_length_scale,
-                         shape.leg_length_scale,
-                         shape.shoulder_width_scale,
-                         shape.hip_width_scale,
-                         shape.girth_scale,
-                         foot_scale};
-    double steps[kParams] = {0.06, 0.06, 0.06, 0.08, 0.08, 0.12, 0.2};
-    const double lo[kParams] = {1.3, 0.8, 0.8, 0.7, 0.7, 0.7, 0.8},
-                 hi[kParams] = {2.3, 1.25, 1.25, 1.4, 1.4, 1.6, 2.0};
-    auto make = [&](const double* v) {
-      foot_scale = v[6];
-      BodyShape s;
-      // The height that keeps the body's crown under the hull's top with this leg length
-      // (makeHumanSkeleton: the legs are 0.84 of the generic height unit, 1.75 m).
-      s.height_m = std::clamp(
-          BodyShape{}.height_m * crown_z / (generic_top_z + 0.84 * (v[2] - 1.0)), 1.3, 2.3);
-      s.arm_length_scale = v[1];
-      s.leg_length_scale = v[2];
-      s.shoulder_width_scale = v[3];
-      s.hip_width_scale = v[4];
-      s.girth_scale = v[5];
-      return s;
-    };
-    for (int round = 0; round < 5; ++round) {
-      for (int i = 0; i < kParams; ++i) {
-        if (!((calibrated_params >> i) & 1)) continue;
-        for (double sign : {1.0, -1.0}) {
-          double trial[kParams];
-          std::copy(k, k + kParams, trial);
-          trial[i] = std::clamp(trial[i] + sign * steps[i], lo[i], hi[i]);
-          if (trial[i] == k[i]) continue;
-          setShape(make(trial));
-          Pose p = best_pose;
-          const double c = fit(p, 12);
-          if (c < best) {
-            best = c;
-            best_pose = p;
-            std::copy(trial, trial + kParams, k);
-            break;
-          }
-        }
-      }
-      for (double& s : steps) s *= 0.5;
-    }
-    setShape(make(k));
-    best = fit(best_pose, opt.init_iterations);
-    rms = fitRms(best_pose);
-  }
-  out.fit_rms_m = rms;
-  if (rms > opt.lost_rms_m) {
-    // A hull no body fits (a prop, someone half inside the stage, a hull carved by some cameras
-    // only) is no actor to take the proportions from: the next initialisation calibrates anew.
-    if (calibrating) foot_scale = 1.0;
-    return false;
-  }
-  if (calibrating) shape_calibrated = true;
-  pose = previous = best_pose;
-  has_previous = false;
-  return true;
-}
-
 PoseTracker::PoseTracker(const Rig& rig, const SkinnedMesh& generic, PoseTrackerOptions options)
     : options_(options), impl_(new Impl(rig, generic, options)) {
   result_.pose = Pose::rest(kHumanJointCount);
@@ -1215,7 +932,8 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
     lo.z() = m.lower.z();
     const Eigen::Vector3i vlo = ((lo - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
     const Eigen::Vector3i vhi = ((hi - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
-    volume = m.carve(vlo, vhi, nullptr, nullptr);
+    double hull_top = 0, hull_bottom = 0;
+    volume = m.carve(vlo, vhi, nullptr, &hull_top, &hull_bottom);
     result_.hull_points = int(m.hull.size());
     if (volume < m.opt.min_volume_m3 || volume > m.opt.max_volume_m3) {
       // No hull to fit (the actor gone, or one frame's keys broken: a light flickered, every mask
@@ -1238,6 +956,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
         if (++m.bad_frames >= m.opt.lost_frames) m.tracking = false;
       } else {
         m.bad_frames = 0;
+        if (m.opt.calibrate_shape && !m.shape_given) m.remeasureHeight(hull_bottom, hull_top);
       }
       result_.state = m.tracking ? TrackState::kTracking : TrackState::kLost;
     }

@@ -36,7 +36,7 @@ struct PoseTrackerOptions {
   size_t max_table_bytes = size_t(1) << 30;
   int iterations = 10;         // Levenberg-Marquardt iterations per tracked frame
   double velocity_gain = 0.8;  // of the constant-velocity prediction (0: the previous pose)
-  int init_iterations = 20;    // per initialisation hypothesis
+  int init_iterations = 20;    // per initialisation hypothesis fitted in full
   // Hull surface samples per frame, evenly thinned beyond: one actor's hull has about 2000 surface
   // voxels at 3 cm, all of them kept (at 2 cm, 2.25 times as many by area: thinned to this; to
   // 2500, with 8 iterations, the arm wave lost the arm). Thinned to 1200, a raised arm kept too few
@@ -91,16 +91,21 @@ struct TrackResult {
 // a temporal prior toward the constant-velocity prediction.
 //
 // Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
-// is fitted from T- and A-pose templates at its centroid in four headings, the best fit wins, and
-// (once per actor: again after the stage stood empty for forget_shape_after_empty_frames) the
-// body shape is calibrated: the generic skeleton's bones scaled to the
-// height of the hull's top less hair_m, then the legs' length (with the top held there), the
-// capsules' girth and the feet's radius (shoes) by a coordinate search that refits the pose for
-// each trial. The arms keep the generic proportions: searching them too lowered the fit's cost
-// but not the joints' error. The clavicles stay at rest (track_clavicles). A fit error above
+// is tried against every pose of a library (makeInitialisationPoses: the built-in clips' poses and
+// their mirror images, crouching, walking, waving, turning, T- and A-pose) at eight headings, over
+// the hull's centroid and standing on its lowest point, the body scaled (until calibrated) so that
+// it spans the hull's height in that pose; the hypotheses are scored on a thinned hull, the best
+// six fitted in full, and the best fit wins. No T-pose is needed. Once per actor (again after the
+// stage stood empty for forget_shape_after_empty_frames) the body shape is calibrated: the generic
+// skeleton's bones scaled to the hull's extent less hair_m in the pose found, then the legs'
+// length (the extent held), the capsules' girth and the feet's radius (shoes) by a coordinate
+// search that refits the pose for each trial. An actor found crouching or bent is measured again
+// when he stands straighter (his height from the hull's extent in that frame), until he stands
+// straight. The arms keep the generic proportions: searching them too lowered the fit's cost but
+// not the joints' error. The clavicles stay at rest (track_clavicles). A fit error above
 // lost_rms_m for lost_frames frames, or an empty stage, loses the actor; the next frames
-// re-initialise. No ground truth at run time. Not thread-safe; reuses its buffers (no allocation
-// per tracked frame once warm).
+// re-initialise by the same search. No ground truth at run time. Not thread-safe; reuses its
+// buffers (no allocation per tracked frame once warm).
 class PoseTracker {
  public:
   // `generic`: the generic human (makeHumanSkeleton's joints), whose mesh gives the bones' radii.

@@ -12,6 +12,7 @@
 #include "core/body/motion_library.h"
 #include "core/geometry/ring_rig.h"
 #include "core/geometry/stage_volume.h"
+#include "core/sim/motion_placement.h"
 #include "tests/core/tracking/synthetic_stage.h"
 
 namespace lumistage {
@@ -202,6 +203,38 @@ TEST(PoseTracker, ReinitialisesAfterTheActorLeavesAndReenters) {
 
 // One frame without a hull (a light flickered, every key broken) does not lose the actor: the
 // next frame is tracked on from the held pose, not initialised again from a T-pose.
+// An actor found crouching, turned and off-centre (no T-pose): the first frame finds him, his
+// height is measured when he stands up.
+TEST(PoseTracker, FindsAnActorWhoEntersCrouchingAndMeasuresHimStanding) {
+  SyntheticStage stage(kStudio);
+  PoseTracker tracker(stage.config.rig, generic());
+  MotionClip clip = makeBuiltinClip("crouch", stage.actor.skeleton, 30.0, 4);
+  MotionPlacement placement;
+  placement.start_s = 1.2;
+  placement.heading_deg = 135;
+  placement.offset_m = {0.3, -0.25};
+  placeMotion(clip, stage.actor.skeleton, placement, 60, 30);
+  const Pose first = clip.sample(placement.start_s);
+  std::vector<Eigen::Vector3d> rest;
+  stage.actor.skeleton.jointPositions(Pose::rest(kHumanJointCount), rest);
+  stage.actor.skeleton.jointPositions(first, stage.joints);
+  ASSERT_LT(stage.joints[kHead].z(), rest[kHead].z() - 0.25) << "not crouching";
+  const TrackResult& r = tracker.track(stage.render(first));
+  ASSERT_EQ(r.state, TrackState::kInitialised);
+  EXPECT_LT(mpjpe(r.joints, stage.joints), 0.06);
+  double sum = 0;
+  int tracked = 0;
+  for (int f = 1; f < 60; ++f) {
+    const TrackResult& t = tracker.track(stage.render(clip.sample(placement.start_s + f / 30.0)));
+    if (!t.valid()) continue;
+    ++tracked;
+    sum += mpjpe(t.joints, stage.joints);
+  }
+  EXPECT_EQ(tracked, 59);
+  EXPECT_LT(sum / tracked, 0.035);
+  EXPECT_NEAR(statureOf(tracker.shape()), statureOf(stage.config.actor.shape), 0.03);
+}
+
 TEST(PoseTracker, OneFrameWithoutAHullDoesNotLoseTheActor) {
   SyntheticStage stage(kStudio);
   PoseTracker tracker(stage.config.rig, generic());

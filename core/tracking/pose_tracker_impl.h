@@ -1,0 +1,242 @@
+#pragma once
+
+// The tracker's insides (PoseTracker::Impl), shared by the files that make it up: the body model
+// and the fit (pose_tracker.cpp) and the initialisation and shape calibration
+// (tracker_initialisation.cpp). Not for use outside core/tracking.
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "core/tracking/pose_tracker.h"
+
+namespace lumistage {
+
+namespace tracker_detail {
+
+// A voxel's cell in a camera's silhouette, or kUnseen<T> where the camera does not see it: 16 bits
+// a cell while every camera has fewer than 65535 cells (1024x768 at step 4), 32 beyond (1920x1080).
+template <typename T>
+constexpr T kUnseen = std::numeric_limits<T>::max();
+
+// A capsule hung on joint `joint`, along its segment: to its child `child`, or along `end_dir`
+// (1 m in the generic skeleton) for an end joint. The axis runs from fraction a_frac to b_frac of
+// the segment, shifted sideways by `lateral_m` (the torso is two capsules side by side); all
+// measured on the generic mesh, then scaled with the calibrated skeleton.
+struct Capsule {
+  int joint = 0;
+  int child = -1;
+  Eigen::Vector3d end_dir = Eigen::Vector3d::UnitZ();
+  double a_frac = 0, b_frac = 1;
+  Eigen::Vector3d lateral_m = Eigen::Vector3d::Zero();
+  double generic_radius_m = 0;
+  // For the current skeleton: the axis relative to the joint (rest-aligned frame).
+  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+  double radius_m = 0;
+};
+
+struct Sample {  // an axis sample that must project inside every silhouette
+  int joint;
+  Eigen::Vector3d local;
+};
+
+// One degree of freedom of the fit: root translation axis, root rotation axis (applied on the
+// left, about the root), or one Euler angle of a joint.
+struct Dof {
+  enum Kind { kTranslation, kRootRotation, kEuler } kind;
+  int joint;
+  int axis;
+};
+
+inline Eigen::Matrix3d rotationOf(const Eigen::Vector3d& rotation_vector) {
+  const double a = rotation_vector.norm();
+  return a > 0 ? Eigen::AngleAxisd(a, rotation_vector / a).toRotationMatrix()
+               : Eigen::Matrix3d::Identity();
+}
+
+inline double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                              const Eigen::Vector3d& b, Eigen::Vector3d& closest) {
+  const Eigen::Vector3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  double t = len2 > 0 ? (p - a).dot(ab) / len2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  closest = a + t * ab;
+  return (p - closest).norm();
+}
+
+}  // namespace tracker_detail
+
+struct PoseTracker::Impl {
+  using Capsule = tracker_detail::Capsule;
+  using Sample = tracker_detail::Sample;
+  using Dof = tracker_detail::Dof;
+  template <typename T>
+  static constexpr T kUnseen = tracker_detail::kUnseen<T>;
+  PoseTrackerOptions opt;
+  Rig rig;
+  int cameras = 0;
+  std::vector<int> cell_w, cell_h;
+  // Hull grid.
+  StageBox stage;
+  Eigen::Vector3d lower;
+  Eigen::Vector3i dims;
+  // [voxel * cameras + camera]: cell while every camera's cells fit in 16 bits, else cell_wide.
+  std::vector<uint16_t> cell;
+  std::vector<uint32_t> cell_wide;
+  // Blocks of kBlock^3 voxels, [block * cameras + camera]: a cell of one of the block's voxels and
+  // how far (in cells, rounded up) every other voxel's cell lies from it, or kUnseen where the
+  // camera does not see all of the block. A camera whose distance transform at that cell exceeds
+  // the reach carves the whole block away (the transform moves by at most a cell a cell), so the
+  // empty space around the actor is carved a block at a time instead of a voxel at a time.
+  static constexpr int kBlock = 4;
+  Eigen::Vector3i block_dims;
+  std::vector<uint32_t> block_cell;
+  std::vector<uint8_t> block_reach;
+  std::vector<uint8_t> occupied;
+  std::vector<Eigen::Vector3d> surface_all, hull;
+  // Silhouette distance transforms (cells), per camera; present[c] when this frame has one. Each
+  // is computed over the silhouette's bounding box grown by kDtMargin cells (dt_box: x0, y0, x1,
+  // y1, inclusive; empty when x1 < x0), where it is exact (no silhouette cell lies outside);
+  // every other cell holds kFarCells. About a quarter of the cells at step 4.
+  static constexpr int kDtMargin = 16;
+  static constexpr float kFarCells = 1000.0f;
+  std::vector<std::vector<float>> dt;
+  std::vector<Eigen::Array4i> dt_box;
+  std::vector<uint8_t> present;
+  std::vector<uint8_t> told_empty;  // per camera: said that its silhouette is left out
+  std::vector<float> dt_f, dt_d, dt_z, dt_col;
+  std::vector<int> dt_v;
+  // Body model.
+  Skeleton generic;
+  Skeleton skeleton;
+  BodyShape shape;
+  double foot_scale = 1.0;  // the feet's radii over the body's (shoes)
+  bool shape_calibrated = false;
+  double generic_head_z = 1, generic_top_z = 1, generic_bottom_z = 0;
+  std::vector<Capsule> capsules;
+  std::vector<Sample> samples;
+  std::vector<Dof> dofs;
+  std::vector<std::vector<int>> chain;  // dofs moving each joint, ascending
+  // Per evaluation.
+  std::vector<Eigen::Isometry3d> global;
+  std::vector<Eigen::Vector3d> dof_axis, dof_centre;
+  std::vector<Eigen::Vector3d> cap_a, cap_b;
+  // The capsules that can be nearest to each hull sample (ascending, in candidates from
+  // candidate_begin[i]): those within kCandidateMargin of the nearest when the lists were made,
+  // with the capsules then at candidate_a, candidate_b. While no capsule end has moved more than
+  // half the margin since, no other capsule can be nearest (a segment whose ends move by at most
+  // m moves at most m from any point): the fit's iterations look at 2 to 4 capsules a sample
+  // instead of all of them, and find the same nearest one.
+  static constexpr double kCandidateMargin = 0.10;
+  std::vector<uint8_t> candidates;
+  std::vector<int> candidate_begin;
+  std::vector<double> capsule_distance;  // of one sample to every capsule, while making them
+  std::vector<Eigen::Vector3d> candidate_a, candidate_b;
+  bool candidates_valid = false;
+  Eigen::MatrixXd H, H_new;
+  Eigen::VectorXd g, g_new, delta;
+  Eigen::MatrixXd damped;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt;
+  Pose candidate, predicted, fitted;
+  // Per joint, the residuals' normal equations in the joint's spatial terms (evaluate): every
+  // degree of freedom moves a point p by a x (p - c) (a turn about axis a through c) or by a (a
+  // shift), so a residual's Jacobian row over a joint's chain is S_d . w, with S_d = (c x a, a) or
+  // (a, 0) and w = (g, p x g) for its slope g = dr/dp. The residuals of a joint add w w^T and
+  // w r, and the chain's block of J^T J is S^T M S, once a joint: per residual 36 products
+  // instead of one for each pair of the chain's degrees of freedom (up to 24: about 300).
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  std::vector<Eigen::Matrix<double, 6, 6>> joint_m;
+  std::vector<Vector6d> joint_g, dof_spatial;
+  std::vector<uint8_t> joint_used;
+  // Tracking state.
+  bool tracking = false;
+  int bad_frames = 0;
+  int empty_frames = 0;      // in a row: the hull too small for anyone
+  bool shape_given = false;  // by setShape(): kept whoever walks on
+  Pose pose, previous;
+  bool has_previous = false;
+  Pose prior_pose;
+  bool use_prior = false;
+  double prior_weight = 0;
+
+  Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTrackerOptions& o);
+  void buildModel(const SkinnedMesh& mesh);
+  void setShape(const BodyShape& s);
+  void prepareSilhouettes(const std::vector<const LowResSilhouette*>& silhouettes);
+  // Carves voxels [lo, hi] (inclusive) and samples the hull's surface; returns the volume.
+  // `bottom_z`: the lowest occupied voxel's floor (the floor itself where the actor stands).
+  double carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid, double* top_z,
+               double* bottom_z = nullptr);
+  template <typename T>
+  void makeBlocks(const std::vector<T>& table);
+  // The largest squared distance, in cells of camera c, of the cells of voxels first .. last from
+  // the first one's; -1 where the camera does not see one of them.
+  template <typename T>
+  int blockReach2(const std::vector<T>& table, const Eigen::Vector3i& first,
+                  const Eigen::Vector3i& last, int c) const;
+  static Eigen::Vector3i blocksOf(const Eigen::Vector3i& voxels) {
+    return (voxels.array() + kBlock - 1) / kBlock;
+  }
+  double evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h, Eigen::VectorXd& grad);
+  // Places the capsules for the pose in `global` (cap_a, cap_b) and remakes the hull samples'
+  // candidate capsules when they no longer hold.
+  void placeCapsules();
+  // The nearest capsule to hull sample i (its index, the signed distance to its surface, the
+  // closest point on its axis).
+  int nearestCapsule(size_t i, double& distance, Eigen::Vector3d& closest) const;
+  double fit(Pose& p, int iterations);
+  double fitRms(const Pose& p);
+  void apply(Pose& p, const Eigen::VectorXd& delta) const;
+  // `volume`: the stage's hull carved for it, m³.
+  bool initialise(TrackResult& out, double& volume);
+  // Initialisation (tracker_initialisation.cpp). The poses it starts from (makeInitialisationPoses
+  // on the generic skeleton), each one's lowest point (the capsules', at the generic shape) and
+  // uprightness, and the scratch of its search.
+  struct Hypothesis {
+    double cost;
+    int pose;
+    double heading_rad, height_m;
+  };
+  std::vector<Pose> library;
+  std::vector<double> library_bottom, library_upright;
+  std::vector<Hypothesis> hypotheses;
+  std::vector<Eigen::Vector3d> full_hull;
+  void makeLibrary();
+  // The body model's lowest and highest point (capsules) in pose `p` of the current skeleton.
+  void modelExtent(const Pose& p, double& bottom, double& top);
+  // The library pose `i` turned to `heading_rad`, its centre over `centroid` (x, y) and its lowest
+  // point at `bottom_z`, for the current skeleton.
+  Pose placedLibraryPose(int i, double heading_rad, const Eigen::Vector3d& centroid,
+                         double bottom_z);
+  // The generic shape scaled so that the body in library pose `i` spans `extent_m` vertically.
+  BodyShape shapeSpanning(int i, double extent_m) const;
+  // The coordinate search over the body's proportions from `best_pose` (its cost `best`), for a
+  // hull `extent` tall with the body as upright as `upright` (its library pose's); both updated,
+  // the shape set.
+  void calibrateShape(Pose& best_pose, double extent, double upright, double& best);
+  // The body's height taken again from a frame in which the actor stands straighter than in any
+  // frame it was taken from (the hull's extent `hull_bottom`..`hull_top` over the model's in the
+  // tracked pose): an actor found crouching is measured when he stands up. Moves the pose (and
+  // the previous one) so that its lowest point stays where it was.
+  void remeasureHeight(double hull_bottom, double hull_top);
+  // How straight the body stands in `p`: its extent over its extent at rest (1 standing).
+  double uprightness(const Pose& p);
+  double height_uprightness = 0;  // of the frame the height was last taken from
+  // The height of a shape whose body spans `extent` (crown above its lowest point) standing as
+  // straight as `upright` (1 standing) with legs `legs` times the generic ones': the generic mesh's
+  // crown scaled.
+  double heightSpanning(double extent, double upright, double legs) const;
+  Pose rest_pose;
+  // The calibrated proportions forgotten: the next initialisation calibrates anew.
+  void forgetShape() {
+    shape_calibrated = false;
+    foot_scale = 1.0;
+    height_uprightness = 0;
+  }
+};
+
+}  // namespace lumistage

@@ -1,0 +1,264 @@
+// The tracker's initialisation and shape calibration (PoseTracker::Impl, pose_tracker_impl.h):
+// finding the actor in any pose, at any heading, anywhere on the stage, and the body's proportions.
+#include <spdlog/spdlog.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "core/tracking/pose_library.h"
+#include "core/tracking/pose_tracker_impl.h"
+
+namespace lumistage {
+
+using namespace tracker_detail;
+
+namespace {
+
+// Initialisation calibrates the body's proportions only on a hull that the best hypothesis fits
+// within this many times lost_rms_m.
+constexpr double kCalibrateWithin = 2.0;
+// Headings each library pose is tried at (45 degrees apart: the fit turns the rest of the way), the
+// hull samples the hypotheses are scored on (every kScoreStride-th), and the best hypotheses then
+// fitted in full.
+constexpr int kHeadings = 8;
+constexpr int kScoreStride = 4;
+constexpr int kFittedHypotheses = 6;
+// A hull whose top is lower than this is nobody standing, crouching or sitting up (a bag, a box).
+constexpr double kLowestTopM = 0.8;
+
+}  // namespace
+
+void PoseTracker::Impl::modelExtent(const Pose& p, double& bottom, double& top) {
+  skeleton.forwardKinematics(p, global);
+  bottom = std::numeric_limits<double>::infinity();
+  top = -bottom;
+  for (const Capsule& c : capsules) {
+    const Eigen::Isometry3d& t = global[c.joint];
+    for (const Eigen::Vector3d& end : {c.a, c.b}) {
+      const double z = (t * end).z();
+      bottom = std::min(bottom, z - c.radius_m);
+      top = std::max(top, z + c.radius_m);
+    }
+  }
+}
+
+double PoseTracker::Impl::uprightness(const Pose& p) {
+  double bottom, top, rest_bottom, rest_top;
+  modelExtent(p, bottom, top);
+  modelExtent(rest_pose, rest_bottom, rest_top);
+  return (top - bottom) / (rest_top - rest_bottom);
+}
+
+void PoseTracker::Impl::remeasureHeight(double hull_bottom, double hull_top) {
+  // Straighter by this much than the frame the height came from: measured again. Below it, the
+  // pose's own error (a knee bent a little more or less) would move the height more than the
+  // posture does.
+  constexpr double kStraighter = 0.02;
+  // Standing straight: the height holds. (The fitted pose's own uprightness, a knee bent a little
+  // more or less, is no measure of a standing actor's: it made the height and the legs trade.)
+  constexpr double kStanding = 0.97;
+  if (height_uprightness >= kStanding) return;
+  const double u = std::min(1.0, uprightness(pose));
+  if (u < height_uprightness + kStraighter) return;
+  const double height =
+      heightSpanning(hull_top - hull_bottom - opt.hair_m, u, shape.leg_length_scale);
+  height_uprightness = u;
+  double bottom, top;
+  modelExtent(pose, bottom, top);
+  if (std::abs(height - shape.height_m) < 0.002) return;
+  spdlog::debug("tracker: the actor stands straighter ({:.2f}): height {:.3f} -> {:.3f} m", u,
+                shape.height_m, height);
+  BodyShape s = shape;
+  s.height_m = height;
+  setShape(s);
+  double new_bottom, new_top;
+  modelExtent(pose, new_bottom, new_top);
+  pose.root_translation_m.z() += bottom - new_bottom;
+  previous.root_translation_m.z() += bottom - new_bottom;
+}
+
+void PoseTracker::Impl::makeLibrary() {
+  rest_pose = Pose::rest(generic.jointCount());
+  library = makeInitialisationPoses(generic);
+  library_bottom.resize(library.size());
+  library_upright.resize(library.size());
+  for (size_t i = 0; i < library.size(); ++i) {
+    double bottom, top;
+    modelExtent(library[i], bottom, top);
+    library_bottom[i] = bottom;
+    library_upright[i] = uprightness(library[i]);
+  }
+  hypotheses.reserve(library.size() * kHeadings);
+}
+
+double PoseTracker::Impl::heightSpanning(double extent, double upright, double legs) const {
+  // makeHumanSkeleton: the legs are 0.84 of the generic height unit (1.75 m).
+  const double crown = generic_top_z - generic_bottom_z + 0.84 * (legs - 1.0);
+  return std::clamp(BodyShape{}.height_m * extent / (crown * upright), 1.3, 2.3);
+}
+
+BodyShape PoseTracker::Impl::shapeSpanning(int i, double extent_m) const {
+  BodyShape s;
+  s.height_m = heightSpanning(extent_m, library_upright[i], 1.0);
+  return s;
+}
+
+Pose PoseTracker::Impl::placedLibraryPose(int i, double heading_rad,
+                                          const Eigen::Vector3d& centroid, double bottom_z) {
+  // The library's heights and offsets are the generic skeleton's: scaled to this one's.
+  const double k = skeleton.restPositions()[0].z() / generic.restPositions()[0].z();
+  Pose p = library[i];
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(heading_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::AngleAxisd root(turn * rotationOf(p.angles_rad[0]));
+  p.angles_rad[0] = root.angle() * root.axis();
+  p.root_translation_m *= k;
+  // Centred: the joints' mean over the hull's centroid.
+  p.root_translation_m.x() = p.root_translation_m.y() = 0;
+  skeleton.forwardKinematics(p, global);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Isometry3d& t : global) mean += t.translation();
+  mean /= double(global.size());
+  p.root_translation_m.x() = centroid.x() - mean.x();
+  p.root_translation_m.y() = centroid.y() - mean.y();
+  p.root_translation_m.z() += bottom_z - k * library_bottom[i];
+  return p;
+}
+
+bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
+  Eigen::Vector3d centroid;
+  double top_z = 0, bottom_z = 0;
+  volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z, &bottom_z);
+  out.hull_points = int(hull.size());
+  if (volume < opt.min_volume_m3 || volume > opt.max_volume_m3 || top_z < kLowestTopM) return false;
+  // The body's vertical extent: the hull's less the hair above the crown.
+  const double extent = top_z - bottom_z - opt.hair_m;
+  const bool calibrating = opt.calibrate_shape && !shape_calibrated;
+  const BodyShape known = shape;
+  use_prior = false;
+
+  // Every library pose at every heading, over the hull's centroid, standing on its lowest point,
+  // scaled (until calibrated) to the hull's height in that pose; scored on a thinned hull.
+  full_hull = hull;
+  hull.clear();
+  for (size_t i = 0; i < full_hull.size(); i += kScoreStride) hull.push_back(full_hull[i]);
+  candidates_valid = false;
+  hypotheses.clear();
+  for (int i = 0; i < int(library.size()); ++i) {
+    if (calibrating) setShape(shapeSpanning(i, extent));
+    for (int h = 0; h < kHeadings; ++h) {
+      const double heading = 2 * std::numbers::pi * h / kHeadings;
+      const Pose p = placedLibraryPose(i, heading, centroid, bottom_z);
+      hypotheses.push_back({evaluate(p, false, H, g), i, heading, shape.height_m});
+    }
+  }
+  hull.swap(full_hull);
+  candidates_valid = false;
+  const int fitted_count = std::min<int>(kFittedHypotheses, int(hypotheses.size()));
+  std::partial_sort(hypotheses.begin(), hypotheses.begin() + fitted_count, hypotheses.end(),
+                    [](const Hypothesis& a, const Hypothesis& b) { return a.cost < b.cost; });
+  Pose best_pose;
+  BodyShape best_shape = known;
+  double best = std::numeric_limits<double>::infinity(), best_upright = 1;
+  for (int k = 0; k < fitted_count; ++k) {
+    const Hypothesis& h = hypotheses[k];
+    if (calibrating) {
+      BodyShape s;
+      s.height_m = h.height_m;
+      setShape(s);
+    }
+    Pose p = placedLibraryPose(h.pose, h.heading_rad, centroid, bottom_z);
+    const double c = fit(p, opt.init_iterations);
+    if (c < best)
+      best = c, best_pose = p, best_shape = shape, best_upright = library_upright[h.pose];
+  }
+  setShape(best_shape);
+  // A hull that no hypothesis fits within twice the lost threshold (two people, a prop, a hull
+  // carved by two cameras) is no body whose proportions a search could find: failed at once.
+  double rms = fitRms(best_pose);
+  if (calibrating && rms > kCalibrateWithin * opt.lost_rms_m) {
+    out.fit_rms_m = rms;
+    return false;
+  }
+  if (calibrating) {
+    calibrateShape(best_pose, extent, best_upright, best);
+    rms = fitRms(best_pose);
+  }
+  out.fit_rms_m = rms;
+  if (rms > opt.lost_rms_m) {
+    // A hull no body fits (a prop, someone half inside the stage, a hull carved by some cameras
+    // only) is no actor to take the proportions from: the next initialisation calibrates anew.
+    if (calibrating) {
+      foot_scale = 1.0;
+      setShape(known);
+    }
+    return false;
+  }
+  if (calibrating) {
+    shape_calibrated = true;
+    height_uprightness = best_upright;
+  }
+  pose = previous = best_pose;
+  has_previous = false;
+  return true;
+}
+
+void PoseTracker::Impl::calibrateShape(Pose& best_pose, double extent, double upright,
+                                       double& best) {
+  // Coordinate search over the body's proportions, refitting the pose for every trial. Which of
+  // them: the legs' length, the girth and the feet (shoes). The hull's extent fixes the body's
+  // overall size in its pose, so a trial leg length trades the legs against the rest of the body:
+  // searching the legs with a free height, or the arms, lowered the fit's cost but raised the
+  // joints' error (the capsules are too coarse to tell bone lengths apart on their own).
+  constexpr int kParams = 7;
+  const int calibrated_params = 0x64;
+  double k[kParams] = {shape.height_m,
+                       shape.arm_length_scale,
+                       shape.leg_length_scale,
+                       shape.shoulder_width_scale,
+                       shape.hip_width_scale,
+                       shape.girth_scale,
+                       foot_scale};
+  double steps[kParams] = {0.06, 0.06, 0.06, 0.08, 0.08, 0.12, 0.2};
+  const double lo[kParams] = {1.3, 0.8, 0.8, 0.7, 0.7, 0.7, 0.8},
+               hi[kParams] = {2.3, 1.25, 1.25, 1.4, 1.4, 1.6, 2.0};
+  // The shape with these proportions whose body spans `extent` as upright as the pose found.
+  const auto make = [&](const double* v) {
+    foot_scale = v[6];
+    BodyShape s;
+    s.arm_length_scale = v[1];
+    s.leg_length_scale = v[2];
+    s.shoulder_width_scale = v[3];
+    s.hip_width_scale = v[4];
+    s.girth_scale = v[5];
+    s.height_m = heightSpanning(extent, upright, v[2]);
+    return s;
+  };
+  for (int round = 0; round < 5; ++round) {
+    for (int i = 0; i < kParams; ++i) {
+      if (!((calibrated_params >> i) & 1)) continue;
+      for (double sign : {1.0, -1.0}) {
+        double trial[kParams];
+        std::copy(k, k + kParams, trial);
+        trial[i] = std::clamp(trial[i] + sign * steps[i], lo[i], hi[i]);
+        if (trial[i] == k[i]) continue;
+        setShape(make(trial));
+        Pose p = best_pose;
+        const double c = fit(p, 12);
+        if (c < best) {
+          best = c;
+          best_pose = p;
+          std::copy(trial, trial + kParams, k);
+          break;
+        }
+      }
+    }
+    for (double& s : steps) s *= 0.5;
+  }
+  setShape(make(k));
+  best = fit(best_pose, opt.init_iterations);
+}
+
+}  // namespace lumistage
