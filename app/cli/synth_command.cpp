@@ -5,9 +5,6 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "app/cli/corpus_command.h"
 #include "app/cli/progress.h"
@@ -25,27 +22,6 @@ using Clock = std::chrono::steady_clock;
 
 double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-// All views of a frame in a grid, a quarter of their size, each labelled with its camera.
-cv::Mat contactSheet(const Rig& rig, const StudioFrame& frame) {
-  const int columns = rig.cameraCount() <= 4 ? rig.cameraCount() : 4;
-  const int rows = (rig.cameraCount() + columns - 1) / columns;
-  const int w = rig.camera(0).width() / 4, h = rig.camera(0).height() / 4;
-  cv::Mat sheet(rows * (h + 4) + 4, columns * (w + 4) + 4, CV_8UC3, cv::Scalar(40, 40, 40));
-  for (int c = 0; c < rig.cameraCount(); ++c) {
-    const Camera& camera = rig.camera(c);
-    const cv::Mat rgba(camera.height(), camera.width(), CV_8UC4,
-                       const_cast<uint8_t*>(frame.images[c].data()));
-    cv::Mat bgr, small;
-    cv::cvtColor(rgba, bgr, cv::COLOR_RGBA2BGR);
-    cv::resize(bgr, small, cv::Size(w, h), 0, 0, cv::INTER_AREA);
-    const cv::Rect cell(4 + (c % columns) * (w + 4), 4 + (c / columns) * (h + 4), w, h);
-    small.copyTo(sheet(cell));
-    cv::putText(sheet, camera.name() + " (" + camera.node() + ")", cell.tl() + cv::Point(6, 18),
-                cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
-  }
-  return sheet;
 }
 
 }  // namespace
@@ -113,11 +89,8 @@ void addSynthCommand(CLI::App& app) {
       writeStudioFrame(studio, frame, f, *writer, images);
       write_ms += millisecondsSince(t0);
       if (f == args->frames / 2) {  // mid-motion: more telling than the T-pose of frame 0
-        const cv::Mat sheet = contactSheet(studio.rig(), frame);
-        cv::imwrite((writer->folder() / "contact_sheet.png").string(), sheet);
-        if (!args->sheet.empty() && !cv::imwrite(args->sheet, sheet)) {
-          throw Error(args->sheet + ": cannot write the contact sheet");
-        }
+        writeContactSheet(studio.rig(), frame, writer->folder() / "contact_sheet.png");
+        if (!args->sheet.empty()) writeContactSheet(studio.rig(), frame, args->sheet);
       }
       printProgress("synth", f + 1, args->frames, millisecondsSince(start) / (f + 1));
     }

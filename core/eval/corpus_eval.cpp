@@ -55,6 +55,7 @@ void film(const StudioConfig& config, int frames, const fs::path& folder,
     for (int f = 0; f < frames; ++f) {
       studio.renderFrame(f, frame);
       writeStudioFrame(studio, frame, f, *writer, images);
+      if (f == frames / 2) writeContactSheet(config.rig, frame, partial / "contact_sheet.png");
       if (progress) progress(f + 1, frames);
     }
   }

@@ -1,6 +1,8 @@
 #include "core/sim/virtual_studio.h"
 
 #include <algorithm>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/body/bvh.h"
 #include "core/body/motion_library.h"
@@ -55,6 +57,26 @@ void VirtualStudio::renderEmptyStage(int camera, int take, std::vector<uint8_t>&
   const uint32_t seed =
       config_.seed * 7919u + 0x9e3779b9u + static_cast<uint32_t>(take) * 131u + camera;
   renderer_->render(config_.rig.camera(camera), config_.look, seed, rgba, /*with_actor=*/false);
+}
+
+void writeContactSheet(const Rig& rig, const StudioFrame& frame, const std::filesystem::path& png) {
+  const int columns = rig.cameraCount() <= 4 ? rig.cameraCount() : 4;
+  const int rows = (rig.cameraCount() + columns - 1) / columns;
+  const int w = rig.camera(0).width() / 4, h = rig.camera(0).height() / 4;
+  cv::Mat sheet(rows * (h + 4) + 4, columns * (w + 4) + 4, CV_8UC3, cv::Scalar(40, 40, 40));
+  for (int c = 0; c < rig.cameraCount(); ++c) {
+    const Camera& camera = rig.camera(c);
+    const cv::Mat rgba(camera.height(), camera.width(), CV_8UC4,
+                       const_cast<uint8_t*>(frame.images[c].data()));
+    cv::Mat rgb, small;
+    cv::cvtColor(rgba, rgb, cv::COLOR_RGBA2RGB);
+    cv::resize(rgb, small, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+    const cv::Rect cell(4 + (c % columns) * (w + 4), 4 + (c / columns) * (h + 4), w, h);
+    small.copyTo(sheet(cell));
+    cv::putText(sheet, camera.name() + " (" + camera.node() + ")", cell.tl() + cv::Point(6, 18),
+                cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  }
+  writePngAtomically(png, {PixelFormat::kRgb8, sheet.cols, sheet.rows, sheet.data});
 }
 
 std::unique_ptr<SessionWriter> openStudioSession(const VirtualStudio& studio,

@@ -65,6 +65,10 @@ std::unique_ptr<SessionWriter> openStudioSession(const VirtualStudio& studio,
 void writeStudioFrame(const VirtualStudio& studio, const StudioFrame& frame, int64_t frame_id,
                       SessionWriter& writer, std::vector<Image>& images);
 
+// All views of a frame in a grid, a quarter of their size, each labelled with its camera and node,
+// written as a PNG (atomically) to look at. Throws Error naming the file when it cannot be written.
+void writeContactSheet(const Rig& rig, const StudioFrame& frame, const std::filesystem::path& png);
+
 // Renders frames 0..frame_count-1 of the studio into a loop for virtual cameras, in `format`.
 // `progress(done, total)` is called after each frame.
 FrameLoop renderFrameLoop(VirtualStudio& studio, int frame_count, PixelFormat format,
