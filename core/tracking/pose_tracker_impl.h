@@ -1,8 +1,9 @@
 #pragma once
 
-// The tracker's insides (PoseTracker::Impl), shared by the files that make it up: the body model
-// and the fit (pose_tracker.cpp) and the initialisation and shape calibration
-// (tracker_initialisation.cpp). Not for use outside core/tracking.
+// The tracker's insides (PoseTracker::Impl), shared by the files that make it up: the body model,
+// the fit and the frame's course (pose_tracker.cpp), the visual hull (hull_carving.cpp), and the
+// initialisation and shape calibration (tracker_initialisation.cpp). Not for use outside
+// core/tracking.
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
