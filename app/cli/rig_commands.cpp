@@ -65,7 +65,7 @@ void addRigCommands(CLI::App& app) {
   show->callback([show_file] { printRig(loadRig(*show_file), *show_file); });
 
   struct ImportArgs {
-    std::string svoboda, opencv, out, image_size;
+    std::string svoboda, opencv, qualisys, out, image_size;
     int cameras_per_node = 3;
   };
   auto args = std::make_shared<ImportArgs>();
@@ -74,7 +74,10 @@ void addRigCommands(CLI::App& app) {
   auto* svoboda = import->add_option("--svoboda", args->svoboda,
                                      "MultiCamSelfCal output folder (*.Pmat.cal, *.rad)");
   auto* opencv = import->add_option("--opencv", args->opencv, "OpenCV FileStorage file (YAML/XML)");
+  auto* qualisys = import->add_option("--qualisys", args->qualisys,
+                                      "Qualisys Track Manager calibration (.qca.txt)");
   svoboda->excludes(opencv);
+  qualisys->excludes(svoboda)->excludes(opencv);
   import->add_option("--image-size", args->image_size, "WIDTHxHEIGHT (needed with --svoboda)");
   import
       ->add_option("--cameras-per-node", args->cameras_per_node,
@@ -83,7 +86,9 @@ void addRigCommands(CLI::App& app) {
   import->add_option("-o,--out", args->out, "rig file to write")->required();
   import->callback([args, import] {
     refuseOutputOverInputs("--out", args->out,
-                           {{"--svoboda", args->svoboda}, {"--opencv", args->opencv}});
+                           {{"--svoboda", args->svoboda},
+                            {"--opencv", args->opencv},
+                            {"--qualisys", args->qualisys}});
   RigImportOptions options;
   options.cameras_per_node = args->cameras_per_node;
   if (!args->image_size.empty()) {
@@ -98,8 +103,10 @@ void addRigCommands(CLI::App& app) {
     writeResult(importSvobodaRig(args->svoboda, options), args->out);
   } else if (!args->opencv.empty()) {
     writeResult(importOpenCvRig(args->opencv, options), args->out);
+  } else if (!args->qualisys.empty()) {
+    writeResult(importQualisysRig(args->qualisys, options), args->out);
   } else {
-    throw CLI::RequiredError("--svoboda or --opencv");
+    throw CLI::RequiredError("--svoboda, --opencv or --qualisys");
   }
 });
 

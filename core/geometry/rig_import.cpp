@@ -17,12 +17,8 @@
 
 namespace lumistage {
 
-namespace {
-
-namespace fs = std::filesystem;
-
-Rig assembleRig(std::vector<Camera> cameras, const RigImportOptions& options,
-                const std::string& source) {
+Rig assembleImportedRig(std::vector<Camera> cameras, const RigImportOptions& options,
+                        const std::string& source) {
   if (cameras.empty()) throw Error(source + ": no cameras found");
   try {
     std::vector<RigNode> nodes =
@@ -32,6 +28,10 @@ Rig assembleRig(std::vector<Camera> cameras, const RigImportOptions& options,
     throw Error(source + ": " + e.what());
   }
 }
+
+namespace {
+
+namespace fs = std::filesystem;
 
 // ---- OpenCV FileStorage ----------------------------------------------------------------------
 
@@ -318,7 +318,7 @@ RigImport importOpenCvRig(const fs::path& file, const RigImportOptions& options)
   } catch (const cv::Exception& e) {
     throw Error(source + ": " + e.err);
   }
-  return {assembleRig(std::move(cameras), options, source), {}};
+  return {assembleImportedRig(std::move(cameras), options, source), {}};
 }
 
 RigImport importSvobodaRig(const fs::path& folder, const RigImportOptions& options) {
@@ -406,7 +406,7 @@ RigImport importSvobodaRig(const fs::path& folder, const RigImportOptions& optio
       throw Error(e.pmat.string() + ": " + error.what());
     }
   }
-  result.rig = assembleRig(std::move(cameras), options, source);
+  result.rig = assembleImportedRig(std::move(cameras), options, source);
   return result;
 }
 

@@ -39,4 +39,18 @@ RigImport importOpenCvRig(const std::filesystem::path& file, const RigImportOpti
 // by least squares over the image and the residual is reported in the notes.
 RigImport importSvobodaRig(const std::filesystem::path& folder, const RigImportOptions& options);
 
+// A Qualisys Track Manager calibration (.qca.txt, XML; Pose2Sim's demos ship one): each video
+// camera's <fov_video> (its image: inclusive pixel bounds), <intrinsic> (focal lengths, principal
+// point and distortion in units of 1/64 pixel of the sensor, as Pose2Sim reads them) and
+// <transform> (the camera's position in millimetres and a rotation r11..r33, QTM's camera looking
+// down its -z). Cameras are named by their serial and ordered naturally (cam2 before cam10);
+// inactive cameras and cameras without an <intrinsic> (marker cameras) are left out with a note.
+// Throws Error naming the file, line, camera and attribute.
+RigImport importQualisysRig(const std::filesystem::path& file, const RigImportOptions& options);
+
+// Imported cameras dealt to nodes as RigImportOptions says; throws Error naming `source` for an
+// empty list or cameras a rig cannot hold (duplicate names).
+Rig assembleImportedRig(std::vector<Camera> cameras, const RigImportOptions& options,
+                        const std::string& source);
+
 }  // namespace lumistage

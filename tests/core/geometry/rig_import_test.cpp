@@ -1,5 +1,6 @@
 #include "core/geometry/rig_import.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -9,6 +10,7 @@
 #include <random>
 
 #include "core/base/error.h"
+#include "core/geometry/ring_rig.h"
 #include "tests/core/geometry/test_cameras.h"
 #include "tests/test_util.h"
 
@@ -265,6 +267,131 @@ TEST(OpenCvImport, MissingKeysAndUnsupportedModelsAreNamed) {
               importOpenCvRig(folder.path() / "garbage.yaml", {});
             }).find("garbage.yaml"),
             std::string::npos);
+}
+
+std::vector<Camera> ringCameras(int count, int width, int height) {
+  RingRigSpec spec;
+  spec.cameras = count;
+  spec.width = width;
+  spec.height = height;
+  spec.distortion = {-0.05, 0.02, 0.0004, -0.0003, 0.0};
+  return makeRingRig(spec).cameras();
+}
+
+// A camera as QTM writes it: intrinsics and distortion in 1/64 pixel, the position in mm, the
+// rotation turned half a turn about the camera's x from ours.
+std::string qcaCamera(const Camera& c, const std::string& serial, int line_left = 0) {
+  const Eigen::Matrix3d m = Eigen::Vector3d(1, -1, -1).asDiagonal() * c.rotation();
+  const Eigen::Vector3d p = 1000 * c.centre();
+  const Intrinsics& k = c.intrinsics();
+  const Distortion& d = c.distortion();
+  return fmt::format(
+      "    <camera active=\"1\" avg-residual=\"0.4\" model=\"none\" serial=\"{}\" "
+      "viewrotation=\"0\">\n"
+      "      <fov_video bottom=\"{}\" left=\"{}\" right=\"{}\" top=\"0\"/>\n"
+      "      <transform r11=\"{:.17g}\" r12=\"{:.17g}\" r13=\"{:.17g}\" r21=\"{:.17g}\" "
+      "r22=\"{:.17g}\" r23=\"{:.17g}\" r31=\"{:.17g}\" r32=\"{:.17g}\" r33=\"{:.17g}\" "
+      "x=\"{:.17g}\" y=\"{:.17g}\" z=\"{:.17g}\"/>\n"
+      "      <intrinsic centerPointU=\"{:.17g}\" centerPointV=\"{:.17g}\" focalLengthU=\"{:.17g}\" "
+      "focalLengthV=\"{:.17g}\" radialDistortion1=\"{:.17g}\" radialDistortion2=\"{:.17g}\" "
+      "radialDistortion3=\"0\" skew=\"0\" tangentalDistortion1=\"{:.17g}\" "
+      "tangentalDistortion2=\"{:.17g}\"/>\n"
+      "    </camera>\n",
+      serial, c.height() - 1, line_left, line_left + c.width() - 1, m(0, 0), m(0, 1), m(0, 2),
+      m(1, 0), m(1, 1), m(1, 2), m(2, 0), m(2, 1), m(2, 2), p.x(), p.y(), p.z(),
+      64 * (k.cx + line_left), 64 * k.cy, 64 * k.fx, 64 * k.fy, 64 * d.k1, 64 * d.k2, 64 * d.p1,
+      64 * d.p2);
+}
+
+TEST(QualisysImport, RecoversEveryVideoCameraInNaturalOrder) {
+  const std::vector<Camera> truth = ringCameras(3, 1088, 1920);
+  TempFolder folder;
+  std::string text =
+      "<?xml version='1.0' encoding='ASCII'?>\n<calibration type=\"regular\">\n"
+      "  <!-- three video cameras and a marker camera -->\n  <cameras>\n";
+  text += qcaCamera(truth[2], "cam10", 16);
+  text += qcaCamera(truth[0], "cam2");
+  text +=
+      "    <camera active=\"1\" serial=\"marker1\" model=\"Miqus M3\">\n"
+      "      <fov_marker bottom=\"1023\" left=\"0\" right=\"1279\" top=\"0\"/>\n"
+      "    </camera>\n";
+  text += qcaCamera(truth[1], "cam3");
+  text += "  </cameras>\n</calibration>\n";
+  folder.write("Calib.qca.txt", text);
+  const RigImport imported = importQualisysRig(folder.path() / "Calib.qca.txt", {});
+  ASSERT_EQ(imported.rig.cameraCount(), 3);
+  EXPECT_EQ(imported.rig.camera(0).name(), "cam2");
+  EXPECT_EQ(imported.rig.camera(1).name(), "cam3");
+  EXPECT_EQ(imported.rig.camera(2).name(), "cam10");
+  ASSERT_EQ(imported.notes.size(), 1u);
+  EXPECT_NE(imported.notes[0].find("marker1"), std::string::npos);
+  const Camera* expected[] = {&truth[0], &truth[1], &truth[2]};
+  for (int c = 0; c < 3; ++c) {
+    const Camera& got = imported.rig.camera(c);
+    EXPECT_EQ(got.width(), 1088);
+    EXPECT_EQ(got.height(), 1920);
+    for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.4, -0.3, 1.7),
+                                     Eigen::Vector3d(-0.5, 0.2, 0.1)}) {
+      const auto a = got.project(p), b = expected[c]->project(p);
+      ASSERT_TRUE(a && b);
+      EXPECT_LT((*a - *b).norm(), 1e-6) << got.name();
+    }
+  }
+}
+
+TEST(QualisysImport, MalformedFilesNameFileLineAndAttribute) {
+  const std::vector<Camera> truth = ringCameras(1, 640, 480);
+  TempFolder folder;
+  const std::string good = "<calibration>\n  <cameras>\n" + qcaCamera(truth[0], "cam01") +
+                           "  </cameras>\n</calibration>\n";
+  const auto errorOf = [&](const std::string& text) {
+    folder.write("c.qca.txt", text);
+    return testing::errorOf([&] { importQualisysRig(folder.path() / "c.qca.txt", {}); });
+  };
+  std::string text = good;
+  text.replace(text.find(" r23=\""), 6, " r99=\"");
+  std::string e = errorOf(text);
+  EXPECT_NE(e.find("c.qca.txt:5: camera 'cam01': r23: <transform> has no 'r23'"), std::string::npos)
+      << e;
+  text = good;
+  text.replace(text.find("focalLengthU=\""), 14, "focalLengthU=\"abc");
+  e = errorOf(text);
+  EXPECT_NE(e.find("c.qca.txt:6: camera 'cam01': focalLengthU: expected a number, got 'abc"),
+            std::string::npos)
+      << e;
+  e = errorOf(good.substr(0, good.find("</camera>")));
+  EXPECT_NE(e.find("camera 'cam01' never ends"), std::string::npos) << e;
+  e = errorOf("<calibration>\n  <cameras>\n  </cameras>\n</calibration>\n");
+  EXPECT_NE(e.find("no video camera"), std::string::npos) << e;
+  text = good;
+  text.replace(text.find("r11=\""), 5, "r11=\"2");
+  e = errorOf(text);
+  EXPECT_NE(e.find("r11..r33 are not a rotation"), std::string::npos) << e;
+}
+
+// The Pose2Sim demo's calibration: four portrait cameras around the treadmill, about 1.9 m high,
+// each seeing the origin.
+TEST(QualisysImport, ReadsThePose2SimDemosCalibration) {
+  const fs::path file = fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" /
+                        "realdata" / "pose2sim-walk" / "calibration" / "Calib.qca.txt";
+  if (!fs::exists(file)) GTEST_SKIP() << file << " is not here";
+  const RigImport imported = importQualisysRig(file, {});
+  ASSERT_EQ(imported.rig.cameraCount(), 4);
+  for (int c = 0; c < 4; ++c) {
+    const Camera& camera = imported.rig.camera(c);
+    EXPECT_EQ(camera.name(), fmt::format("cam{:02}", c + 1));
+    EXPECT_EQ(camera.width(), 1088);
+    EXPECT_EQ(camera.height(), 1920);
+    EXPECT_NEAR(camera.intrinsics().fx, 1680, 20);
+    EXPECT_GT(camera.centre().z(), 1.5);
+    EXPECT_LT(camera.centre().z(), 2.3);
+    const auto origin = camera.project(Eigen::Vector3d(0, 0, 0.9));
+    ASSERT_TRUE(origin.has_value()) << camera.name();
+    EXPECT_GT(origin->x(), 0);
+    EXPECT_LT(origin->x(), 1088);
+    EXPECT_GT(origin->y(), 0);
+    EXPECT_LT(origin->y(), 1920);
+  }
 }
 
 }  // namespace
