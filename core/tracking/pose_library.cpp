@@ -58,14 +58,52 @@ Pose uprightFacingForward(const Pose& pose) {
   return out;
 }
 
+Pose bentAtTheHips(const Skeleton& skeleton, const Pose& pose, double angle_rad) {
+  std::vector<Eigen::Vector3d> joints;
+  skeleton.jointPositions(pose, joints);
+  const double head_y = joints[kHead].y();
+  Pose best = pose;
+  // The torso pitched forward about the body's left-right axis (whichever sign brings the head
+  // forward), each thigh turned back by as much so that the legs stand where they stood.
+  for (const double sign : {1.0, -1.0}) {
+    Pose p = pose;
+    const Eigen::Matrix3d pitch =
+        Eigen::AngleAxisd(sign * angle_rad, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    p.angles_rad[0] = rotationVector(rotationOf(pose.angles_rad[0]) * pitch);
+    skeleton.jointPositions(p, joints);
+    if (joints[kHead].y() <= head_y) continue;
+    for (const int hip : {int(kRightHip), int(kLeftHip)}) {
+      const int ankle = hip + 2;
+      double best_drift = 1e9;
+      Pose chosen = p;
+      for (const double turn : {1.0, -1.0}) {
+        Pose q = p;
+        q.angles_rad[size_t(hip)].x() += turn * angle_rad;
+        skeleton.clampToLimits(q);
+        skeleton.jointPositions(q, joints);
+        const double drift = (joints[size_t(ankle)] - joints[size_t(hip)]).head<2>().norm();
+        if (drift < best_drift) best_drift = drift, chosen = q;
+      }
+      p = chosen;
+    }
+    best = p;
+  }
+  return best;
+}
+
 std::vector<Pose> makeInitialisationPoses(const Skeleton& skeleton, double min_spacing_m) {
   constexpr double kFps = 10, kSeconds = 4;
   std::vector<Pose> candidates = {Pose::rest(skeleton.jointCount())};
   for (const std::string& name : builtinClipNames()) {
     const MotionClip clip = makeBuiltinClip(name, skeleton, kFps, kSeconds);
     for (const Pose& p : clip.frames) {
-      candidates.push_back(uprightFacingForward(p));
-      candidates.push_back(mirroredPose(candidates.back()));
+      const Pose facing = uprightFacingForward(p);
+      // Bent forward at the hips, as a body picking something up or leaning on a rail: the
+      // clips never bend so far.
+      for (const double bend : {0.0, 0.6, 1.2}) {
+        candidates.push_back(bend > 0 ? bentAtTheHips(skeleton, facing, bend) : facing);
+        candidates.push_back(mirroredPose(candidates.back()));
+      }
     }
   }
   std::vector<Pose> kept;

@@ -280,7 +280,10 @@ void PoseTracker::Impl::setShape(const BodyShape& s) {
     const bool foot = c.joint == kRightAnkle || c.joint == kLeftAnkle || c.joint == kRightFoot ||
                       c.joint == kLeftFoot;
     const double radius = c.generic_radius_m * scale * (foot ? foot_scale : 1.0);
-    c.radius_m = radius * s.girth_scale;
+    // The belly (a heavy actor's calibration) thickens the abdomen's capsules on top of the girth.
+    const bool abdomen =
+        c.joint == kSpine1 || c.joint == kSpine2 || (c.joint == kPelvis && c.child == kSpine1);
+    c.radius_m = radius * s.girth_scale * (abdomen ? s.belly_scale : 1.0);
     // The girth thickens the body sideways (the clothes), not along its bones: the axis is
     // shortened at both ends by what the radius grew, so that the capsule reaches as far along
     // the bone as before. Lengthened with its radius instead, the capsules of the head and the

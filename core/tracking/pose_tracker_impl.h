@@ -218,7 +218,8 @@ struct PoseTracker::Impl {
   // The coordinate search over the body's proportions from `best_pose` (its cost `best`), for a
   // hull `extent` tall with the body as upright as `upright` (its library pose's); both updated,
   // the shape set.
-  void calibrateShape(Pose& best_pose, double extent, double upright, double& best);
+  // `heavy`: the search again, for a heavy actor (the girth and the belly further).
+  void calibrateShape(Pose& best_pose, double extent, double upright, double& best, bool heavy);
   // The body's height taken again from a frame in which the actor stands straighter than in any
   // frame it was taken from (the hull's extent `hull_bottom`..`hull_top` over the model's in the
   // tracked pose): an actor found crouching is measured when he stands up. Moves the pose (and

@@ -23,7 +23,7 @@ constexpr double kCalibrateWithin = 2.0;
 // hull samples the hypotheses are scored on (every kScoreStride-th), and the best hypotheses then
 // fitted in full.
 constexpr int kHeadings = 8;
-constexpr int kScoreStride = 4;
+constexpr int kScoreStride = 8;
 constexpr int kFittedHypotheses = 6;
 // A hull whose top is lower than this is nobody standing, crouching or sitting up (a bag, a box).
 constexpr double kLowestTopM = 0.8;
@@ -183,8 +183,12 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
     return false;
   }
   if (calibrating) {
-    calibrateShape(best_pose, extent, best_upright, best);
+    calibrateShape(best_pose, extent, best_upright, best, false);
     rms = fitRms(best_pose);
+    if (rms > opt.lost_rms_m) {
+      calibrateShape(best_pose, extent, best_upright, best, true);
+      rms = fitRms(best_pose);
+    }
   }
   out.fit_rms_m = rms;
   if (rms > opt.lost_rms_m) {
@@ -205,25 +209,31 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   return true;
 }
 
-void PoseTracker::Impl::calibrateShape(Pose& best_pose, double extent, double upright,
-                                       double& best) {
+void PoseTracker::Impl::calibrateShape(Pose& best_pose, double extent, double upright, double& best,
+                                       bool heavy) {
   // Coordinate search over the body's proportions, refitting the pose for every trial. Which of
   // them: the legs' length, the girth and the feet (shoes). The hull's extent fixes the body's
   // overall size in its pose, so a trial leg length trades the legs against the rest of the body:
   // searching the legs with a free height, or the arms, lowered the fit's cost but raised the
   // joints' error (the capsules are too coarse to tell bone lengths apart on their own).
-  constexpr int kParams = 7;
-  const int calibrated_params = 0x64;
+  // A heavy actor's search (`heavy`: the first left the fit above lost_rms_m) starts from the
+  // first one's result with larger steps of the girth and the belly: the first one's halving steps
+  // reach a girth of 1.23 at most, which holds a clothed actor of the generic build (searched
+  // further, the girth grew past the actor's and the joints' error with it: the reference walk
+  // 13.9 -> 17.5 mm) but leaves a heavy one unfitted, and never found at all.
+  constexpr int kParams = 8;
+  const int calibrated_params = heavy ? 0xa0 : 0x64;
   double k[kParams] = {shape.height_m,
                        shape.arm_length_scale,
                        shape.leg_length_scale,
                        shape.shoulder_width_scale,
                        shape.hip_width_scale,
                        shape.girth_scale,
-                       foot_scale};
-  double steps[kParams] = {0.06, 0.06, 0.06, 0.08, 0.08, 0.12, 0.2};
-  const double lo[kParams] = {1.3, 0.8, 0.8, 0.7, 0.7, 0.7, 0.8},
-               hi[kParams] = {2.3, 1.25, 1.25, 1.4, 1.4, 1.6, 2.0};
+                       foot_scale,
+                       shape.belly_scale};
+  double steps[kParams] = {0.06, 0.06, 0.06, 0.08, 0.08, heavy ? 0.2 : 0.12, 0.2, 0.2};
+  const double lo[kParams] = {1.3, 0.8, 0.8, 0.7, 0.7, 0.7, 0.8, 0.8},
+               hi[kParams] = {2.3, 1.25, 1.25, 1.4, 1.4, 1.8, 2.0, 1.8};
   // The shape with these proportions whose body spans `extent` as upright as the pose found.
   const auto make = [&](const double* v) {
     foot_scale = v[6];
@@ -233,6 +243,7 @@ void PoseTracker::Impl::calibrateShape(Pose& best_pose, double extent, double up
     s.shoulder_width_scale = v[3];
     s.hip_width_scale = v[4];
     s.girth_scale = v[5];
+    s.belly_scale = v[7];
     s.height_m = heightSpanning(extent, upright, v[2]);
     return s;
   };

@@ -52,7 +52,7 @@ TEST(PoseLibrary, PosesFaceForwardOverTheOriginAndDifferFromOneAnother) {
   ASSERT_LT(poses.size(), 400u);
   EXPECT_EQ(poses[0], Pose::rest(kHumanJointCount));
   std::vector<std::vector<Eigen::Vector3d>> joints(poses.size());
-  int crouched = 0;
+  int crouched = 0, bent = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
     skeleton.jointPositions(poses[i], joints[i]);
     EXPECT_EQ(poses[i].root_translation_m.x(), 0);
@@ -62,9 +62,11 @@ TEST(PoseLibrary, PosesFaceForwardOverTheOriginAndDifferFromOneAnother) {
                                      ? Eigen::Vector3d(poses[i].angles_rad[0].normalized())
                                      : Eigen::Vector3d::UnitZ());
     const Eigen::Vector3d forward = root * Eigen::Vector3d::UnitY();
-    EXPECT_NEAR(forward.x(), 0, 1e-9) << i;
-    EXPECT_GT(forward.y(), 0) << i;
+    EXPECT_NEAR(forward.x(), 0, 1e-9) << i;  // turned to face +y (pitched, never turned aside)
     crouched += joints[i][kPelvis].z() < joints[0][kPelvis].z() - 0.2;
+    // Bent forward at the hips: the head ahead of the pelvis and lower than it stands.
+    bent += joints[i][kHead].y() - joints[i][kPelvis].y() > 0.4 &&
+            joints[i][kHead].z() < joints[0][kHead].z() - 0.3;
     for (size_t k = 0; k < i; ++k) {
       double sum = 0;
       for (size_t j = 0; j < joints[i].size(); ++j) sum += (joints[i][j] - joints[k][j]).norm();
@@ -72,6 +74,7 @@ TEST(PoseLibrary, PosesFaceForwardOverTheOriginAndDifferFromOneAnother) {
     }
   }
   EXPECT_GT(crouched, 2);
+  EXPECT_GT(bent, 4);
 }
 
 }  // namespace
