@@ -214,7 +214,9 @@ void addEvalCommand(CLI::App& app) {
   };
   auto args = std::make_shared<Args>();
   CLI::App* eval = app.add_subcommand(
-      "eval", "measure the studio's stages against a session's ground truth (truth/)");
+      "eval",
+      "measure the studio's stages against a session's ground truth (truth/); on a session "
+      "without one, motion capture's frames tracked and silhouettes");
   eval->add_option("--session", args->session, "session folder (lumistage synth writes one)")
       ->required();
   eval->add_option("--json", args->json, "write the report as JSON (docs/eval-report.md)");
@@ -241,8 +243,6 @@ void addEvalCommand(CLI::App& app) {
     if (!args->loo_pictures.empty() && args->loo_frames == 0)
       throw Error("--loo-pictures: --loo-frames 0 scores no view to picture");
     const SessionReader session(args->session);
-    if (!session.hasTruth())
-      throw Error(args->session + ": no ground truth (truth/) to evaluate against");
     if (!args->loo_pictures.empty()) {
       std::error_code ec;
       fs::create_directories(args->loo_pictures, ec);
@@ -251,6 +251,21 @@ void addEvalCommand(CLI::App& app) {
     }
     EvalReport report;
     report.setText("session", "session", args->session);
+    if (!session.hasTruth()) {
+      // A real take: what can be measured without the truth (frames tracked, the posed body
+      // against every silhouette); the rest needs the virtual studio's truth/.
+      MocapEvalOptions mocap;
+      mocap.camera_count = args->cameras;
+      mocap.max_frames = args->frames;
+      evaluateMocap(session, loadGenericHuman(args->body), mocap, report);
+      if (!args->json.empty()) writeFileAtomically(args->json, report.toJson());
+      if (!args->quiet) fmt::print("{}", report.toText());
+      fmt::print(stderr,
+                 "eval: {} has no ground truth (truth/): motion capture's frames and silhouettes "
+                 "only\n",
+                 args->session);
+      return;
+    }
     // Stages add their sections in pipeline order; a later stage may use an earlier one's result.
     // Segmentation: each camera's keyer, as the nodes learn it, against the truth masks of four
     // frames spread over the session.

@@ -70,6 +70,9 @@ void addImportCommand(CLI::App& session) {
       ->add_option("--fps", a->options.fps,
                    "the footage's frame rate (default: the first video's; needed for images)")
       ->check(CLI::Range(0.1, 10000.0));
+  import->add_option("--masks", a->options.masks,
+                     "another tool's masks of the actor: MASKS/CAMERA/FFFFFF.png (the footage's "
+                     "frame numbers, from 0); only frames every camera has one of are taken");
   import->add_option("-o,--out", a->out, "the session's folder (new or empty)")->required();
   import->callback([a] {
     const Rig rig = loadRig(a->rig);

@@ -151,7 +151,7 @@ FootageImportReport importFootage(const Rig& rig, const std::vector<FootageSourc
 
   // The session's rate: every n-th frame of the footage's.
   SessionWriter writer(out, report.rig, PixelFormat::kRgb8, fps / options.every, "import");
-  std::vector<cv::Mat> bgr(cameras.size()), rgb(cameras.size());
+  std::vector<cv::Mat> bgr(cameras.size()), rgb(cameras.size()), masks(cameras.size());
   std::vector<ImageView> views(cameras.size());
   const int last = options.frames > 0 ? options.frames : std::numeric_limits<int>::max();
   int expected = last;
@@ -170,19 +170,50 @@ FootageImportReport importFootage(const Rig& rig, const std::vector<FootageSourc
     if (ended >= 0) {
       const FootageSource& s = footage[size_t(ended)]->source();
       report.notes.push_back(fmt::format(
-          "camera '{}': its footage ends before its frame {} (offset {}): the session ends at {} "
-          "frames",
-          s.camera, base + s.offset, s.offset, k));
+          "camera '{}': its footage ends before its frame {} (offset {}): the session ends there, "
+          "after {} frames",
+          s.camera, base + s.offset, s.offset, report.frames));
       break;
     }
+    bool masked = true;
+    for (size_t c = 0; c < cameras.size() && masked && !options.masks.empty(); ++c) {
+      const fs::path file = options.masks / cameras[c].name() /
+                            fmt::format("{:06}.png", base + footage[c]->source().offset);
+      std::error_code ec;
+      masked = fs::is_regular_file(file, ec);
+      if (!masked) break;
+      masks[c] = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
+      if (masks[c].cols != cameras[c].width() || masks[c].rows != cameras[c].height())
+        throw Error(fmt::format("{}: expected a {}x{} mask (camera '{}'), got {}", file.string(),
+                                cameras[c].width(), cameras[c].height(), cameras[c].name(),
+                                masks[c].empty()
+                                    ? std::string("no image")
+                                    : fmt::format("{}x{}", masks[c].cols, masks[c].rows)));
+    }
+    if (!masked) {
+      ++report.without_masks;
+      continue;
+    }
+    const int id = report.frames;
     for (size_t c = 0; c < cameras.size(); ++c) {
       cv::cvtColor(bgr[c], rgb[c], cv::COLOR_BGR2RGB);
       views[c] = {PixelFormat::kRgb8, rgb[c].cols, rgb[c].rows, rgb[c].data};
+      if (options.masks.empty()) continue;
+      // A frame's masks before its index line: a reader that sees the frame finds them.
+      const fs::path folder = out / "masks" / cameras[c].name();
+      fs::create_directories(folder);
+      cv::Mat binary = masks[c] > 127;
+      writePngAtomically(folder / fmt::format("{:06}.png", id),
+                         {PixelFormat::kMono8, binary.cols, binary.rows, binary.data});
     }
-    writer.writeFrame(k, int64_t(std::llround(1e9 * k * options.every / fps)), views);
-    report.frames = k + 1;
+    // Timestamps are the footage's time.
+    writer.writeFrame(id, int64_t(std::llround(1e9 * (base - options.first) / fps)), views);
+    report.frames = id + 1;
     if (progress) progress(k + 1, std::max(expected, k + 1));
   }
+  if (report.without_masks > 0)
+    report.notes.push_back(
+        fmt::format("{} frames left out: a camera has no mask of them", report.without_masks));
   if (report.frames == 0) throw Error("footage import: no frame that every camera has");
   return report;
 }

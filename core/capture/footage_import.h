@@ -23,10 +23,15 @@ struct FootageImportOptions {
   int frames = 0;  // at most this many session frames; 0: as many as every camera has
   int every = 1;   // every n-th frame
   double fps = 0;  // the footage's rate; 0: the first video's own (image folders need it)
+  // Another tool's masks of the actor, masks/<camera>/<footage frame, 6 digits>.png (non-zero on
+  // the actor, the footage's size), copied into the session (docs/session-format.md): only the
+  // frames every camera has a mask of are taken. Empty: none.
+  std::filesystem::path masks;
 };
 
 struct FootageImportReport {
   int frames = 0;                  // session frames written
+  int without_masks = 0;           // frames left out for a camera's missing mask
   Rig rig;                         // as written: image sizes the footage's where they differ
   std::vector<std::string> notes;  // size adjustments, where each camera's footage ended
 };

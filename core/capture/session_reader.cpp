@@ -407,13 +407,34 @@ fs::path SessionReader::truthMaskPath(int camera, int i) const {
          fmt::format("{:06}.png", frameId(i));
 }
 
-std::vector<uint8_t> SessionReader::readTruthMask(int camera, int i) const {
-  const std::string path = truthMaskPath(camera, i).string();
-  const cv::Mat mask = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  const Camera& c = rig_.camera(camera);
+namespace {
+
+// A mask file: one byte a pixel of the camera's size. Throws Error naming it and `what` it is.
+std::vector<uint8_t> readMaskFile(const fs::path& file, const Camera& c, const char* what) {
+  const cv::Mat mask = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
   if (mask.empty() || mask.cols != c.width() || mask.rows != c.height() || !mask.isContinuous())
-    throw Error(path + ": cannot read the truth mask (8-bit PNG of the camera's size)");
+    throw Error(fmt::format("{}: cannot read the {} ({}x{} PNG, camera {})", file.string(), what,
+                            c.width(), c.height(), c.name()));
   return {mask.data, mask.data + mask.total()};
+}
+
+}  // namespace
+
+std::vector<uint8_t> SessionReader::readTruthMask(int camera, int i) const {
+  return readMaskFile(truthMaskPath(camera, i), rig_.camera(camera), "truth mask");
+}
+
+bool SessionReader::hasMasks() const {
+  std::error_code ec;
+  return fs::is_directory(folder_ / "masks", ec);
+}
+
+fs::path SessionReader::maskPath(int camera, int i) const {
+  return folder_ / "masks" / rig_.camera(camera).name() / fmt::format("{:06}.png", frameId(i));
+}
+
+std::vector<uint8_t> SessionReader::readMask(int camera, int i) const {
+  return readMaskFile(maskPath(camera, i), rig_.camera(camera), "actor's mask");
 }
 
 void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,

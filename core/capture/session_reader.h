@@ -56,6 +56,14 @@ class SessionReader {
   // camera's size. Throws Error naming the file when it is missing or of another size.
   std::vector<uint8_t> readTruthMask(int camera, int i) const;
 
+  // Masks another tool made of the actor (a matting tool, a segmenter): masks/<camera>/<frame
+  // id>.png, one byte a pixel, non-zero on the actor, of the camera's size. A session carries them
+  // when its folder has masks/ (lumistage session import --masks); they then stand for the key.
+  bool hasMasks() const;
+  std::filesystem::path maskPath(int camera, int i) const;
+  // Throws Error naming the file when it is missing, unreadable or of another size.
+  std::vector<uint8_t> readMask(int camera, int i) const;
+
  private:
   struct FrameEntry {
     int64_t id;

@@ -1,6 +1,7 @@
 #include "core/eval/mocap_eval.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -9,7 +10,9 @@
 #include "core/body/human_skeleton.h"
 #include "core/eval/percentile.h"
 #include "core/imaging/keyer.h"
+#include "core/pipeline/posed_body.h"
 #include "core/pipeline/silhouettes.h"
+#include "core/tracking/mesh_silhouette.h"
 
 namespace lumistage {
 
@@ -64,11 +67,26 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
       joint_height_m(truth_index.size(), 0.0);
   int tracked = 0;
   bool initialised = false;
+  // The session's own masks (another tool's) stand for the key where it has them.
+  const bool masks = session.hasMasks();
+  // The posed body's silhouette against each camera's, summed over the tracked frames.
+  std::vector<double> iou_sum(size_t(all), 0.0);
+  LowResSilhouette body;
+  Pose body_pose;
+  std::vector<Eigen::Affine3f> transforms;
+  Eigen::Matrix3Xf positions, normals;
   for (int f = 0; f < frames; ++f) {
-    session.readFrame(f, images, cameras);
+    if (!masks) session.readFrame(f, images, cameras);
     pointers.clear();
     for (int c : cameras) {
-      computeSilhouette(keyer, images[c].image.view(), c, options.silhouette_step, silhouettes[c]);
+      if (masks) {
+        const std::vector<uint8_t> mask = session.readMask(c, f);
+        maskSilhouette(mask.data(), rig.camera(c).width(), rig.camera(c).height(), c,
+                       options.silhouette_step, silhouettes[c]);
+      } else {
+        computeSilhouette(keyer, images[c].image.view(), c, options.silhouette_step,
+                          silhouettes[c]);
+      }
       pointers.push_back(&silhouettes[c]);
     }
     const auto start = std::chrono::steady_clock::now();
@@ -89,6 +107,23 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
     if (!r.valid()) continue;
     ++tracked;
     report.setFrame(f, "fit_rms_mm", r.fit_rms_m * 1e3);
+    // The generic human posed as the nodes pose it, against each camera's silhouette.
+    const PoseData message = poseMessageFor(generic.skeleton, tracker.skeleton(), r.pose, r.joints);
+    posedBodyMesh(generic, message, body_pose, transforms, positions, normals);
+    double frame_iou = 0;
+    for (int c : cameras) {
+      rasterizeSilhouette(positions, generic.rest.triangles, rig.camera(c), c,
+                          options.silhouette_step, body);
+      int both = 0, either = 0;
+      for (size_t b = 0; b < body.bits.size(); ++b) {
+        both += std::popcount(unsigned(body.bits[b] & silhouettes[c].bits[b]));
+        either += std::popcount(unsigned(body.bits[b] | silhouettes[c].bits[b]));
+      }
+      const double iou = either > 0 ? double(both) / either : 0.0;
+      iou_sum[size_t(c)] += iou;
+      frame_iou += iou / double(cameras.size());
+    }
+    report.setFrame(f, "silhouette_iou", frame_iou);
     if (!truth.empty()) {
       // The initialising frame itself is reported but not held to the tracking bound.
       const bool counted = initialised || r.state == TrackState::kTracking;
@@ -132,6 +167,13 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
       report.set(section, "joint_height_error_mm_" + name, joint_height_m[j] * per_frame);
     }
   }
+  double iou = 0;
+  for (int c : cameras) {
+    const double camera_iou = tracked > 0 ? iou_sum[size_t(c)] / tracked : std::nan("");
+    report.set(section, "silhouette_iou_" + rig.camera(c).name(), camera_iou);
+    iou += camera_iou / double(cameras.size());
+  }
+  report.set(section, "silhouette_iou", iou);
   report.set(section, "pose_ms", mean(times_ms));
   report.set(section, "pose_ms_max",
              times_ms.empty() ? std::nan("") : *std::max_element(times_ms.begin(), times_ms.end()));

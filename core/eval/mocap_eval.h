@@ -26,8 +26,11 @@ struct MocapEvalResult {
 };
 
 // Replays a session as the studio sees it: every camera's image keyed at low resolution
-// (GreenScreenKeyer at the cells' centres, as CameraNode does), the silhouettes fed to a
-// PoseTracker, and the tracked joints compared with truth/joints.csv when the session has it.
+// (GreenScreenKeyer at the cells' centres, as CameraNode does; the session's own masks where it
+// carries them), the silhouettes fed to a PoseTracker, the generic human posed as the nodes pose
+// it compared with each silhouette (silhouette_iou, per camera silhouette_iou_<camera>: the
+// cells of both over the cells of either, mean over tracked frames), and the tracked joints
+// compared with truth/joints.csv when the session has it.
 // Adds section "mocap" to `report`: frames, frames_tracked, cameras, mpjpe_mm (mean over tracked
 // frames of the mean per-joint error), mpjpe_mm_max (the worst frame after initialisation),
 // mpjpe_mm_p95, pose_ms (mean CPU time of the fit per tracked frame, on one core; initialising

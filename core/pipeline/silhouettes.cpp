@@ -162,6 +162,20 @@ void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int 
   }
 }
 
+void maskSilhouette(const uint8_t* mask, int width, int height, int camera, int step,
+                    LowResSilhouette& out) {
+  out.camera = camera;
+  out.step = step;
+  out.width = width / step;
+  out.height = height / step;
+  out.bits.assign((size_t(out.width) * out.height + 7) / 8, 0);
+  for (int y = 0; y < out.height; ++y) {
+    const uint8_t* row = mask + size_t(y * step + step / 2) * width;
+    for (int x = 0; x < out.width; ++x)
+      if (row[x * step + step / 2]) out.set(x, y);
+  }
+}
+
 void silhouetteMask(const LowResSilhouette& s, std::vector<uint8_t>& out) {
   const size_t cells = size_t(s.width) * s.height;
   out.resize(cells);

@@ -33,6 +33,11 @@ struct LowResSilhouette {
 void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
                        LowResSilhouette& out);
 
+// A mask (one byte a pixel, non-zero on the actor: another tool's) as the silhouette a node would
+// key: a cell is set when the pixel at its centre is. `out`'s buffer is reused.
+void maskSilhouette(const uint8_t* mask, int width, int height, int camera, int step,
+                    LowResSilhouette& out);
+
 // The silhouette as one byte a cell (255 foreground, 0 not): the lumigraph's foreground mask
 // (LumigraphRenderer::setMask). `out` is reused.
 void silhouetteMask(const LowResSilhouette& silhouette, std::vector<uint8_t>& out);

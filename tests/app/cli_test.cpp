@@ -519,6 +519,40 @@ TEST(Cli, SynthDrawsAStageFromASeedThatItsConfigFilmsAgain) {
   fs::remove_all(folder);
 }
 
+// Footage and another tool's masks from elsewhere (here a virtual studio session's images and
+// true masks, as image folders): imported in one command, then evaluated without a truth/.
+TEST(Cli, ImportedFootageWithMasksIsTrackedAndEvaluatedWithoutTruth) {
+  const fs::path folder = tempPath("import");
+  fs::remove_all(folder);
+  Result r = run(kCli + " synth --seed 5 --cameras 8-8 --start clip --frames 4 --out " +
+                 (folder / "studio").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // Every other frame's masks only: the import takes the frames that have them.
+  fs::remove(folder / "studio" / "truth" / "masks" / "cam03" / "000001.png");
+  r = run(kCli + " session import --rig " + (folder / "studio" / "rig.yaml").string() +
+          " --footage " + (folder / "studio").string() + " --fps 30 --masks " +
+          (folder / "studio" / "truth" / "masks").string() + " --out " +
+          (folder / "imported").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("1 frames left out: a camera has no mask of them"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("imported 3 frames of 8 cameras"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(folder / "imported" / "masks" / "cam08" / "000002.png"));
+  r = run(kCli + " eval --session " + (folder / "imported").string() + " --json " +
+          (folder / "eval.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("no ground truth (truth/): motion capture's frames and silhouettes"),
+            std::string::npos)
+      << r.output;
+  std::ifstream in(folder / "eval.json");
+  const std::string json((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(json.find("\"frames_tracked\": 3"), std::string::npos) << json;
+  const size_t at = json.find("\"silhouette_iou\": ");
+  ASSERT_NE(at, std::string::npos) << json;
+  EXPECT_GT(std::stod(json.substr(at + 18)), 0.6) << json.substr(at, 40);
+  fs::remove_all(folder);
+}
+
 TEST(Cli, RunWritesTheFiguresAsJson) {
   const fs::path folder = tempPath("run");
   ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
