@@ -9,6 +9,17 @@
 
 namespace lumistage {
 
+Eigen::Matrix3d aimedRotation(const Eigen::Vector3d& centre, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - centre).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d R;
+  R.row(0) = x.transpose();
+  R.row(1) = y.transpose();
+  R.row(2) = z.transpose();
+  return R;
+}
+
 Rig makeRingRig(const RingRigSpec& spec) {
   if (spec.cameras <= 0 || spec.heights_m.empty() || !(spec.radius_m > 0) ||
       !(spec.vertical_fov_deg > 0 && spec.vertical_fov_deg < 170)) {
@@ -24,14 +35,7 @@ Rig makeRingRig(const RingRigSpec& spec) {
     const double angle = 2 * std::numbers::pi * i / spec.cameras;
     const Eigen::Vector3d centre(spec.radius_m * std::cos(angle), spec.radius_m * std::sin(angle),
                                  spec.heights_m[i % spec.heights_m.size()]);
-    // Camera axes in the world: z toward the target, x horizontal (level horizon), y down.
-    const Eigen::Vector3d z = (spec.target_m - centre).normalized();
-    const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-    const Eigen::Vector3d y = z.cross(x);
-    Eigen::Matrix3d R;
-    R.row(0) = x.transpose();
-    R.row(1) = y.transpose();
-    R.row(2) = z.transpose();
+    const Eigen::Matrix3d R = aimedRotation(centre, spec.target_m);
     cameras.emplace_back(fmt::format("cam{:02}", i + 1), spec.width, spec.height, intrinsics,
                          spec.distortion, R, -R * centre);
   }

@@ -25,4 +25,8 @@ struct RingRigSpec {
 
 Rig makeRingRig(const RingRigSpec& spec);
 
+// The world-to-camera rotation of a camera at `centre` aimed at `target`, its horizon level: the
+// camera's z toward the target, x horizontal, y down.
+Eigen::Matrix3d aimedRotation(const Eigen::Vector3d& centre, const Eigen::Vector3d& target);
+
 }  // namespace lumistage

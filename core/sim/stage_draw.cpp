@@ -12,6 +12,7 @@
 #include "core/body/bvh.h"
 #include "core/body/human_skeleton.h"
 #include "core/body/motion_library.h"
+#include "core/geometry/ring_rig.h"
 
 namespace lumistage {
 
@@ -40,17 +41,6 @@ class Dice {
 // The column every camera must see whole: wherever the drawn motion takes the actor (root within
 // kRoamM of the centre), arms out and raised.
 constexpr double kColumnRadiusM = 1.0, kColumnTopM = 2.5, kRoamM = 0.8;
-
-Eigen::Matrix3d lookAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - centre).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Eigen::Matrix3d R;
-  R.row(0) = x.transpose();
-  R.row(1) = y.transpose();
-  R.row(2) = z.transpose();
-  return R;
-}
 
 // The focal length that fits the column into a width x height image whose principal point is
 // (cx, cy), with a margin of `margin` of the image on every side, undistorted (the drawn lenses
@@ -98,7 +88,7 @@ Rig drawRig(Dice& dice, const StageDrawOptions& options) {
     const Eigen::Vector3d aim =
         target +
         Eigen::Vector3d(dice.uniform(-0.1, 0.1), dice.uniform(-0.1, 0.1), dice.uniform(-0.1, 0.1));
-    const Eigen::Matrix3d R = lookAt(centre, aim);
+    const Eigen::Matrix3d R = aimedRotation(centre, aim);
     const double cx = 0.5 * (width - 1) + dice.uniform(-14, 14);
     const double cy = 0.5 * (height - 1) + dice.uniform(-10, 10);
     const double f = fittingFocal(R, centre, width, height, cx, cy, 0.03);
