@@ -162,6 +162,13 @@ FootageImportReport importFootage(const Rig& rig, const std::vector<FootageSourc
                                  options.every));
   for (int k = 0; k < last; ++k) {
     const int base = options.first + k * options.every;
+    // A camera whose footage starts later (a negative offset) has no frame yet: skipped.
+    bool before = false;
+    for (const auto& f : footage) before = before || base + f->source().offset < 0;
+    if (before) {
+      ++report.before_footage;
+      continue;
+    }
     int ended = -1;
     for (size_t c = 0; c < cameras.size() && ended < 0; ++c) {
       const int index = base + footage[c]->source().offset;
@@ -211,6 +218,10 @@ FootageImportReport importFootage(const Rig& rig, const std::vector<FootageSourc
     report.frames = id + 1;
     if (progress) progress(k + 1, std::max(expected, k + 1));
   }
+  if (report.before_footage > 0)
+    report.notes.push_back(fmt::format(
+        "{} frames left out at the start: a camera's footage (negative offset) begins later",
+        report.before_footage));
   if (report.without_masks > 0)
     report.notes.push_back(
         fmt::format("{} frames left out: a camera has no mask of them", report.without_masks));

@@ -32,6 +32,7 @@ struct FootageImportOptions {
 struct FootageImportReport {
   int frames = 0;                  // session frames written
   int without_masks = 0;           // frames left out for a camera's missing mask
+  int before_footage = 0;          // frames left out before a camera's footage begins
   Rig rig;                         // as written: image sizes the footage's where they differ
   std::vector<std::string> notes;  // size adjustments, where each camera's footage ended
 };

@@ -66,22 +66,27 @@ TEST(FootageImport, EveryCamerasFramesAreTakenExactlyAtItsOffset) {
   const FootageImportReport report = importFootage(rig,
                                                    {{"cam01", folder / "cam01.avi", 0},
                                                     {"cam02", folder / "cam02.avi", 3},
-                                                    {"cam03", folder / "cam03", -1}},
+                                                    {"cam03", folder / "cam03", -3}},
                                                    folder / "session", options);
-  // cam02 runs out first: frame 1 + 2k + 3 <= 19 for k <= 7.
-  EXPECT_EQ(report.frames, 8);
-  ASSERT_EQ(report.notes.size(), 1u);
+  // cam03 begins 3 frames later: the first taken frame (1) has none, the next (3) its 0. cam02
+  // runs out first: frame 1 + 2k + 3 <= 19 for k <= 7.
+  EXPECT_EQ(report.frames, 7);
+  ASSERT_EQ(report.notes.size(), 2u);
   EXPECT_NE(report.notes[0].find("camera 'cam02': its footage ends before its frame 20"),
             std::string::npos)
       << report.notes[0];
+  EXPECT_NE(report.notes[1].find("1 frames left out at the start"), std::string::npos)
+      << report.notes[1];
   const SessionReader session(folder / "session");
-  ASSERT_EQ(session.frameCount(), 8);
+  ASSERT_EQ(session.frameCount(), 7);
   EXPECT_DOUBLE_EQ(session.fps(), 12.5);
-  for (int k : {0, 3, 7}) {
-    EXPECT_NEAR(levelOf(session, k, 0), 10 * (1 + 2 * k) + 0, 2) << k;  // MJPEG: within 2
-    EXPECT_NEAR(levelOf(session, k, 1), 10 * (4 + 2 * k) + 1, 2) << k;
-    EXPECT_EQ(levelOf(session, k, 2), 10 * (2 * k) + 2) << k;  // PNG: exact
+  for (int k : {0, 3, 6}) {
+    const int base = 3 + 2 * k;                                  // the footage's frame
+    EXPECT_NEAR(levelOf(session, k, 0), 10 * base + 0, 2) << k;  // MJPEG: within 2
+    EXPECT_NEAR(levelOf(session, k, 1), 10 * (base + 3) + 1, 2) << k;
+    EXPECT_EQ(levelOf(session, k, 2), 10 * (base - 3) + 2) << k;  // PNG: exact
   }
+  EXPECT_EQ(session.timestampNs(0), int64_t(2 * 1e9 / 25 + 0.5));  // the footage's time
   fs::remove_all(folder);
 }
 
