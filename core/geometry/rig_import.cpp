@@ -170,6 +170,10 @@ Eigen::Matrix<double, 3, 4> readPmat(const fs::path& file) {
   std::vector<double> values;
   std::string line;
   for (int line_number = 1; std::getline(text, line); ++line_number) {
+    // Octave's save writes "# Created by Octave ...", "# name: Pmat", "# rows: 3" first; MATLAB
+    // users comment with '%'.
+    const size_t first = line.find_first_not_of(" \t");
+    if (first != std::string::npos && (line[first] == '#' || line[first] == '%')) continue;
     std::istringstream words(line);
     std::string word;
     while (words >> word) {

@@ -82,8 +82,13 @@ TEST(SvobodaImport, RecoversEveryCameraFromProjectionAndRadFiles) {
     Distortion d = truth[i].distortion();
     d.k3 = 0;  // .rad files of the toolbox carry kc1..kc4
     const double scale = (i % 2 ? -1.0 : 1.0) * (0.001 + i);
+    // Half of them as the toolbox writes them under Octave: with its header of comments.
+    const std::string octave =
+        i % 2 ? "# Created by Octave 8.4.0, Tue Nov 25 10:12:33 2025 CET <user@stage>\n"
+                "# name: Pmat\n# type: matrix\n# rows: 3\n# columns: 4\n"
+              : "";
     folder.write("camera" + std::to_string(i + 1) + ".Pmat.cal",
-                 pmatText(scale * truth[i].projectionMatrix()));
+                 octave + pmatText(scale * truth[i].projectionMatrix()));
     folder.write("cam" + std::to_string(i + 1) + ".rad",
                  radText(truth[i].intrinsics().matrix(), d));
   }
