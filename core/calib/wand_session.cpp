@@ -1,7 +1,9 @@
 #include "core/calib/wand_session.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <charconv>
 #include <fstream>
 #include <sstream>
@@ -150,11 +152,21 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
       if (camera < 0) throw fail(fmt::format("unknown camera '{}' (no camera line for it)", w[2]));
       const Eigen::Vector2d pixel(number(w[3], "x_px"), number(w[4], "y_px"));
       const WandCamera& c = cameras[camera];
-      if (pixel.x() < -0.5 || pixel.y() < -0.5 || pixel.x() >= c.width - 0.5 ||
-          pixel.y() >= c.height - 0.5)
+      // Beyond the image by less than a pixel (a centroid of a blob cut by the image's edge):
+      // dropped with a warning. Further: not this camera's point.
+      const double beyond = std::max({-0.5 - pixel.x(), -0.5 - pixel.y(),
+                                      pixel.x() - (c.width - 0.5), pixel.y() - (c.height - 0.5)});
+      if (beyond > 1.0)
         throw fail(fmt::format("pixel ({}, {}) is outside camera {}'s {}x{} image", pixel.x(),
                                pixel.y(), c.name, c.width, c.height));
-      points.push_back({sample, camera, pixel});
+      if (beyond >= 0) {
+        spdlog::warn("{}", locate(source_name, line_number, "",
+                                  fmt::format("pixel ({}, {}) lies just off camera {}'s {}x{} "
+                                              "image: left out",
+                                              pixel.x(), pixel.y(), c.name, c.width, c.height)));
+      } else {
+        points.push_back({sample, camera, pixel});
+      }
       max_sample = std::max(max_sample, sample);
     } else if (w[0] == "pair") {
       expect(3, "pair SAMPLE_A SAMPLE_B");

@@ -32,6 +32,19 @@ TEST(WandSession, SavesAndLoadsBack) {
   }
 }
 
+// A real wand recording's centroid of a blob the image's edge cut lies a fraction of a pixel off
+// the image: that point is left out (with a warning), the rest is read.
+TEST(WandSession, APointJustOffTheImageIsLeftOut) {
+  const WandSession s = parseWandSession(
+      "# lumistage wand points 1\ncamera cam01 640 480\npoint 0 cam01 10 -0.59\n"
+      "point 1 cam01 639.7 20\npoint 2 cam01 320 240\n",
+      "w.txt");
+  EXPECT_EQ(s.sampleCount(), 3);
+  EXPECT_FALSE(s.has(0, 0));
+  EXPECT_FALSE(s.has(1, 0));
+  EXPECT_TRUE(s.has(2, 0));
+}
+
 TEST(WandSession, ErrorsNameTheLine) {
   const std::string head = "# lumistage wand points 1\ncamera cam01 640 480\n";
   auto error = [](const std::string& text) {
@@ -40,6 +53,8 @@ TEST(WandSession, ErrorsNameTheLine) {
   EXPECT_NE(error(head + "point 0 cam02 1 2\n").find("w.txt:3"), std::string::npos);
   EXPECT_NE(error(head + "point 0 cam02 1 2\n").find("unknown camera 'cam02'"), std::string::npos);
   EXPECT_NE(error(head + "point 0 cam01 700 2\n").find("outside camera cam01's 640x480"),
+            std::string::npos);
+  EXPECT_NE(error(head + "point 0 cam01 5 -1.6\n").find("outside camera cam01's 640x480"),
             std::string::npos);
   EXPECT_NE(error(head + "point x cam01 1 2\n").find("sample: expected a non-negative integer"),
             std::string::npos);
