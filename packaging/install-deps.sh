@@ -26,7 +26,7 @@ packages=(
   # compression of the nodes' refinement statistics
   libzstd-dev
   # logging, command line, config
-  libspdlog-dev libfmt-dev libcli11-dev libyaml-cpp-dev
+  libspdlog-dev libfmt-dev libcli11-dev libyaml-cpp-dev libtoml11-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
 )

@@ -65,7 +65,7 @@ void addRigCommands(CLI::App& app) {
   show->callback([show_file] { printRig(loadRig(*show_file), *show_file); });
 
   struct ImportArgs {
-    std::string svoboda, opencv, qualisys, out, image_size;
+    std::string svoboda, opencv, qualisys, toml, out, image_size;
     int cameras_per_node = 3;
   };
   auto args = std::make_shared<ImportArgs>();
@@ -76,8 +76,11 @@ void addRigCommands(CLI::App& app) {
   auto* opencv = import->add_option("--opencv", args->opencv, "OpenCV FileStorage file (YAML/XML)");
   auto* qualisys = import->add_option("--qualisys", args->qualisys,
                                       "Qualisys Track Manager calibration (.qca.txt)");
+  auto* toml =
+      import->add_option("--toml", args->toml, "Pose2Sim or anipose calibration (Calib*.toml)");
   svoboda->excludes(opencv);
   qualisys->excludes(svoboda)->excludes(opencv);
+  toml->excludes(svoboda)->excludes(opencv)->excludes(qualisys);
   import->add_option("--image-size", args->image_size, "WIDTHxHEIGHT (needed with --svoboda)");
   import
       ->add_option("--cameras-per-node", args->cameras_per_node,
@@ -88,7 +91,8 @@ void addRigCommands(CLI::App& app) {
     refuseOutputOverInputs("--out", args->out,
                            {{"--svoboda", args->svoboda},
                             {"--opencv", args->opencv},
-                            {"--qualisys", args->qualisys}});
+                            {"--qualisys", args->qualisys},
+                            {"--toml", args->toml}});
   RigImportOptions options;
   options.cameras_per_node = args->cameras_per_node;
   if (!args->image_size.empty()) {
@@ -105,8 +109,10 @@ void addRigCommands(CLI::App& app) {
     writeResult(importOpenCvRig(args->opencv, options), args->out);
   } else if (!args->qualisys.empty()) {
     writeResult(importQualisysRig(args->qualisys, options), args->out);
+  } else if (!args->toml.empty()) {
+    writeResult(importTomlRig(args->toml, options), args->out);
   } else {
-    throw CLI::RequiredError("--svoboda, --opencv or --qualisys");
+    throw CLI::RequiredError("--svoboda, --opencv, --qualisys or --toml");
   }
 });
 

@@ -9,4 +9,8 @@ namespace lumistage {
 // nothing, so that the message decoder (and its fuzz target) can check names with it.
 bool isValidName(std::string_view name);
 
+// Names with their runs of digits compared as numbers: "cam2" before "cam10", "cam_9" before
+// "cam_10"; otherwise character by character.
+bool naturalLess(std::string_view a, std::string_view b);
+
 }  // namespace lumistage

@@ -48,6 +48,13 @@ RigImport importSvobodaRig(const std::filesystem::path& folder, const RigImportO
 // Throws Error naming the file, line, camera and attribute.
 RigImport importQualisysRig(const std::filesystem::path& file, const RigImportOptions& options);
 
+// Pose2Sim's or anipose's calibration (Calib*.toml): a table per camera ([cam_1], [cam_2] ...;
+// [metadata] is skipped) with name, size [width, height], matrix (K, 3 rows), distortions (k1 k2
+// p1 p2 [k3]), rotation (Rodrigues) and translation (metres, world to camera), OpenCV's
+// conventions; cameras in their tables' natural order. A fisheye camera is refused. Throws Error
+// naming the file and the table (toml11's own file:line:column for malformed TOML).
+RigImport importTomlRig(const std::filesystem::path& file, const RigImportOptions& options);
+
 // Imported cameras dealt to nodes as RigImportOptions says; throws Error naming `source` for an
 // empty list or cameras a rig cannot hold (duplicate names).
 Rig assembleImportedRig(std::vector<Camera> cameras, const RigImportOptions& options,

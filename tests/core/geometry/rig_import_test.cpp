@@ -399,5 +399,68 @@ TEST(QualisysImport, ReadsThePose2SimDemosCalibration) {
   }
 }
 
+// A camera as Pose2Sim's toml_write writes it (trailing commas, floats everywhere).
+std::string tomlCamera(const Camera& c, const std::string& section) {
+  const Eigen::AngleAxisd aa(c.rotation());
+  const Eigen::Vector3d r = aa.angle() * aa.axis();
+  const Intrinsics& k = c.intrinsics();
+  const Distortion& d = c.distortion();
+  return fmt::format(
+      "[{}]\nname = \"{}\"\nsize = [ {}.0, {}.0,]\n"
+      "matrix = [ [ {:.17g}, 0.0, {:.17g},], [ 0.0, {:.17g}, {:.17g},], [ 0.0, 0.0, 1.0,],]\n"
+      "distortions = [ {:.17g}, {:.17g}, {:.17g}, {:.17g},]\n"
+      "rotation = [ {:.17g}, {:.17g}, {:.17g},]\ntranslation = [ {:.17g}, {:.17g}, {:.17g},]\n"
+      "fisheye = false\n\n",
+      section, c.name(), c.width(), c.height(), k.fx, k.cx, k.fy, k.cy, d.k1, d.k2, d.p1, d.p2,
+      r.x(), r.y(), r.z(), c.translation().x(), c.translation().y(), c.translation().z());
+}
+
+TEST(TomlImport, ReadsPose2SimCalibrationsInTheirTablesNaturalOrder) {
+  const std::vector<Camera> truth = ringCameras(11, 1280, 720);
+  TempFolder folder;
+  std::string text = "# Pose2Sim calibration\n";
+  for (int i = 10; i >= 0; --i) text += tomlCamera(truth[size_t(i)], fmt::format("cam_{}", i + 1));
+  text += "[metadata]\nadjusted = false\nerror = 0.0\n";
+  folder.write("Calib.toml", text);
+  const RigImport imported = importTomlRig(folder.path() / "Calib.toml", {});
+  ASSERT_EQ(imported.rig.cameraCount(), 11);
+  for (int c = 0; c < 11; ++c) {
+    const Camera& got = imported.rig.camera(c);
+    EXPECT_EQ(got.name(), truth[size_t(c)].name());
+    EXPECT_EQ(got.width(), 1280);
+    for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.4, -0.3, 1.7)}) {
+      const auto a = got.project(p), b = truth[size_t(c)].project(p);
+      ASSERT_TRUE(a && b);
+      EXPECT_LT((*a - *b).norm(), 1e-6) << got.name();
+    }
+  }
+}
+
+TEST(TomlImport, MalformedFilesAreNamed) {
+  const std::vector<Camera> truth = ringCameras(1, 640, 480);
+  TempFolder folder;
+  const auto errorOf = [&](const std::string& text) {
+    folder.write("c.toml", text);
+    return testing::errorOf([&] { importTomlRig(folder.path() / "c.toml", {}); });
+  };
+  const std::string good = tomlCamera(truth[0], "cam_1");
+  std::string text = good;
+  text.replace(text.find("rotation = [ "), 13, "rotation = [ \"x\", ");
+  std::string e = errorOf(text);
+  EXPECT_NE(e.find("c.toml: [cam_1]: rotation: expected numbers"), std::string::npos) << e;
+  text = good;
+  text.replace(text.find("translation"), 11, "tra");
+  e = errorOf(text);
+  EXPECT_NE(e.find("[cam_1]: no 'translation'"), std::string::npos) << e;
+  text = good;
+  text.replace(text.find("fisheye = false"), 15, "fisheye = true");
+  e = errorOf(text);
+  EXPECT_NE(e.find("fisheye lens model is not supported"), std::string::npos) << e;
+  e = errorOf(good.substr(0, good.find("matrix") + 14));
+  EXPECT_NE(e.find("c.toml:5: missing array separator"), std::string::npos) << e;
+  e = errorOf("[metadata]\nadjusted = false\n");
+  EXPECT_NE(e.find("no camera tables"), std::string::npos) << e;
+}
+
 }  // namespace
 }  // namespace lumistage

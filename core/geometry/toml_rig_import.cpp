@@ -1,0 +1,126 @@
+// Pose2Sim's and anipose's calibrations (Calib*.toml, OpenCV conventions), read with toml11.
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <toml.hpp>
+
+#include "core/base/error.h"
+#include "core/base/names.h"
+#include "core/geometry/rig_import.h"
+
+namespace lumistage {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The numbers of a TOML array (integers or floats). Throws Error naming the table and key.
+std::vector<double> numbers(const toml::value& array, const std::string& where) {
+  if (!array.is_array()) throw Error(where + ": expected an array of numbers");
+  std::vector<double> out;
+  for (const toml::value& v : array.as_array()) {
+    if (v.is_floating()) {
+      out.push_back(v.as_floating());
+    } else if (v.is_integer()) {
+      out.push_back(double(v.as_integer()));
+    } else {
+      throw Error(where + ": expected numbers, found " + toml::format(v));
+    }
+    if (!std::isfinite(out.back())) throw Error(where + ": a number that is not finite");
+  }
+  return out;
+}
+
+const toml::value& key(const toml::value& table, const char* name, const std::string& where) {
+  if (!table.contains(name)) throw Error(fmt::format("{}: no '{}'", where, name));
+  return table.at(name);
+}
+
+Camera readCamera(const std::string& section, const toml::value& t, const std::string& source) {
+  const std::string where = fmt::format("{}: [{}]", source, section);
+  std::string name = section;
+  if (t.contains("name")) {
+    if (!t.at("name").is_string()) throw Error(where + ": name: expected a string");
+    name = t.at("name").as_string();
+  }
+  if (t.contains("fisheye") && t.at("fisheye").is_boolean() && t.at("fisheye").as_boolean())
+    throw Error(where + ": fisheye = true: the fisheye lens model is not supported");
+  const std::vector<double> size = numbers(key(t, "size", where), where + ": size");
+  if (size.size() != 2 || !(size[0] >= 16 && size[1] >= 16 && size[0] <= 16384 && size[1] <= 16384))
+    throw Error(where + ": size: expected [width, height] in pixels");
+  const toml::value& matrix = key(t, "matrix", where);
+  if (!matrix.is_array() || matrix.as_array().size() != 3)
+    throw Error(where + ": matrix: expected 3 rows of 3 numbers");
+  Eigen::Matrix3d K;
+  for (int r = 0; r < 3; ++r) {
+    const std::vector<double> row =
+        numbers(matrix.as_array()[size_t(r)], fmt::format("{}: matrix row {}", where, r + 1));
+    if (row.size() != 3) throw Error(where + ": matrix: expected 3 rows of 3 numbers");
+    for (int c = 0; c < 3; ++c) K(r, c) = row[size_t(c)];
+  }
+  if (!(K(0, 0) > 0 && K(1, 1) > 0) || K(2, 2) == 0)
+    throw Error(where + ": matrix: expected positive focal lengths and K33 = 1");
+  const std::vector<double> d = numbers(key(t, "distortions", where), where + ": distortions");
+  if (d.size() < 4 || d.size() > 5) throw Error(where + ": distortions: expected k1 k2 p1 p2 [k3]");
+  const std::vector<double> rvec = numbers(key(t, "rotation", where), where + ": rotation");
+  const std::vector<double> tvec = numbers(key(t, "translation", where), where + ": translation");
+  if (rvec.size() != 3) throw Error(where + ": rotation: expected a Rodrigues vector of 3");
+  if (tvec.size() != 3) throw Error(where + ": translation: expected 3 numbers (metres)");
+  const Eigen::Vector3d w(rvec[0], rvec[1], rvec[2]);
+  const Eigen::Matrix3d R = w.norm() > 0
+                                ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
+                                : Eigen::Matrix3d::Identity();
+  const Distortion distortion{d[0], d[1], d[2], d[3], d.size() > 4 ? d[4] : 0.0};
+  return Camera(name, int(std::lround(size[0])), int(std::lround(size[1])),
+                Intrinsics::fromMatrix(K), distortion, R,
+                Eigen::Vector3d(tvec[0], tvec[1], tvec[2]));
+}
+
+// toml11's error as file:line: what (its first line, without toml11's "[error] toml::parse_x:"
+// prefix); its own message draws the line's text below, which a log does not want.
+std::string tomlError(const std::string& source, const toml::exception& e) {
+  std::string what = e.what();
+  what = what.substr(0, what.find('\n'));
+  for (const char* prefix : {"[error] ", "toml::"}) {
+    if (what.rfind(prefix, 0) == 0) what.erase(0, std::string(prefix).size());
+  }
+  const size_t colon = what.find(": ");
+  if (colon != std::string::npos && what.find(' ') > colon) what.erase(0, colon + 2);
+  return fmt::format("{}:{}: {}", source, e.location().line(), what);
+}
+
+}  // namespace
+
+RigImport importTomlRig(const fs::path& file, const RigImportOptions& options) {
+  const std::string source = file.string();
+  toml::value data;
+  try {
+    data = toml::parse(source);
+  } catch (const toml::exception& e) {
+    throw Error(tomlError(source, e));
+  } catch (const std::exception& e) {
+    throw Error(source + ": " + e.what());  // cannot open it
+  }
+  if (!data.is_table()) throw Error(source + ": expected TOML tables, one a camera");
+  std::vector<std::string> sections;
+  for (const auto& [section, value] : data.as_table())
+    if (value.is_table() && section != "metadata") sections.push_back(section);
+  // toml11 keeps a table's keys unordered: the cameras in their sections' natural order.
+  std::sort(sections.begin(), sections.end(),
+            [](const std::string& a, const std::string& b) { return naturalLess(a, b); });
+  RigImport result;
+  std::vector<Camera> cameras;
+  try {
+    for (const std::string& section : sections)
+      cameras.push_back(readCamera(section, data.at(section), source));
+  } catch (const toml::exception& e) {
+    throw Error(tomlError(source, e));
+  }
+  if (cameras.empty()) throw Error(source + ": no camera tables ([cam_1] ...)");
+  result.rig = assembleImportedRig(std::move(cameras), options, source);
+  return result;
+}
+
+}  // namespace lumistage
