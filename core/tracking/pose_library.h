@@ -8,10 +8,10 @@ namespace lumistage {
 
 // The poses the tracker starts from when it does not know how the actor stands: every pose of the
 // built-in clips (motion_library.h: walking, waving, turning, crouching, the T- and A-pose), a
-// tenth of a second apart, and each one's mirror image, for `skeleton` (the human skeleton's 24
-// joints). Each is turned to face +y and stood over the origin (root x and y zero, its height as
-// in its clip); poses whose joints lie within `min_spacing_m` on average of a pose already taken
-// are left out. The T-pose comes first.
+// tenth of a second apart, each also bent forward at the hips by 0.6 and 1.2 rad, and each one's
+// mirror image, for `skeleton` (the human skeleton's 24 joints). Each is turned to face +y and
+// stood over the origin (root x and y zero, its height as in its clip); poses whose joints lie
+// within `min_spacing_m` on average of a pose already taken are left out. The T-pose comes first.
 std::vector<Pose> makeInitialisationPoses(const Skeleton& skeleton, double min_spacing_m = 0.04);
 
 // The pose's mirror image through the body's sagittal plane (x = 0 in the rest pose): left and

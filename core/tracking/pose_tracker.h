@@ -91,8 +91,9 @@ struct TrackResult {
 // a temporal prior toward the constant-velocity prediction.
 //
 // Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
-// is tried against every pose of a library (makeInitialisationPoses: the built-in clips' poses and
-// their mirror images, crouching, walking, waving, turning, T- and A-pose) at eight headings, over
+// is tried against every pose of a library (makeInitialisationPoses: the built-in clips' poses,
+// their mirror images and each bent forward at the hips: crouching, walking, waving, turning,
+// bending over, T- and A-pose) at eight headings, over
 // the hull's centroid and standing on its lowest point, the body scaled (until calibrated) so that
 // it spans the hull's height in that pose; the hypotheses are scored on a thinned hull, the best
 // six fitted in full, and the best fit wins. No T-pose is needed. Once per actor (again after the
