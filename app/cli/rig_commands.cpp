@@ -65,7 +65,7 @@ void addRigCommands(CLI::App& app) {
   show->callback([show_file] { printRig(loadRig(*show_file), *show_file); });
 
   struct ImportArgs {
-    std::string svoboda, opencv, qualisys, toml, out, image_size;
+    std::string svoboda, opencv, qualisys, toml, easymocap, out, image_size;
     int cameras_per_node = 3;
   };
   auto args = std::make_shared<ImportArgs>();
@@ -78,10 +78,14 @@ void addRigCommands(CLI::App& app) {
                                       "Qualisys Track Manager calibration (.qca.txt)");
   auto* toml =
       import->add_option("--toml", args->toml, "Pose2Sim or anipose calibration (Calib*.toml)");
+  auto* easymocap = import->add_option("--easymocap", args->easymocap,
+                                       "EasyMocap calibration folder (intri.yml, extri.yml)");
   svoboda->excludes(opencv);
   qualisys->excludes(svoboda)->excludes(opencv);
   toml->excludes(svoboda)->excludes(opencv)->excludes(qualisys);
-  import->add_option("--image-size", args->image_size, "WIDTHxHEIGHT (needed with --svoboda)");
+  easymocap->excludes(svoboda)->excludes(opencv)->excludes(qualisys)->excludes(toml);
+  import->add_option("--image-size", args->image_size,
+                     "WIDTHxHEIGHT (needed with --svoboda, and --easymocap without W_ and H_)");
   import
       ->add_option("--cameras-per-node", args->cameras_per_node,
                    "cameras per node PC; cameras are dealt to nodes in turn")
@@ -92,7 +96,8 @@ void addRigCommands(CLI::App& app) {
                            {{"--svoboda", args->svoboda},
                             {"--opencv", args->opencv},
                             {"--qualisys", args->qualisys},
-                            {"--toml", args->toml}});
+                            {"--toml", args->toml},
+                            {"--easymocap", args->easymocap}});
   RigImportOptions options;
   options.cameras_per_node = args->cameras_per_node;
   if (!args->image_size.empty()) {
@@ -111,8 +116,10 @@ void addRigCommands(CLI::App& app) {
     writeResult(importQualisysRig(args->qualisys, options), args->out);
   } else if (!args->toml.empty()) {
     writeResult(importTomlRig(args->toml, options), args->out);
+  } else if (!args->easymocap.empty()) {
+    writeResult(importEasyMocapRig(args->easymocap, options), args->out);
   } else {
-    throw CLI::RequiredError("--svoboda, --opencv, --qualisys or --toml");
+    throw CLI::RequiredError("--svoboda, --opencv, --qualisys, --toml or --easymocap");
   }
 });
 

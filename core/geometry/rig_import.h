@@ -55,6 +55,13 @@ RigImport importQualisysRig(const std::filesystem::path& file, const RigImportOp
 // naming the file and the table (toml11's own file:line:column for malformed TOML).
 RigImport importTomlRig(const std::filesystem::path& file, const RigImportOptions& options);
 
+// EasyMocap's calibration: `folder`/intri.yml (names, K_<name>, dist_<name>: k1 k2 p1 p2 [k3])
+// and `folder`/extri.yml (Rot_<name> or the Rodrigues R_<name>, T_<name> in metres, world to
+// camera), OpenCV FileStorage files, cameras in the order of `names`. EasyMocap writes no image
+// size: W_<name> and H_<name> where present, else options.width and height. Throws Error naming
+// the file and key.
+RigImport importEasyMocapRig(const std::filesystem::path& folder, const RigImportOptions& options);
+
 // Imported cameras dealt to nodes as RigImportOptions says; throws Error naming `source` for an
 // empty list or cameras a rig cannot hold (duplicate names).
 Rig assembleImportedRig(std::vector<Camera> cameras, const RigImportOptions& options,

@@ -462,5 +462,74 @@ TEST(TomlImport, MalformedFilesAreNamed) {
   EXPECT_NE(e.find("no camera tables"), std::string::npos) << e;
 }
 
+// intri.yml and extri.yml as EasyMocap's write_intri and write_extri write them.
+void writeEasyMocap(const fs::path& folder, const std::vector<Camera>& cameras,
+                    bool rotation_matrix, bool translation = true) {
+  cv::FileStorage intri((folder / "intri.yml").string(), cv::FileStorage::WRITE);
+  cv::FileStorage extri((folder / "extri.yml").string(), cv::FileStorage::WRITE);
+  for (cv::FileStorage* f : {&intri, &extri}) {
+    *f << "names"
+       << "[";
+    for (const Camera& c : cameras) *f << c.name();
+    *f << "]";
+  }
+  for (const Camera& c : cameras) {
+    cv::Mat K(3, 3, CV_64F), dist(1, 5, CV_64F), R(3, 3, CV_64F), rvec(3, 1, CV_64F),
+        T(3, 1, CV_64F);
+    const Eigen::Matrix3d k = c.intrinsics().matrix();
+    const Eigen::AngleAxisd aa(c.rotation());
+    const Eigen::Vector3d w = aa.angle() * aa.axis();
+    for (int i = 0; i < 9; ++i) {
+      K.at<double>(i / 3, i % 3) = k(i / 3, i % 3);
+      R.at<double>(i / 3, i % 3) = c.rotation()(i / 3, i % 3);
+    }
+    const Distortion& d = c.distortion();
+    const double coefficients[5] = {d.k1, d.k2, d.p1, d.p2, d.k3};
+    for (int i = 0; i < 5; ++i) dist.at<double>(0, i) = coefficients[i];
+    for (int i = 0; i < 3; ++i) rvec.at<double>(i) = w[i], T.at<double>(i) = c.translation()[i];
+    intri << "K_" + c.name() << K << "dist_" + c.name() << dist;
+    extri << "R_" + c.name() << rvec;
+    if (rotation_matrix) extri << "Rot_" + c.name() << R;
+    if (translation) extri << "T_" + c.name() << T;
+  }
+}
+
+TEST(EasyMocapImport, ReadsIntriAndExtriInTheirNamesOrder) {
+  const std::vector<Camera> truth = ringCameras(4, 1280, 720);
+  RigImportOptions options;
+  options.width = 1280;
+  options.height = 720;
+  for (const bool rotation_matrix : {true, false}) {
+    TempFolder folder;
+    writeEasyMocap(folder.path(), truth, rotation_matrix);
+    const RigImport imported = importEasyMocapRig(folder.path(), options);
+    ASSERT_EQ(imported.rig.cameraCount(), 4);
+    for (int c = 0; c < 4; ++c) {
+      const Camera& got = imported.rig.camera(c);
+      EXPECT_EQ(got.name(), truth[size_t(c)].name());
+      const auto a = got.project(Eigen::Vector3d(0.3, -0.2, 1.4)),
+                 b = truth[size_t(c)].project(Eigen::Vector3d(0.3, -0.2, 1.4));
+      ASSERT_TRUE(a && b);
+      EXPECT_LT((*a - *b).norm(), 1e-6) << got.name();
+    }
+  }
+}
+
+TEST(EasyMocapImport, MissingPiecesAreNamed) {
+  const std::vector<Camera> truth = ringCameras(2, 640, 480);
+  TempFolder folder;
+  writeEasyMocap(folder.path(), truth, true, /*translation=*/false);
+  RigImportOptions options;
+  std::string e = testing::errorOf([&] { importEasyMocapRig(folder.path(), options); });
+  EXPECT_NE(e.find("extri.yml: no 'T_cam01'"), std::string::npos) << e;
+  writeEasyMocap(folder.path(), truth, true);
+  e = testing::errorOf([&] { importEasyMocapRig(folder.path(), options); });
+  EXPECT_NE(e.find("camera 'cam01' has no image size: give it (--image-size WxH)"),
+            std::string::npos)
+      << e;
+  e = testing::errorOf([&] { importEasyMocapRig(folder.path() / "nothing", options); });
+  EXPECT_NE(e.find("intri.yml: no such file"), std::string::npos) << e;
+}
+
 }  // namespace
 }  // namespace lumistage
