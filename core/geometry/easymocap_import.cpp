@@ -7,6 +7,7 @@
 
 #include "core/base/error.h"
 #include "core/geometry/rig_import.h"
+#include "core/geometry/rotation.h"
 
 namespace lumistage {
 
@@ -80,9 +81,7 @@ RigImport importEasyMocapRig(const fs::path& folder, const RigImportOptions& opt
       for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = r[size_t(i)];
     } else {
       const std::vector<double> r = numbersOf(extri, "R_" + name, {3}, extri_file);
-      const Eigen::Vector3d w(r[0], r[1], r[2]);
-      R = w.norm() > 0 ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
-                       : Eigen::Matrix3d::Identity();
+      R = rotationFromVector({r[0], r[1], r[2]});
     }
     if ((R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-4)
       throw Error(fmt::format("{}: Rot_{}: not a rotation", extri_file.string(), name));

@@ -14,6 +14,7 @@
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/geometry/projection_matrix.h"
+#include "core/geometry/rotation.h"
 
 namespace lumistage {
 
@@ -136,11 +137,7 @@ Camera readOpenCvCamera(const cv::FileNode& node, int index, const std::string& 
         readMatrix(need({"rvec", "R", "rotation"}, "a 3x3 rotation R or a Rodrigues vector rvec"),
                    where + ": rvec");
     if (rvec.size() != 3) throw Error(where + ": rvec: expected 3 numbers");
-    // Rodrigues: the vector's direction is the axis, its length the angle.
-    const Eigen::Vector3d axis_angle(rvec(0), rvec(1), rvec(2));
-    const double angle = axis_angle.norm();
-    R = angle > 0 ? Eigen::AngleAxisd(angle, axis_angle / angle).toRotationMatrix()
-                  : Eigen::Matrix3d::Identity();
+    R = rotationFromVector({rvec(0), rvec(1), rvec(2)});  // Rodrigues
   }
   const Eigen::MatrixXd T =
       readMatrix(need({"T", "tvec", "translation"}, "a translation (3 numbers, world to camera)"),

@@ -9,6 +9,7 @@
 #include "core/base/error.h"
 #include "core/base/names.h"
 #include "core/geometry/rig_import.h"
+#include "core/geometry/rotation.h"
 
 namespace lumistage {
 
@@ -68,10 +69,7 @@ Camera readCamera(const std::string& section, const toml::value& t, const std::s
   const std::vector<double> tvec = numbers(key(t, "translation", where), where + ": translation");
   if (rvec.size() != 3) throw Error(where + ": rotation: expected a Rodrigues vector of 3");
   if (tvec.size() != 3) throw Error(where + ": translation: expected 3 numbers (metres)");
-  const Eigen::Vector3d w(rvec[0], rvec[1], rvec[2]);
-  const Eigen::Matrix3d R = w.norm() > 0
-                                ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
-                                : Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d R = rotationFromVector({rvec[0], rvec[1], rvec[2]});
   const Distortion distortion{d[0], d[1], d[2], d[3], d.size() > 4 ? d[4] : 0.0};
   return Camera(name, int(std::lround(size[0])), int(std::lround(size[1])),
                 Intrinsics::fromMatrix(K), distortion, R,

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/base/error.h"
+#include "core/geometry/rotation.h"
 
 namespace lumistage {
 
@@ -31,12 +32,8 @@ void placeMotion(MotionClip& clip, const Skeleton& skeleton, const MotionPlaceme
     root.head<2>() -= centre;
     pose.root_translation_m = turn * root + shift - rest_root;
     if (pose.angles_rad.empty()) continue;
-    const double angle = pose.angles_rad[0].norm();
-    const Eigen::Matrix3d rotation =
-        angle > 0 ? Eigen::AngleAxisd(angle, pose.angles_rad[0] / angle).toRotationMatrix()
-                  : Eigen::Matrix3d::Identity();
-    const Eigen::AngleAxisd turned(turn.toRotationMatrix() * rotation);
-    pose.angles_rad[0] = turned.angle() * turned.axis();
+    pose.angles_rad[0] =
+        rotationVectorOf(turn.toRotationMatrix() * rotationFromVector(pose.angles_rad[0]));
   }
 }
 

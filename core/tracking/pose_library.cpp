@@ -6,20 +6,11 @@
 
 #include "core/body/human_skeleton.h"
 #include "core/body/motion_library.h"
+#include "core/geometry/rotation.h"
 
 namespace lumistage {
 
 namespace {
-
-Eigen::Matrix3d rotationOf(const Eigen::Vector3d& v) {
-  const double a = v.norm();
-  return a > 0 ? Eigen::AngleAxisd(a, v / a).toRotationMatrix() : Eigen::Matrix3d::Identity();
-}
-
-Eigen::Vector3d rotationVector(const Eigen::Matrix3d& r) {
-  const Eigen::AngleAxisd aa(r);
-  return aa.angle() * aa.axis();
-}
 
 double meanJointDistance(const std::vector<Eigen::Vector3d>& a,
                          const std::vector<Eigen::Vector3d>& b) {
@@ -49,11 +40,11 @@ Pose mirroredPose(const Pose& pose) {
 Pose uprightFacingForward(const Pose& pose) {
   Pose out = pose;
   if (out.angles_rad.empty()) return out;
-  const Eigen::Matrix3d r = rotationOf(pose.angles_rad[0]);
+  const Eigen::Matrix3d r = rotationFromVector(pose.angles_rad[0]);
   const Eigen::Vector3d forward = r * Eigen::Vector3d::UnitY();
   const double heading = std::atan2(-forward.x(), forward.y());  // about +z, from +y
-  out.angles_rad[0] =
-      rotationVector(Eigen::AngleAxisd(-heading, Eigen::Vector3d::UnitZ()).toRotationMatrix() * r);
+  out.angles_rad[0] = rotationVectorOf(
+      Eigen::AngleAxisd(-heading, Eigen::Vector3d::UnitZ()).toRotationMatrix() * r);
   out.root_translation_m.x() = out.root_translation_m.y() = 0;
   return out;
 }
@@ -69,7 +60,7 @@ Pose bentAtTheHips(const Skeleton& skeleton, const Pose& pose, double angle_rad)
     Pose p = pose;
     const Eigen::Matrix3d pitch =
         Eigen::AngleAxisd(sign * angle_rad, Eigen::Vector3d::UnitX()).toRotationMatrix();
-    p.angles_rad[0] = rotationVector(rotationOf(pose.angles_rad[0]) * pitch);
+    p.angles_rad[0] = rotationVectorOf(rotationFromVector(pose.angles_rad[0]) * pitch);
     skeleton.jointPositions(p, joints);
     if (joints[kHead].y() <= head_y) continue;
     for (const int hip : {int(kRightHip), int(kLeftHip)}) {

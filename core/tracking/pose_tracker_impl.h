@@ -1,9 +1,9 @@
 #pragma once
 
-// The tracker's insides (PoseTracker::Impl), shared by the files that make it up: the body model,
-// the fit and the frame's course (pose_tracker.cpp), the visual hull (hull_carving.cpp), and the
-// initialisation and shape calibration (tracker_initialisation.cpp). Not for use outside
-// core/tracking.
+// The tracker's insides (PoseTracker::Impl), shared by the files that make it up: the body model
+// and the frame's course (pose_tracker.cpp), the visual hull (hull_carving.cpp), the fit
+// (tracker_fit.cpp), and the initialisation and shape calibration (tracker_initialisation.cpp).
+// Not for use outside core/tracking.
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -13,6 +13,7 @@
 #include <limits>
 #include <vector>
 
+#include "core/geometry/rotation.h"
 #include "core/tracking/pose_tracker.h"
 
 namespace lumistage {
@@ -52,12 +53,6 @@ struct Dof {
   int joint;
   int axis;
 };
-
-inline Eigen::Matrix3d rotationOf(const Eigen::Vector3d& rotation_vector) {
-  const double a = rotation_vector.norm();
-  return a > 0 ? Eigen::AngleAxisd(a, rotation_vector / a).toRotationMatrix()
-               : Eigen::Matrix3d::Identity();
-}
 
 inline double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                               const Eigen::Vector3d& b, Eigen::Vector3d& closest) {
@@ -228,6 +223,7 @@ struct PoseTracker::Impl {
   // How straight the body stands in `p`: its extent over its extent at rest (1 standing).
   double uprightness(const Pose& p);
   double height_uprightness = 0;  // of the frame the height was last taken from
+  double rest_extent_m = 1;       // the body's extent at rest, for the current shape (setShape)
   // The height of a shape whose body spans `extent` (crown above its lowest point) standing as
   // straight as `upright` (1 standing) with legs `legs` times the generic ones': the generic mesh's
   // crown scaled.

@@ -45,10 +45,9 @@ void PoseTracker::Impl::modelExtent(const Pose& p, double& bottom, double& top) 
 }
 
 double PoseTracker::Impl::uprightness(const Pose& p) {
-  double bottom, top, rest_bottom, rest_top;
+  double bottom, top;
   modelExtent(p, bottom, top);
-  modelExtent(rest_pose, rest_bottom, rest_top);
-  return (top - bottom) / (rest_top - rest_bottom);
+  return (top - bottom) / rest_extent_m;
 }
 
 void PoseTracker::Impl::remeasureHeight(double hull_bottom, double hull_top) {
@@ -80,7 +79,6 @@ void PoseTracker::Impl::remeasureHeight(double hull_bottom, double hull_top) {
 }
 
 void PoseTracker::Impl::makeLibrary() {
-  rest_pose = Pose::rest(generic.jointCount());
   library = makeInitialisationPoses(generic);
   library_bottom.resize(library.size());
   library_upright.resize(library.size());
@@ -112,8 +110,7 @@ Pose PoseTracker::Impl::placedLibraryPose(int i, double heading_rad,
   Pose p = library[i];
   const Eigen::Matrix3d turn =
       Eigen::AngleAxisd(heading_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const Eigen::AngleAxisd root(turn * rotationOf(p.angles_rad[0]));
-  p.angles_rad[0] = root.angle() * root.axis();
+  p.angles_rad[0] = rotationVectorOf(turn * rotationFromVector(p.angles_rad[0]));
   p.root_translation_m *= k;
   // Centred: the joints' mean over the hull's centroid.
   p.root_translation_m.x() = p.root_translation_m.y() = 0;

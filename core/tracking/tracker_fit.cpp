@@ -1,0 +1,290 @@
+// The tracker's fit (PoseTracker::Impl, pose_tracker_impl.h): the cost of a pose against the hull's
+// samples and the silhouettes, with its analytic normal equations, and Levenberg-Marquardt over
+// it; the capsules placed for a pose and each hull sample's nearest one.
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+#include "core/tracking/pose_tracker_impl.h"
+
+namespace lumistage {
+
+using namespace tracker_detail;
+
+double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h,
+                                   Eigen::VectorXd& grad) {
+  skeleton.forwardKinematics(p, global);
+  const int n = int(dofs.size());
+  if (jacobian) {
+    h.setZero();
+    grad.setZero();
+    for (int d = 0; d < n; ++d) {
+      const Dof& dof = dofs[d];
+      if (dof.kind == Dof::kTranslation) {
+        dof_axis[d] = Eigen::Vector3d::Unit(dof.axis);
+      } else if (dof.kind == Dof::kRootRotation) {
+        dof_axis[d] = Eigen::Vector3d::Unit(dof.axis);
+        dof_centre[d] = global[0].translation();
+      } else {
+        const Eigen::Matrix3d rp = global[skeleton.joint(dof.joint).parent].linear();
+        const Eigen::Vector3d& a = p.angles_rad[dof.joint];
+        if (dof.axis == 0) {
+          dof_axis[d] = rp.col(0);
+        } else if (dof.axis == 1) {
+          dof_axis[d] =
+              rp * Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()) * Eigen::Vector3d::UnitY();
+        } else {
+          dof_axis[d] = rp * Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()) *
+                        Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                        Eigen::Vector3d::UnitZ();
+        }
+        dof_centre[d] = global[dof.joint].translation();
+      }
+      if (dof.kind == Dof::kTranslation) {
+        dof_spatial[d] << dof_axis[d], Eigen::Vector3d::Zero();
+      } else {
+        dof_spatial[d] << dof_centre[d].cross(dof_axis[d]), dof_axis[d];
+      }
+    }
+    for (size_t j = 0; j < joint_m.size(); ++j) {
+      joint_m[j].setZero();
+      joint_g[j].setZero();
+      joint_used[j] = 0;
+    }
+  }
+  // Accumulates w * J^T J and w * J^T r for a residual whose Jacobian is dr/dp . dp/dtheta, p a
+  // point moving with `joint` (in the joint's spatial terms, joint_m and joint_g).
+  auto accumulate = [&](int joint, const Eigen::Vector3d& point, const Eigen::Vector3d& dr_dp,
+                        double r, double w) {
+    Vector6d spatial;
+    spatial << dr_dp, point.cross(dr_dp);
+    joint_m[joint].noalias() += w * spatial * spatial.transpose();
+    joint_g[joint] += (w * r) * spatial;
+    joint_used[joint] = 1;
+  };
+  placeCapsules();
+  double cost = 0;
+  // Hull surface samples on the model's surface.
+  const double delta_out = opt.huber_m, delta_in = 4 * opt.huber_m;
+  for (size_t i = 0; i < hull.size(); ++i) {
+    const Eigen::Vector3d& v = hull[i];
+    double best;
+    Eigen::Vector3d best_closest;
+    const int best_c = nearestCapsule(i, best, best_closest);
+    // The hull holds the body: a model surface beyond the hull (r < 0) is wrong, a hull beyond
+    // the model (r > 0) may be a phantom of the carving (between the legs, under the arms).
+    const double r = best, ar = std::abs(r);
+    const double delta = r < 0 ? delta_in : delta_out;
+    cost += ar <= delta ? 0.5 * r * r : delta * (ar - 0.5 * delta);
+    if (jacobian) {
+      const Eigen::Vector3d diff = v - best_closest;
+      const double len = diff.norm();
+      if (len < 1e-9 || best_c < 0) continue;
+      const double w = ar <= delta ? 1.0 : delta / ar;
+      accumulate(capsules[best_c].joint, best_closest, -diff / len, r, w);
+    }
+  }
+  // Axis samples inside every silhouette.
+  const double ws = opt.silhouette_weight;
+  const int step = opt.silhouette_step;
+  for (const Sample& s : samples) {
+    const Eigen::Vector3d q = global[s.joint] * s.local;
+    for (int c = 0; c < cameras; ++c) {
+      if (!present[c]) continue;
+      const Camera& cam = rig.camera(c);
+      const Eigen::Vector3d x = cam.toCamera(q);
+      if (x.z() <= 0.1) continue;
+      const auto pix = cam.project(q);
+      if (!pix) continue;
+      const double cx = ((*pix)(0) - step / 2) / step, cy = ((*pix)(1) - step / 2) / step;
+      const int w = cell_w[c], hgt = cell_h[c];
+      if (cx < 0 || cy < 0 || cx > w - 1 || cy > hgt - 1) continue;
+      const int x0 = std::min(int(cx), w - 2), y0 = std::min(int(cy), hgt - 2);
+      const double fx = cx - x0, fy = cy - y0;
+      const Eigen::Array4i& box = dt_box[c];
+      double value, gx, gy;
+      if (x0 >= box[0] && x0 + 1 <= box[2] && y0 >= box[1] && y0 + 1 <= box[3]) {
+        const float* d = &dt[c][size_t(y0) * w + x0];
+        const double d00 = d[0], d10 = d[1], d01 = d[w], d11 = d[w + 1];
+        value = (1 - fy) * ((1 - fx) * d00 + fx * d10) + fy * ((1 - fx) * d01 + fx * d11);
+        gx = (1 - fy) * (d10 - d00) + fy * (d11 - d01);
+        gy = (1 - fx) * (d01 - d00) + fx * (d11 - d10);
+      } else if (box[2] < box[0]) {
+        continue;  // no silhouette in this view: nothing to be drawn toward
+      } else {
+        // Beyond the transform's box: its nearest cell's distance plus the way to it (the
+        // silhouette is at least kDtMargin cells further).
+        const double px = std::clamp(cx, double(box[0]), double(box[2])),
+                     py = std::clamp(cy, double(box[1]), double(box[3]));
+        const double ex = cx - px, ey = cy - py, e = std::hypot(ex, ey);
+        value = dt[c][size_t(std::lround(py)) * w + size_t(std::lround(px))] + e;
+        gx = e > 0 ? ex / e : 0;
+        gy = e > 0 ? ey / e : 0;
+      }
+      if (value <= 0) continue;
+      const double m_per_cell = step * x.z() / cam.intrinsics().fx;
+      const double r = value * m_per_cell;
+      cost += 0.5 * ws * r * r;
+      if (!jacobian) continue;
+      const Intrinsics& k = cam.intrinsics();
+      const double iz = 1.0 / x.z();
+      // d(cell)/d(camera coordinates), pinhole (the lens distortion is left out of the slope).
+      const Eigen::Vector3d du(k.fx * iz, 0, -k.fx * x.x() * iz * iz),
+          dv(0, k.fy * iz, -k.fy * x.y() * iz * iz);
+      const Eigen::Vector3d dr_dx = m_per_cell / step * (gx * du + gy * dv);
+      accumulate(s.joint, q, cam.rotation().transpose() * dr_dx, r, ws);
+    }
+  }
+  // The joints' sums into the degrees of freedom: S^T M S and S^T g over each joint's chain.
+  if (jacobian) {
+    for (size_t j = 0; j < joint_m.size(); ++j) {
+      if (!joint_used[j]) continue;
+      const std::vector<int>& ch = chain[j];
+      for (size_t b = 0; b < ch.size(); ++b) {
+        const Vector6d moved = joint_m[j] * dof_spatial[ch[b]];
+        for (size_t a = 0; a <= b; ++a) h(ch[a], ch[b]) += dof_spatial[ch[a]].dot(moved);
+        grad(ch[b]) += dof_spatial[ch[b]].dot(joint_g[j]);
+      }
+    }
+  }
+  // Temporal prior.
+  if (use_prior) {
+    const double w = prior_weight;
+    Eigen::Vector3d e = p.root_translation_m - prior_pose.root_translation_m;
+    const Eigen::Matrix3d r_now = global[0].linear();
+    const Eigen::Matrix3d r_prior = rotationFromVector(prior_pose.angles_rad[0]);
+    const Eigen::AngleAxisd rot(r_now * r_prior.transpose());
+    const Eigen::Vector3d er = rot.angle() * rot.axis();
+    cost += 0.5 * w * (e.squaredNorm() + er.squaredNorm());
+    for (int d = 0; d < n; ++d) {
+      const Dof& dof = dofs[d];
+      double err;
+      if (dof.kind == Dof::kTranslation) {
+        err = e[dof.axis];
+      } else if (dof.kind == Dof::kRootRotation) {
+        err = er[dof.axis];
+      } else {
+        err = p.angles_rad[dof.joint][dof.axis] - prior_pose.angles_rad[dof.joint][dof.axis];
+        cost += 0.5 * w * err * err;
+      }
+      if (jacobian) {
+        h(d, d) += w;
+        grad(d) += w * err;
+      }
+    }
+  }
+  if (jacobian) h.triangularView<Eigen::StrictlyLower>() = h.transpose();
+  return cost;
+}
+
+void PoseTracker::Impl::apply(Pose& p, const Eigen::VectorXd& delta) const {
+  for (size_t d = 0; d < dofs.size(); ++d) {
+    const Dof& dof = dofs[d];
+    if (dof.kind == Dof::kTranslation) {
+      p.root_translation_m[dof.axis] += delta(d);
+    } else if (dof.kind == Dof::kEuler) {
+      p.angles_rad[dof.joint][dof.axis] += delta(d);
+    }
+  }
+  const Eigen::Vector3d w = delta.segment<3>(3);
+  if (w.norm() > 0) {
+    const Eigen::Matrix3d r0 = rotationFromVector(p.angles_rad[0]);
+    const Eigen::AngleAxisd r(Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix() * r0);
+    p.angles_rad[0] = r.angle() * r.axis();
+  }
+  skeleton.clampToLimits(p);
+}
+
+double PoseTracker::Impl::fit(Pose& p, int iterations) {
+  double cost = evaluate(p, true, H, g);
+  double lambda = 1e-3;
+  for (int it = 0; it < iterations; ++it) {
+    damped = H;
+    for (int d = 0; d < damped.rows(); ++d) damped(d, d) += lambda * H(d, d) + 1e-6;
+    ldlt.compute(damped);
+    delta = g;
+    ldlt.solveInPlace(delta);
+    delta = -delta;
+    candidate = p;
+    apply(candidate, delta);
+    const double c = evaluate(candidate, true, H_new, g_new);
+    if (c < cost) {
+      const double gain = cost - c;
+      p = candidate;
+      cost = c;
+      std::swap(H, H_new);
+      std::swap(g, g_new);
+      lambda = std::max(1e-6, lambda / 3);
+      if (gain < 1e-7 * std::max(1.0, cost)) break;
+    } else {
+      lambda *= 8;
+      if (lambda > 1e4) break;
+    }
+  }
+  return cost;
+}
+
+void PoseTracker::Impl::placeCapsules() {
+  const size_t n = capsules.size();
+  for (size_t c = 0; c < n; ++c) {
+    const Eigen::Isometry3d& t = global[capsules[c].joint];
+    cap_a[c] = t * capsules[c].a;
+    cap_b[c] = t * capsules[c].b;
+  }
+  double moved = 0;
+  if (candidates_valid) {
+    for (size_t c = 0; c < n; ++c) {
+      moved = std::max(moved, (cap_a[c] - candidate_a[c]).squaredNorm());
+      moved = std::max(moved, (cap_b[c] - candidate_b[c]).squaredNorm());
+    }
+  }
+  if (candidates_valid && std::sqrt(moved) <= 0.5 * kCandidateMargin) return;
+  candidate_a = cap_a;
+  candidate_b = cap_b;
+  candidates.clear();
+  candidate_begin.resize(hull.size() + 1);
+  capsule_distance.resize(n);
+  for (size_t i = 0; i < hull.size(); ++i) {
+    candidate_begin[i] = int(candidates.size());
+    double best = 1e9;
+    Eigen::Vector3d closest;
+    for (size_t c = 0; c < n; ++c) {
+      capsule_distance[c] =
+          segmentDistance(hull[i], cap_a[c], cap_b[c], closest) - capsules[c].radius_m;
+      best = std::min(best, capsule_distance[c]);
+    }
+    for (size_t c = 0; c < n; ++c)
+      if (capsule_distance[c] <= best + kCandidateMargin) candidates.push_back(uint8_t(c));
+  }
+  candidate_begin[hull.size()] = int(candidates.size());
+  candidates_valid = true;
+}
+
+int PoseTracker::Impl::nearestCapsule(size_t i, double& distance, Eigen::Vector3d& closest) const {
+  distance = 1e9;
+  closest = Eigen::Vector3d::Zero();
+  int best = -1;
+  for (int k = candidate_begin[i]; k < candidate_begin[i + 1]; ++k) {
+    const int c = candidates[k];
+    Eigen::Vector3d point;
+    const double d = segmentDistance(hull[i], cap_a[c], cap_b[c], point) - capsules[c].radius_m;
+    if (d < distance) distance = d, best = c, closest = point;
+  }
+  return best;
+}
+
+double PoseTracker::Impl::fitRms(const Pose& p) {
+  skeleton.forwardKinematics(p, global);
+  placeCapsules();
+  double sum = 0;
+  for (size_t i = 0; i < hull.size(); ++i) {
+    double best;
+    Eigen::Vector3d closest;
+    nearestCapsule(i, best, closest);
+    best = std::min(std::abs(best), 0.2);
+    sum += best * best;
+  }
+  return hull.empty() ? 1.0 : std::sqrt(sum / hull.size());
+}
+
+}  // namespace lumistage
