@@ -207,10 +207,10 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
 
 void addEvalCommand(CLI::App& app) {
   struct Args {
-    std::string session, json, config, loo_pictures;
+    std::string session, json, config, loo_pictures, fit_pictures;
     BodyDetail body = BodyDetail::kStandard;
-    int cameras = 0, frames = 0, loo_frames = 3;
-    bool quiet = false;
+    int cameras = 0, frames = 0, loo_frames = 3, fit_every = 1;
+    bool quiet = false, mocap_only = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* eval = app.add_subcommand(
@@ -234,32 +234,45 @@ void addEvalCommand(CLI::App& app) {
   eval->add_option("--loo-pictures", args->loo_pictures,
                    "folder to write every scored view into, beside the camera's image and their "
                    "error map (<frame>_<camera>.png)");
+  eval->add_option("--fit-pictures", args->fit_pictures,
+                   "folder to write a picture of the tracked body over every camera's silhouette "
+                   "into (<frame>.png; green: both, blue: silhouette only, red: body only)");
+  eval->add_option("--fit-every", args->fit_every, "with --fit-pictures: a picture every N frames")
+      ->capture_default_str()
+      ->check(within(1, 1e9));
+  eval->add_flag("--mocap-only", args->mocap_only,
+                 "motion capture's figures only (no segmentation, rendering or refinement)");
   addBodyOption(*eval, args->body);
   eval->add_flag("--quiet", args->quiet, "no report on standard output");
   eval->callback([args] {
     refuseOutputOverInputs("--json", args->json, {{"--session", args->session}});
     requireOutputFolder("--json", args->json);
     refuseOutputOverInputs("--loo-pictures", args->loo_pictures, {{"--session", args->session}});
+    refuseOutputOverInputs("--fit-pictures", args->fit_pictures, {{"--session", args->session}});
     if (!args->loo_pictures.empty() && args->loo_frames == 0)
       throw Error("--loo-pictures: --loo-frames 0 scores no view to picture");
     const SessionReader session(args->session);
-    if (!args->loo_pictures.empty()) {
+    for (const auto& [option, folder] : {std::pair{"--loo-pictures", args->loo_pictures},
+                                         {"--fit-pictures", args->fit_pictures}}) {
+      if (folder.empty()) continue;
       std::error_code ec;
-      fs::create_directories(args->loo_pictures, ec);
-      if (ec)
-        throw Error("--loo-pictures " + args->loo_pictures + ": cannot create: " + ec.message());
+      fs::create_directories(folder, ec);
+      if (ec) throw Error(fmt::format("{} {}: cannot create: {}", option, folder, ec.message()));
     }
     EvalReport report;
     report.setText("session", "session", args->session);
-    if (!session.hasTruth()) {
-      // A real take: what can be measured without the truth (frames tracked, the posed body
-      // against every silhouette); the rest needs the virtual studio's truth/.
+    if (!session.hasTruth() || args->mocap_only) {
+      // Motion capture alone: all a real take can be measured by without the truth (frames
+      // tracked, the posed body against every silhouette), and against truth/ where it is.
       MocapEvalOptions mocap;
       mocap.camera_count = args->cameras;
       mocap.max_frames = args->frames;
+      mocap.pictures = args->fit_pictures;
+      mocap.picture_every = args->fit_every;
       evaluateMocap(session, loadGenericHuman(args->body), mocap, report);
       if (!args->json.empty()) writeFileAtomically(args->json, report.toJson());
       if (!args->quiet) fmt::print("{}", report.toText());
+      if (session.hasTruth()) return;
       fmt::print(stderr,
                  "eval: {} has no ground truth (truth/): motion capture's frames and silhouettes "
                  "only\n",
@@ -284,6 +297,8 @@ void addEvalCommand(CLI::App& app) {
                               session.rig().cameraCount()));
     mocap.camera_count = args->cameras;
     mocap.max_frames = args->frames;
+    mocap.pictures = args->fit_pictures;
+    mocap.picture_every = args->fit_every;
     const SkinnedMesh generic = loadGenericHuman(args->body);
     report.set("mocap", "body_vertices", double(generic.rest.vertexCount()));
     const MocapEvalResult tracked = evaluateMocap(session, generic, mocap, report);

@@ -1,5 +1,7 @@
 #include "core/eval/mocap_eval.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <bit>
 #include <chrono>
@@ -8,6 +10,7 @@
 
 #include "core/base/error.h"
 #include "core/body/human_skeleton.h"
+#include "core/eval/fit_picture.h"
 #include "core/eval/percentile.h"
 #include "core/imaging/keyer.h"
 #include "core/pipeline/posed_body.h"
@@ -71,12 +74,14 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   const bool masks = session.hasMasks();
   // The posed body's silhouette against each camera's, summed over the tracked frames.
   std::vector<double> iou_sum(size_t(all), 0.0);
-  LowResSilhouette body;
+  std::vector<LowResSilhouette> bodies(cameras.size());
+  std::vector<ImageView> views;
   Pose body_pose;
   std::vector<Eigen::Affine3f> transforms;
   Eigen::Matrix3Xf positions, normals;
   for (int f = 0; f < frames; ++f) {
-    if (!masks) session.readFrame(f, images, cameras);
+    const bool picture = !options.pictures.empty() && f % options.picture_every == 0;
+    if (!masks || picture) session.readFrame(f, images, cameras);
     pointers.clear();
     for (int c : cameras) {
       if (masks) {
@@ -104,14 +109,26 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
     result.valid.push_back(r.valid());
     result.poses.push_back(r.pose);
     result.joints.push_back(r.valid() ? r.joints : std::vector<Eigen::Vector3d>{});
-    if (!r.valid()) continue;
+    for (LowResSilhouette& b : bodies) b.bits.clear();
+    auto writePicture = [&] {
+      if (!picture) return;
+      views.clear();
+      for (int c : cameras) views.push_back(images[size_t(c)].image.view());
+      writeFitPicture(options.pictures / fmt::format("{:06d}.png", f), views, pointers, bodies);
+    };
+    if (!r.valid()) {
+      writePicture();
+      continue;
+    }
     ++tracked;
     report.setFrame(f, "fit_rms_mm", r.fit_rms_m * 1e3);
     // The generic human posed as the nodes pose it, against each camera's silhouette.
     const PoseData message = poseMessageFor(generic.skeleton, tracker.skeleton(), r.pose, r.joints);
     posedBodyMesh(generic, message, body_pose, transforms, positions, normals);
     double frame_iou = 0;
-    for (int c : cameras) {
+    for (size_t k = 0; k < cameras.size(); ++k) {
+      const int c = cameras[k];
+      LowResSilhouette& body = bodies[k];
       rasterizeSilhouette(positions, generic.rest.triangles, rig.camera(c), c,
                           options.silhouette_step, body);
       int both = 0, either = 0;
@@ -124,6 +141,7 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
       frame_iou += iou / double(cameras.size());
     }
     report.setFrame(f, "silhouette_iou", frame_iou);
+    writePicture();
     if (!truth.empty()) {
       // The initialising frame itself is reported but not held to the tracking bound.
       const bool counted = initialised || r.state == TrackState::kTracking;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <filesystem>
 #include <vector>
 
 #include "core/body/skinned_mesh.h"
@@ -14,6 +15,10 @@ struct MocapEvalOptions {
   int silhouette_step = 4;  // as the nodes send
   int camera_count = 0;     // use this many of the rig's cameras, evenly spread; 0: all
   int max_frames = 0;       // 0: every readable frame
+  // Where to write a picture of the fit (writeFitPicture, <frame>.png) every picture_every
+  // frames; empty: none.
+  std::filesystem::path pictures;
+  int picture_every = 1;
   PoseTrackerOptions tracker;
 };
 
