@@ -122,6 +122,8 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
     }
     ++tracked;
     report.setFrame(f, "fit_rms_mm", r.fit_rms_m * 1e3);
+    report.setFrame(f, "rim_rms_mm", r.rim_rms_m * 1e3);
+    report.setFrame(f, "left_out_camera", r.left_out_camera);
     // The generic human posed as the nodes pose it, against each camera's silhouette.
     const PoseData message = poseMessageFor(generic.skeleton, tracker.skeleton(), r.pose, r.joints);
     posedBodyMesh(generic, message, body_pose, transforms, positions, normals);

@@ -345,6 +345,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
   Impl& m = *impl_;
   m.prepareSilhouettes(silhouettes);
   result_.hull_points = 0;
+  result_.left_out_camera = -1;
   double volume = 0;  // of the hull carved this frame, m³
   if (!m.tracking) {
     if (m.initialise(result_, volume)) {
@@ -371,6 +372,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
         predicted.angles_rad[j] += k * (m.pose.angles_rad[j] - m.previous.angles_rad[j]);
       m.skeleton.clampToLimits(predicted);
     }
+    result_.left_out_camera = m.leaveOutDisagreeingCamera(predicted);
     // Carve only around the predicted body.
     m.skeleton.forwardKinematics(predicted, m.global);
     Eigen::Vector3d lo = m.global[0].translation(), hi = lo;
@@ -401,10 +403,11 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
       m.fit(p, m.opt.iterations);
       m.use_prior = false;
       result_.fit_rms_m = m.fitRms(p);
+      result_.rim_rms_m = m.rimRms(p);
       m.previous = m.pose;
       m.pose = p;
       m.has_previous = true;
-      if (result_.fit_rms_m > m.opt.lost_rms_m) {
+      if (!m.fitHolds(result_.fit_rms_m, result_.rim_rms_m)) {
         if (++m.bad_frames >= m.opt.lost_frames) m.tracking = false;
       } else {
         m.bad_frames = 0;

@@ -54,6 +54,32 @@ struct Dof {
   int axis;
 };
 
+// A viewing ray through a silhouette's edge (its origin the camera's centre, its direction of unit
+// length): the body touches it.
+struct RimRay {
+  Eigen::Vector3d origin, direction;
+  int camera;
+};
+
+// The distance between a ray (origin o, unit direction d, s >= 0) and segment a-b, with the
+// closest points on each.
+inline double raySegmentDistance(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                 const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                 Eigen::Vector3d& on_ray, Eigen::Vector3d& on_segment) {
+  const Eigen::Vector3d u = b - a, w0 = o - a;
+  const double B = d.dot(u), C = u.squaredNorm(), D = d.dot(w0), E = u.dot(w0);
+  const double denom = C - B * B;
+  double t = denom > 1e-12 * C ? std::clamp((E - B * D) / denom, 0.0, 1.0) : 0.0;
+  double s = t * B - D;
+  if (s < 0) {
+    s = 0;
+    t = C > 0 ? std::clamp(E / C, 0.0, 1.0) : 0.0;
+  }
+  on_ray = o + s * d;
+  on_segment = a + t * u;
+  return (on_ray - on_segment).norm();
+}
+
 inline double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                               const Eigen::Vector3d& b, Eigen::Vector3d& closest) {
   const Eigen::Vector3d ab = b - a;
@@ -70,6 +96,7 @@ struct PoseTracker::Impl {
   using Capsule = tracker_detail::Capsule;
   using Sample = tracker_detail::Sample;
   using Dof = tracker_detail::Dof;
+  using RimRay = tracker_detail::RimRay;
   template <typename T>
   static constexpr T kUnseen = tracker_detail::kUnseen<T>;
   PoseTrackerOptions opt;
@@ -104,6 +131,9 @@ struct PoseTracker::Impl {
   std::vector<Eigen::Array4i> dt_box;
   std::vector<uint8_t> present;
   std::vector<uint8_t> told_empty;  // per camera: said that its silhouette is left out
+  // This frame's rays through the silhouettes' edges (sampleRim), every camera's.
+  std::vector<RimRay> rim;
+  std::vector<double> rim_residuals;  // rimRms's scratch
   std::vector<float> dt_f, dt_d, dt_z, dt_col;
   std::vector<int> dt_v;
   // Body model.
@@ -128,8 +158,8 @@ struct PoseTracker::Impl {
   // m moves at most m from any point): the fit's iterations look at 2 to 4 capsules a sample
   // instead of all of them, and find the same nearest one.
   static constexpr double kCandidateMargin = 0.10;
-  std::vector<uint8_t> candidates;
-  std::vector<int> candidate_begin;
+  std::vector<uint8_t> candidates, rim_candidates;  // and those of each rim ray
+  std::vector<int> candidate_begin, rim_candidate_begin;
   std::vector<double> capsule_distance;  // of one sample to every capsule, while making them
   std::vector<Eigen::Vector3d> candidate_a, candidate_b;
   bool candidates_valid = false;
@@ -163,6 +193,14 @@ struct PoseTracker::Impl {
   void buildModel(const SkinnedMesh& mesh);
   void setShape(const BodyShape& s);
   void prepareSilhouettes(const std::vector<const LowResSilhouette*>& silhouettes);
+  // Appends to `rim` up to `count` rays through silhouette s's edge cells, evenly thinned, each
+  // through the cell's edge (half a cell outward from its centre).
+  void sampleRim(const LowResSilhouette& s, int count);
+  // Leaves out of this frame the camera whose silhouette misses much of the body in pose `p` (the
+  // prediction) while every other camera's holds it: a segmenter's mask that lost the actor's
+  // upper body would carve it from the hull. At most one a frame, with four cameras or more.
+  // Returns the camera left out, or -1.
+  int leaveOutDisagreeingCamera(const Pose& p);
   // Carves voxels [lo, hi] (inclusive) and samples the hull's surface; returns the volume.
   // `bottom_z`: the lowest occupied voxel's floor (the floor itself where the actor stands).
   double carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid, double* top_z,
@@ -184,8 +222,20 @@ struct PoseTracker::Impl {
   // The nearest capsule to hull sample i (its index, the signed distance to its surface, the
   // closest point on its axis).
   int nearestCapsule(size_t i, double& distance, Eigen::Vector3d& closest) const;
+  // The same for rim ray i (the signed distance to its surface, the closest points on the ray and
+  // on the capsule's axis).
+  int nearestRimCapsule(size_t i, double& distance, Eigen::Vector3d& on_ray,
+                        Eigen::Vector3d& on_segment) const;
   double fit(Pose& p, int iterations);
   double fitRms(const Pose& p);
+  // The rays through the silhouettes' edges to the body's surface (those beyond rim_outlier_m
+  // counted at it), RMS over the nearest four fifths, metres: how well the body explains the
+  // silhouettes, whatever the number of cameras.
+  double rimRms(const Pose& p);
+  // Whether a fit with these errors holds the actor (lost_rms_m, lost_rim_m).
+  bool fitHolds(double hull_rms, double rim_rms) const {
+    return hull_rms <= opt.lost_rms_m && (rim.empty() || rim_rms <= opt.lost_rim_m);
+  }
   void apply(Pose& p, const Eigen::VectorXd& delta) const;
   // `volume`: the stage's hull carved for it, m³.
   bool initialise(TrackResult& out, double& volume);

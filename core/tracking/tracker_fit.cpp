@@ -4,6 +4,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/tracking/pose_tracker_impl.h"
 
@@ -82,6 +83,26 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
       if (len < 1e-9 || best_c < 0) continue;
       const double w = ar <= delta ? 1.0 : delta / ar;
       accumulate(capsules[best_c].joint, best_closest, -diff / len, r, w);
+    }
+  }
+  // Rays through the silhouettes' edges touching the body's surface.
+  if (opt.rim_weight > 0) {
+    const double delta = opt.rim_huber_m, wr = opt.rim_weight;
+    for (size_t i = 0; i < rim.size(); ++i) {
+      const RimRay& ray = rim[i];
+      if (!present[ray.camera]) continue;
+      Eigen::Vector3d on_ray, on_segment;
+      double best;
+      const int best_c = nearestRimCapsule(i, best, on_ray, on_segment);
+      if (best_c < 0 || best > opt.rim_outlier_m) continue;  // no body part near: not the actor's
+      const double ar = std::abs(best);
+      cost += wr * (ar <= delta ? 0.5 * best * best : delta * (ar - 0.5 * delta));
+      if (!jacobian) continue;
+      const Eigen::Vector3d diff = on_segment - on_ray;
+      const double len = diff.norm();
+      if (len < 1e-9) continue;
+      accumulate(capsules[best_c].joint, on_segment, diff / len, best,
+                 wr * (ar <= delta ? 1.0 : delta / ar));
     }
   }
   // Axis samples inside every silhouette.
@@ -257,7 +278,38 @@ void PoseTracker::Impl::placeCapsules() {
       if (capsule_distance[c] <= best + kCandidateMargin) candidates.push_back(uint8_t(c));
   }
   candidate_begin[hull.size()] = int(candidates.size());
+  rim_candidates.clear();
+  rim_candidate_begin.resize(rim.size() + 1);
+  Eigen::Vector3d on_ray, on_segment;
+  for (size_t i = 0; i < rim.size(); ++i) {
+    rim_candidate_begin[i] = int(rim_candidates.size());
+    double best = 1e9;
+    for (size_t c = 0; c < n; ++c) {
+      capsule_distance[c] = raySegmentDistance(rim[i].origin, rim[i].direction, cap_a[c], cap_b[c],
+                                               on_ray, on_segment) -
+                            capsules[c].radius_m;
+      best = std::min(best, capsule_distance[c]);
+    }
+    for (size_t c = 0; c < n; ++c)
+      if (capsule_distance[c] <= best + kCandidateMargin) rim_candidates.push_back(uint8_t(c));
+  }
+  rim_candidate_begin[rim.size()] = int(rim_candidates.size());
   candidates_valid = true;
+}
+
+int PoseTracker::Impl::nearestRimCapsule(size_t i, double& distance, Eigen::Vector3d& on_ray,
+                                         Eigen::Vector3d& on_segment) const {
+  distance = 1e9;
+  on_ray = on_segment = Eigen::Vector3d::Zero();
+  int best = -1;
+  Eigen::Vector3d r, q;
+  for (int k = rim_candidate_begin[i]; k < rim_candidate_begin[i + 1]; ++k) {
+    const int c = rim_candidates[k];
+    const double d = raySegmentDistance(rim[i].origin, rim[i].direction, cap_a[c], cap_b[c], r, q) -
+                     capsules[c].radius_m;
+    if (d < distance) distance = d, best = c, on_ray = r, on_segment = q;
+  }
+  return best;
 }
 
 int PoseTracker::Impl::nearestCapsule(size_t i, double& distance, Eigen::Vector3d& closest) const {
@@ -271,6 +323,28 @@ int PoseTracker::Impl::nearestCapsule(size_t i, double& distance, Eigen::Vector3
     if (d < distance) distance = d, best = c, closest = point;
   }
   return best;
+}
+
+double PoseTracker::Impl::rimRms(const Pose& p) {
+  skeleton.forwardKinematics(p, global);
+  placeCapsules();
+  rim_residuals.clear();
+  Eigen::Vector3d on_ray, on_segment;
+  for (size_t i = 0; i < rim.size(); ++i) {
+    if (!present[rim[i].camera]) continue;
+    double best;
+    nearestRimCapsule(i, best, on_ray, on_segment);
+    rim_residuals.push_back(std::min(std::abs(best), opt.rim_outlier_m));
+  }
+  if (rim_residuals.empty()) return 1.0;
+  // The best kRimTrim of them: a segmenter's mask that takes a bag or a shadow in with the actor
+  // is no worse a fit.
+  constexpr double kRimTrim = 0.8;
+  const size_t kept = std::max<size_t>(1, size_t(kRimTrim * double(rim_residuals.size())));
+  std::nth_element(rim_residuals.begin(), rim_residuals.begin() + (kept - 1), rim_residuals.end());
+  double sum = 0;
+  for (size_t i = 0; i < kept; ++i) sum += rim_residuals[i] * rim_residuals[i];
+  return std::sqrt(sum / double(kept));
 }
 
 double PoseTracker::Impl::fitRms(const Pose& p) {

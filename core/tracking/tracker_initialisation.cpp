@@ -188,7 +188,8 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
     }
   }
   out.fit_rms_m = rms;
-  if (rms > opt.lost_rms_m) {
+  out.rim_rms_m = rimRms(best_pose);
+  if (!fitHolds(rms, out.rim_rms_m)) {
     // A hull no body fits (a prop, someone half inside the stage, a hull carved by some cameras
     // only) is no actor to take the proportions from: the next initialisation calibrates anew.
     if (calibrating) {
