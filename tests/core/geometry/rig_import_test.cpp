@@ -436,6 +436,24 @@ TEST(TomlImport, ReadsPose2SimCalibrationsInTheirTablesNaturalOrder) {
   }
 }
 
+// toml11 recurses per level of nested arrays and inline tables: 100,000 levels overflowed the
+// stack. Brackets in strings and comments are not nesting.
+TEST(TomlImport, DeepNestingIsRefusedBeforeToml11ReadsIt) {
+  const std::vector<Camera> truth = ringCameras(1, 640, 480);
+  TempFolder folder;
+  const std::string good = tomlCamera(truth[0], "cam_1");
+  folder.write("deep.toml",
+               good + "[extra]\nx = " + std::string(100000, '[') + std::string(100000, ']') + "\n");
+  const std::string e = testing::errorOf([&] { importTomlRig(folder.path() / "deep.toml", {}); });
+  EXPECT_NE(e.find("deep.toml:"), std::string::npos) << e.substr(0, 300);
+  EXPECT_NE(e.find("nested deeper than 64 levels"), std::string::npos) << e.substr(0, 300);
+  const std::string brackets(200, '[');
+  folder.write("fine.toml", "# " + brackets + "\n" + good + "[metadata]\nnote = \"" + brackets +
+                                "\"\nmore = \'" + brackets + "\'\nlong = \"\"\"\n" + brackets +
+                                "\n\"\"\"\n");
+  EXPECT_EQ(importTomlRig(folder.path() / "fine.toml", {}).rig.cameraCount(), 1);
+}
+
 TEST(TomlImport, MalformedFilesAreNamed) {
   const std::vector<Camera> truth = ringCameras(1, 640, 480);
   TempFolder folder;
