@@ -15,6 +15,7 @@
 #include <zmq_addon.hpp>
 
 #include "core/base/error.h"
+#include "core/base/names.h"
 
 namespace lumistage {
 
@@ -213,7 +214,12 @@ std::optional<ReceivedMessage> StudioEndpoint::receive(std::chrono::milliseconds
         received.node = user;
       }
     }
-    if (frames.size() != 2) {
+    if (!isValidName(received.node)) {
+      // In plain mode a peer's name is whatever it calls itself: one that is no node name (a line
+      // break and a forged log line in it, terminal escapes) is refused, and logged quoted.
+      received.node = quotedInput(received.node, 64);
+      received.result.error = "its name is not a valid node name";
+    } else if (frames.size() != 2) {
       received.result.error =
           fmt::format("expected one frame a message, got {}", frames.size() - 1);
     } else {

@@ -275,3 +275,33 @@ TEST(Transport, InvalidKeysAreRefusedUpFront) {
 
 }  // namespace
 }  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+// In plain mode a peer's name is what it says: one with a line break and terminal escapes must
+// not reach the studio's log as it is (it forged lines there).
+TEST(Transport, APlainPeerWhoseNameIsNoNodeNameIsRefusedAndNamedQuoted) {
+  StudioEndpointConfig plain_studio;
+  plain_studio.bind = "tcp://127.0.0.1:*";
+  plain_studio.security = TransportSecurity::kPlain;
+  StudioEndpoint studio(plain_studio);
+  NodeEndpointConfig config;
+  config.name = "node1\x1b[2J\n[2024-01-01 00:00:00.000] [info] node evil is streaming";
+  config.security = TransportSecurity::kPlain;
+  config.connect = studio.endpoint();
+  NodeEndpoint node(config);
+  ASSERT_TRUE(node.send(hello("node1"), std::chrono::seconds(5)));
+  const std::optional<ReceivedMessage> in = studio.receive(std::chrono::seconds(5));
+  ASSERT_TRUE(in.has_value());
+  EXPECT_FALSE(in->result.ok());
+  EXPECT_EQ(in->result.error, "its name is not a valid node name");
+  EXPECT_EQ(in->node.find('\n'), std::string::npos) << in->node;
+  EXPECT_EQ(in->node.find('\x1b'), std::string::npos) << in->node;
+  EXPECT_EQ(in->node.rfind("'node1\\x1b[2J\\n[2024-01-01", 0), 0u) << in->node;
+  ASSERT_EQ(studio.badMessages().size(), 1u);
+  EXPECT_EQ(studio.badMessages().begin()->first, in->node);
+}
+
+}  // namespace
+}  // namespace lumistage
