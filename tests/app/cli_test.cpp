@@ -408,6 +408,22 @@ TEST(Cli, ADamagedImageCostsItsFrameAndAReplayThatCannotGoOnFails) {
   fs::remove_all(folder);
 }
 
+// A take onto a disk that fills (here: files may not grow past 40 blocks, about 20-40 KB, and a
+// camera image is 77 KB): every node stops recording with an error, and the run says it failed.
+TEST(Cli, RunFailsWhenATakeLosesANodesRecording) {
+  const fs::path folder = tempPath("take_full_disk");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 2 --cameras-per-node 1 --width 320 --height 240",
+                               "actor:\n  vertices: 2000\n", "--frames 4 --bayer"));
+  const Result r = run("(trap '' XFSZ; ulimit -f 40; " + kCli + " run --session " +
+                       (folder / "session").string() + " --frames 20 --seconds 30 --record-take " +
+                       (folder / "takes" / "take-1").string() + ")");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("take take-1: frames "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the take lost the recording of nodes node1, node2"), std::string::npos)
+      << r.output;
+  fs::remove_all(folder);
+}
+
 // --body fine: the studio and the nodes it starts pose the finer generic human alike (a node
 // given offsets for another mesh says so and renders nothing), and each node sends the
 // refinement twice the statistics.
