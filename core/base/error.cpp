@@ -92,4 +92,19 @@ std::string quotedInput(std::string_view text, size_t limit) {
   return out;
 }
 
+std::string printableInput(std::string_view text, size_t limit) {
+  bool plain = text.size() <= limit;
+  for (size_t i = 0; plain && i < text.size();) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c >= 0x20 && c < 0x7f) {
+      ++i;
+    } else if (const size_t n = c >= 0x80 ? printableUtf8(text, i) : 0; n > 0) {
+      i += n;
+    } else {
+      plain = false;
+    }
+  }
+  return plain ? std::string(text) : quotedInput(text, limit);
+}
+
 }  // namespace lumistage

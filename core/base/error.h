@@ -24,4 +24,9 @@ std::string locate(std::string_view file, int line, std::string_view key, std::s
 // moves a terminal's cursor or forges a log line.
 std::string quotedInput(std::string_view text, size_t limit = 200);
 
+// Free text from an input shown among other text (a node's last error in a report): as it is when
+// it is at most `limit` bytes of printable UTF-8 (no control byte), otherwise its quotedInput()
+// form. Plain text reads as it did; nothing else can move a cursor or forge a line.
+std::string printableInput(std::string_view text, size_t limit = 200);
+
 }  // namespace lumistage

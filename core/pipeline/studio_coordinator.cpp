@@ -8,6 +8,7 @@
 #include <limits>
 #include <utility>
 
+#include "core/base/error.h"
 #include "core/body/human_model.h"
 #include "core/geometry/stage_volume.h"
 #include "core/pipeline/posed_body.h"
@@ -191,10 +192,16 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   if (const auto* heartbeat = std::get_if<HeartbeatData>(&message.body)) {
     node.report.bytes = heartbeat->bytes_sent;  // what the node says it has sent in all
     node.report.cameras.clear();
+    // Camera names were checked by the decoder; the free text a node sends (its cameras' errors,
+    // its take's error and disk) reaches the log, `lumistage run`'s report and the health panel
+    // escaped and cut short, so that no node can forge a line or move a terminal's cursor there.
     for (const CameraHealthData& c : heartbeat->cameras) {
-      node.report.cameras.push_back({c.camera, c.frames, c.dropped, c.frame_rate, c.last_error});
+      node.report.cameras.push_back(
+          {c.camera, c.frames, c.dropped, c.frame_rate, printableInput(c.last_error)});
     }
     node.report.take = heartbeat->take;
+    node.report.take.error = printableInput(heartbeat->take.error);
+    node.report.take.disk = printableInput(heartbeat->take.disk, 64);
     // A node that missed the take's command (or its stop), or came back during it: told again.
     // One still recording a take this studio never asked for (the studio restarted mid-take):
     // told to stop, rather than fill its disk unattended.

@@ -34,5 +34,17 @@ TEST(QuotedInput, TruncatesLongTextAndSaysHowLongItWas) {
   EXPECT_EQ(quotedInput("ab\xc3\xa4", 3), "'ab'... (4 bytes in all)");
 }
 
+TEST(PrintableInput, KeepsPlainTextAndQuotesTheRest) {
+  EXPECT_EQ(printableInput("lost: reconnecting"), "lost: reconnecting");
+  EXPECT_EQ(printableInput("K\xc3\xa4the's disk"), "K\xc3\xa4the's disk");
+  EXPECT_EQ(printableInput("ok\n[2024-01-01] [info] forged"), "'ok\\n[2024-01-01] [info] forged'");
+  EXPECT_EQ(printableInput("a\x1b[2Jb"), "'a\\x1b[2Jb'");
+  EXPECT_EQ(printableInput("\xc2\x9b"
+                           "2J"),
+            "'\\xc2\\x9b2J'");
+  EXPECT_EQ(printableInput(std::string(300, 'x')),
+            "'" + std::string(200, 'x') + "'... (300 bytes in all)");
+}
+
 }  // namespace
 }  // namespace lumistage

@@ -336,3 +336,32 @@ TEST(MessageCodec, MalformedViewsAreRefusedWithTheirReason) {
 
 }  // namespace
 }  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+// Camera names in heartbeats reach the studio's log, `lumistage run`'s report and its JSON: a
+// node (a plain-mode peer with a valid node name will do) that sends a line break or terminal
+// escapes in one is refused, as a node name is.
+TEST(MessageCodec, NamesThatAreNoCameraOrNodeNamesAreRefused) {
+  HeartbeatData forged;
+  forged.cameras = {{"cam1", 10, 0, 30.f, ""}, {"cam2\n[info] forged", 10, 0, 30.f, ""}};
+  EXPECT_EQ(decodeError(envelope(forged)),
+            "heartbeat: camera 1: its name is not a valid camera name");
+  HeartbeatData escape;
+  escape.cameras = {{"\x1b[2Jcam1", 10, 0, 30.f, ""}};
+  EXPECT_EQ(decodeError(envelope(escape)),
+            "heartbeat: camera 0: its name is not a valid camera name");
+  HelloData hello{"node1", {"cam1", "cam 2"}, kProtocolVersion, {}};
+  EXPECT_EQ(decodeError(envelope(hello)), "hello: camera 1: its name is not a valid camera name");
+  HelloData node{"node1\x1b", {}, kProtocolVersion, {}};
+  EXPECT_EQ(decodeError(envelope(node)), "hello: the node name is not a valid node name");
+  // Free text (a last error) still decodes: the studio shows it escaped (StudioCoordinator).
+  HeartbeatData free_text;
+  free_text.cameras = {{"cam1", 10, 0, 30.f, "bad\x1b[2J"}};
+  const std::vector<uint8_t> text = encodeMessage(envelope(free_text));
+  EXPECT_TRUE(decodeMessage(text.data(), text.size()).ok());
+}
+
+}  // namespace
+}  // namespace lumistage

@@ -369,6 +369,34 @@ TEST(StudioCoordinator, ANodeBackFromLostReportsItsTakeAnew) {
   EXPECT_EQ(take().written, 3);
 }
 
+// A node's free text (its cameras' errors, its take's error) reaches the log and `lumistage run`'s
+// report: with a line break or terminal escapes in it, it is shown escaped and cut short; plain
+// text as it was.
+TEST(StudioCoordinator, ANodesErrorTextIsShownEscaped) {
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, {});
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint(), "node1");
+  HeartbeatData heartbeat;
+  heartbeat.cameras = {{"cam01", 10, 0, 30.f, "\x1b[2Jlost\n[info] node node2 is streaming"},
+                       {"cam02", 10, 0, 30.f, "lost: reconnecting"}};
+  heartbeat.take =
+      TakeStatusData{"take-1", 1, 9, 0, 0, 0, false, std::string(900, 'e') + "\r", -1, "pc\x1b:1"};
+  ASSERT_TRUE(node.send(0, heartbeat));
+  const auto report = [&] {
+    for (const NodeReport& n : studio.report().nodes)
+      if (n.name == "node1") return n;
+    return NodeReport{};
+  };
+  for (int slice = 0; slice < 200 && report().cameras.empty(); ++slice)
+    studio.runFor(milliseconds(10));
+  const NodeReport n = report();
+  ASSERT_EQ(n.cameras.size(), 2u);
+  EXPECT_EQ(n.cameras[0].last_error, "'\\x1b[2Jlost\\n[info] node node2 is streaming'");
+  EXPECT_EQ(n.cameras[1].last_error, "lost: reconnecting");
+  EXPECT_EQ(n.take.error, "'" + std::string(200, 'e') + "'... (901 bytes in all)");
+  EXPECT_EQ(n.take.disk, "'pc\\x1b:1'");
+}
+
 // How long each node's takes' disk lasts at its cameras' rate: nodes on one PC write to one disk,
 // so its free space lasts for their rates together; a node that does not say has no figure.
 TEST(StudioCoordinator, TakesDiskTimeCountsTheNodesThatShareADisk) {
