@@ -279,6 +279,10 @@ void addRunCommand(CLI::App& app) {
                                        "(4096x4096), e.g. 640x480, got {}",
                                        most, a->view_size));
     }
+    // The one view this run renders bounds what a node may send the studio, and so what a
+    // connection to its port may make it buffer.
+    options.coordinator.max_view_pixels =
+        a->view_size.empty() ? 320 * 240 : int64_t(width) * height;
     LocalPipelineRun pipeline(options);
     StudioCoordinator& studio = pipeline.studio();
     if (!a->view_size.empty()) {

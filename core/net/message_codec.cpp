@@ -659,6 +659,23 @@ std::string takeNameError(std::string_view take) {
   return "take name '" + shown + "' has a character other than letters, digits, '-', '_' and '.'";
 }
 
+size_t largestNodeMessage(const NodeMessageSizes& sizes, const MessageLimits& limits) {
+  // An envelope, a body table and a vector's length and padding: a few hundred bytes; a string is
+  // its length, its bytes, its terminator and padding.
+  const uint64_t table = 256, text = limits.max_string_bytes + 8;
+  const uint64_t cameras = uint64_t(std::max(sizes.cameras, 0));
+  const uint64_t step = uint64_t(std::max(sizes.silhouette_step, 1));
+  const uint64_t cells = uint64_t(std::max<int64_t>(sizes.camera_pixels, 0)) / (step * step);
+  const uint64_t silhouettes = table + cameras * (table + (cells + 7) / 8);
+  const uint64_t statistics = table + maxCompressedStatisticsBytes(
+                                          uint64_t(std::max<int64_t>(sizes.statistics_samples, 0)));
+  const uint64_t image = table + 5 * uint64_t(std::max<int64_t>(sizes.view_pixels, 0));
+  const uint64_t heartbeat = table + cameras * (table + 2 * text) + table + 3 * text;
+  const uint64_t timestamps = table + uint64_t(std::max(limits.max_stages, 0)) * (table + text);
+  const uint64_t hello = table + text + (cameras + 64) * text;
+  return size_t(std::max({silhouettes, statistics, image, heartbeat, timestamps, hello}));
+}
+
 const char* messageTypeName(const MessageBody& body) {
   static constexpr const char* kNames[] = {
       "hello",         "heartbeat",        "silhouettes", "pose",   "vertex statistics", "offsets",
