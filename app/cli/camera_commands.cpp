@@ -292,6 +292,9 @@ void addCameraCommands(CLI::App& app) {
           st.failed ? "; recording stopped: " + st.last_error : "");
       if (st.failed) throw Error(st.last_error);
     }
+    // A source that stopped on a failure (every frame left of a replay damaged) is not a stream
+    // that ran its course.
+    if (const std::string failure = source->failure(); !failure.empty()) throw Error(failure);
   });
 }
 

@@ -10,7 +10,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "app/cli/checks.h"
 #include "app/cli/machine_info.h"
@@ -111,7 +113,8 @@ bool tellTakeDisk(const RunReport& r, double seconds) {
 }
 
 // Stops the take, waits (at most 30 s) for every node to close its part, and says how each went.
-void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
+// Returns the nodes whose part failed (stopped on an error: a full disk), or was never closed.
+std::vector<std::string> finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
   StudioCoordinator& studio = pipeline.studio();
   studio.stopTake();
   // The studio goes on past the frames asked for, until the nodes have closed the take.
@@ -127,8 +130,10 @@ void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
     pipeline.runFor(std::chrono::milliseconds(100));
   const RecordData& take = studio.take();
   fmt::print("take {}: frames {} to {}\n", take.take, take.first_frame, take.last_frame);
+  std::vector<std::string> failed;
   for (const NodeReport& n : studio.report().nodes) {
     const TakeStatusData& t = n.take;
+    if (!t.error.empty() || !t.finished) failed.push_back(n.name);
     std::string disk;
     if (t.free_bytes >= 0) {
       disk = fmt::format("; its disk: {} free", bytesInWords(t.free_bytes));
@@ -148,6 +153,7 @@ void finishTake(LocalPipelineRun& pipeline, const std::string& folder) {
     fmt::print("join the nodes' parts with: lumistage session merge {} --out {}-session\n", folder,
                folder);
   }
+  return failed;
 }
 
 }  // namespace
@@ -273,6 +279,10 @@ void addRunCommand(CLI::App& app) {
                                        "(4096x4096), e.g. 640x480, got {}",
                                        most, a->view_size));
     }
+    // The one view this run renders bounds what a node may send the studio, and so what a
+    // connection to its port may make it buffer.
+    options.coordinator.max_view_pixels =
+        a->view_size.empty() ? 320 * 240 : int64_t(width) * height;
     LocalPipelineRun pipeline(options);
     StudioCoordinator& studio = pipeline.studio();
     if (!a->view_size.empty()) {
@@ -347,7 +357,9 @@ void addRunCommand(CLI::App& app) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     const CpuUse cpu{(processCpuSeconds() - cpu_start) / wall_s,
                      (nodes_cpu - nodes_cpu_start) / wall_s};
-    if (!take.empty() && !studio.take().take.empty()) finishTake(pipeline, a->record_take);
+    std::vector<std::string> take_failed;  // nodes whose part of the take was lost
+    if (!take.empty() && !studio.take().take.empty())
+      take_failed = finishTake(pipeline, a->record_take);
     bool recording_failed = pipeline.viewRecordingFailed();  // stopped by a failure (a full disk)
     if (std::unique_ptr<ViewRecorder> recorder = pipeline.stopRecordingView()) {
       if (!recorder->error().empty()) {
@@ -427,6 +439,12 @@ void addRunCommand(CLI::App& app) {
                               pipeline.nodesFailed(), pipeline.nodesFailed() > 1 ? "es" : ""));
     }
     if (recording_failed) throw Error("the view's recording failed (see above)");
+    if (!take_failed.empty()) {
+      std::string names;
+      for (const std::string& n : take_failed) names += (names.empty() ? "" : ", ") + n;
+      throw Error(fmt::format("the take lost the recording of node{} {} (see above)",
+                              take_failed.size() > 1 ? "s" : "", names));
+    }
   });
 }
 

@@ -180,10 +180,16 @@ int main(int argc, char** argv) {
                                       : std::string(" (its free space unknown)"));
     }
     std::fflush(stdout);
+    // Whether the node stopped on its own (its source ended or failed), not as asked: a failure,
+    // for `lumistage run` and systemd to see.
+    std::atomic<bool> stopped_alone{false};
     if (monitor) {
       // The node works on its own threads; the window lives on this one (GLFW wants the main
       // thread). Closing the window stops the node.
-      std::thread worker([&camera_node, &stop] { camera_node.run(stop); });
+      std::thread worker([&camera_node, &stop, &stopped_alone] {
+        camera_node.run(stop);
+        if (!stop.exchange(true)) stopped_alone = true;  // closes the window too
+      });
       bool monitor_failed = false;
       try {
         lumistage::runNodeMonitor(camera_node, rig, node.name, stop, monitor_screenshot);
@@ -196,9 +202,15 @@ int main(int argc, char** argv) {
       if (monitor_failed) return 2;  // as asked it could not run (no display): not a clean stop
     } else {
       camera_node.run(stop);
+      stopped_alone = !stop;
     }
     fmt::print("node {}: sent {} frame sets, {:.1f} MB\n", node.name, camera_node.setsSent(),
                camera_node.bytesSent() / 1e6);
+    if (stopped_alone) {
+      fmt::print(stderr, "lumistage-node: error: node {} stopped: {}\n", node.name,
+                 camera_node.sourceEnd());
+      return 1;
+    }
     return 0;
   } catch (const std::exception& e) {
     fmt::print(stderr, "lumistage-node: error: {}\n", e.what());

@@ -1,5 +1,7 @@
 #include "core/base/yaml_reader.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -20,7 +22,7 @@ std::string describe(const YAML::Node& node) {
     case YAML::NodeType::Null:
       return "nothing";
     case YAML::NodeType::Scalar:
-      return "'" + node.Scalar() + "'";
+      return quotedInput(node.Scalar());
     case YAML::NodeType::Sequence:
       return "a list";
     case YAML::NodeType::Map:
@@ -28,6 +30,16 @@ std::string describe(const YAML::Node& node) {
     default:
       return "nothing";
   }
+}
+
+// A key of the file as a part of a dotted key path: as it is when it is a plain word, else quoted
+// (a key of megabytes or of terminal escapes is the file's text too).
+std::string keyInPath(const std::string& name) {
+  const bool plain =
+      !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+      });
+  return plain ? name : quotedInput(name);
 }
 
 }  // namespace
@@ -60,7 +72,15 @@ YAML::Node YamlReader::required(const YAML::Node& map, std::string_view map_key,
 }
 
 void YamlReader::requireMap(const YAML::Node& node, std::string_view key) const {
-  if (!node.IsMap()) fail(node, key, "expected a map of keys, got " + describe(node));
+  if (node.IsMap()) return;
+  // A whole document that is one text is another kind of file (`rig: /etc/passwd`): its contents
+  // are not for the message.
+  if (key.empty() && node.IsScalar()) {
+    fail(node, key,
+         "expected a map of keys, got text (" + std::to_string(node.Scalar().size()) +
+             " bytes): not a YAML file of this kind");
+  }
+  fail(node, key, "expected a map of keys, got " + describe(node));
 }
 
 void YamlReader::requireSequence(const YAML::Node& node, std::string_view key, int size) const {
@@ -84,7 +104,7 @@ void YamlReader::checkKeys(const YAML::Node& map, std::string_view key,
     // YAML keeps the first of two equal keys: the second, a hand edit, would be ignored.
     for (const auto& [other, line] : seen) {
       if (other == name)
-        fail(entry.first, child(key, name),
+        fail(entry.first, child(key, keyInPath(name)),
              "given twice (first at line " + std::to_string(line) + ")");
     }
     seen.emplace_back(name, entry.first.Mark().line + 1);
@@ -93,7 +113,8 @@ void YamlReader::checkKeys(const YAML::Node& map, std::string_view key,
     if (!known) {
       std::string list;
       for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      fail(entry.first, child(key, name), "unknown key '" + name + "'; expected one of: " + list);
+      fail(entry.first, child(key, keyInPath(name)),
+           "unknown key " + quotedInput(name) + "; expected one of: " + list);
     }
   }
 }

@@ -52,6 +52,7 @@ struct BvhFile {
   double frame_time_s = 0;
   int value_count = 0;
   std::vector<std::vector<double>> frames;
+  std::vector<int> frame_lines;  // each frame's line in the file
 };
 
 struct Token {
@@ -80,7 +81,7 @@ class Parser {
     tokenizeHierarchy();
     expect("HIERARCHY");
     expect("ROOT");
-    parseJoint(out, -1);
+    parseHierarchy(out);
     if (pos_ >= tokens_.size() || tokens_[pos_].text != "MOTION") {
       fail(pos_ < tokens_.size() ? tokens_[pos_].line : lastLine(),
            "expected MOTION after the hierarchy" + found());
@@ -96,7 +97,7 @@ class Parser {
   int lastLine() const { return static_cast<int>(lines_.size()); }
   std::string found() const {
     if (pos_ >= tokens_.size()) return ", found the end of the file (truncated?)";
-    return fmt::format(", found '{}'", tokens_[pos_].text);
+    return ", found " + quotedInput(tokens_[pos_].text);
   }
 
   void tokenizeHierarchy() {
@@ -132,7 +133,7 @@ class Parser {
     const char* end = t.text.data() + t.text.size();
     auto [ptr, ec] = std::from_chars(t.text.data(), end, value);
     if (ec != std::errc() || ptr != end || !std::isfinite(value)) {
-      fail(t.line, fmt::format("expected a number for {}, found '{}'", what, t.text));
+      fail(t.line, fmt::format("expected a number for {}, found {}", what, quotedInput(t.text)));
     }
     return value;
   }
@@ -143,7 +144,9 @@ class Parser {
     return v;
   }
 
-  void parseJoint(BvhFile& out, int parent) {
+  // A joint's name, OFFSET and CHANNELS, up to its children: the joint is added to `out` and its
+  // index returned. Its children and its '}' are for parseHierarchy.
+  int parseJointHead(BvhFile& out, int parent) {
     const Token& name = next("a joint name");
     if (name.text == "{") fail(name.line, "expected a joint name before '{'");
     BvhJoint joint;
@@ -156,8 +159,8 @@ class Parser {
     const Token& count_token = next("a channel count");
     const double count = number(count_token, "the channel count");
     if (count < 0 || count > 6 || count != std::floor(count)) {
-      fail(count_token.line,
-           fmt::format("expected a channel count from 0 to 6, found '{}'", count_token.text));
+      fail(count_token.line, fmt::format("expected a channel count from 0 to 6, found {}",
+                                         quotedInput(count_token.text)));
     }
     static constexpr std::string_view kNames[] = {"Xposition", "Yposition", "Zposition",
                                                   "Xrotation", "Yrotation", "Zrotation"};
@@ -165,34 +168,40 @@ class Parser {
       const Token& t = next("a channel name");
       const auto* it = std::find(std::begin(kNames), std::end(kNames), t.text);
       if (it == std::end(kNames)) {
-        fail(t.line, fmt::format("unknown channel '{}' of joint '{}', expected one of Xposition, "
+        fail(t.line, fmt::format("unknown channel {} of joint {}, expected one of Xposition, "
                                  "Yposition, Zposition, Xrotation, Yrotation, Zrotation",
-                                 t.text, joint.name));
+                                 quotedInput(t.text), quotedInput(joint.name)));
       }
       joint.channels.push_back(static_cast<int>(it - std::begin(kNames)));
     }
     joint.first_value = out.value_count;
     out.value_count += static_cast<int>(joint.channels.size());
-    const int index = static_cast<int>(out.joints.size());
     out.joints.push_back(std::move(joint));
-    while (true) {
+    return static_cast<int>(out.joints.size()) - 1;
+  }
+
+  // The joints from the root on, depth first. The joints still open are a stack of our own, not
+  // the call stack: a file of 50,000 nested joints is read like any other (it crashed the parser
+  // when each level was a call).
+  void parseHierarchy(BvhFile& out) {
+    std::vector<int> open{parseJointHead(out, -1)};
+    while (!open.empty()) {
+      const int index = open.back();
       if (pos_ >= tokens_.size()) {
-        fail(lastLine(), fmt::format("expected '}}' closing joint '{}' (line {}), found the end "
+        fail(lastLine(), fmt::format("expected '}}' closing joint {} (line {}), found the end "
                                      "of the file (truncated?)",
-                                     out.joints[index].name, out.joints[index].line));
+                                     quotedInput(out.joints[index].name), out.joints[index].line));
       }
       const Token& t = tokens_[pos_];
       if (t.text == "}") {
         ++pos_;
-        return;
-      }
-      if (t.text == "MOTION") {
-        fail(t.line, fmt::format("expected '}}' closing joint '{}' (line {}) before MOTION",
-                                 out.joints[index].name, out.joints[index].line));
-      }
-      if (t.text == "JOINT") {
+        open.pop_back();
+      } else if (t.text == "MOTION") {
+        fail(t.line, fmt::format("expected '}}' closing joint {} (line {}) before MOTION",
+                                 quotedInput(out.joints[index].name), out.joints[index].line));
+      } else if (t.text == "JOINT") {
         ++pos_;
-        parseJoint(out, index);
+        open.push_back(parseJointHead(out, index));
       } else if (t.text == "End") {
         ++pos_;
         expect("Site");
@@ -200,8 +209,8 @@ class Parser {
         out.end_sites.push_back({index, offset()});
         expect("}");
       } else {
-        fail(t.line, fmt::format("expected JOINT, End Site or '}}' in joint '{}', found '{}'",
-                                 out.joints[index].name, t.text));
+        fail(t.line, fmt::format("expected JOINT, End Site or '}}' in joint {}, found {}",
+                                 quotedInput(out.joints[index].name), quotedInput(t.text)));
       }
     }
   }
@@ -237,7 +246,7 @@ class Parser {
       auto [line, number_] = nextLine("'Frames: N'");
       auto words = split(line);
       if (words.size() != 2 || words[0] != "Frames:") {
-        fail(number_, fmt::format("expected 'Frames: N', found '{}'", line));
+        fail(number_, "expected 'Frames: N', found " + quotedInput(line));
       }
       const double n = number({words[1], number_}, "Frames");
       if (n < 0 || n != std::floor(n)) fail(number_, "expected a whole number of frames");
@@ -248,7 +257,7 @@ class Parser {
       auto [line, number_] = nextLine("'Frame Time: seconds'");
       auto words = split(line);
       if (words.size() != 3 || words[0] != "Frame" || words[1] != "Time:") {
-        fail(number_, fmt::format("expected 'Frame Time: seconds', found '{}'", line));
+        fail(number_, "expected 'Frame Time: seconds', found " + quotedInput(line));
       }
       out.frame_time_s = number({words[2], number_}, "Frame Time");
       if (out.frame_time_s <= 0) fail(number_, "expected a positive Frame Time");
@@ -264,6 +273,7 @@ class Parser {
         fail(number_, fmt::format("frame {} has {} values, expected {} (one per channel)",
                                   out.frames.size() + 1, words.size(), out.value_count));
       }
+      out.frame_lines.push_back(number_);
       std::vector<double>& frame = out.frames.emplace_back(words.size());
       for (size_t v = 0; v < words.size(); ++v)
         frame[v] = number({words[v], number_}, "a channel value");
@@ -306,6 +316,11 @@ double rootHeight(const std::vector<Eigen::Vector3d>& rest, int up) {
   for (const auto& p : rest) lowest = std::min(lowest, p[up]);
   return rest[0][up] - lowest;
 }
+
+// Bounds on what a file's numbers make: its coordinates (centimetres, usually), and the root's
+// place after scaling to the target skeleton, in metres.
+constexpr double kMaxCoordinate = 1e7;
+constexpr double kMaxRootMetres = 1e4;
 
 struct CmuAlias {
   std::string_view from, to;
@@ -373,6 +388,12 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
   for (int j = 0; j < source_count; ++j) {
     const BvhJoint& joint = bvh.joints[j];
     rest[j] = joint.parent < 0 ? joint.offset : rest[joint.parent] + joint.offset;
+    if (!rest[j].allFinite() || rest[j].cwiseAbs().maxCoeff() > kMaxCoordinate) {
+      throw Error(locate(file, joint.line, "",
+                         fmt::format("joint {} is {} from the origin at rest, expected a skeleton "
+                                     "within {:g} units (OFFSETs too large?)",
+                                     quotedInput(joint.name), rest[j].norm(), kMaxCoordinate)));
+    }
   }
   std::vector<Eigen::Vector3d> rest_with_ends = rest;
   for (const auto& [joint, offset] : bvh.end_sites) {
@@ -400,7 +421,7 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
                        fmt::format("no joint of the file maps to the target skeleton (first "
                                    "joint '{}', target root '{}'): expected CMU, Mixamo or our "
                                    "own joint names",
-                                   bvh.joints[0].name, target.joint(0).name)));
+                                   quotedInput(bvh.joints[0].name), target.joint(0).name)));
   }
 
   const double source_height = rootHeight(rest_with_ends, 1);
@@ -421,7 +442,8 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
   clip.frames.reserve(bvh.frames.size());
   std::vector<Eigen::Matrix3d> source_global(source_count);
   std::vector<Eigen::Matrix3d> target_global(target.jointCount());
-  for (const std::vector<double>& values : bvh.frames) {
+  for (size_t f = 0; f < bvh.frames.size(); ++f) {
+    const std::vector<double>& values = bvh.frames[f];
     Eigen::Vector3d root_position = bvh.joints[0].offset;
     for (int j = 0; j < source_count; ++j) {
       const BvhJoint& joint = bvh.joints[j];
@@ -436,7 +458,8 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
           position[kind] = v;
           has_position = true;
         } else {
-          local = local * axisRotation(kind - 3, v * std::numbers::pi / 180.0);
+          // (Degrees to radians as v * (pi / 180): v * pi overflows for v near the largest double.)
+          local = local * axisRotation(kind - 3, v * (std::numbers::pi / 180.0));
         }
       }
       if (j == 0 && has_position) root_position = position;
@@ -444,6 +467,15 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
     }
     Pose pose = Pose::rest(target.jointCount());
     pose.root_translation_m = scale * (c * (root_position - rest_root));
+    // Values the number check let through (any finite double) must still make a place on a stage:
+    // 1e308 overflowed to inf here, and NaN reached truth/joints.csv.
+    if (!pose.root_translation_m.allFinite() ||
+        pose.root_translation_m.cwiseAbs().maxCoeff() > kMaxRootMetres) {
+      throw Error(locate(file, bvh.frame_lines[f], "",
+                         fmt::format("frame {}: the root is {} m from the origin, expected a place "
+                                     "within {:g} m (a position value too large?)",
+                                     f + 1, pose.root_translation_m.norm(), kMaxRootMetres)));
+    }
     for (int t = 0; t < target.jointCount(); ++t) {
       const int parent = target.joint(t).parent;
       const Eigen::Matrix3d parent_global =
@@ -456,6 +488,12 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
       target_global[t] = c * source_global[source_of[t]] * c;
       const Eigen::Matrix3d local = parent_global.transpose() * target_global[t];
       pose.angles_rad[t] = parent < 0 ? rotationVector(local) : eulerXyz(local);
+      if (!pose.angles_rad[t].allFinite()) {
+        throw Error(locate(file, bvh.frame_lines[f], "",
+                           fmt::format("frame {}: joint {} has no finite rotation (a rotation "
+                                       "value too large?)",
+                                       f + 1, quotedInput(bvh.joints[source_of[t]].name))));
+      }
     }
     clip.frames.push_back(std::move(pose));
   }

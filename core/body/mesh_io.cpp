@@ -17,9 +17,12 @@
 #include <set>
 #include <stdexcept>
 #include <system_error>
+#include <utility>
+#include <vector>
 
 #include "core/base/error.h"
 #include "core/body/bvh.h"
+#include "core/body/gltf_check.h"
 #include "core/body/human_skeleton.h"
 
 namespace lumistage {
@@ -273,6 +276,8 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec))
     fail(path, "no such file (or not a regular file), expected a mesh file");
+  // Assimp recurses per level of a glTF's JSON and nodes: too deep a file is refused before it.
+  checkGltfNesting(path);
   Assimp::Importer importer;
   // FBX pivots would otherwise become helper nodes ("Hips_$AssimpFbx$_Rotation") between bones,
   // and so joints of ours.
@@ -285,6 +290,21 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
                    importer.GetErrorString());
   }
   if (scene->mRootNode == nullptr) fail(path, "no scene graph, expected a rigged mesh");
+  // What follows walks the scene graph recursively: its depth is checked first, without recursion
+  // (formats other than glTF are not checked before Assimp).
+  {
+    constexpr int kMaxDepth = GltfNestingLimits{}.node_depth;
+    std::vector<std::pair<const aiNode*, int>> stack{{scene->mRootNode, 1}};
+    while (!stack.empty()) {
+      const auto [node, depth] = stack.back();
+      stack.pop_back();
+      if (depth > kMaxDepth)
+        fail(path, fmt::format("its nodes nest deeper than {} levels (node {})", kMaxDepth,
+                               quotedInput(node->mName.C_Str(), 64)));
+      for (unsigned k = 0; k < node->mNumChildren; ++k)
+        stack.emplace_back(node->mChildren[k], depth + 1);
+    }
+  }
 
   // The triangle meshes (SortByPType moved points and lines into meshes of their own).
   std::vector<unsigned> meshes;

@@ -98,8 +98,8 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
       if (line_number == 1 && line.rfind(kHeader, 0) == 0) {
         const std::vector<std::string_view> version = splitWords(line.substr(kHeader.size()));
         if (version.size() != 1 || version[0] != "1")
-          throw fail(fmt::format("wand points version '{}': this build reads version 1",
-                                 line.substr(kHeader.size())));
+          throw fail(fmt::format("wand points version {}: this build reads version 1",
+                                 quotedInput(line.substr(kHeader.size()))));
         header = true;
       }
       if (end == text.size()) break;
@@ -110,7 +110,8 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
       int v = 0;
       const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
       if (r.ec != std::errc() || r.ptr != s.data() + s.size() || v < 0)
-        throw fail(fmt::format("{}: expected a non-negative integer, found '{}'", what, s));
+        throw fail(
+            fmt::format("{}: expected a non-negative integer, found {}", what, quotedInput(s)));
       return v;
     };
     // Samples are frames of a wand's wave: a million is over nine hours at 30 frames a second,
@@ -126,7 +127,7 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
       double v = 0;
       const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
       if (r.ec != std::errc() || r.ptr != s.data() + s.size() || !std::isfinite(v))
-        throw fail(fmt::format("{}: expected a number, found '{}'", what, s));
+        throw fail(fmt::format("{}: expected a number, found {}", what, quotedInput(s)));
       return v;
     };
     auto expect = [&](size_t n, const char* form) {
@@ -135,7 +136,8 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
     if (w[0] == "camera") {
       expect(4, "camera NAME WIDTH HEIGHT");
       WandCamera c{std::string(w[1]), integer(w[2], "width"), integer(w[3], "height")};
-      if (!isValidName(c.name)) throw fail(fmt::format("'{}' is not a valid camera name", c.name));
+      if (!isValidName(c.name))
+        throw fail(fmt::format("{} is not a valid camera name", quotedInput(c.name)));
       if (c.width <= 0 || c.height <= 0) throw fail("camera size must be positive");
       for (const WandCamera& o : cameras) {
         if (o.name == c.name) throw fail(fmt::format("camera '{}' listed twice", c.name));
@@ -149,7 +151,8 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
       for (size_t c = 0; c < cameras.size(); ++c) {
         if (cameras[c].name == w[2]) camera = static_cast<int>(c);
       }
-      if (camera < 0) throw fail(fmt::format("unknown camera '{}' (no camera line for it)", w[2]));
+      if (camera < 0)
+        throw fail(fmt::format("unknown camera {} (no camera line for it)", quotedInput(w[2])));
       const Eigen::Vector2d pixel(number(w[3], "x_px"), number(w[4], "y_px"));
       const WandCamera& c = cameras[camera];
       // Beyond the image by less than a pixel (a centroid of a blob cut by the image's edge):
@@ -178,8 +181,8 @@ WandSession parseWandSession(std::string_view text, std::string_view source_name
           {sampleId(w[1]), {number(w[2], "x_m"), number(w[3], "y_m"), number(w[4], "z_m")}});
       max_sample = std::max(max_sample, marks.back().sample);
     } else {
-      throw fail(
-          fmt::format("unknown line kind '{}' (expected camera, point, pair or floor)", w[0]));
+      throw fail(fmt::format("unknown line kind {} (expected camera, point, pair or floor)",
+                             quotedInput(w[0])));
     }
     if (end == text.size()) break;
   }

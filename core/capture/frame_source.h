@@ -37,6 +37,9 @@ class FrameSource {
   // recording (see finished()). `frame`'s image buffer is reused: no allocation once warmed up.
   virtual bool next(CameraFrame& frame, std::chrono::milliseconds timeout) = 0;
   virtual bool finished() const { return false; }
+  // Why it finished before its end (every frame left failed to decode, say), in words; empty when
+  // it did not.
+  virtual std::string failure() const { return {}; }
   virtual CameraStats stats(int camera) const = 0;
   // Whether its frame ids only count instants, so that another count that numbers the same
   // instants may replace it (cameras, live): true. A recording's ids, or the virtual studio's,

@@ -1,7 +1,10 @@
 #include "core/capture/session_reader.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <array>
 #include <cctype>
@@ -65,6 +68,35 @@ Lines splitLines(std::string_view text) {
   return lines;
 }
 
+// Opens a camera image for reading, only if it is a regular file: a FIFO in a camera's folder
+// blocked fopen for ever, a device would be read without end. Null, with what is wrong in
+// `problem`, otherwise.
+std::FILE* openImage(const fs::path& path, std::string& problem) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    problem =
+        errno == ENOENT ? "is missing" : fmt::format("cannot be opened: {}", std::strerror(errno));
+    return nullptr;
+  }
+  struct stat st {};
+  std::FILE* file = nullptr;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    problem = "is not a regular file (a FIFO, a folder or a device?)";
+  } else if ((file = ::fdopen(fd, "rb")) == nullptr) {
+    problem = fmt::format("cannot be opened: {}", std::strerror(errno));
+  }
+  if (file == nullptr) ::close(fd);
+  return file;
+}
+
+// Whether `path` names something other than a regular file (what openImage refuses), for a
+// reader that opens it itself (OpenCV).
+bool existsButIsNotARegularFile(const fs::path& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  return !ec && fs::exists(status) && !fs::is_regular_file(status);
+}
+
 uint32_t bigEndian32(const unsigned char* p) {
   return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | uint32_t(p[3]);
 }
@@ -73,11 +105,9 @@ uint32_t bigEndian32(const unsigned char* p) {
 // file ends with the IEND chunk (a file cut short by a crash or a full disk does not). Returns
 // what is wrong, or an empty string.
 std::string checkPng(const fs::path& path, int width, int height, int channels) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (!file) {
-    return errno == ENOENT ? "is missing"
-                           : fmt::format("cannot be opened: {}", std::strerror(errno));
-  }
+  std::string problem;
+  std::FILE* file = openImage(path, problem);
+  if (!file) return problem;
   std::array<unsigned char, 26> header{};
   std::array<unsigned char, 12> tail{};
   const bool header_read = std::fread(header.data(), 1, header.size(), file) == header.size();
@@ -156,12 +186,9 @@ size_t readPnmHeader(std::FILE* file, int width, int height, int channels, std::
 // Cheap check of a frame's PNM: its header, and a file as long as the header and every pixel (a
 // file cut short by a crash or a full disk is not).
 std::string checkPnm(const fs::path& path, int width, int height, int channels) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (!file) {
-    return errno == ENOENT ? "is missing"
-                           : fmt::format("cannot be opened: {}", std::strerror(errno));
-  }
   std::string problem;
+  std::FILE* file = openImage(path, problem);
+  if (!file) return problem;
   const size_t length = readPnmHeader(file, width, height, channels, problem);
   const long size = std::fseek(file, 0, SEEK_END) == 0 ? std::ftell(file) : -1;
   std::fclose(file);
@@ -178,9 +205,9 @@ std::string checkPnm(const fs::path& path, int width, int height, int channels) 
 std::string readPnm(const fs::path& path, int64_t frame_id, const Camera& camera,
                     PixelFormat format, Image& image) {
   const int channels = bytesPerPixel(format);
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (!file) return fmt::format("{}: cannot be opened: {}", path.string(), std::strerror(errno));
   std::string problem;
+  std::FILE* file = openImage(path, problem);
+  if (!file) return fmt::format("{}: frame {}: {}", path.string(), frame_id, problem);
   const size_t length = readPnmHeader(file, camera.width(), camera.height(), channels, problem);
   image.resize(format, camera.width(), camera.height());
   const bool whole =
@@ -214,12 +241,16 @@ void SessionReader::readSessionYaml() {
   const YamlReader yaml(path.string());
   const YAML::Node root = yaml.parseDocument(readFile(path));
   yaml.requireMap(root, "");
+  // The format first: another kind of file's keys are not for the message.
+  const YAML::Node format = yaml.required(root, "", "format", "lumistage-session");
+  if (!format.IsScalar() || format.Scalar() != "lumistage-session") {
+    yaml.fail(format, "format",
+              "expected lumistage-session, got " +
+                  (format.IsScalar() ? quotedInput(format.Scalar()) : std::string("no text")));
+  }
   yaml.checkKeys(root, "",
                  {"format", "version", "source", "rig", "fps", "pixel_format", "image_files",
                   "cameras", "truth"});
-  const YAML::Node format = yaml.required(root, "", "format", "lumistage-session");
-  if (yaml.string(format, "format") != "lumistage-session")
-    yaml.fail(format, "format", "expected lumistage-session, got '" + format.Scalar() + "'");
   const YAML::Node version = yaml.required(root, "", "version", "1");
   if (yaml.integer(version, "version") != 1) {
     yaml.fail(version, "version",
@@ -234,20 +265,21 @@ void SessionReader::readSessionYaml() {
   const std::optional<PixelFormat> parsed =
       parsePixelFormat(yaml.string(pixel_format, "pixel_format"));
   if (!parsed) {
-    yaml.fail(pixel_format, "pixel_format",
-              "expected one of " + pixelFormatNames() + ", got '" + pixel_format.Scalar() + "'");
+    yaml.fail(
+        pixel_format, "pixel_format",
+        "expected one of " + pixelFormatNames() + ", got " + quotedInput(pixel_format.Scalar()));
   }
   format_ = *parsed;
   const YAML::Node image_files = yaml.required(root, "", "image_files", "png or pnm");
   const std::optional<ImageFiles> files = parseImageFiles(yaml.string(image_files, "image_files"));
   if (!files) {
     yaml.fail(image_files, "image_files",
-              "expected png or pnm, got '" + image_files.Scalar() + "'");
+              "expected png or pnm, got " + quotedInput(image_files.Scalar()));
   }
   files_ = *files;
   const YAML::Node truth = yaml.required(root, "", "truth", "true or false");
   if (!truth.IsScalar() || !YAML::convert<bool>::decode(truth, truth_))
-    yaml.fail(truth, "truth", "expected true or false, got '" + truth.Scalar() + "'");
+    yaml.fail(truth, "truth", "expected true or false, got " + quotedInput(truth.Scalar()));
 
   const YAML::Node rig_file = yaml.required(root, "", "rig", "the rig file's name, rig.yaml");
   rig_ = loadRig(folder_ / yaml.string(rig_file, "rig"));
@@ -281,9 +313,9 @@ void SessionReader::readIndex() {
     return;
   }
   if (lines.complete[0] != "frame,timestamp_ns") {
-    throw Error(locate(
-        file, 1, "",
-        "expected the header 'frame,timestamp_ns', got '" + std::string(lines.complete[0]) + "'"));
+    throw Error(
+        locate(file, 1, "",
+               "expected the header 'frame,timestamp_ns', got " + quotedInput(lines.complete[0])));
   }
   int bad_times = 0;
   std::string first_bad_time;
@@ -294,9 +326,9 @@ void SessionReader::readIndex() {
     FrameEntry entry{};
     if (fields.size() != 2 || !parseNumber(fields[0], entry.id) ||
         !parseNumber(fields[1], entry.timestamp_ns)) {
-      throw Error(locate(
-          file, line_number, "",
-          "expected frame,timestamp_ns as two whole numbers, got '" + std::string(line) + "'"));
+      throw Error(
+          locate(file, line_number, "",
+                 "expected frame,timestamp_ns as two whole numbers, got " + quotedInput(line)));
     }
     if (entry.id < 0) {
       throw Error(locate(file, line_number, "",
@@ -333,9 +365,9 @@ void SessionReader::readIndex() {
   if (!lines.torn.empty()) {
     warnings_.push_back(locate(
         file, int(lines.complete.size()) + 1, "",
-        fmt::format("torn last line '{}' (no newline: the recording stopped while writing it); "
+        fmt::format("torn last line {} (no newline: the recording stopped while writing it); "
                     "ignored, the session ends {}",
-                    lines.torn,
+                    quotedInput(lines.torn),
                     frames_.empty() ? "before its first frame"
                                     : fmt::format("at frame {}", frames_.back().id))));
   }
@@ -411,7 +443,9 @@ namespace {
 
 // A mask file: one byte a pixel of the camera's size. Throws Error naming it and `what` it is.
 std::vector<uint8_t> readMaskFile(const fs::path& file, const Camera& c, const char* what) {
-  const cv::Mat mask = cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
+  const cv::Mat mask = existsButIsNotARegularFile(file)
+                           ? cv::Mat()
+                           : cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
   if (mask.empty() || mask.cols != c.width() || mask.rows != c.height() || !mask.isContinuous())
     throw Error(fmt::format("{}: cannot read the {} ({}x{} PNG, camera {})", file.string(), what,
                             c.width(), c.height(), c.name()));
@@ -458,6 +492,13 @@ void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
         continue;
       }
       cv::Mat decoded;
+      if (existsButIsNotARegularFile(path)) {
+        errors[k] = fmt::format(
+            "{}: frame {}: is not a regular file (a FIFO, a folder or a "
+            "device?)",
+            path.string(), id);
+        continue;
+      }
       try {
         decoded = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
       } catch (const cv::Exception& e) {
@@ -497,8 +538,8 @@ std::vector<std::vector<Eigen::Vector3d>> SessionReader::readTruthJoints(
   const std::vector<std::string_view> header = splitFields(lines.complete[0]);
   if (header[0] != "frame" || (header.size() - 1) % 3 != 0) {
     throw Error(locate(file, 1, "",
-                       "expected the header frame,NAME_x,NAME_y,NAME_z,..., got '" +
-                           std::string(lines.complete[0]) + "'"));
+                       "expected the header frame,NAME_x,NAME_y,NAME_z,..., got " +
+                           quotedInput(lines.complete[0])));
   }
   const size_t joints = (header.size() - 1) / 3;
   if (joint_names) {
@@ -520,8 +561,8 @@ std::vector<std::vector<Eigen::Vector3d>> SessionReader::readTruthJoints(
       ok = parseNumber(fields[k], values[(k - 1) / 3][int((k - 1) % 3)]);
     if (!ok) {
       throw Error(locate(file, int(l) + 1, "",
-                         fmt::format("expected a frame number and {} numbers, got '{}'", 3 * joints,
-                                     lines.complete[l])));
+                         fmt::format("expected a frame number and {} numbers, got {}", 3 * joints,
+                                     quotedInput(lines.complete[l]))));
     }
     by_frame[id] = std::move(values);
   }

@@ -1,6 +1,7 @@
 #include "core/capture/session_source.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
@@ -52,23 +53,70 @@ SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions 
         options_.memory_limit_bytes / 1048576.0));
   }
   memory_.resize(frames);
+  memory_errors_.resize(frames);
+  int damaged = 0;
   for (int i = 0; i < frames; ++i) {
     if (options_.cancel && options_.cancel->load())
       throw Error(folder.string() + ": replay stopped while its frames were being loaded");
-    reader_.readFrame(i, memory_[i], cameras_);
+    try {
+      reader_.readFrame(i, memory_[i], cameras_);
+    } catch (const Error& e) {
+      // Served as a set that failed (loadSet), as from disk.
+      memory_[i].clear();
+      memory_errors_[i] = e.what();
+      ++damaged;
+    }
+  }
+  if (damaged == frames) {
+    throw Error(fmt::format("{}: no frame of the session can be decoded; the first: {}",
+                            folder.string(), memory_errors_[0]));
   }
 }
 
 bool SessionSource::loadSet() {
-  if (options_.mode == ReplayMode::kFromMemory) return true;
-  try {
-    reader_.readFrame(next_set_, set_, cameras_);
-  } catch (const std::exception& e) {
-    error_ = e.what();
+  std::string error;
+  if (options_.mode == ReplayMode::kFromMemory) {
+    error = memory_errors_[next_set_];
+  } else {
+    try {
+      reader_.readFrame(next_set_, set_, cameras_);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  }
+  if (error.empty()) {
+    damaged_in_a_row_ = 0;
+    return true;
+  }
+  // A damaged image costs its set, not the replay: the node or the stream goes on with the next.
+  error_ = error;
+  ++damaged_;
+  damage_told_.resize(reader_.frameCount(), 0);
+  if (!damage_told_[next_set_]) {
+    damage_told_[next_set_] = 1;
+    spdlog::warn("replay: {}; frame {} skipped (counted as dropped), the replay goes on", error,
+                 reader_.frameId(next_set_));
+  }
+  if (++damaged_in_a_row_ >= reader_.frameCount()) {
+    failure_ = fmt::format(
+        "replay stopped: none of the session's {} frames left can be decoded; "
+        "the last: {}",
+        reader_.frameCount(), error);
     finished_ = true;
     return false;
   }
-  return true;
+  if (!options_.synchronized) advanceSet();  // synchronized: the next tick says which set
+  return false;
+}
+
+void SessionSource::advanceSet() {
+  if (++next_set_ == reader_.frameCount()) {
+    next_set_ = 0;
+    if (options_.loop)
+      ++loop_;
+    else
+      finished_ = true;
+  }
 }
 
 bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout, bool with_image) {
@@ -127,13 +175,7 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout, 
   last_delivery_ = delivered;
   if (++next_camera_ == static_cast<int>(cameras_.size())) {
     next_camera_ = 0;
-    if (++next_set_ == reader_.frameCount()) {
-      next_set_ = 0;
-      if (options_.loop)
-        ++loop_;
-      else
-        finished_ = true;
-    }
+    advanceSet();
   }
   return true;
 }
@@ -142,7 +184,7 @@ CameraStats SessionSource::stats(int camera) const {
   CameraStats stats;
   stats.frames = delivered_.at(camera);
   if (std::find(cameras_.begin(), cameras_.end(), camera) != cameras_.end())
-    stats.dropped = skipped_;
+    stats.dropped = skipped_ + damaged_;
   const double seconds = std::chrono::duration<double>(last_delivery_ - first_delivery_).count();
   stats.frame_rate_hz = stats.frames > 1 && seconds > 0 ? (stats.frames - 1) / seconds : 0.0;
   stats.temperature_c = std::nan("");  // a recording has no sensor

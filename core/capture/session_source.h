@@ -46,8 +46,11 @@ class SessionSource : public FrameSource {
   explicit SessionSource(const std::filesystem::path& folder, ReplayOptions options = {});
 
   const Rig& rig() const override { return reader_.rig(); }
-  // False on timeout (kRecordedRate: the next set is not due yet), at the end, or when a frame
-  // cannot be decoded any more (stats().last_error says which file; finished() is then true).
+  // False on timeout (kRecordedRate: the next set is not due yet), at the end, or for a set whose
+  // image cannot be decoded (a file damaged since the session was opened): that set is skipped,
+  // said once with its file, counted as dropped for every camera, and replay goes on
+  // (stats().last_error says which file). Only when every set in a row fails does it finish, with
+  // failure() saying why.
   bool next(CameraFrame& frame, std::chrono::milliseconds timeout) override {
     return next(frame, timeout, true);
   }
@@ -59,13 +62,15 @@ class SessionSource : public FrameSource {
   // The camera whose frame the next call delivers.
   int nextCamera() const { return cameras_[next_camera_]; }
   bool finished() const override { return finished_; }
+  std::string failure() const override { return failure_; }
   bool idsCountInstants() const override { return false; }
   CameraStats stats(int camera) const override;
 
   const SessionReader& reader() const { return reader_; }
 
  private:
-  bool loadSet();  // into set_, for set index next_set_
+  bool loadSet();     // into set_, for set index next_set_; false (the set skipped) when it fails
+  void advanceSet();  // to the set after next_set_ (the end, or the first again when looping)
 
   SessionReader reader_;
   ReplayOptions options_;
@@ -87,6 +92,12 @@ class SessionSource : public FrameSource {
   int64_t skipped_ = 0;
   std::chrono::steady_clock::time_point first_delivery_, last_delivery_;
   std::string error_;
+  std::string failure_;
+  // Sets skipped as their images failed to decode: in all (each camera's dropped), in a row, and
+  // for each set whether it was said (once per set, not once per loop).
+  int64_t damaged_ = 0, damaged_in_a_row_ = 0;
+  std::vector<uint8_t> damage_told_;
+  std::vector<std::string> memory_errors_;  // kFromMemory: each set's decoding error, if any
 };
 
 }  // namespace lumistage

@@ -113,7 +113,7 @@ double number(const Tag& tag, const char* key, const Place& where) {
   const std::string& text = it->second;
   const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
   if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(value))
-    throw Error(fmt::format("{}: {}: expected a number, got '{}'", at, key, text));
+    throw Error(fmt::format("{}: {}: expected a number, got {}", at, key, quotedInput(text)));
   return value;
 }
 

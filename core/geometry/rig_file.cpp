@@ -130,14 +130,14 @@ Rig parseRig(std::string_view yaml_text, std::string_view source_name) {
   const YamlReader in{std::string(source_name)};
   const YAML::Node root = in.parseDocument(yaml_text);
   in.requireMap(root, "");
-  in.checkKeys(root, "", {"format", "version", "stage", "nodes", "cameras"});
-
+  // The format first: another kind of file's keys are not for the message.
   const YAML::Node format = in.required(root, "", "format", std::string("'") + kFormat + "'");
-  if (in.string(format, "format") != kFormat) {
-    in.fail(
-        format, "format",
-        fmt::format("expected '{}', got '{}': not a Lumistage rig file", kFormat, format.Scalar()));
+  if (!format.IsScalar() || format.Scalar() != kFormat) {
+    in.fail(format, "format",
+            fmt::format("expected '{}', got {}: not a Lumistage rig file", kFormat,
+                        format.IsScalar() ? quotedInput(format.Scalar()) : "no text"));
   }
+  in.checkKeys(root, "", {"format", "version", "stage", "nodes", "cameras"});
   const YAML::Node version = in.required(root, "", "version", "1");
   const int v = in.integer(version, "version");
   if (v != kVersion) {

@@ -182,8 +182,8 @@ Eigen::Matrix<double, 3, 4> readPmat(const fs::path& file) {
         used = 0;
       }
       if (used != word.size() || !std::isfinite(value)) {
-        throw Error(
-            fmt::format("{}:{}: expected a number, got '{}'", file.string(), line_number, word));
+        throw Error(fmt::format("{}:{}: expected a number, got {}", file.string(), line_number,
+                                quotedInput(word)));
       }
       values.push_back(value);
     }
@@ -227,8 +227,8 @@ RadFile readRad(const fs::path& file) {
       used = 0;
     }
     if (value.empty() || used != value.size() || !std::isfinite(number)) {
-      throw Error(fmt::format("{}:{}: {}: expected a number, got '{}'", file.string(), line_number,
-                              key, value));
+      throw Error(fmt::format("{}:{}: {}: expected a number, got {}", file.string(), line_number,
+                              key, quotedInput(value)));
     }
     values[key] = number;
   }

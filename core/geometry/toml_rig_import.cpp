@@ -4,8 +4,11 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <string_view>
 #include <toml.hpp>
 
+#include "core/base/atomic_file.h"
 #include "core/base/error.h"
 #include "core/base/names.h"
 #include "core/geometry/rig_import.h"
@@ -89,13 +92,88 @@ std::string tomlError(const std::string& source, const toml::exception& e) {
   return fmt::format("{}:{}: {}", source, e.location().line(), what);
 }
 
+// toml11 parses arrays and inline tables within each other by recursion, with no limit: a file
+// nesting them 100,000 deep overflowed the stack. Their depth is measured first (outside strings
+// and comments), and a file deeper than a calibration's few levels refused.
+// TOML documents are UTF-8. toml11 reads a character's bytes by its first one without looking
+// where the text ends: a quote, a lone 0xee and a quote read past its buffer (found by
+// file_reader_fuzz). Text that is not UTF-8 is refused, naming its line, before toml11 sees it.
+void checkTomlUtf8(std::string_view text, const std::string& source) {
+  int line = 1;
+  for (size_t i = 0; i < text.size();) {
+    const auto byte = [&](size_t k) { return static_cast<unsigned char>(text[k]); };
+    const unsigned char lead = byte(i);
+    const size_t length = lead < 0x80                    ? 1
+                          : lead >= 0xc2 && lead <= 0xdf ? 2
+                          : lead >= 0xe0 && lead <= 0xef ? 3
+                          : lead >= 0xf0 && lead <= 0xf4 ? 4
+                                                         : 0;
+    bool valid = length > 0 && i + length <= text.size();
+    for (size_t k = 1; valid && k < length; ++k) valid = (byte(i + k) & 0xc0) == 0x80;
+    if (!valid) {
+      throw Error(
+          fmt::format("{}:{}: byte {:#04x} is not UTF-8 text, which TOML is: refused "
+                      "before reading it",
+                      source, line, lead));
+    }
+    line += lead == '\n';
+    i += length;
+  }
+}
+
+void checkTomlNesting(std::string_view text, const std::string& source) {
+  constexpr int kMaxDepth = 64;
+  int depth = 0, line = 1;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+    } else if (c == '#') {
+      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+    } else if (c == '"' || c == '\'') {
+      // Strings: basic ones take backslash escapes; """ and ''' ones span lines.
+      const bool multiline = text.compare(i, 3, std::string(3, c)) == 0;
+      i += multiline ? 3 : 1;
+      while (i < text.size()) {
+        if (c == '"' && text[i] == '\\') {
+          i += 2;
+          continue;
+        }
+        if (text[i] == '\n') {
+          if (!multiline) break;  // an unclosed string: toml11 says so
+          ++line;
+        }
+        if (multiline ? text.compare(i, 3, std::string(3, c)) == 0 : text[i] == c) {
+          i += multiline ? 2 : 0;
+          break;
+        }
+        ++i;
+      }
+      if (i < text.size() && text[i] == '\n') --i;  // counted by the loop
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxDepth) {
+        throw Error(
+            fmt::format("{}:{}: arrays and tables nested deeper than {} levels: refused "
+                        "before reading it",
+                        source, line, kMaxDepth));
+      }
+    } else if (c == ']' || c == '}') {
+      depth = std::max(0, depth - 1);
+    }
+  }
+}
+
 }  // namespace
 
 RigImport importTomlRig(const fs::path& file, const RigImportOptions& options) {
   const std::string source = file.string();
+  const std::string text = readFile(file);  // (a FIFO or a device refused, not read)
+  checkTomlUtf8(text, source);
+  checkTomlNesting(text, source);
   toml::value data;
   try {
-    data = toml::parse(source);
+    std::istringstream in(text);
+    data = toml::parse(in, source);
   } catch (const toml::exception& e) {
     throw Error(tomlError(source, e));
   } catch (const std::exception& e) {

@@ -1,5 +1,7 @@
 #include "core/net/curve_keys.h"
 
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <zmq.h>
 
 #include <algorithm>
@@ -81,10 +83,19 @@ void rejectUnknown(const fs::path& path,
   }
 }
 
+// A key folder: one it creates is its owner's only, whatever the umask (under umask 000,
+// authorized/ was writable by anyone: a key of their own put there is a node the studio admits).
+// One there already is left as it is, and said when others may write to it.
 void createDirectories(const fs::path& dir) {
   std::error_code ec;
-  fs::create_directories(dir, ec);
+  const bool created = fs::create_directories(dir, ec);
   if (ec) throw Error(dir.string() + ": cannot create the folder: " + ec.message());
+  if (created) {
+    fs::permissions(dir, fs::perms::owner_all, fs::perm_options::replace, ec);
+    if (ec) throw Error(dir.string() + ": cannot make the folder private: " + ec.message());
+  } else if (const std::string problem = keyPermissionProblem(dir); !problem.empty()) {
+    spdlog::warn("{}", problem);
+  }
 }
 
 void requireNodeName(const std::string& name) {
@@ -136,7 +147,33 @@ void saveKeyPair(const fs::path& path, const CurveKeyPair& keys, std::string_vie
   writeFileAtomically(path, text, {.mode = kSecretMode});
 }
 
+std::string keyPermissionProblem(const fs::path& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec) return {};
+  const fs::perms p = status.permissions();
+  const auto any = [&](fs::perms bits) { return (p & bits) != fs::perms::none; };
+  const auto mode = fmt::format("{:04o}", static_cast<unsigned>(p & fs::perms::mask));
+  if (fs::is_directory(status)) {
+    if (!any(fs::perms::group_write | fs::perms::others_write)) return {};
+    return fmt::format(
+        "{}: the key folder is writable by others (mode {}): anyone may add a "
+        "key the studio admits; chmod 700 it",
+        path.string(), mode);
+  }
+  if (!any(fs::perms::group_read | fs::perms::others_read | fs::perms::group_write |
+           fs::perms::others_write))
+    return {};
+  return fmt::format(
+      "{}: the secret key is readable or writable by others (mode {}): anyone who "
+      "could read it may pose as its owner; chmod 600 it (and make a new key if it "
+      "may have been read)",
+      path.string(), mode);
+}
+
 CurveKeyPair loadKeyPair(const fs::path& path) {
+  if (const std::string problem = keyPermissionProblem(path); !problem.empty())
+    spdlog::warn("{}", problem);
   const auto entries = parseKeyFile(path);
   rejectUnknown(path, entries, {"public", "secret"});
   CurveKeyPair keys{requireKey(path, entries, "public"), requireKey(path, entries, "secret")};
@@ -229,6 +266,8 @@ std::vector<AuthorizedNode> KeyStore::authorizedNodes() const {
   if (!fs::is_directory(dir, ec)) {
     throw Error(dir.string() + ": no such folder (create keys with 'lumistage keys init')");
   }
+  if (const std::string problem = keyPermissionProblem(dir); !problem.empty())
+    spdlog::warn("{}", problem);
   for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
     if (entry.path().extension() != ".pub") continue;
     nodes.push_back({entry.path().stem().string(), loadPublicKey(entry.path())});

@@ -39,10 +39,15 @@ bool isValidNodeName(std::string_view name);
 // the key and what was expected.
 void saveKeyPair(const std::filesystem::path& path, const CurveKeyPair& keys,
                  std::string_view comment);
+// Warns (the log) when the file's secret is readable by others than its owner.
 CurveKeyPair loadKeyPair(const std::filesystem::path& path);
 void savePublicKey(const std::filesystem::path& path, std::string_view public_key,
                    std::string_view comment);
 std::string loadPublicKey(const std::filesystem::path& path);
+
+// What is wrong with the permissions of a secret key file (others may read it) or of a key folder
+// (others may add or swap keys in it), in words; empty when nothing is, or it cannot be told.
+std::string keyPermissionProblem(const std::filesystem::path& path);
 
 // A key folder as laid out above.
 class KeyStore {

@@ -181,12 +181,16 @@ Check decodeHello(const fb::Hello& in, const MessageLimits& limits, HelloData& o
   if (capabilities > 64) return "hello: " + num(capabilities) + " capabilities, at most 64";
   out.node_name = copyString(in.node_name());
   if (out.node_name.empty()) return "hello: the node name is empty";
+  if (!isValidName(out.node_name)) return "hello: the node name is not a valid node name";
   out.protocol_version = in.protocol_version();
   for (size_t i = 0; i < cameras; ++i) {
     const flatbuffers::String* name =
         in.camera_names()->Get(static_cast<flatbuffers::uoffset_t>(i));
     if (Check c = checkString(name, "hello: camera name", limits); !c.empty()) return c;
     out.camera_names.push_back(copyString(name));
+    if (!isValidName(out.camera_names.back())) {
+      return "hello: camera " + num(i) + ": its name is not a valid camera name";
+    }
   }
   for (size_t i = 0; i < capabilities; ++i) {
     const flatbuffers::String* name =
@@ -209,6 +213,11 @@ Check decodeHeartbeat(const fb::Heartbeat& in, const MessageLimits& limits, Hear
     const fb::CameraHealth* c = in.cameras()->Get(static_cast<flatbuffers::uoffset_t>(i));
     if (c == nullptr) return "heartbeat: camera " + num(i) + " is missing";
     if (Check e = checkString(c->camera(), "heartbeat: camera name", limits); !e.empty()) return e;
+    // Names reach the studio's log and reports: one that is no camera name (a line break, terminal
+    // escapes) is refused here, as a node name is at the endpoint.
+    if (!isValidName(copyString(c->camera()))) {
+      return "heartbeat: camera " + num(i) + ": its name is not a valid camera name";
+    }
     if (Check e = checkString(c->last_error(), "heartbeat: last error", limits); !e.empty()) {
       return e;
     }
@@ -648,6 +657,23 @@ std::string takeNameError(std::string_view take) {
   if (take.front() == '.' || take.front() == '-')
     return "take name '" + shown + "' starts with '" + take.front() + "'";
   return "take name '" + shown + "' has a character other than letters, digits, '-', '_' and '.'";
+}
+
+size_t largestNodeMessage(const NodeMessageSizes& sizes, const MessageLimits& limits) {
+  // An envelope, a body table and a vector's length and padding: a few hundred bytes; a string is
+  // its length, its bytes, its terminator and padding.
+  const uint64_t table = 256, text = limits.max_string_bytes + 8;
+  const uint64_t cameras = uint64_t(std::max(sizes.cameras, 0));
+  const uint64_t step = uint64_t(std::max(sizes.silhouette_step, 1));
+  const uint64_t cells = uint64_t(std::max<int64_t>(sizes.camera_pixels, 0)) / (step * step);
+  const uint64_t silhouettes = table + cameras * (table + (cells + 7) / 8);
+  const uint64_t statistics = table + maxCompressedStatisticsBytes(
+                                          uint64_t(std::max<int64_t>(sizes.statistics_samples, 0)));
+  const uint64_t image = table + 5 * uint64_t(std::max<int64_t>(sizes.view_pixels, 0));
+  const uint64_t heartbeat = table + cameras * (table + 2 * text) + table + 3 * text;
+  const uint64_t timestamps = table + uint64_t(std::max(limits.max_stages, 0)) * (table + text);
+  const uint64_t hello = table + text + (cameras + 64) * text;
+  return size_t(std::max({silhouettes, statistics, image, heartbeat, timestamps, hello}));
 }
 
 const char* messageTypeName(const MessageBody& body) {

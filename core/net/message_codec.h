@@ -200,6 +200,22 @@ struct MessageLimits {
   size_t max_string_bytes = 1024;
 };
 
+// What a node's messages to the studio are sized by: the rig, the refinement and the views.
+struct NodeMessageSizes {
+  int cameras = 0;                 // the rig's (a bound on any one node's)
+  int64_t camera_pixels = 0;       // the largest camera's width x height
+  int silhouette_step = 1;         // silhouette cells of step x step pixels
+  int64_t statistics_samples = 0;  // points refined x offset levels
+  int64_t view_pixels = 0;         // the largest view the nodes render
+};
+
+// The largest message a node may legitimately send for those sizes, in bytes on the wire: its
+// silhouettes, its refinement statistics (zstd's bound of their largest packed form, which bounds
+// the packed form too), a partial image of the largest view in any encoding (5 bytes a pixel at
+// worst, RLE of no two equal pixels), a heartbeat or frame timestamps with every string at
+// `limits`' longest; each with the FlatBuffers tables around it.
+size_t largestNodeMessage(const NodeMessageSizes& sizes, const MessageLimits& limits = {});
+
 // Either a message or why the bytes were refused.
 struct DecodeResult {
   std::optional<Message> message;

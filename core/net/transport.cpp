@@ -15,6 +15,7 @@
 #include <zmq_addon.hpp>
 
 #include "core/base/error.h"
+#include "core/base/names.h"
 
 namespace lumistage {
 
@@ -53,6 +54,8 @@ void setHeartbeats(zmq::socket_t& socket) {
   socket.set(zmq::sockopt::heartbeat_timeout, kHeartbeatTimeoutMs);
   socket.set(zmq::sockopt::heartbeat_ttl, kHeartbeatTimeoutMs);
 }
+
+constexpr int kHandshakeIntervalMs = 5000;
 
 bool waitReadable(zmq::socket_t& socket, std::chrono::milliseconds timeout, int wake_fd = -1) {
   zmq::pollitem_t items[2] = {{socket.handle(), 0, ZMQ_POLLIN, 0},
@@ -153,8 +156,13 @@ StudioEndpoint::StudioEndpoint(StudioEndpointConfig config) : state_(std::make_u
   // second connection under a name it holds, and libzmq then reads the node's next message as its
   // name. Under CURVE a message still counts for the node its key names, whatever it calls itself.
   s.router.set(zmq::sockopt::router_handover, true);
-  // Oversized messages never reach memory: libzmq drops the connection that sends one.
+  // Oversized messages never reach memory: libzmq drops the connection that announces one, while
+  // its handshake is under way too (when a message that size is all a connection may make it
+  // buffer: the coordinator sets the limit from the rig, not at 64 MB).
   s.router.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(s.config.limits.max_bytes));
+  // A connection that has not finished its handshake in this time is closed (libzmq waits 30 s):
+  // a node's handshake takes milliseconds; a hostile one holds its buffers for at most this long.
+  s.router.set(zmq::sockopt::handshake_ivl, kHandshakeIntervalMs);
   if (s.config.security == TransportSecurity::kCurve) {
     requireKey(s.config.studio_key.public_key, "studio public key");
     requireKey(s.config.studio_key.secret_key, "studio secret key");
@@ -178,6 +186,10 @@ StudioEndpoint::StudioEndpoint(StudioEndpointConfig config) : state_(std::make_u
     if (s.zap_thread.joinable()) s.zap_thread.join();
     throw Error(fmt::format("studio endpoint {}: cannot bind: {}", s.config.bind, e.what()));
   }
+  spdlog::info(
+      "studio: messages of up to {:.1f} MB taken, handshakes closed after {} s; a connection "
+      "announcing a larger message is dropped",
+      double(s.config.limits.max_bytes) / 1e6, kHandshakeIntervalMs / 1000);
 }
 
 StudioEndpoint::~StudioEndpoint() {
@@ -213,7 +225,12 @@ std::optional<ReceivedMessage> StudioEndpoint::receive(std::chrono::milliseconds
         received.node = user;
       }
     }
-    if (frames.size() != 2) {
+    if (!isValidName(received.node)) {
+      // In plain mode a peer's name is whatever it calls itself: one that is no node name (a line
+      // break and a forged log line in it, terminal escapes) is refused, and logged quoted.
+      received.node = quotedInput(received.node, 64);
+      received.result.error = "its name is not a valid node name";
+    } else if (frames.size() != 2) {
       received.result.error =
           fmt::format("expected one frame a message, got {}", frames.size() - 1);
     } else {
@@ -243,6 +260,10 @@ bool StudioEndpoint::send(const std::string& peer, const Message& message,
                           std::chrono::milliseconds timeout) {
   const std::vector<uint8_t> bytes = encodeMessage(message);
   return send(peer, bytes, timeout);
+}
+
+size_t StudioEndpoint::maxMessageBytes() const {
+  return state_->config.limits.max_bytes;
 }
 
 std::vector<Refusal> StudioEndpoint::refusals() const {

@@ -70,6 +70,10 @@ class StudioEndpoint {
             std::chrono::milliseconds timeout);
   bool send(const std::string& peer, const Message& message, std::chrono::milliseconds timeout);
 
+  // The largest message taken (config.limits.max_bytes): libzmq drops the connection of a peer
+  // that announces a larger one, before its handshake is done too.
+  size_t maxMessageBytes() const;
+
   // The latest refusals (at most 64) and how many there were in all.
   std::vector<Refusal> refusals() const;
   int64_t refusalCount() const;

@@ -745,6 +745,12 @@ bool CameraNode::send(Message message) {
   return sent;
 }
 
+std::string CameraNode::sourceEnd() {
+  const std::unique_lock lock = lockSource();
+  std::string failure = source_->failure();
+  return failure.empty() ? "its cameras' source delivered its last frame" : failure;
+}
+
 void CameraNode::run(const std::atomic<bool>& stop) {
   std::atomic<bool> stop_workers{false};
   std::thread capture([&] { captureLoop(stop_workers); });

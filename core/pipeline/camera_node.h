@@ -66,6 +66,8 @@ class CameraNode {
 
   // Runs until `stop` is set or the source ends.
   void run(const std::atomic<bool>& stop);
+  // Why the source ended (after run() returned without `stop`): its failure, or that it ended.
+  std::string sourceEnd();
 
   int64_t setsSent() const { return sets_sent_; }
   int64_t bytesSent() const { return bytes_sent_; }

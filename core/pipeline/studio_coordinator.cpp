@@ -8,6 +8,7 @@
 #include <limits>
 #include <utility>
 
+#include "core/base/error.h"
 #include "core/body/human_model.h"
 #include "core/geometry/stage_volume.h"
 #include "core/pipeline/posed_body.h"
@@ -26,12 +27,44 @@ void refuseSayingOnce(Node& node, bool& told, fmt::format_string<Args...> why, A
   spdlog::warn(why, std::forward<Args>(args)...);
 }
 
+// The default view (the constructor's): 320x240.
+constexpr int64_t kDefaultViewPixels = 320 * 240;
+
+int64_t largestViewPixels(const StudioCoordinatorOptions& options) {
+  return std::max(options.max_view_pixels, kDefaultViewPixels);
+}
+
+// The endpoint's message size from what the nodes of this rig may send (largestNodeMessage), a
+// quarter more to spare, never above what was asked for: every connection, before its handshake
+// is done too, may make libzmq buffer a message this large, so that 64 MB let a few dozen hostile
+// connections take gigabytes (issue 54).
+StudioEndpointConfig limitedToTheRig(const Rig& rig, StudioEndpointConfig endpoint,
+                                     const StudioCoordinatorOptions& options) {
+  NodeMessageSizes sizes;
+  sizes.cameras = rig.cameraCount();
+  for (int c = 0; c < rig.cameraCount(); ++c)
+    sizes.camera_pixels =
+        std::max(sizes.camera_pixels, int64_t(rig.camera(c).width()) * rig.camera(c).height());
+  sizes.silhouette_step = options.silhouette_step;
+  // Statistics are of the body's vertices and their window points; without a body to tell, of
+  // as many points as a message may hold.
+  const int64_t points =
+      options.body ? int64_t(options.body->rest.vertexCount()) * RefineConfig::kWindowPoints
+                   : int64_t(endpoint.limits.max_vertices);
+  sizes.statistics_samples = points * std::max(options.refine.offset_count, 1);
+  sizes.view_pixels = largestViewPixels(options);
+  const size_t largest = largestNodeMessage(sizes, endpoint.limits);
+  endpoint.limits.max_bytes =
+      std::min(endpoint.limits.max_bytes, largest + largest / 4 + (size_t{64} << 10));
+  return endpoint;
+}
+
 }  // namespace
 
 StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoint,
                                      int body_joint_count, StudioCoordinatorOptions options)
     : rig_(rig),
-      endpoint_(std::move(endpoint)),
+      endpoint_(limitedToTheRig(rig, std::move(endpoint), options)),
       options_(options),
       stage_(chooseStage(rig)),
       locator_(rig, options.silhouette_step, 0.06, stage_.box),
@@ -82,7 +115,18 @@ StudioCoordinator::~StudioCoordinator() {
   mocap_thread_.join();
 }
 
+bool StudioCoordinator::acceptsView(const ViewData& view) const {
+  if (int64_t(view.width) * view.height <= largestViewPixels(options_)) return true;
+  // The nodes' images of it would be larger than the endpoint takes: each would cost its node
+  // the connection.
+  spdlog::error(
+      "studio: view {} of {}x{} is larger than the {} pixels the studio was started for: not used",
+      view.view, view.width, view.height, largestViewPixels(options_));
+  return false;
+}
+
 void StudioCoordinator::setView(const ViewData& view) {
+  if (!acceptsView(view)) return;
   for (ViewData& v : views_) {
     if (v.view == view.view) {
       v = view;
@@ -93,6 +137,8 @@ void StudioCoordinator::setView(const ViewData& view) {
 }
 
 void StudioCoordinator::setViews(std::vector<ViewData> views) {
+  for (const ViewData& view : views)
+    if (!acceptsView(view)) return;
   if (!views.empty()) views_ = std::move(views);
 }
 
@@ -191,10 +237,16 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   if (const auto* heartbeat = std::get_if<HeartbeatData>(&message.body)) {
     node.report.bytes = heartbeat->bytes_sent;  // what the node says it has sent in all
     node.report.cameras.clear();
+    // Camera names were checked by the decoder; the free text a node sends (its cameras' errors,
+    // its take's error and disk) reaches the log, `lumistage run`'s report and the health panel
+    // escaped and cut short, so that no node can forge a line or move a terminal's cursor there.
     for (const CameraHealthData& c : heartbeat->cameras) {
-      node.report.cameras.push_back({c.camera, c.frames, c.dropped, c.frame_rate, c.last_error});
+      node.report.cameras.push_back(
+          {c.camera, c.frames, c.dropped, c.frame_rate, printableInput(c.last_error)});
     }
     node.report.take = heartbeat->take;
+    node.report.take.error = printableInput(heartbeat->take.error);
+    node.report.take.disk = printableInput(heartbeat->take.disk, 64);
     // A node that missed the take's command (or its stop), or came back during it: told again.
     // One still recording a take this studio never asked for (the studio restarted mid-take):
     // told to stop, rather than fill its disk unattended.

@@ -51,6 +51,11 @@ struct StudioCoordinatorOptions {
   // and done; otherwise it is dropped before any work, so that a pipeline slower than its cameras
   // drops frames instead of queueing them (latency stays bounded). 0: no limit.
   int max_frames_in_flight = 3;
+  // The largest view (width x height) the nodes will be asked to render, the default 320x240 at
+  // least: what the largest message a node may send follows from, with the rig, and so the most a
+  // connection may make the studio buffer. A larger view is refused (setView). The default covers
+  // the studio window's viewport (1920 wide, up to 1.5 times as high).
+  int64_t max_view_pixels = 1920 * 2880;
   int raw_bytes_per_pixel = 1;  // of the cameras' images (Bayer, mono: 1; RGB: 3)
   RefineConfig refine;          // the refinement module's parameters
   // The body mesh the nodes pose (the generic human). Its triangles give the refinement's
@@ -165,6 +170,8 @@ class StudioCoordinator {
   StudioCoordinator& operator=(const StudioCoordinator&) = delete;
 
   std::string endpoint() const { return endpoint_.endpoint(); }
+  // The largest message the endpoint takes (from the rig and max_view_pixels).
+  size_t maxMessageBytes() const { return endpoint_.maxMessageBytes(); }
   // Runs until `stop`, or `max_frames` frames are done.
   void run(const std::atomic<bool>& stop);
   // Handles what arrives within `duration` (or until `max_frames` are done), then returns: the
@@ -176,7 +183,8 @@ class StudioCoordinator {
   void setMaxFrames(int64_t frames) { options_.max_frames = frames; }
   RunReport report() const;
   // The virtual cameras the nodes render for, each a stream of blended images (default: view 0,
-  // the stage from the front-left). setView replaces the view of the same id or adds it.
+  // the stage from the front-left). setView replaces the view of the same id or adds it; a view
+  // larger than max_view_pixels is refused (logged; the views stay as they were).
   void setView(const ViewData& view);
   void setViews(std::vector<ViewData> views);
   void removeView(int view);
@@ -328,6 +336,7 @@ class StudioCoordinator {
   void takePoses();
   // The views and the frame's pose to every node.
   void sendPose(int64_t frame_id, FrameState& frame);
+  bool acceptsView(const ViewData& view) const;
   // Whether the statistics are of the body's vertices (the nodes pose that body).
   bool bodyFits(int vertex_count) const {
     return options_.body && options_.body->rest.vertexCount() == vertex_count;

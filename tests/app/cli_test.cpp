@@ -373,6 +373,57 @@ TEST(Cli, RunFailsWhenANodeProcessDies) {
   fs::remove_all(folder);
 }
 
+// A PNG whose signature, header and end chunk are right (a session opens with it) but whose image
+// data is garbage.
+void garbleImageData(const fs::path& png) {
+  std::string bytes = readFile(png);
+  for (size_t i = 41; i + 20 < bytes.size(); ++i) bytes[i] = char(0x55);
+  std::ofstream(png, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+TEST(Cli, ADamagedImageCostsItsFrameAndAReplayThatCannotGoOnFails) {
+  const fs::path folder = tempPath("damaged_image");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 2 --cameras-per-node 1 --width 320 --height 240",
+                               "actor:\n  vertices: 2000\n", "--frames 4"));
+  const fs::path session = folder / "session";
+  garbleImageData(session / "cam02" / "000001.png");
+  // The stream goes on past it, says which file and counts the frame dropped.
+  Result r = run(kCli + " stream --session " + session.string() + " --replay fast");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cam02/000001.png"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("frame 1 skipped (counted as dropped)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("6 frames in"), std::string::npos) << r.output;
+  // Every frame of a camera damaged: the stream stops, and says so in its status.
+  for (const char* file : {"000000.png", "000002.png", "000003.png"})
+    garbleImageData(session / "cam02" / file);
+  r = run(kCli + " stream --session " + session.string() + " --replay fast");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("none of the session's 4 frames left can be decoded"), std::string::npos)
+      << r.output;
+  // A node replaying that camera stops with it, with a failure status, and so does the run.
+  r = run(kCli + " run --session " + session.string() + " --frames 100000 --seconds 8");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("node node2 exited (status 1)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 node process failed during the run"), std::string::npos) << r.output;
+  fs::remove_all(folder);
+}
+
+// A take onto a disk that fills (here: files may not grow past 40 blocks, about 20-40 KB, and a
+// camera image is 77 KB): every node stops recording with an error, and the run says it failed.
+TEST(Cli, RunFailsWhenATakeLosesANodesRecording) {
+  const fs::path folder = tempPath("take_full_disk");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 2 --cameras-per-node 1 --width 320 --height 240",
+                               "actor:\n  vertices: 2000\n", "--frames 4 --bayer"));
+  const Result r = run("(trap '' XFSZ; ulimit -f 40; " + kCli + " run --session " +
+                       (folder / "session").string() + " --frames 20 --seconds 30 --record-take " +
+                       (folder / "takes" / "take-1").string() + ")");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("take take-1: frames "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the take lost the recording of nodes node1, node2"), std::string::npos)
+      << r.output;
+  fs::remove_all(folder);
+}
+
 // --body fine: the studio and the nodes it starts pose the finer generic human alike (a node
 // given offsets for another mesh says so and renders nothing), and each node sends the
 // refinement twice the statistics.

@@ -47,5 +47,47 @@ TEST(YamlReader, SyntaxErrorsCarryTheirLine) {
   EXPECT_NE(e.find("YAML syntax error"), std::string::npos) << e;
 }
 
+TEST(YamlReader, DeepNestingIsAnErrorNotACrash) {
+  // yaml-cpp recurses per level of nesting, under a depth guard: 100,000 levels of flow or block
+  // collections must end in an Error naming the file, not a stack overflow.
+  const YamlReader in("deep.yaml");
+  const int depth = 100000;
+  for (const std::string& text : {std::string(depth, '[') + std::string(depth, ']'),
+                                  [&] {
+                                    std::string t;
+                                    for (int i = 0; i < depth; ++i) t += "{a: ";
+                                    return t + "1" + std::string(depth, '}');
+                                  }(),
+                                  [&] {
+                                    std::string t;
+                                    for (int i = 0; i < 5000; ++i) t += std::string(i, ' ') + "-\n";
+                                    return t;
+                                  }()}) {
+    const std::string e = testing::errorOf([&] { in.parseDocument(text); });
+    EXPECT_EQ(e.rfind("deep.yaml", 0), 0u) << e.substr(0, 300);
+  }
+}
+
+TEST(YamlReader, TextFromTheFileIsQuotedAndCut) {
+  const YamlReader in("test.yaml");
+  // A 20 MB scalar with a terminal escape in it: 200 bytes of it come back, escaped.
+  const YAML::Node root = in.parseDocument("a: \"\\e[2J" + std::string(20'000'000, 'x') + "\"\n");
+  const std::string e = testing::errorOf([&] { in.number(root["a"], "a"); });
+  EXPECT_LT(e.size(), 400u);
+  EXPECT_NE(e.find("got '\\x1b[2Jxxx"), std::string::npos) << e;
+  EXPECT_NE(e.find("... (20000004 bytes in all)"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\x1b'), std::string::npos);
+  // A key with a line break in it cannot forge a line of the message.
+  const YAML::Node keys = in.parseDocument("\"bad\\nkey\": 1\n");
+  const std::string k = testing::errorOf([&] { in.checkKeys(keys, "", {"good"}); });
+  EXPECT_EQ(k, "test.yaml:1: 'bad\\nkey': unknown key 'bad\\nkey'; expected one of: good");
+  // Another kind of file read as YAML (/etc/passwd is one long text): its contents stay out.
+  const YAML::Node passwd =
+      in.parseDocument("root:x:0:0:root:/root:/bin/bash\ndaemon:x:1:1:daemon:/usr/sbin\n");
+  const std::string p = testing::errorOf([&] { in.requireMap(passwd, ""); });
+  EXPECT_EQ(p.find("root:x"), std::string::npos) << p;
+  EXPECT_NE(p.find("not a YAML file of this kind"), std::string::npos) << p;
+}
+
 }  // namespace
 }  // namespace lumistage

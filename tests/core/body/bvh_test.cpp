@@ -276,5 +276,54 @@ TEST(Bvh, MalformedFilesNameFileLineAndWhatWasExpected) {
   fs::remove_all(folder);
 }
 
+TEST(Bvh, DeeplyNestedJointsAreReadWithoutRecursion) {
+  // 100,000 joints, each the child of the one before: the parser once recursed per level and
+  // ended with a stack overflow (SIGSEGV) on such a file.
+  const fs::path folder = testFolder();
+  constexpr int kDepth = 100000;
+  std::string text =
+      "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 3 Xposition Yposition "
+      "Zposition\n";
+  for (int j = 0; j < kDepth; ++j)
+    text += "JOINT j" + std::to_string(j) + "\n{\nOFFSET 0 -1 0\nCHANNELS 0\n";
+  text += "End Site\n{\nOFFSET 0 -1 0\n}\n";
+  for (int j = 0; j <= kDepth; ++j) text += "}\n";
+  text += "MOTION\nFrames: 1\nFrame Time: 0.01\n0 0 0\n";
+  writeText(folder / "deep.bvh", text);
+  const MotionClip clip = loadBvh(folder / "deep.bvh", makeHumanSkeleton());
+  EXPECT_EQ(clip.frames.size(), 1u);
+  // Cut short inside the nesting: an error naming the innermost open joint, not a crash.
+  writeText(folder / "deep.bvh", text.substr(0, text.find("End Site")));
+  const std::string m =
+      testing::errorOf([&] { loadBvh(folder / "deep.bvh", makeHumanSkeleton()); });
+  EXPECT_NE(m.find("expected '}' closing joint 'j99999'"), std::string::npos) << m;
+}
+
+TEST(Bvh, ValuesTooLargeForAStageAreRefusedWithTheirLine) {
+  const fs::path folder = testFolder();
+  const Skeleton s = makeHumanSkeleton();
+  auto load = [&](const std::string& from, const std::string& to) {
+    std::string text = kCmuStyle;
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    writeText(folder / "bad.bvh", text.replace(at, from.size(), to));
+    return testing::errorOf([&] { loadBvh(folder / "bad.bvh", s); });
+  };
+  // A root position of 1e308 is a number, but scaled to metres it is no place on a stage (it wrote
+  // -nan into a session's truth).
+  std::string m = load("10 100 -20 0 0 0", "1e308 100 -20 0 0 0");
+  EXPECT_NE(m.find("bad.bvh:69: frame 2: the root is"), std::string::npos) << m;
+  // OFFSETs whose sum overflows.
+  m = load("OFFSET -5 0 0", "OFFSET -1.7e308 0 0");
+  EXPECT_NE(m.find("bad.bvh:"), std::string::npos) << m;
+  EXPECT_NE(m.find("at rest"), std::string::npos) << m;
+  m = load("OFFSET 0 -45 0", "OFFSET 0 nan 0");
+  EXPECT_NE(m.find("expected a number for OFFSET, found 'nan'"), std::string::npos) << m;
+  // Text echoed from the file is quoted, its control bytes escaped: no terminal escape gets out.
+  m = load("10 100 -20", "10 \x1b[2J -20");
+  EXPECT_NE(m.find("'\\x1b[2J'"), std::string::npos) << m;
+  EXPECT_EQ(m.find('\x1b'), std::string::npos) << m;
+}
+
 }  // namespace
 }  // namespace lumistage

@@ -71,6 +71,13 @@ TEST(WandSession, ErrorsNameTheLine) {
   EXPECT_NE(error("# lumistage wand points 2\ncamera cam01 640 480\n")
                 .find("w.txt:1: wand points version ' 2': this build reads version 1"),
             std::string::npos);
+  // What is echoed from the file is quoted: a terminal escape comes back as \x1b, a long word cut.
+  const std::string escaped = error(head + "point 0 cam01 1 \x1b[2J\n");
+  EXPECT_NE(escaped.find("found '\\x1b[2J'"), std::string::npos) << escaped;
+  EXPECT_EQ(escaped.find('\x1b'), std::string::npos) << escaped;
+  const std::string huge = error(head + std::string(100000, 'z') + " 1\n");
+  EXPECT_NE(huge.find("(100000 bytes in all)"), std::string::npos);
+  EXPECT_LT(huge.size(), 400u);
   const WandSession ok = parseWandSession(head + "point 3 cam01 10.5 20.25\n", "w.txt");
   EXPECT_EQ(ok.sampleCount(), 4);
   EXPECT_TRUE(ok.has(3, 0));

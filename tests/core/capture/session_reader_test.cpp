@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -302,6 +304,63 @@ TEST(SessionReader, MalformedFilesAreErrorsNamingFileAndLine) {
   expectError(index + ":4: frame 0 after frame 1: frame numbers must increase");
   replaceInFile(index, "frame,timestamp_ns", "frame;timestamp_ns");
   expectError(index + ":1: expected the header 'frame,timestamp_ns', got 'frame;timestamp_ns'");
+  fs::remove_all(folder);
+}
+
+// A FIFO where a frame's image should be: fopen on it blocked `stream` for ever. In a child with an
+// alarm, so that a regression fails instead of hanging.
+TEST(SessionReader, AFifoInACameraFolderIsRefusedNotOpened) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("fifo");
+  writeSession(folder, rig, PixelFormat::kMono8, 3);
+  const fs::path image = folder / "cam02" / "000001.png";
+  fs::remove(image);
+  ASSERT_EQ(::mkfifo(image.c_str(), 0600), 0);
+  const int code = testing::inChildProcess([&] {
+    ::alarm(20);
+    SessionReader reader(folder);
+    const std::string warnings = allWarnings(reader);
+    if (reader.frameCount() != 2) return 1;
+    if (!contains(warnings, "cam02/000001.png")) return 2;
+    if (!contains(warnings, "is not a regular file")) return 3;
+    // Put there after the session was opened: the frame fails, it does not block.
+    std::vector<CameraFrame> frames;
+    ::unlink((folder / "cam01" / "000002.png").c_str());
+    if (::mkfifo((folder / "cam01" / "000002.png").c_str(), 0600) != 0) return 4;
+    try {
+      reader.readFrame(1, frames);
+      return 5;
+    } catch (const Error& e) {
+      if (!contains(e.what(), "is not a regular file")) return 6;
+    }
+    // session.yaml a FIFO: an Error, not a wait.
+    fs::remove(folder / "session.yaml");
+    if (::mkfifo((folder / "session.yaml").c_str(), 0600) != 0) return 7;
+    const std::string m = testing::errorOf([&] { SessionReader again(folder); });
+    return contains(m, "session.yaml: is not a regular file") ? 0 : 8;
+  });
+  EXPECT_EQ(code, 0);
+  fs::remove_all(folder);
+}
+
+// A session.yaml whose rig is another kind of file (written by someone else, read by a user who
+// may read more): the error says what is wrong, not what the file holds.
+TEST(SessionReader, ARigThatIsAnotherKindOfFileIsNotEchoed) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("rig_passwd");
+  writeSession(folder, rig, PixelFormat::kMono8, 1);
+  const fs::path secret = folder / "passwd";
+  std::ofstream(secret) << "root:x:0:0:root:/root:/bin/bash\nsecret: hunter2\n";
+  replaceInFile(folder / "session.yaml", "rig: rig.yaml", "rig: " + secret.string());
+  std::string m = testing::errorOf([&] { SessionReader reader(folder); });
+  EXPECT_TRUE(contains(m, "passwd")) << m;
+  EXPECT_FALSE(contains(m, "root:x")) << m;
+  EXPECT_FALSE(contains(m, "hunter2")) << m;
+  // A YAML map of another kind: its keys stay out too (the format is checked first).
+  std::ofstream(secret, std::ios::trunc) << "password: hunter2\n";
+  m = testing::errorOf([&] { SessionReader reader(folder); });
+  EXPECT_TRUE(contains(m, "missing key 'format'")) << m;
+  EXPECT_FALSE(contains(m, "password")) << m;
   fs::remove_all(folder);
 }
 

@@ -8,6 +8,7 @@
 #include "core/base/error.h"
 #include "core/capture/session_recorder.h"
 #include "tests/core/capture/capture_test_util.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -151,19 +152,86 @@ TEST(Replay, FromMemoryLoadingStopsWhenCancelled) {
   fs::remove_all(folder);
 }
 
-TEST(Replay, AnImageDamagedAfterOpeningEndsTheReplayWithItsName) {
+// A PNG whose signature, header and end chunk are right (the check at opening passes) but whose
+// image data is garbage.
+void garbleImageData(const fs::path& png) {
+  std::string bytes = readFile(png);
+  ASSERT_GT(bytes.size(), 60u);
+  // Past the signature, IHDR and the first chunk's length and type; short of the end chunk.
+  for (size_t i = 41; i + 20 < bytes.size(); ++i) bytes[i] = char(0x55);
+  std::ofstream(png, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// Every frame a source serves until it finishes (or `limit`), with what was asked of next().
+int drain(SessionSource& source, int limit = 1000) {
+  CameraFrame frame;
+  int got = 0;
+  for (int calls = 0; !source.finished() && calls < limit; ++calls)
+    got += source.next(frame, milliseconds(0));
+  return got;
+}
+
+TEST(Replay, AnImageDamagedAfterOpeningIsSkippedCountedAndSaid) {
   const Rig rig = smallRig();
   const fs::path folder = freshFolder("replay_damaged");
   record(folder, rig, PixelFormat::kMono8, 3);
   SessionSource source(folder, replay(ReplayMode::kAsFastAsPossible));
   std::ofstream(folder / "cam02" / "000001.png", std::ios::trunc) << "not a png";
-  CameraFrame frame;
-  int got = 0;
-  while (source.next(frame, milliseconds(0))) ++got;
-  EXPECT_EQ(got, 3);
+  // Set 1 is skipped; sets 0 and 2 come out whole.
+  EXPECT_EQ(drain(source), 6);
   EXPECT_TRUE(source.finished());
+  EXPECT_EQ(source.failure(), "");
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(source.stats(c).dropped, 1) << c;
   EXPECT_NE(source.stats(1).last_error.find("cam02/000001.png"), std::string::npos)
       << source.stats(1).last_error;
+  fs::remove_all(folder);
+}
+
+TEST(Replay, GarbageImageDataPassesTheOpeningCheckAndIsSkippedInEveryMode) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("replay_garbage");
+  record(folder, rig, PixelFormat::kMono8, 4);
+  garbleImageData(folder / "cam01" / "000002.png");
+  for (ReplayMode mode : {ReplayMode::kAsFastAsPossible, ReplayMode::kFromMemory}) {
+    SessionSource source(folder, replay(mode));
+    ASSERT_EQ(source.reader().frameCount(), 4);  // the header and end chunk are right
+    EXPECT_EQ(drain(source), 9);
+    EXPECT_EQ(source.failure(), "");
+    EXPECT_EQ(source.stats(0).dropped, 1);
+    EXPECT_NE(source.stats(0).last_error.find("cam01/000002.png"), std::string::npos)
+        << source.stats(0).last_error;
+  }
+  // Looping and synchronised, as a node replays: it goes on past the damaged set, loop after loop.
+  ReplayOptions options = replay(ReplayMode::kRecordedRate, true, size_t(1) << 30, {0, 1});
+  options.synchronized = true;
+  SessionSource node(folder, options);
+  CameraFrame frame;
+  int got = 0;
+  for (int calls = 0; calls < 4000 && got < 2 * 10; ++calls)
+    got += node.next(frame, milliseconds(5));
+  EXPECT_EQ(got, 20);
+  EXPECT_FALSE(node.finished());
+  fs::remove_all(folder);
+}
+
+TEST(Replay, WhenEveryFrameFailsTheReplayFinishesAndSaysWhy) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("replay_all_damaged");
+  record(folder, rig, PixelFormat::kMono8, 2);
+  SessionSource source(folder, replay(ReplayMode::kAsFastAsPossible, true));
+  for (const char* file : {"000000.png", "000001.png"}) garbleImageData(folder / "cam01" / file);
+  EXPECT_EQ(drain(source), 0);
+  EXPECT_TRUE(source.finished());
+  EXPECT_NE(source.failure().find("none of the session's 2 frames left can be decoded"),
+            std::string::npos)
+      << source.failure();
+  // From memory: refused when opened, naming the first file.
+  const std::string m = testing::errorOf([&] {
+    const SessionSource opened(folder, replay(ReplayMode::kFromMemory));
+    ADD_FAILURE() << "opened, with " << opened.reader().frameCount() << " frames";
+  });
+  EXPECT_NE(m.find("no frame of the session can be decoded"), std::string::npos) << m;
+  EXPECT_NE(m.find("cam01/000000.png"), std::string::npos) << m;
   fs::remove_all(folder);
 }
 

@@ -436,6 +436,43 @@ TEST(TomlImport, ReadsPose2SimCalibrationsInTheirTablesNaturalOrder) {
   }
 }
 
+// toml11 recurses per level of nested arrays and inline tables: 100,000 levels overflowed the
+// stack. Brackets in strings and comments are not nesting.
+TEST(TomlImport, DeepNestingIsRefusedBeforeToml11ReadsIt) {
+  const std::vector<Camera> truth = ringCameras(1, 640, 480);
+  TempFolder folder;
+  const std::string good = tomlCamera(truth[0], "cam_1");
+  folder.write("deep.toml",
+               good + "[extra]\nx = " + std::string(100000, '[') + std::string(100000, ']') + "\n");
+  const std::string e = testing::errorOf([&] { importTomlRig(folder.path() / "deep.toml", {}); });
+  EXPECT_NE(e.find("deep.toml:"), std::string::npos) << e.substr(0, 300);
+  EXPECT_NE(e.find("nested deeper than 64 levels"), std::string::npos) << e.substr(0, 300);
+  const std::string brackets(200, '[');
+  folder.write("fine.toml", "# " + brackets + "\n" + good + "[metadata]\nnote = \"" + brackets +
+                                "\"\nmore = \'" + brackets + "\'\nlong = \"\"\"\n" + brackets +
+                                "\n\"\"\"\n");
+  EXPECT_EQ(importTomlRig(folder.path() / "fine.toml", {}).rig.cameraCount(), 1);
+}
+
+// toml11 read past its buffer on a quote, a lone UTF-8 lead byte and a quote (file_reader_fuzz,
+// AddressSanitizer): text that is not UTF-8 is refused before toml11 reads it; UTF-8 is read.
+TEST(TomlImport, TextThatIsNotUtf8IsRefusedBeforeToml11ReadsIt) {
+  const std::vector<Camera> truth = ringCameras(1, 640, 480);
+  TempFolder folder;
+  const std::string good = tomlCamera(truth[0], "cam_1");
+  folder.write("cut.toml", good + "\n'\xee'");
+  const std::string e = testing::errorOf([&] { importTomlRig(folder.path() / "cut.toml", {}); });
+  EXPECT_NE(e.find("cut.toml:"), std::string::npos) << e;
+  EXPECT_NE(e.find("byte 0xee is not UTF-8 text"), std::string::npos) << e;
+  folder.write("latin1.toml", "# caf\xe9\n" + good);
+  EXPECT_NE(testing::errorOf([&] {
+              importTomlRig(folder.path() / "latin1.toml", {});
+            }).find("latin1.toml:1: byte 0xe9"),
+            std::string::npos);
+  folder.write("utf8.toml", "# K\xc3\xa4the's cameras\n" + good);
+  EXPECT_EQ(importTomlRig(folder.path() / "utf8.toml", {}).rig.cameraCount(), 1);
+}
+
 TEST(TomlImport, MalformedFilesAreNamed) {
   const std::vector<Camera> truth = ringCameras(1, 640, 480);
   TempFolder folder;

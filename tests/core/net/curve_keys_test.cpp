@@ -121,3 +121,48 @@ TEST_F(CurveKeysTest, BadKeyFilesNameFileLineAndKey) {
 
 }  // namespace
 }  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+// Under umask 000 the key folders came out writable by anyone; a secret key made readable by
+// others was used without a word.
+TEST(CurveKeyPermissions, FoldersArePrivateWhateverTheUmaskAndLooseSecretsAreSaid) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("lumistage_key_permissions_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const mode_t old_umask = ::umask(0);
+  KeyStore store(dir);
+  store.init({"node1"});
+  store.addNode("node2");
+  ::umask(old_umask);
+  for (const fs::path& folder : {dir, dir / "nodes", dir / "authorized"}) {
+    struct stat st {};
+    ASSERT_EQ(::stat(folder.c_str(), &st), 0);
+    EXPECT_EQ(st.st_mode & 0777, 0700u) << folder;
+    EXPECT_EQ(keyPermissionProblem(folder), "");
+  }
+  for (const fs::path& secret :
+       {store.studioKeyPath(), store.nodeKeyPath("node1"), store.nodeKeyPath("node2")}) {
+    struct stat st {};
+    ASSERT_EQ(::stat(secret.c_str(), &st), 0);
+    EXPECT_EQ(st.st_mode & 0777, 0600u) << secret;
+    EXPECT_EQ(keyPermissionProblem(secret), "");
+  }
+  // chmod 644 on a secret, 777 on the folder the studio admits keys from: said.
+  fs::permissions(store.studioKeyPath(), fs::perms(0644));
+  EXPECT_NE(keyPermissionProblem(store.studioKeyPath())
+                .find("studio.key: the secret key is "
+                      "readable or writable by others "
+                      "(mode 0644)"),
+            std::string::npos)
+      << keyPermissionProblem(store.studioKeyPath());
+  EXPECT_NO_THROW(store.studioKey());  // used still, with the warning
+  fs::permissions(dir / "authorized", fs::perms(0777));
+  EXPECT_NE(keyPermissionProblem(dir / "authorized").find("writable by others (mode 0777)"),
+            std::string::npos);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace lumistage

@@ -336,3 +336,89 @@ TEST(MessageCodec, MalformedViewsAreRefusedWithTheirReason) {
 
 }  // namespace
 }  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+// Camera names in heartbeats reach the studio's log, `lumistage run`'s report and its JSON: a
+// node (a plain-mode peer with a valid node name will do) that sends a line break or terminal
+// escapes in one is refused, as a node name is.
+TEST(MessageCodec, NamesThatAreNoCameraOrNodeNamesAreRefused) {
+  HeartbeatData forged;
+  forged.cameras = {{"cam1", 10, 0, 30.f, ""}, {"cam2\n[info] forged", 10, 0, 30.f, ""}};
+  EXPECT_EQ(decodeError(envelope(forged)),
+            "heartbeat: camera 1: its name is not a valid camera name");
+  HeartbeatData escape;
+  escape.cameras = {{"\x1b[2Jcam1", 10, 0, 30.f, ""}};
+  EXPECT_EQ(decodeError(envelope(escape)),
+            "heartbeat: camera 0: its name is not a valid camera name");
+  HelloData hello{"node1", {"cam1", "cam 2"}, kProtocolVersion, {}};
+  EXPECT_EQ(decodeError(envelope(hello)), "hello: camera 1: its name is not a valid camera name");
+  HelloData node{"node1\x1b", {}, kProtocolVersion, {}};
+  EXPECT_EQ(decodeError(envelope(node)), "hello: the node name is not a valid node name");
+  // Free text (a last error) still decodes: the studio shows it escaped (StudioCoordinator).
+  HeartbeatData free_text;
+  free_text.cameras = {{"cam1", 10, 0, 30.f, "bad\x1b[2J"}};
+  const std::vector<uint8_t> text = encodeMessage(envelope(free_text));
+  EXPECT_TRUE(decodeMessage(text.data(), text.size()).ok());
+}
+
+}  // namespace
+}  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+// The studio's message limit follows from largestNodeMessage (issue 54: at 64 MB every connection
+// could make it buffer that much). It must hold what a node legitimately sends at those sizes,
+// in its worst case: a partial image of noise (no two equal pixels, no empty one between), every
+// silhouette mask of the largest camera, a heartbeat of every string at its longest.
+TEST(MessageCodec, TheLargestNodeMessageHoldsWhatANodeSendsAtItsWorst) {
+  NodeMessageSizes sizes;
+  sizes.cameras = 4;
+  sizes.camera_pixels = 640 * 480;
+  sizes.silhouette_step = 4;
+  sizes.statistics_samples = 500 * 18;
+  sizes.view_pixels = 200 * 150;
+  const MessageLimits limits;
+  const size_t largest = largestNodeMessage(sizes, limits);
+  const auto wire = [](MessageBody body) {
+    return encodeMessage(envelope(std::move(body))).size();
+  };
+
+  std::vector<uint8_t> noise(size_t(sizes.view_pixels) * 4);
+  for (size_t i = 0; i < noise.size(); ++i) noise[i] = uint8_t(i * 7 + i / 4 * 13 + 1);
+  std::vector<uint8_t> runs;
+  encodeAlphaRuns(noise, runs);
+  // Every other pixel empty: a pair of run lengths for each literal pixel.
+  std::vector<uint8_t> sparse = noise;
+  for (size_t p = 0; p < sparse.size() / 4; p += 2) std::fill_n(sparse.begin() + p * 4, 4, 0);
+  std::vector<uint8_t> sparse_runs;
+  encodeAlphaRuns(sparse, sparse_runs);
+  for (const auto& [encoding, data] : {std::pair{ImageEncoding::kRawRgba, noise},
+                                       std::pair{ImageEncoding::kRleRgba, encodeRleRgba(noise)},
+                                       std::pair{ImageEncoding::kAlphaRuns, runs},
+                                       std::pair{ImageEncoding::kAlphaRuns, sparse_runs}}) {
+    const size_t bytes = wire(PartialImageData{0, 200, 150, encoding, data});
+    EXPECT_LE(bytes, largest) << int(encoding);
+    EXPECT_TRUE(bytes > size_t(sizes.view_pixels) * 3);  // the pixels are in it
+  }
+
+  SilhouettesData masks;
+  for (int c = 0; c < sizes.cameras; ++c)
+    masks.masks.push_back({c, 160, 120, std::vector<uint8_t>(160 * 120 / 8, 0xa5)});
+  EXPECT_LE(wire(masks), largest);
+
+  HeartbeatData heartbeat;
+  const std::string longest(limits.max_string_bytes, 'e');
+  for (int c = 0; c < sizes.cameras; ++c)
+    heartbeat.cameras.push_back({"cam0" + std::to_string(c), 1, 1, 30.f, longest});
+  heartbeat.take = {"take-1", 1, 2, 3, 4, 5, false, longest, 1, longest};
+  EXPECT_LE(wire(heartbeat), largest);
+
+  // And no more than a margin above the largest of them: the limit is the rig's, not 64 MB.
+  EXPECT_LT(largest, size_t(sizes.view_pixels) * 5 + 4096);
+}
+
+}  // namespace
+}  // namespace lumistage

@@ -275,3 +275,105 @@ TEST(Transport, InvalidKeysAreRefusedUpFront) {
 
 }  // namespace
 }  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+// In plain mode a peer's name is what it says: one with a line break and terminal escapes must
+// not reach the studio's log as it is (it forged lines there).
+TEST(Transport, APlainPeerWhoseNameIsNoNodeNameIsRefusedAndNamedQuoted) {
+  StudioEndpointConfig plain_studio;
+  plain_studio.bind = "tcp://127.0.0.1:*";
+  plain_studio.security = TransportSecurity::kPlain;
+  StudioEndpoint studio(plain_studio);
+  NodeEndpointConfig config;
+  config.name = "node1\x1b[2J\n[2024-01-01 00:00:00.000] [info] node evil is streaming";
+  config.security = TransportSecurity::kPlain;
+  config.connect = studio.endpoint();
+  NodeEndpoint node(config);
+  ASSERT_TRUE(node.send(hello("node1"), std::chrono::seconds(5)));
+  const std::optional<ReceivedMessage> in = studio.receive(std::chrono::seconds(5));
+  ASSERT_TRUE(in.has_value());
+  EXPECT_FALSE(in->result.ok());
+  EXPECT_EQ(in->result.error, "its name is not a valid node name");
+  EXPECT_EQ(in->node.find('\n'), std::string::npos) << in->node;
+  EXPECT_EQ(in->node.find('\x1b'), std::string::npos) << in->node;
+  EXPECT_EQ(in->node.rfind("'node1\\x1b[2J\\n[2024-01-01", 0), 0u) << in->node;
+  ASSERT_EQ(studio.badMessages().size(), 1u);
+  EXPECT_EQ(studio.badMessages().begin()->first, in->node);
+}
+
+}  // namespace
+}  // namespace lumistage
+
+namespace lumistage {
+namespace {
+
+// Opens a TCP connection to `endpoint` (tcp://127.0.0.1:PORT); -1 when it cannot.
+int connectRaw(const std::string& endpoint) {
+  const int port = std::stoi(endpoint.substr(endpoint.rfind(':') + 1));
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.sin_port = htons(uint16_t(port));
+  if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+// Writes `bytes` unless the peer closes the connection first; false when it did.
+bool writeAll(int fd, const uint8_t* bytes, size_t size) {
+  for (size_t sent = 0; sent < size;) {
+    pollfd out{fd, POLLOUT, 0};
+    if (poll(&out, 1, 10'000) <= 0 || (out.revents & (POLLERR | POLLHUP))) return false;
+    const ssize_t n = send(fd, bytes + sent, size - sent, MSG_NOSIGNAL);
+    if (n <= 0) return false;
+    sent += size_t(n);
+  }
+  return true;
+}
+
+// Issue 54: a client that opened a CURVE connection and sent a 60 MB frame during the handshake
+// was buffered whole (the limit was 64 MB) until the handshake timed out; two dozen took the
+// studio past 1.6 GB. A frame announced over the limit costs its connection at once, before its
+// body is read, and the studio goes on serving its nodes.
+TEST(Transport, AHandshakeAnnouncingAMessageOverTheLimitIsClosedBeforeItsBody) {
+  const Keys keys;
+  StudioEndpointConfig config = curveStudio(keys);
+  config.limits.max_bytes = size_t{1} << 20;
+  StudioEndpoint studio(config);
+  EXPECT_EQ(studio.maxMessageBytes(), size_t{1} << 20);
+  const int fd = connectRaw(studio.endpoint());
+  ASSERT_GE(fd, 0);
+  // A ZMTP 3.0 greeting asking for CURVE, then a command frame (the handshake's HELLO) of 60 MB.
+  std::vector<uint8_t> greeting(64, 0);
+  greeting[0] = 0xff;
+  greeting[9] = 0x7f;
+  greeting[10] = 3;
+  for (size_t i = 0; i < 5; ++i) greeting[12 + i] = uint8_t("CURVE"[i]);
+  const uint64_t announced = uint64_t{60} << 20;
+  greeting.push_back(0x06);  // command, 8-byte size
+  for (int shift = 56; shift >= 0; shift -= 8) greeting.push_back(uint8_t(announced >> shift));
+  ASSERT_TRUE(writeAll(fd, greeting.data(), greeting.size()));
+  // Its body: the studio closes the connection before all of it is sent (the kernel's buffers take
+  // a few MB at most).
+  const std::vector<uint8_t> chunk(size_t{1} << 20, 0x5a);
+  uint64_t sent = 0;
+  while (sent < announced && writeAll(fd, chunk.data(), chunk.size())) sent += chunk.size();
+  EXPECT_LT(sent, announced) << "the studio took the whole 60 MB frame";
+  close(fd);
+
+  // An authorised node is served as before.
+  NodeEndpoint node(curveNode(studio, "node1", keys.node1, keys.studio.public_key));
+  ASSERT_TRUE(node.send(hello("node1"), kPatience));
+  const std::optional<ReceivedMessage> in = studio.receive(kPatience);
+  ASSERT_TRUE(in.has_value());
+  EXPECT_TRUE(in->result.ok()) << in->result.error;
+  EXPECT_EQ(in->node, "node1");
+}
+
+}  // namespace
+}  // namespace lumistage

@@ -369,6 +369,74 @@ TEST(StudioCoordinator, ANodeBackFromLostReportsItsTakeAnew) {
   EXPECT_EQ(take().written, 3);
 }
 
+// A node's free text (its cameras' errors, its take's error) reaches the log and `lumistage run`'s
+// report: with a line break or terminal escapes in it, it is shown escaped and cut short; plain
+// text as it was.
+TEST(StudioCoordinator, ANodesErrorTextIsShownEscaped) {
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, {});
+  StudioCoordinator& studio = *made;
+  ScriptedNode node(studio.endpoint(), "node1");
+  HeartbeatData heartbeat;
+  heartbeat.cameras = {{"cam01", 10, 0, 30.f, "\x1b[2Jlost\n[info] node node2 is streaming"},
+                       {"cam02", 10, 0, 30.f, "lost: reconnecting"}};
+  heartbeat.take =
+      TakeStatusData{"take-1", 1, 9, 0, 0, 0, false, std::string(900, 'e') + "\r", -1, "pc\x1b:1"};
+  ASSERT_TRUE(node.send(0, heartbeat));
+  const auto report = [&] {
+    for (const NodeReport& n : studio.report().nodes)
+      if (n.name == "node1") return n;
+    return NodeReport{};
+  };
+  for (int slice = 0; slice < 200 && report().cameras.empty(); ++slice)
+    studio.runFor(milliseconds(10));
+  const NodeReport n = report();
+  ASSERT_EQ(n.cameras.size(), 2u);
+  EXPECT_EQ(n.cameras[0].last_error, "'\\x1b[2Jlost\\n[info] node node2 is streaming'");
+  EXPECT_EQ(n.cameras[1].last_error, "lost: reconnecting");
+  EXPECT_EQ(n.take.error, "'" + std::string(200, 'e') + "'... (901 bytes in all)");
+  EXPECT_EQ(n.take.disk, "'pc\\x1b:1'");
+}
+
+// Issue 54: every connection to the studio's port, before its handshake is done too, may make it
+// buffer a message of the endpoint's limit, which was 64 MB whatever the rig. It now follows from
+// the rig, the body and the largest view: enough for a node's image of that view in any encoding,
+// and a view larger than that is refused rather than cost every node its connection.
+TEST(StudioCoordinator, ItsMessageLimitFollowsTheRigAndTheLargestView) {
+  StudioCoordinatorOptions options;
+  options.max_view_pixels = 640 * 480;
+  // The body gives the statistics' size (without one, any number of points up to the decoder's
+  // limit is taken).
+  options.body = std::make_shared<const SkinnedMesh>(loadGenericHuman());
+  const std::unique_ptr<StudioCoordinator> made = twoCameraStudio(1, options);
+  StudioCoordinator& studio = *made;
+  EXPECT_GE(studio.maxMessageBytes(), size_t(640 * 480) * 5);  // RLE of noise: 5 bytes a pixel
+  EXPECT_LT(studio.maxMessageBytes(), size_t{8} << 20);
+
+  ViewData view = studio.view();
+  view.width = 640;
+  view.height = 480;
+  studio.setView(view);
+  EXPECT_EQ(studio.view().width, 640);
+  view.width = 1280;
+  view.height = 960;
+  studio.setView(view);
+  EXPECT_EQ(studio.view().width, 640);  // refused: the nodes' images would not fit
+  view.view = 1;
+  studio.setViews({studio.view(), view});
+  EXPECT_EQ(studio.views().size(), 1u);
+
+  // A node's largest image of the view arrives.
+  ScriptedNode node(studio.endpoint(), "node1");
+  std::vector<uint8_t> noise(size_t(640) * 480 * 4);
+  for (size_t i = 0; i < noise.size(); ++i) noise[i] = uint8_t(i * 7 + i / 4 * 13 + 1);
+  ASSERT_TRUE(
+      node.send(0, PartialImageData{0, 640, 480, ImageEncoding::kRleRgba, encodeRleRgba(noise)}));
+  for (int slice = 0; slice < 200 && studio.nodeState("node1") != "streaming"; ++slice)
+    studio.runFor(milliseconds(10));
+  EXPECT_EQ(studio.nodeState("node1"), "streaming");
+  EXPECT_EQ(badMessagesOf(studio, "node1"), 0);
+}
+
 // How long each node's takes' disk lasts at its cameras' rate: nodes on one PC write to one disk,
 // so its free space lasts for their rates together; a node that does not say has no figure.
 TEST(StudioCoordinator, TakesDiskTimeCountsTheNodesThatShareADisk) {

@@ -1,0 +1,107 @@
+// libFuzzer targets over the readers of files a user is handed (issue 54): BVH motion, rig and
+// session YAML, wand points, and the Qualisys XML and TOML calibration imports. Each reader takes
+// a path, so every input is written to a file first. Any input must give a result or an Error
+// (std::exception) naming what is wrong, never a crash, a hang, unbounded memory or a read out of
+// bounds (AddressSanitizer). One source, one binary a reader: LUMISTAGE_FUZZ_READER picks which
+// (run_fuzz.sh builds each).
+// Not yet run by run_fuzz.sh (the readers need the core library and its dependencies, which the
+// message decoder's target does not); built by hand against a build folder's core library, e.g.
+//   clang++ -std=c++20 -O1 -g -fsanitize=fuzzer,address -I. -isystem /usr/include/eigen3 \
+//     -isystem /usr/include/opencv4 -DLUMISTAGE_FUZZ_READER=5 -DLUMISTAGE_FUZZ_EXTENSION='".toml"'
+//     \
+//     tests/fuzz/file_reader_fuzz.cpp core/geometry/toml_rig_import.cpp \
+//     build/core/liblumistage_core.a <core_tests' link libraries> -o toml_fuzz
+// (the reader's own sources given first, so that they are instrumented; the rest from the
+// library). Run so for 15-20 s each, the rig, wand and Qualisys readers found nothing; the TOML
+// import read past toml11's buffer (fixed in toml_rig_import.cpp).
+// With LUMISTAGE_FUZZ_SEED_DIR set, the target first copies its reader's valid examples there
+// (LUMISTAGE_FUZZ_SEEDS, ':'-separated files), so the fuzzer starts from inputs that parse.
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/body/bvh.h"
+#include "core/body/human_skeleton.h"
+#include "core/calib/wand_session.h"
+#include "core/capture/session_reader.h"
+#include "core/geometry/rig_file.h"
+#include "core/geometry/rig_import.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace lumistage;
+
+// The file every input is written to, named as its reader expects.
+const fs::path& inputFile() {
+  static const fs::path file = [] {
+    const char* extension = LUMISTAGE_FUZZ_EXTENSION;
+    const fs::path dir =
+        fs::temp_directory_path() / ("lumistage_fuzz_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    // A session is a folder whose session.yaml names the rest.
+    return dir / (LUMISTAGE_FUZZ_READER == 6 ? std::string("session.yaml")
+                                             : std::string("input") + extension);
+  }();
+  return file;
+}
+
+void read(const fs::path& file) {
+#if LUMISTAGE_FUZZ_READER == 1
+  static const Skeleton target = makeHumanSkeleton();
+  (void)loadBvh(file, target);
+#elif LUMISTAGE_FUZZ_READER == 2
+  (void)loadRig(file);
+#elif LUMISTAGE_FUZZ_READER == 3
+  (void)loadWandSession(file);
+#elif LUMISTAGE_FUZZ_READER == 4
+  (void)importQualisysRig(file, {});
+#elif LUMISTAGE_FUZZ_READER == 5
+  (void)importTomlRig(file, {});
+#elif LUMISTAGE_FUZZ_READER == 6
+  // A session's session.yaml, in a session folder of its own (its rig: a file beside it).
+  (void)SessionReader(file.parent_path());
+#else
+#error "LUMISTAGE_FUZZ_READER: 1 BVH, 2 rig, 3 wand points, 4 Qualisys, 5 TOML, 6 session"
+#endif
+}
+
+void copySeeds() {
+  const char* dir = std::getenv("LUMISTAGE_FUZZ_SEED_DIR");
+  const char* seeds = std::getenv("LUMISTAGE_FUZZ_SEEDS");
+  if (dir == nullptr || seeds == nullptr) return;
+  std::string list = seeds;
+  for (size_t start = 0, n = 0; start <= list.size(); ++n) {
+    const size_t end = std::min(list.find(':', start), list.size());
+    const fs::path seed = list.substr(start, end - start);
+    std::error_code ignored;
+    if (!seed.empty())
+      fs::copy_file(seed, fs::path(dir) / ("seed" + std::to_string(n)),
+                    fs::copy_options::overwrite_existing, ignored);
+    start = end + 1;
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  copySeeds();
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const fs::path& file = inputFile();
+  std::ofstream(file, std::ios::binary | std::ios::trunc)
+      .write(reinterpret_cast<const char*>(data), std::streamsize(size));
+  try {
+    read(file);
+  } catch (const std::exception&) {
+    // Refused with a reason: what a reader should do with a bad file.
+  }
+  return 0;
+}
