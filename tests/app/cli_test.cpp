@@ -799,11 +799,12 @@ TEST(Cli, EvalScoresEachStageAgainstTheTruth) {
   // The matte score also counts what is drawn beyond the actor; the true surface misses nothing.
   // (Its 2000 vertices here, rim-dilated, draw beyond the actor too, and the view's feathered
   // silhouette, whose odds are the pipeline geometry's, costs the true one: the pipeline's refined
-  // mesh comes within half a dB of it; the strict one, carved by no silhouette of its view, about
-  // 1 dB below the refined.)
+  // mesh comes within half a dB of it or above it (0.75 dB above since the tracker fits the
+  // silhouettes' edges); the strict one, carved by no silhouette of its view, about 1 dB below the
+  // refined.)
   const double truth_matte = reportNumber(text, "loo_matte_psnr_db_truth_surface"),
                refined_matte = reportNumber(text, "loo_matte_psnr_db");
-  EXPECT_NEAR(truth_matte, refined_matte, 0.5) << text;
+  EXPECT_GT(refined_matte, truth_matte - 0.5) << text;
   EXPECT_GT(refined_matte, reportNumber(text, "loo_matte_psnr_db_strict") + 0.5) << text;
   EXPECT_LT(reportNumber(text, "loo_missed_pct_truth_surface"), 0.5) << text;
   EXPECT_GT(reportNumber(text, "loo_missed_pct_unrefined"), reportNumber(text, "loo_missed_pct"))
