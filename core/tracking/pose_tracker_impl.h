@@ -251,6 +251,7 @@ struct PoseTracker::Impl {
   std::vector<double> library_bottom, library_upright;
   std::vector<Hypothesis> hypotheses;
   std::vector<Eigen::Vector3d> full_hull;
+  std::vector<RimRay> full_rim;
   void makeLibrary();
   // The body model's lowest and highest point (capsules) in pose `p` of the current skeleton.
   void modelExtent(const Pose& p, double& bottom, double& top);

@@ -137,10 +137,13 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   use_prior = false;
 
   // Every library pose at every heading, over the hull's centroid, standing on its lowest point,
-  // scaled (until calibrated) to the hull's height in that pose; scored on a thinned hull.
+  // scaled (until calibrated) to the hull's height in that pose; scored on a thinned hull and rim.
   full_hull = hull;
   hull.clear();
   for (size_t i = 0; i < full_hull.size(); i += kScoreStride) hull.push_back(full_hull[i]);
+  full_rim = rim;
+  rim.clear();
+  for (size_t i = 0; i < full_rim.size(); i += kScoreStride) rim.push_back(full_rim[i]);
   candidates_valid = false;
   hypotheses.clear();
   for (int i = 0; i < int(library.size()); ++i) {
@@ -152,6 +155,7 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
     }
   }
   hull.swap(full_hull);
+  rim.swap(full_rim);
   candidates_valid = false;
   const int fitted_count = std::min<int>(kFittedHypotheses, int(hypotheses.size()));
   std::partial_sort(hypotheses.begin(), hypotheses.begin() + fitted_count, hypotheses.end(),
