@@ -1,14 +1,100 @@
 #include "app/cli/body_commands.h"
 
 #include <fmt/format.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <memory>
 
 #include "app/cli/checks.h"
+#include "core/base/error.h"
 #include "core/body/human_model.h"
 #include "core/body/mesh_io.h"
 
 namespace lumistage {
+
+namespace {
+
+// Prints a rigged mesh's surface and skeleton (body show).
+void showBody(const std::string& file) {
+  const SkinnedMesh mesh = loadSkinnedMesh(file);
+  const std::string manifold = checkClosedManifold(mesh.rest);
+  const Eigen::Vector3f lo = mesh.rest.positions.rowwise().minCoeff();
+  const Eigen::Vector3f hi = mesh.rest.positions.rowwise().maxCoeff();
+  fmt::print("{}: {} vertices, {} triangles, {}\n", file, mesh.rest.vertexCount(),
+             mesh.rest.triangles.size(),
+             manifold.empty() ? "closed and manifold" : "NOT closed and manifold: " + manifold);
+  fmt::print("extent: x {:.3f}..{:.3f}, y {:.3f}..{:.3f}, z {:.3f}..{:.3f} m\n", lo.x(), hi.x(),
+             lo.y(), hi.y(), lo.z(), hi.z());
+  fmt::print("{} joints:\n", mesh.skeleton.jointCount());
+  for (int j = 0; j < mesh.skeleton.jointCount(); ++j) {
+    const Joint& joint = mesh.skeleton.joint(j);
+    const Eigen::Vector3d p = mesh.skeleton.restPositions()[j];
+    fmt::print("  {:<16} parent {:<16} at ({:6.3f}, {:6.3f}, {:6.3f})\n", joint.name,
+               joint.parent < 0 ? "-" : mesh.skeleton.joint(joint.parent).name, p.x(), p.y(),
+               p.z());
+  }
+}
+
+// Runs showBody in a child process, so that a crash inside Assimp (a COLLADA file nesting
+// 100,000 nodes overflows its parser's stack; only glTF's depth is checked before Assimp reads
+// it) becomes an error naming the file instead of a dead process. The child prints as the
+// command does; its error text comes back through a pipe.
+void showBodyInChildProcess(const std::string& file) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw Error(fmt::format("body show: pipe: {}", std::strerror(errno)));
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw Error(fmt::format("body show: fork: {}", std::strerror(errno)));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    std::string error;
+    try {
+      showBody(file);
+    } catch (const std::exception& e) {
+      error = *e.what() != '\0' ? e.what() : file + ": the import failed";
+    }
+    std::fflush(stdout);
+    for (size_t done = 0; done < error.size();) {
+      const ssize_t n = ::write(fds[1], error.data() + done, error.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      done += size_t(n);
+    }
+    ::_exit(error.empty() ? 0 : 1);
+  }
+  ::close(fds[1]);
+  std::string error;
+  char buffer[4096];
+  for (;;) {
+    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    error.append(buffer, size_t(n));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(status)) {
+    throw Error(fmt::format(
+        "{}: the import crashed inside the mesh library ({}): a damaged or hostile file, or one "
+        "nested too deep",
+        file, ::strsignal(WTERMSIG(status))));
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw Error(error.empty() ? file + ": the import failed" : error);
+}
+
+}  // namespace
 
 void addBodyCommands(CLI::App& app) {
   CLI::App* body = app.add_subcommand("body", "The generic human and other rigged meshes");
@@ -35,25 +121,9 @@ void addBodyCommands(CLI::App& app) {
   CLI::App* show =
       body->add_subcommand("show", "Print a rigged mesh's skeleton and surface, or its error");
   show->add_option("file", *file, "glTF/GLB, FBX, COLLADA...")->required();
-  show->callback([file] {
-    const SkinnedMesh mesh = loadSkinnedMesh(*file);
-    const std::string manifold = checkClosedManifold(mesh.rest);
-    const Eigen::Vector3f lo = mesh.rest.positions.rowwise().minCoeff();
-    const Eigen::Vector3f hi = mesh.rest.positions.rowwise().maxCoeff();
-    fmt::print("{}: {} vertices, {} triangles, {}\n", *file, mesh.rest.vertexCount(),
-               mesh.rest.triangles.size(),
-               manifold.empty() ? "closed and manifold" : "NOT closed and manifold: " + manifold);
-    fmt::print("extent: x {:.3f}..{:.3f}, y {:.3f}..{:.3f}, z {:.3f}..{:.3f} m\n", lo.x(), hi.x(),
-               lo.y(), hi.y(), lo.z(), hi.z());
-    fmt::print("{} joints:\n", mesh.skeleton.jointCount());
-    for (int j = 0; j < mesh.skeleton.jointCount(); ++j) {
-      const Joint& joint = mesh.skeleton.joint(j);
-      const Eigen::Vector3d p = mesh.skeleton.restPositions()[j];
-      fmt::print("  {:<16} parent {:<16} at ({:6.3f}, {:6.3f}, {:6.3f})\n", joint.name,
-                 joint.parent < 0 ? "-" : mesh.skeleton.joint(joint.parent).name, p.x(), p.y(),
-                 p.z());
-    }
-  });
+  // Read in a child process whatever the file's name: Assimp picks its importer by the name and
+  // by the contents, and only glTF's nesting is checked before it reads.
+  show->callback([file] { showBodyInChildProcess(*file); });
 }
 
 }  // namespace lumistage

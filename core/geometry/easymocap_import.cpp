@@ -5,7 +5,9 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 
+#include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/geometry/file_storage_nesting.h"
 #include "core/geometry/rig_import.h"
 #include "core/geometry/rotation.h"
 
@@ -42,6 +44,7 @@ std::vector<double> numbersOf(const cv::FileStorage& storage, const std::string&
 cv::FileStorage open(const fs::path& file) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) throw Error(file.string() + ": no such file");
+  checkFileStorageNesting(readFile(file), file.string());  // OpenCV's parsers recurse per level
   try {
     cv::FileStorage storage(file.string(), cv::FileStorage::READ);
     if (!storage.isOpened())

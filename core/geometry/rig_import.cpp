@@ -13,6 +13,7 @@
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/geometry/file_storage_nesting.h"
 #include "core/geometry/projection_matrix.h"
 #include "core/geometry/rotation.h"
 
@@ -297,6 +298,7 @@ std::pair<Distortion, double> refitDistortion(const Eigen::Matrix3d& K_p, const 
 RigImport importOpenCvRig(const fs::path& file, const RigImportOptions& options) {
   const std::string source = file.string();
   if (!fs::is_regular_file(file)) throw Error(source + ": no such file");
+  checkFileStorageNesting(readFile(file), source);  // OpenCV's parsers recurse per level
   cv::FileStorage storage;
   try {
     if (!storage.open(source, cv::FileStorage::READ)) {

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <atomic>
+#include <cstring>
 #include <deque>
 #include <iterator>
 #include <mutex>
@@ -56,6 +57,9 @@ void setHeartbeats(zmq::socket_t& socket) {
 }
 
 constexpr int kHandshakeIntervalMs = 5000;
+constexpr int kHandshakeLogIntervalMs = 5000;
+// A name for each endpoint's monitor socket (inproc names are per context, but say whose).
+std::atomic<int> monitor_serial{0};
 
 bool waitReadable(zmq::socket_t& socket, std::chrono::milliseconds timeout, int wake_fd = -1) {
   zmq::pollitem_t items[2] = {{socket.handle(), 0, ZMQ_POLLIN, 0},
@@ -73,64 +77,122 @@ struct StudioEndpoint::State {
   StudioEndpointConfig config;
   zmq::context_t context;
   zmq::socket_t router;
-  zmq::socket_t zap;  // CURVE only: ZeroMQ asks it about every connecting key (RFC 27)
-  std::thread zap_thread;
+  zmq::socket_t zap;       // CURVE only: ZeroMQ asks it about every connecting key (RFC 27)
+  zmq::socket_t monitor;   // the router's connection events: handshakes that failed
+  std::thread zap_thread;  // serves zap and reads monitor
   std::atomic<bool> stop{false};
   std::unordered_map<std::string, std::string> node_of_key;  // Z85 public key -> node name
 
   mutable std::mutex mutex;  // guards what other threads read: refusals and counters
   std::deque<Refusal> refusals;
   int64_t refusal_count = 0;
+  int64_t handshake_failures = 0;
   std::map<std::string, int64_t> bad_messages;
+  // Failed handshakes are logged at most once every kHandshakeLogIntervalMs, with their count.
+  int64_t handshake_failures_unlogged = 0;
+  std::string last_handshake_failure;
+  std::chrono::steady_clock::time_point handshake_logged_at{};
 
-  void serveZap();
+  void serve();
+  void answerZap();
+  void readMonitor();
+  void logHandshakeFailures(bool force);
   void countBad(const std::string& node, const std::string& reason);
 };
 
-void StudioEndpoint::State::serveZap() {
+void StudioEndpoint::State::serve() {
   while (!stop.load()) {
     try {
-      if (!waitReadable(zap, std::chrono::milliseconds(50))) continue;
-      std::vector<zmq::message_t> request;
-      if (!zmq::recv_multipart(zap, std::back_inserter(request))) continue;
-      // version, request id, domain, address, routing id, mechanism, credentials...
-      if (request.size() < 6) continue;  // not from libzmq; it never sends less
-      const std::string address = request[3].to_string();
-      const std::string mechanism = request[5].to_string();
-      std::string status = "400", text, user;
-      if (mechanism != "CURVE" || request.size() < 7 || request[6].size() != 32) {
-        text = "mechanism " + mechanism + " refused, CURVE required";
-      } else {
-        std::array<char, 41> z85{};
-        zmq_z85_encode(z85.data(), request[6].data<uint8_t>(), 32);
-        const std::string key = z85.data();
-        if (const auto it = node_of_key.find(key); it != node_of_key.end()) {
-          status = "200";
-          text = "OK";
-          user = it->second;
-        } else {
-          text = "node key " + key.substr(0, 8) + " is not authorized";
-        }
-        if (status != "200") {
-          std::lock_guard lock(mutex);
-          ++refusal_count;
-          refusals.push_back({address, key.substr(0, 8), text});
-          if (refusals.size() > 64) refusals.pop_front();
-          if (worthLogging(refusal_count)) {
-            spdlog::warn("studio: refused a node at {}: {}", address, text);
-          }
-        }
-      }
-      const std::string version = request[0].to_string(), id = request[1].to_string();
-      const std::array<zmq::const_buffer, 6> reply{zmq::buffer(version), zmq::buffer(id),
-                                                   zmq::buffer(status),  zmq::buffer(text),
-                                                   zmq::buffer(user),    zmq::str_buffer("")};
-      zmq::send_multipart(zap, reply);
+      zmq::pollitem_t items[2] = {{monitor.handle(), 0, ZMQ_POLLIN, 0},
+                                  {zap ? zap.handle() : nullptr, 0, ZMQ_POLLIN, 0}};
+      zmq::poll(items, zap ? 2 : 1, std::chrono::milliseconds(50));
+      if ((items[0].revents & ZMQ_POLLIN) != 0) readMonitor();
+      if (zap && (items[1].revents & ZMQ_POLLIN) != 0) answerZap();
+      logHandshakeFailures(false);
     } catch (const zmq::error_t& e) {
       if (e.num() == ETERM) return;
-      spdlog::error("studio: authentication handler: {}", e.what());
+      if (e.num() != EINTR) spdlog::error("studio: connection handler: {}", e.what());
     }
   }
+  logHandshakeFailures(true);
+}
+
+// One connection event from the router's monitor (two frames: event and value, address).
+void StudioEndpoint::State::readMonitor() {
+  std::vector<zmq::message_t> event;
+  if (!zmq::recv_multipart(monitor, std::back_inserter(event), zmq::recv_flags::dontwait) ||
+      event.size() != 2 || event[0].size() != 6)
+    return;
+  uint16_t id = 0;
+  uint32_t value = 0;
+  std::memcpy(&id, event[0].data(), sizeof id);
+  std::memcpy(&value, event[0].data<uint8_t>() + 2, sizeof value);
+  std::string reason;
+  if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL) {
+    reason = value == ZMQ_PROTOCOL_ERROR_ZMTP_CRYPTOGRAPHIC
+                 ? "its CURVE handshake did not decrypt (a node that trusts another studio key?)"
+             : value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH
+                 ? "its security mechanism is not the studio's (plain against CURVE?)"
+                 : fmt::format("ZMTP protocol error 0x{:x}", value);
+  } else if (id == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL) {
+    reason = fmt::format("its handshake did not finish ({})", zmq_strerror(int(value)));
+  } else {
+    return;  // ZMQ_EVENT_HANDSHAKE_FAILED_AUTH: a key refused, counted by answerZap
+  }
+  std::lock_guard lock(mutex);
+  ++handshake_failures;
+  ++handshake_failures_unlogged;
+  last_handshake_failure = std::move(reason);
+}
+
+void StudioEndpoint::State::logHandshakeFailures(bool force) {
+  const auto now = std::chrono::steady_clock::now();
+  std::lock_guard lock(mutex);
+  if (handshake_failures_unlogged == 0 ||
+      (!force && now - handshake_logged_at < std::chrono::milliseconds(kHandshakeLogIntervalMs)))
+    return;
+  spdlog::warn("studio: {} connection(s) failed their handshake ({} in all); the last: {}",
+               handshake_failures_unlogged, handshake_failures, last_handshake_failure);
+  handshake_failures_unlogged = 0;
+  handshake_logged_at = now;
+}
+
+void StudioEndpoint::State::answerZap() {
+  std::vector<zmq::message_t> request;
+  if (!zmq::recv_multipart(zap, std::back_inserter(request), zmq::recv_flags::dontwait)) return;
+  // version, request id, domain, address, routing id, mechanism, credentials...
+  if (request.size() < 6) return;  // not from libzmq; it never sends less
+  const std::string address = request[3].to_string();
+  const std::string mechanism = request[5].to_string();
+  std::string status = "400", text, user;
+  if (mechanism != "CURVE" || request.size() < 7 || request[6].size() != 32) {
+    text = "mechanism " + mechanism + " refused, CURVE required";
+  } else {
+    std::array<char, 41> z85{};
+    zmq_z85_encode(z85.data(), request[6].data<uint8_t>(), 32);
+    const std::string key = z85.data();
+    if (const auto it = node_of_key.find(key); it != node_of_key.end()) {
+      status = "200";
+      text = "OK";
+      user = it->second;
+    } else {
+      text = "node key " + key.substr(0, 8) + " is not authorized";
+    }
+    if (status != "200") {
+      std::lock_guard lock(mutex);
+      ++refusal_count;
+      refusals.push_back({address, key.substr(0, 8), text});
+      if (refusals.size() > 64) refusals.pop_front();
+      if (worthLogging(refusal_count)) {
+        spdlog::warn("studio: refused a node at {}: {}", address, text);
+      }
+    }
+  }
+  const std::string version = request[0].to_string(), id = request[1].to_string();
+  const std::array<zmq::const_buffer, 6> reply{zmq::buffer(version), zmq::buffer(id),
+                                               zmq::buffer(status),  zmq::buffer(text),
+                                               zmq::buffer(user),    zmq::str_buffer("")};
+  zmq::send_multipart(zap, reply);
 }
 
 void StudioEndpoint::State::countBad(const std::string& node, const std::string& reason) {
@@ -177,8 +239,21 @@ StudioEndpoint::StudioEndpoint(StudioEndpointConfig config) : state_(std::make_u
     s.router.set(zmq::sockopt::curve_server, true);
     s.router.set(zmq::sockopt::curve_secretkey, s.config.studio_key.secret_key);
     s.router.set(zmq::sockopt::zap_domain, "lumistage");
-    s.zap_thread = std::thread([&s] { s.serveZap(); });
   }
+  // Handshakes that fail (a node trusting another studio key, a plain peer, one that never
+  // finishes) are told by the router's monitor, read on the same thread as the ZAP requests.
+  const std::string monitor_endpoint =
+      fmt::format("inproc://lumistage.studio.monitor.{}", monitor_serial++);
+  if (zmq_socket_monitor(s.router.handle(), monitor_endpoint.c_str(),
+                         ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
+                             ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                             ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) != 0)
+    throw Error(
+        fmt::format("studio endpoint: cannot monitor its socket: {}", zmq_strerror(zmq_errno())));
+  s.monitor = zmq::socket_t(s.context, zmq::socket_type::pair);
+  s.monitor.set(zmq::sockopt::linger, 0);
+  s.monitor.connect(monitor_endpoint);
+  s.zap_thread = std::thread([&s] { s.serve(); });
   try {
     s.router.bind(s.config.bind);
   } catch (const zmq::error_t& e) {
@@ -195,8 +270,10 @@ StudioEndpoint::StudioEndpoint(StudioEndpointConfig config) : state_(std::make_u
 StudioEndpoint::~StudioEndpoint() {
   state_->stop = true;
   if (state_->zap_thread.joinable()) state_->zap_thread.join();
+  zmq_socket_monitor(state_->router.handle(), nullptr, 0);
   state_->router.close();
   state_->zap.close();
+  state_->monitor.close();
 }
 
 std::string StudioEndpoint::endpoint() const {
@@ -274,6 +351,11 @@ std::vector<Refusal> StudioEndpoint::refusals() const {
 int64_t StudioEndpoint::refusalCount() const {
   std::lock_guard lock(state_->mutex);
   return state_->refusal_count;
+}
+
+int64_t StudioEndpoint::handshakeFailures() const {
+  std::lock_guard lock(state_->mutex);
+  return state_->handshake_failures;
 }
 
 std::map<std::string, int64_t> StudioEndpoint::badMessages() const {

@@ -1023,7 +1023,7 @@ RunReport StudioCoordinator::report() const {
   r.node_bytes_per_frame = shown_frames > 0 ? double(shown_bytes) / double(shown_frames) : 0;
   r.node_bytes_per_s = counted > 0 ? per_second / counted : 0;
   r.raw_bytes_per_frame_per_node = rig_.nodeCount() > 0 ? raw / rig_.nodeCount() : 0;
-  r.refusals = endpoint_.refusalCount();
+  r.refusals = endpoint_.refusalCount() + endpoint_.handshakeFailures();
   r.frames_in_flight = static_cast<int>(frames_.size());
   const int64_t now = steadyNowNs();
   for (NodeReport& n : r.nodes) {

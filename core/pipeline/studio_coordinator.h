@@ -141,6 +141,7 @@ struct RunReport {
   bool deadlines_following = false;
   double hull_agreement = 0;  // share of posed vertices seen inside the silhouettes
   std::vector<NodeReport> nodes;
+  // Connections turned away: keys refused and handshakes that failed (StudioEndpoint).
   int64_t refusals = 0;
   std::vector<FrameTiming> timeline;  // every counted frame, up to kTimelineFrames
   int frames_in_flight = 0;           // frames begun and not yet done or given up

@@ -121,6 +121,42 @@ TEST(Cli, RigShowOfABadFileSaysWhereAndFails) {
   fs::remove(bad);
 }
 
+// Assimp's COLLADA parser recurses per nested node: 100,000 of them ended `body show` with
+// SIGSEGV. The import runs in a child process: a crash inside it is an error naming the file,
+// a refused file keeps its message, and a good file prints as before.
+TEST(Cli, BodyShowSaysSoWhenTheImportCrashesOrIsRefused) {
+  const fs::path deep = tempPath("deep.dae");
+  {
+    std::ofstream out(deep);
+    out << "<?xml version=\"1.0\"?>\n<COLLADA xmlns=\"http://www.collada.org/2005/11/"
+           "COLLADASchema\" version=\"1.4.1\">\n<library_visual_scenes><visual_scene id=\"s\">";
+    for (int i = 0; i < 100000; ++i) out << "<node id=\"n\">";
+    for (int i = 0; i < 100000; ++i) out << "</node>";
+    out << "</visual_scene></library_visual_scenes><scene><instance_visual_scene url=\"#s\"/>"
+           "</scene></COLLADA>\n";
+  }
+  Result r = run(kCli + " body show " + deep.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("lumistage: error: " + deep.string() +
+                          ": the import crashed inside the mesh library"),
+            std::string::npos)
+      << r.output;
+  const fs::path bad = tempPath("bad.fbx");
+  std::ofstream(bad) << "garbage\n";
+  r = run(kCli + " body show " + bad.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("lumistage: error: " + bad.string() + ": cannot read it as a mesh"),
+            std::string::npos)
+      << r.output;
+  const fs::path good = tempPath("good.glb");
+  ASSERT_EQ(run(kCli + " body generate --vertices 500 --out " + good.string()).exit_code, 0);
+  r = run(kCli + " body show " + good.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("closed and manifold"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("24 joints:"), std::string::npos) << r.output;
+  for (const fs::path& f : {deep, bad, good}) fs::remove(f);
+}
+
 TEST(Cli, KeysInitAndAddNodeWriteAKeyStoreTheStudioCanLoad) {
   const fs::path dir = tempPath("keys");
   fs::remove_all(dir);

@@ -2,20 +2,15 @@
 // session YAML, wand points, and the Qualisys XML and TOML calibration imports. Each reader takes
 // a path, so every input is written to a file first. Any input must give a result or an Error
 // (std::exception) naming what is wrong, never a crash, a hang, unbounded memory or a read out of
-// bounds (AddressSanitizer). One source, one binary a reader: LUMISTAGE_FUZZ_READER picks which
-// (run_fuzz.sh builds each).
-// Not yet run by run_fuzz.sh (the readers need the core library and its dependencies, which the
-// message decoder's target does not); built by hand against a build folder's core library, e.g.
-//   clang++ -std=c++20 -O1 -g -fsanitize=fuzzer,address -I. -isystem /usr/include/eigen3 \
-//     -isystem /usr/include/opencv4 -DLUMISTAGE_FUZZ_READER=5 -DLUMISTAGE_FUZZ_EXTENSION='".toml"'
-//     \
-//     tests/fuzz/file_reader_fuzz.cpp core/geometry/toml_rig_import.cpp \
-//     build/core/liblumistage_core.a <core_tests' link libraries> -o toml_fuzz
-// (the reader's own sources given first, so that they are instrumented; the rest from the
-// library). Run so for 15-20 s each, the rig, wand and Qualisys readers found nothing; the TOML
-// import read past toml11's buffer (fixed in toml_rig_import.cpp).
+// bounds (AddressSanitizer). One source, one binary a reader: LUMISTAGE_FUZZ_READER picks which.
+// tests/CMakeLists.txt builds each with clang against the project's core library (the reader's
+// own sources instrumented, the rest as built), and ctest fuzzes each for a few seconds
+// (file_reader_fuzz_<reader>, by run_reader_fuzz.sh). Run at length by hand, e.g.
+//   build/tests/file_reader_fuzz_toml -max_total_time=600 build/tests/fuzz/toml/corpus
+// Found so far: the TOML import read past toml11's buffer (fixed in toml_rig_import.cpp).
 // With LUMISTAGE_FUZZ_SEED_DIR set, the target first copies its reader's valid examples there
-// (LUMISTAGE_FUZZ_SEEDS, ':'-separated files), so the fuzzer starts from inputs that parse.
+// (LUMISTAGE_FUZZ_SEEDS, ':'-separated files), so the fuzzer starts from inputs that parse. A
+// session names its rig file: LUMISTAGE_FUZZ_RIG, copied beside every session as rig.yaml.
 #include <unistd.h>
 
 #include <cstdint>
@@ -37,13 +32,25 @@ namespace {
 namespace fs = std::filesystem;
 using namespace lumistage;
 
+// The folder of the file every input is written to; removed when the fuzzer exits.
+const fs::path& inputFolder() {
+  static const fs::path dir =
+      fs::temp_directory_path() / ("lumistage_fuzz_" + std::to_string(::getpid()));
+  return dir;
+}
+
 // The file every input is written to, named as its reader expects.
 const fs::path& inputFile() {
   static const fs::path file = [] {
     const char* extension = LUMISTAGE_FUZZ_EXTENSION;
-    const fs::path dir =
-        fs::temp_directory_path() / ("lumistage_fuzz_" + std::to_string(::getpid()));
+    const fs::path& dir = inputFolder();
     fs::create_directories(dir);
+    std::atexit([] {
+      std::error_code ignored;
+      fs::remove_all(inputFolder(), ignored);
+    });
+    if (const char* rig = std::getenv("LUMISTAGE_FUZZ_RIG"); rig != nullptr)
+      fs::copy_file(rig, dir / "rig.yaml", fs::copy_options::overwrite_existing);
     // A session is a folder whose session.yaml names the rest.
     return dir / (LUMISTAGE_FUZZ_READER == 6 ? std::string("session.yaml")
                                              : std::string("input") + extension);

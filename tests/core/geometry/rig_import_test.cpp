@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <opencv2/core.hpp>
 #include <random>
 
@@ -271,6 +272,71 @@ TEST(OpenCvImport, MissingKeysAndUnsupportedModelsAreNamed) {
   EXPECT_NE(testing::errorOf([&] {
               importOpenCvRig(folder.path() / "garbage.yaml", {});
             }).find("garbage.yaml"),
+            std::string::npos);
+}
+
+// OpenCV's FileStorage parsers recurse per level of nesting: 100,000 levels ended the process
+// with SIGSEGV. Each way the formats nest is refused with file:line before OpenCV reads it.
+TEST(OpenCvImport, DeeplyNestedFilesAreRefusedBeforeOpenCvParsesThem) {
+  TempFolder folder;
+  constexpr int kDepth = 100000;
+  const std::string head = "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n";
+  std::string block = head;
+  for (int i = 0; i < 2000; ++i) block += std::string(size_t(i), ' ') + "a:\n";
+  std::string items = head + "k:\n";
+  for (int i = 0; i < kDepth; ++i) items += "- ";
+  items += "1\n";
+  std::string xml = "<?xml version=\"1.0\"?>\n<opencv_storage>\n<!-- a comment -->\n";
+  for (int i = 0; i < kDepth; ++i) xml += "<a>";
+  const std::map<std::string, std::string> files = {
+      {"flow.yaml", head + "k: " + std::string(kDepth, '[') + "1" + std::string(kDepth, ']')},
+      {"maps.yaml", head + "k: " + std::string(kDepth, '{') + "a: 1" + std::string(kDepth, '}')},
+      {"block.yaml", block},
+      {"items.yaml", items},
+      {"deep.xml", xml},
+      {"deep.json", "{\"k\": " + std::string(kDepth, '[') + "1" + std::string(kDepth, ']') + "}"},
+      // Closing brackets in quotes do not close.
+      {"quoted.yaml", head + "k: " + [] {
+         std::string t;
+         for (int i = 0; i < kDepth; ++i) t += "[ ']' ";
+         return t;
+       }()}};
+  for (const auto& [name, text] : files) {
+    folder.write(name, text);
+    const std::string e = testing::errorOf([&] { importOpenCvRig(folder.path() / name, {}); });
+    EXPECT_NE(e.find(name + ":"), std::string::npos) << name << ": " << e.substr(0, 300);
+    EXPECT_NE(e.find("nested deeper than 64 levels"), std::string::npos)
+        << name << ": " << e.substr(0, 300);
+  }
+  // Nesting a calibration's few levels, XML's self-closing elements and brackets in comments
+  // and strings still reach OpenCV.
+  folder.write(
+      "fine.xml",
+      "<?xml version=\"1.0\"?>\n<opencv_storage>\n<!-- <a><a><a> -->\n" + std::string(200, ' ') +
+          "<image_width>640</image_width><image_height>480</image_height>\n"
+          "<camera_matrix type_id=\"opencv-matrix\"><rows>3</rows>"
+          "<cols>3</cols><dt>d</dt><data>500 0 320 0 500 240 0 0 1</data>"
+          "</camera_matrix>\n<distortion_coefficients type_id=\"opencv-matrix\"><rows>1</rows>"
+          "<cols>5</cols><dt>d</dt><data>0 0 0 0 0</data></distortion_coefficients>\n"
+          "</opencv_storage>\n");
+  // Read by OpenCV to the end: it is the missing pose that is said.
+  EXPECT_NE(testing::errorOf([&] {
+              importOpenCvRig(folder.path() / "fine.xml", {});
+            }).find("missing key 'rvec'"),
+            std::string::npos);
+  std::string flat = "<?xml version=\"1.0\"?>\n<opencv_storage>\n";
+  for (int i = 0; i < 1000; ++i) flat += "<b a=\"/>\"/>";
+  folder.write("flat.xml", flat + "\n</opencv_storage>\n");
+  const std::string f = testing::errorOf([&] { importOpenCvRig(folder.path() / "flat.xml", {}); });
+  EXPECT_EQ(f.find("nested deeper"), std::string::npos) << f.substr(0, 300);
+  folder.write("fine.yaml", head + "# " + std::string(100, '[') + "\nnote: \"]]]] {[\"\n" +
+                                "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+                                "  data: [500, 0, 320, 0, 500, 240, 0, 0, 1]\n"
+                                "distortion_coefficients: [0, 0, 0, 0, 0]\n");
+  // Read by OpenCV to the end: it is the missing pose that is said.
+  EXPECT_NE(testing::errorOf([&] {
+              importOpenCvRig(folder.path() / "fine.yaml", {});
+            }).find("missing key 'rvec'"),
             std::string::npos);
 }
 
@@ -566,6 +632,16 @@ TEST(EasyMocapImport, MissingPiecesAreNamed) {
       << e;
   e = testing::errorOf([&] { importEasyMocapRig(folder.path() / "nothing", options); });
   EXPECT_NE(e.find("intri.yml: no such file"), std::string::npos) << e;
+}
+
+TEST(EasyMocapImport, DeeplyNestedFilesAreRefusedBeforeOpenCvParsesThem) {
+  const std::vector<Camera> truth = ringCameras(2, 640, 480);
+  TempFolder folder;
+  writeEasyMocap(folder.path(), truth, true);
+  folder.write("extri.yml", "%YAML:1.0\nnames: " + std::string(100000, '[') + "\n");
+  const std::string e = testing::errorOf([&] { importEasyMocapRig(folder.path(), {}); });
+  EXPECT_NE(e.find("extri.yml:2: nested deeper than 64 levels"), std::string::npos)
+      << e.substr(0, 300);
 }
 
 }  // namespace

@@ -228,6 +228,41 @@ TEST(Transport, ANodeWhoseConnectionDiedSilentlyIsHeardAgainWhenItComesBack) {
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
+// Handshakes that fail before any key is checked were neither counted nor logged (issue 54):
+// a node that trusts another studio key, a plain peer at a CURVE studio. The router's monitor
+// counts them; an authorized node's handshake does not count.
+TEST(Transport, HandshakesThatFailAreCounted) {
+  const Keys keys;
+  StudioEndpoint studio(curveStudio(keys));
+  const auto countReaches = [&](int64_t at_least) {
+    for (int i = 0; i < 100 && studio.handshakeFailures() < at_least; ++i)
+      std::this_thread::sleep_for(milliseconds(50));
+    return studio.handshakeFailures();
+  };
+  {
+    NodeEndpoint node(curveNode(studio, "node1", keys.node1, keys.studio.public_key));
+    ASSERT_TRUE(node.send(hello("node1"), kPatience));
+    ASSERT_TRUE(studio.receive(kPatience).has_value());
+  }
+  EXPECT_EQ(studio.handshakeFailures(), 0);
+  {
+    NodeEndpoint node(curveNode(studio, "node1", keys.node1, generateCurveKeyPair().public_key));
+    EXPECT_FALSE(node.send(hello("node1"), kRefusedWait));
+    EXPECT_GE(countReaches(1), 1);
+  }
+  const int64_t wrong_key = studio.handshakeFailures();
+  {
+    NodeEndpointConfig config;
+    config.connect = studio.endpoint();
+    config.name = "node1";
+    config.security = TransportSecurity::kPlain;
+    NodeEndpoint node(config);
+    EXPECT_FALSE(node.send(hello("node1"), kRefusedWait));
+    EXPECT_GT(countReaches(wrong_key + 1), wrong_key);
+  }
+  EXPECT_EQ(studio.refusalCount(), 0);  // no key was refused: none was checked
+}
+
 TEST(Transport, PlainModeWorksOnlyWhenBothSidesAskForIt) {
   StudioEndpointConfig plain_studio;
   plain_studio.bind = "tcp://127.0.0.1:*";

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Fuzzes one file reader's libFuzzer binary (file_reader_fuzz.cpp, built by tests/CMakeLists.txt)
+# for a bounded time from its seeds. Fails on a crash, a leak, a sanitizer report, a hang (10 s
+# an input) or memory past 2 GB; the input that did it is kept in OUT_DIR (crash-*, leak-*, ...),
+# and the corpus grows there from one run to the next.
+# Usage: run_reader_fuzz.sh BINARY OUT_DIR SECONDS SEED...
+set -euo pipefail
+binary=$1 out=$2 seconds=$3
+shift 3
+mkdir -p "$out/corpus"
+seeds=$(IFS=:; echo "$*")
+cd "$out"
+set +e
+LUMISTAGE_FUZZ_SEED_DIR="$out/corpus" LUMISTAGE_FUZZ_SEEDS="$seeds" "$binary" \
+  -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -max_len=16384 -print_final_stats=1 \
+  -artifact_prefix="$out/" corpus >fuzz.log 2>&1
+status=$?
+set -e
+grep -v -E '^#[0-9]+.*(NEW|REDUCE|pulse)|# Uses:|recommended dictionary' fuzz.log | tail -60
+exit "$status"
