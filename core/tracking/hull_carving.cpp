@@ -190,6 +190,9 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
   int count = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   double top = 0, bottom = dims.z();
+  // The kept voxels' box: only it is scanned for the surface and cleared after (the region around
+  // a body is ten times its box, the stage's a hundred).
+  Eigen::Vector3i kept_lo = hi, kept_hi = lo;
   // The camera that carved the last voxel away is asked first: neighbouring voxels mostly fall
   // outside the same silhouette.
   int first = 0;
@@ -229,6 +232,8 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
             sum += Eigen::Vector3d(x, y, z);
             top = std::max(top, double(z));
             bottom = std::min(bottom, double(z));
+            kept_lo = kept_lo.cwiseMin(Eigen::Vector3i(x, y, z));
+            kept_hi = kept_hi.cwiseMax(Eigen::Vector3i(x, y, z));
           }
         }
       }
@@ -259,9 +264,10 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
   // Surface voxels: kept, with a 6-neighbour that is not (the region's border and the floor
   // count as empty). The sample moves half a voxel toward its empty neighbours: onto the hull's
   // boundary, on average, rather than inside it.
-  for (int z = lo.z(); z <= hi.z(); ++z) {
-    for (int y = lo.y(); y <= hi.y(); ++y) {
-      for (int x = lo.x(); x <= hi.x(); ++x) {
+  if (count == 0) kept_lo = hi + Eigen::Vector3i::Ones(), kept_hi = hi;  // nothing to scan
+  for (int z = kept_lo.z(); z <= kept_hi.z(); ++z) {
+    for (int y = kept_lo.y(); y <= kept_hi.y(); ++y) {
+      for (int x = kept_lo.x(); x <= kept_hi.x(); ++x) {
         const size_t v = z * sz + y * sy + x;
         if (!occupied[v]) continue;
         Eigen::Vector3d n = Eigen::Vector3d::Zero();
@@ -278,9 +284,9 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
       }
     }
   }
-  for (int z = lo.z(); z <= hi.z(); ++z) {
-    for (int y = lo.y(); y <= hi.y(); ++y)
-      std::fill_n(&occupied[z * sz + y * sy + lo.x()], hi.x() - lo.x() + 1, 0);
+  for (int z = kept_lo.z(); z <= kept_hi.z(); ++z) {
+    for (int y = kept_lo.y(); y <= kept_hi.y(); ++y)
+      std::fill_n(&occupied[z * sz + y * sy + kept_lo.x()], kept_hi.x() - kept_lo.x() + 1, 0);
   }
   const size_t n = surface_all.size(), m = size_t(opt.max_hull_points);
   if (n <= m) {
