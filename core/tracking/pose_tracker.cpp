@@ -372,9 +372,9 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
         predicted.angles_rad[j] += k * (m.pose.angles_rad[j] - m.previous.angles_rad[j]);
       m.skeleton.clampToLimits(predicted);
     }
-    result_.left_out_camera = m.leaveOutDisagreeingCamera(predicted);
-    // Carve only around the predicted body.
+    // Carve only around the predicted body, with the cameras that hold it.
     m.skeleton.forwardKinematics(predicted, m.global);
+    result_.left_out_camera = m.leaveOutDisagreeingCamera();
     Eigen::Vector3d lo = m.global[0].translation(), hi = lo;
     for (const auto& t : m.global) {
       lo = lo.cwiseMin(t.translation());

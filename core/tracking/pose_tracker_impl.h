@@ -196,11 +196,11 @@ struct PoseTracker::Impl {
   // Appends to `rim` up to `count` rays through silhouette s's edge cells, evenly thinned, each
   // through the cell's edge (half a cell outward from its centre).
   void sampleRim(const LowResSilhouette& s, int count);
-  // Leaves out of this frame the camera whose silhouette misses much of the body in pose `p` (the
-  // prediction) while every other camera's holds it: a segmenter's mask that lost the actor's
-  // upper body would carve it from the hull. At most one a frame, with four cameras or more.
-  // Returns the camera left out, or -1.
-  int leaveOutDisagreeingCamera(const Pose& p);
+  // Leaves out of this frame the camera whose silhouette misses much of the body posed in
+  // `global` (the prediction's forward kinematics) while every other camera's holds it: a
+  // segmenter's mask that lost the actor's upper body would carve it from the hull. At most one a
+  // frame, with four cameras or more. Returns the camera left out, or -1.
+  int leaveOutDisagreeingCamera();
   // Carves voxels [lo, hi] (inclusive) and samples the hull's surface; returns the volume.
   // `bottom_z`: the lowest occupied voxel's floor (the floor itself where the actor stands).
   double carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid, double* top_z,

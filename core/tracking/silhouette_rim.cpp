@@ -12,12 +12,10 @@ using namespace tracker_detail;
 
 void PoseTracker::Impl::sampleRim(const LowResSilhouette& s, int count) {
   const int w = s.width, h = s.height;
-  const auto inside = [&](int x, int y) {
-    return x >= 0 && y >= 0 && x < w && y < h && s.at(x, y);
-  };
   // Edge cells: inside, with a 4-neighbour outside (the image's border is no edge: the body goes
-  // on beyond it).
-  const auto outward = [&](int x, int y, Eigen::Vector2d& n) {
+  // on beyond it); `n` the way out. Asked within the silhouette's box, on the image.
+  const auto edge = [&](int x, int y, Eigen::Vector2d& n) {
+    if (!s.at(x, y)) return false;
     n.setZero();
     if (x > 0 && !s.at(x - 1, y)) n.x() -= 1;
     if (x + 1 < w && !s.at(x + 1, y)) n.x() += 1;
@@ -29,14 +27,14 @@ void PoseTracker::Impl::sampleRim(const LowResSilhouette& s, int count) {
   int edges = 0;
   Eigen::Vector2d n;
   for (int y = box[1]; y <= box[3]; ++y)
-    for (int x = box[0]; x <= box[2]; ++x) edges += inside(x, y) && outward(x, y, n);
+    for (int x = box[0]; x <= box[2]; ++x) edges += edge(x, y, n);
   if (edges == 0 || count <= 0) return;
   const Camera& cam = rig.camera(s.camera);
   const double step = s.step;
   int k = 0, taken = 0;
   for (int y = box[1]; y <= box[3]; ++y) {
     for (int x = box[0]; x <= box[2]; ++x) {
-      if (!inside(x, y) || !outward(x, y, n)) continue;
+      if (!edge(x, y, n)) continue;
       // Evenly: edge k is taken when it passes the next of `count` marks.
       if (int64_t(k++) * count / edges < taken) continue;
       ++taken;
@@ -49,7 +47,7 @@ void PoseTracker::Impl::sampleRim(const LowResSilhouette& s, int count) {
   }
 }
 
-int PoseTracker::Impl::leaveOutDisagreeingCamera(const Pose& p) {
+int PoseTracker::Impl::leaveOutDisagreeingCamera() {
   // A sample this many cells outside a silhouette is missed by it; a camera that misses more than
   // kMissed of them while none of the others misses more than kHeld is left out.
   constexpr float kOutsideCells = 2.0f;
@@ -57,7 +55,6 @@ int PoseTracker::Impl::leaveOutDisagreeingCamera(const Pose& p) {
   int given = 0;
   for (int c = 0; c < cameras; ++c) given += present[c];
   if (given < 4) return -1;
-  skeleton.forwardKinematics(p, global);
   double worst = 0, second = 0;
   int worst_c = -1;
   const int step = opt.silhouette_step;

@@ -262,38 +262,37 @@ void PoseTracker::Impl::placeCapsules() {
   if (candidates_valid && std::sqrt(moved) <= 0.5 * kCandidateMargin) return;
   candidate_a = cap_a;
   candidate_b = cap_b;
-  candidates.clear();
-  candidate_begin.resize(hull.size() + 1);
   capsule_distance.resize(n);
-  for (size_t i = 0; i < hull.size(); ++i) {
-    candidate_begin[i] = int(candidates.size());
-    double best = 1e9;
-    Eigen::Vector3d closest;
-    for (size_t c = 0; c < n; ++c) {
-      capsule_distance[c] =
-          segmentDistance(hull[i], cap_a[c], cap_b[c], closest) - capsules[c].radius_m;
-      best = std::min(best, capsule_distance[c]);
+  // For each of `count` items, the capsules within kCandidateMargin of its nearest (distance(i, c):
+  // to capsule c's surface), into `list` from `begin[i]`.
+  const auto makeCandidates = [&](size_t count, const auto& distance, std::vector<uint8_t>& list,
+                                  std::vector<int>& begin) {
+    list.clear();
+    begin.resize(count + 1);
+    for (size_t i = 0; i < count; ++i) {
+      begin[i] = int(list.size());
+      double best = 1e9;
+      for (size_t c = 0; c < n; ++c) {
+        capsule_distance[c] = distance(i, c) - capsules[c].radius_m;
+        best = std::min(best, capsule_distance[c]);
+      }
+      for (size_t c = 0; c < n; ++c)
+        if (capsule_distance[c] <= best + kCandidateMargin) list.push_back(uint8_t(c));
     }
-    for (size_t c = 0; c < n; ++c)
-      if (capsule_distance[c] <= best + kCandidateMargin) candidates.push_back(uint8_t(c));
-  }
-  candidate_begin[hull.size()] = int(candidates.size());
-  rim_candidates.clear();
-  rim_candidate_begin.resize(rim.size() + 1);
-  Eigen::Vector3d on_ray, on_segment;
-  for (size_t i = 0; i < rim.size(); ++i) {
-    rim_candidate_begin[i] = int(rim_candidates.size());
-    double best = 1e9;
-    for (size_t c = 0; c < n; ++c) {
-      capsule_distance[c] = raySegmentDistance(rim[i].origin, rim[i].direction, cap_a[c], cap_b[c],
-                                               on_ray, on_segment) -
-                            capsules[c].radius_m;
-      best = std::min(best, capsule_distance[c]);
-    }
-    for (size_t c = 0; c < n; ++c)
-      if (capsule_distance[c] <= best + kCandidateMargin) rim_candidates.push_back(uint8_t(c));
-  }
-  rim_candidate_begin[rim.size()] = int(rim_candidates.size());
+    begin[count] = int(list.size());
+  };
+  Eigen::Vector3d closest, on_ray;
+  makeCandidates(
+      hull.size(),
+      [&](size_t i, size_t c) { return segmentDistance(hull[i], cap_a[c], cap_b[c], closest); },
+      candidates, candidate_begin);
+  makeCandidates(
+      rim.size(),
+      [&](size_t i, size_t c) {
+        return raySegmentDistance(rim[i].origin, rim[i].direction, cap_a[c], cap_b[c], on_ray,
+                                  closest);
+      },
+      rim_candidates, rim_candidate_begin);
   candidates_valid = true;
 }
 
