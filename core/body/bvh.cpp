@@ -297,14 +297,6 @@ Eigen::Matrix3d axisRotation(int axis, double angle_rad) {
   return Eigen::AngleAxisd(angle_rad, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
 }
 
-// R = Rx(a) Ry(b) Rz(c) with b in [-pi/2, pi/2]; at gimbal lock c = 0.
-Eigen::Vector3d eulerXyz(const Eigen::Matrix3d& r) {
-  const double sb = std::clamp(r(0, 2), -1.0, 1.0);
-  const double b = std::asin(sb);
-  if (std::abs(sb) > 1 - 1e-12) return {std::atan2(r(2, 1), r(1, 1)), b, 0.0};
-  return {std::atan2(-r(1, 2), r(2, 2)), b, std::atan2(-r(0, 1), r(0, 0))};
-}
-
 Eigen::Vector3d rotationVector(const Eigen::Matrix3d& r) {
   const Eigen::AngleAxisd aa(r);
   return aa.angle() * aa.axis();
@@ -328,7 +320,7 @@ struct CmuAlias {
 
 }  // namespace
 
-std::optional<std::string> humanJointNameFor(std::string_view name, bool cmu_spine) {
+std::optional<std::string> humanJointNameFor(std::string_view name, JointNaming naming) {
   // Mixamo (and other FBX exports) prefix a namespace: "mixamorig:Hips".
   if (const size_t colon = name.rfind(':'); colon != std::string_view::npos) {
     name = name.substr(colon + 1);
@@ -346,18 +338,22 @@ std::optional<std::string> humanJointNameFor(std::string_view name, bool cmu_spi
       {"LowerBack", "spine1"}, {"Spine", "spine2"}, {"Spine1", "spine3"}};
   static constexpr CmuAlias kSpineMixamo[] = {
       {"Spine", "spine1"}, {"Spine1", "spine2"}, {"Spine2", "spine3"}};
-  for (const CmuAlias& a : cmu_spine ? std::span(kSpineCmu) : std::span(kSpineMixamo)) {
+  static constexpr CmuAlias kSpineBiovision[] = {{"Ab", "spine1"}, {"Chest", "spine3"}};
+  std::span<const CmuAlias> spine = kSpineMixamo;
+  if (naming == JointNaming::kCmu) spine = kSpineCmu;
+  if (naming == JointNaming::kBiovision) spine = kSpineBiovision;
+  for (const CmuAlias& a : spine) {
     if (equalsIgnoreCase(name, a.from)) return std::string(a.to);
   }
   static constexpr CmuAlias kSided[] = {
       {"Shoulder", "clavicle"}, {"Collar", "clavicle"}, {"Clavicle", "clavicle"},
       {"Arm", "shoulder"},      {"UpArm", "shoulder"},  {"UpperArm", "shoulder"},
       {"ForeArm", "elbow"},     {"LowArm", "elbow"},    {"LowerArm", "elbow"},
-      {"Hand", "wrist"},        {"UpLeg", "hip"},       {"Hip", "hip"},
-      {"Thigh", "hip"},         {"Leg", "knee"},        {"Knee", "knee"},
-      {"LowLeg", "knee"},       {"Shin", "knee"},       {"Foot", "ankle"},
-      {"Ankle", "ankle"},       {"ToeBase", "foot"},    {"Toe", "foot"},
-      {"Toes", "foot"}};
+      {"Elbow", "elbow"},       {"Wrist", "wrist"},     {"Hand", "wrist"},
+      {"UpLeg", "hip"},         {"Hip", "hip"},         {"Thigh", "hip"},
+      {"Leg", "knee"},          {"Knee", "knee"},       {"LowLeg", "knee"},
+      {"Shin", "knee"},         {"Foot", "ankle"},      {"Ankle", "ankle"},
+      {"ToeBase", "foot"},      {"Toe", "foot"},        {"Toes", "foot"}};
   static constexpr CmuAlias kMiddle[] = {{"Hips", "pelvis"},
                                          {"Pelvis", "pelvis"},
                                          {"Hip", "pelvis"},
@@ -370,6 +366,8 @@ std::optional<std::string> humanJointNameFor(std::string_view name, bool cmu_spi
     const std::string_view p(prefix);
     if (name.size() <= p.size() || !equalsIgnoreCase(name.substr(0, p.size()), p)) continue;
     const std::string_view rest = name.substr(p.size());
+    if (naming == JointNaming::kBiovision && equalsIgnoreCase(rest, "Shoulder"))
+      return std::string(side) + "shoulder";
     for (const CmuAlias& a : kSided) {
       if (equalsIgnoreCase(rest, a.from)) return std::string(side) + std::string(a.to);
     }
@@ -401,15 +399,22 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
   }
 
   // Map: target joint -> source joint (the first one in file order naming it).
-  const bool cmu_spine = std::any_of(bvh.joints.begin(), bvh.joints.end(), [](const BvhJoint& j) {
-    return equalsIgnoreCase(j.name, "LowerBack");
-  });
+  const auto has = [&](std::string_view suffix) {
+    return std::any_of(bvh.joints.begin(), bvh.joints.end(), [&](const BvhJoint& j) {
+      return j.name.size() >= suffix.size() &&
+             equalsIgnoreCase(std::string_view(j.name).substr(j.name.size() - suffix.size()),
+                              suffix);
+    });
+  };
+  const JointNaming naming = has("LowerBack") ? JointNaming::kCmu
+                             : has("Collar")  ? JointNaming::kBiovision
+                                              : JointNaming::kGeneric;
   std::vector<int> source_of(target.jointCount(), -1);
   int mapped = 0;
   for (int j = 0; j < source_count; ++j) {
     std::optional<int> t = target.findJoint(bvh.joints[j].name);
     if (!t) {
-      if (auto ours = humanJointNameFor(bvh.joints[j].name, cmu_spine)) t = target.findJoint(*ours);
+      if (auto ours = humanJointNameFor(bvh.joints[j].name, naming)) t = target.findJoint(*ours);
     }
     if (t && source_of[*t] < 0) {
       source_of[*t] = j;
@@ -435,6 +440,22 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
   const Eigen::Vector3d rest_root(bvh.joints[0].offset.x(), source_height,
                                   bvh.joints[0].offset.z());
   const Eigen::Matrix3d c = bvhToOurs();
+  // The file's rest pose need not be ours (a CMU skeleton's legs splay 20 degrees, a Biovision
+  // one's arms may hang down): each joint's rotation is taken relative to the turn that brings
+  // our bone (to its first mapped child) onto the file's at rest. Without it a CMU actor standing
+  // straight came in with his thighs turned 20 degrees inward, his legs crossed.
+  std::vector<Eigen::Matrix3d> rest_turn(target.jointCount(), Eigen::Matrix3d::Identity());
+  for (int t = 0; t < target.jointCount(); ++t) {
+    if (source_of[t] < 0) continue;
+    for (int k = t + 1; k < target.jointCount(); ++k) {
+      if (target.joint(k).parent != t || source_of[k] < 0) continue;
+      const Eigen::Vector3d ours = target.restPositions()[k] - target.restPositions()[t];
+      const Eigen::Vector3d theirs = c * (rest[source_of[k]] - rest[source_of[t]]);
+      if (ours.norm() > 1e-9 && theirs.norm() > 1e-9)
+        rest_turn[t] = Eigen::Quaterniond::FromTwoVectors(ours, theirs).toRotationMatrix();
+      break;
+    }
+  }
 
   MotionClip clip;
   clip.name = path.stem().string();
@@ -484,10 +505,9 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
         target_global[t] = parent_global;  // no source: stays at zero
         continue;
       }
-      // Rest poses are identity rotations in both, so a global rotation is relative to rest.
-      target_global[t] = c * source_global[source_of[t]] * c;
+      target_global[t] = c * source_global[source_of[t]] * c * rest_turn[t];
       const Eigen::Matrix3d local = parent_global.transpose() * target_global[t];
-      pose.angles_rad[t] = parent < 0 ? rotationVector(local) : eulerXyz(local);
+      pose.angles_rad[t] = parent < 0 ? rotationVector(local) : eulerAnglesOf(local);
       if (!pose.angles_rad[t].allFinite()) {
         throw Error(locate(file, bvh.frame_lines[f], "",
                            fmt::format("frame {}: joint {} has no finite rotation (a rotation "
@@ -566,7 +586,7 @@ void saveBvh(const MotionClip& clip, const Skeleton& skeleton, const std::filesy
         local = eulerRotation(pose.angles_rad[j]);
       }
       // A rotation in our frame seen in the file's frame: C R C (C is its own inverse).
-      line += vec(eulerXyz(c * local * c) * to_deg);
+      line += vec(eulerAnglesOf(c * local * c) * to_deg);
       line += j == order.back() ? "\n" : " ";
     }
     out += line;

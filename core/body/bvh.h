@@ -24,13 +24,21 @@ namespace lumistage {
 // site) and scaled by our pelvis height / the file's pelvis height, both measured that way. That
 // ratio also converts the units (centimetres, inches, metres), so no unit is guessed.
 
-// Our human joint name for a common BVH / FBX joint name (CMU, Mixamo with or without its
-// "mixamorig:" prefix, generic), or the name itself when it already is one of ours; nullopt when
-// unknown. `cmu_spine`: "LowerBack, Spine, Spine1" (CMU) instead of "Spine, Spine1, Spine2".
-std::optional<std::string> humanJointNameFor(std::string_view name, bool cmu_spine = false);
+// How a skeleton names its spine and arms. kGeneric (Mixamo and most FBX exports): Spine, Spine1,
+// Spine2, and Shoulder the clavicle; kCmu (a skeleton with a LowerBack): LowerBack, Spine, Spine1;
+// kBiovision (one with Collar joints): Ab, Chest, Collar the clavicle and Shoulder the upper arm.
+enum class JointNaming { kGeneric, kCmu, kBiovision };
+
+// Our human joint name for a common BVH / FBX joint name (CMU, Biovision, Mixamo with or without
+// its "mixamorig:" prefix, generic), or the name itself when it already is one of ours; nullopt
+// when unknown.
+std::optional<std::string> humanJointNameFor(std::string_view name,
+                                             JointNaming naming = JointNaming::kGeneric);
 
 // Reads a BVH file and retargets it onto `target` by joint name (same name, else
-// humanJointNameFor). Each mapped target joint takes the world rotation of its source joint;
+// humanJointNameFor). Each mapped target joint takes the world rotation of its source joint,
+// after the turn that brings its bone (to its first mapped child) onto the file's at rest: a rest
+// pose that is not ours (legs splayed, arms down) moves the bones as the file moves them;
 // rotations of unmapped source joints are thereby folded into their mapped descendants; a target
 // joint with no source stays at zero. Nothing is clamped to joint limits. Throws Error with file
 // and line: missing braces or keywords, unknown channel names, non-numeric values, a frame line

@@ -1,5 +1,7 @@
 #include "core/body/skeleton.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace lumistage {
@@ -15,6 +17,13 @@ Eigen::Matrix3d eulerRotation(const Eigen::Vector3d& a) {
           Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
           Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()))
       .toRotationMatrix();
+}
+
+Eigen::Vector3d eulerAnglesOf(const Eigen::Matrix3d& r) {
+  const double sb = std::clamp(r(0, 2), -1.0, 1.0);
+  const double b = std::asin(sb);
+  if (std::abs(sb) > 1 - 1e-12) return {std::atan2(r(2, 1), r(1, 1)), b, 0.0};
+  return {std::atan2(-r(1, 2), r(2, 2)), b, std::atan2(-r(0, 1), r(0, 0))};
 }
 
 Skeleton::Skeleton(std::vector<Joint> joints) : joints_(std::move(joints)) {

@@ -44,6 +44,8 @@ struct Pose {
 };
 
 Eigen::Matrix3d eulerRotation(const Eigen::Vector3d& angles_rad);  // Rx(a.x) Ry(a.y) Rz(a.z)
+// Its inverse: the angles of R = Rx(a) Ry(b) Rz(c) with b in [-pi/2, pi/2]; at gimbal lock c = 0.
+Eigen::Vector3d eulerAnglesOf(const Eigen::Matrix3d& r);
 
 class Skeleton {
  public:

@@ -109,7 +109,12 @@ TEST(Bvh, NamesMapToOurs) {
   EXPECT_EQ(humanJointNameFor("LeftToeBase"), "left_foot");
   EXPECT_EQ(humanJointNameFor("RightCollar"), "right_clavicle");
   EXPECT_EQ(humanJointNameFor("Spine"), "spine1");
-  EXPECT_EQ(humanJointNameFor("Spine", /*cmu_spine=*/true), "spine2");
+  EXPECT_EQ(humanJointNameFor("Spine", JointNaming::kCmu), "spine2");
+  EXPECT_EQ(humanJointNameFor("LeftShoulder"), "left_clavicle");
+  EXPECT_EQ(humanJointNameFor("LeftShoulder", JointNaming::kBiovision), "left_shoulder");
+  EXPECT_EQ(humanJointNameFor("RightElbow", JointNaming::kBiovision), "right_elbow");
+  EXPECT_EQ(humanJointNameFor("RightWrist", JointNaming::kBiovision), "right_wrist");
+  EXPECT_EQ(humanJointNameFor("Chest", JointNaming::kBiovision), "spine3");
   EXPECT_EQ(humanJointNameFor("left_knee"), "left_knee");
   EXPECT_EQ(humanJointNameFor("RHipJoint"), std::nullopt);
 }
@@ -195,6 +200,59 @@ TEST(Bvh, CmuStyleFileRetargetsOntoOurSkeleton) {
 
 // Real files' frame counts disagree with their frame lines (an exporter that counted before the
 // take ended, a copy cut short): every whole frame line is read, whatever 'Frames:' says.
+// A file whose rest pose is not ours (its right thigh splayed outward, its right upper arm
+// hanging down): at zero rotations our bones lie where the file's do, not where ours rest.
+TEST(Bvh, ARestPoseThatIsNotOursKeepsTheBonesWhereTheFileHasThem) {
+  std::string text = kCmuStyle;
+  const auto replaceFirst = [&](const std::string& from, const std::string& to) {
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  };
+  replaceFirst("OFFSET 0 -45 0", "OFFSET -15 -42 0");  // RightLeg: the knee out to the right
+  replaceFirst("OFFSET -28 0 0", "OFFSET 0 -28 0");    // RightForeArm: the elbow below
+  const fs::path folder = testFolder();
+  writeText(folder / "rest.bvh", text);
+  const Skeleton s = makeHumanSkeleton();
+  const MotionClip clip = loadBvh(folder / "rest.bvh", s);
+  std::vector<Eigen::Vector3d> p;
+  s.jointPositions(clip.frames[0], p);
+  // The file's x is our -x, its y our z.
+  const Eigen::Vector3d thigh = (p[kRightKnee] - p[kRightHip]).normalized();
+  EXPECT_LT((thigh - Eigen::Vector3d(15, 0, -42).normalized()).norm(), 1e-9);
+  const Eigen::Vector3d upper_arm = (p[kRightElbow] - p[kRightShoulder]).normalized();
+  EXPECT_LT((upper_arm - Eigen::Vector3d(0, 0, -1)).norm(), 1e-9);
+  // The rest of the body is ours at rest.
+  const auto& rest = s.restPositions();
+  for (int j : {kLeftKnee, kLeftAnkle, kSpine3, kHead})
+    EXPECT_LT((p[j] - p[kPelvis] - (rest[j] - rest[kPelvis])).norm(), 1e-9) << s.joint(j).name;
+  fs::remove_all(folder);
+}
+
+// Real files made by others (../shared/realdata/motions, where present): the CMU actor stands with
+// his legs apart, not crossed (its rest pose splays the legs); the Biovision boxer's elbows bend
+// (its Shoulder is the upper arm, its Collar the clavicle).
+TEST(Bvh, RealCmuAndBiovisionFilesComeInAsTheActorMoved) {
+  const fs::path motions =
+      fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" / "realdata" / "motions";
+  if (!fs::exists(motions / "cmu-01_03.bvh") || !fs::exists(motions / "boxing-biovision.bvh"))
+    GTEST_SKIP() << "no " << motions.string();
+  const Skeleton s = makeHumanSkeleton();
+  const MotionClip cmu = loadBvh(motions / "cmu-01_03.bvh", s);
+  std::vector<Eigen::Vector3d> p;
+  for (size_t f = 0; f <= 120; f += 60) {
+    s.jointPositions(cmu.frames[f], p);
+    const Eigen::Vector3d across = (p[kLeftHip] - p[kRightHip]).normalized();
+    EXPECT_GT((p[kLeftKnee] - p[kRightKnee]).dot(across), 0.1) << "frame " << f;
+    EXPECT_GT((p[kLeftAnkle] - p[kRightAnkle]).dot(across), 0.1) << "frame " << f;
+  }
+  const MotionClip boxing = loadBvh(motions / "boxing-biovision.bvh", s);
+  double most_bent = 0;
+  for (const Pose& pose : boxing.frames)
+    most_bent = std::max(most_bent, pose.angles_rad[kRightElbow].norm());
+  EXPECT_GT(most_bent, 1.0);
+}
+
 TEST(Bvh, FramesAreTheFramesLinesWhateverTheHeaderAnnounces) {
   const fs::path folder = testFolder();
   const Skeleton s = makeHumanSkeleton();
