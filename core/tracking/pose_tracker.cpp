@@ -401,10 +401,21 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
       Pose& p = m.fitted;
       p = predicted;
       m.fit(p, m.opt.iterations);
+      // A limb left where the hull is not is tried where it is unexplained; after a try that
+      // found nothing better, not again for kRecoveryWait frames (the carving's phantoms).
+      constexpr int kRecoveryWait = 10;
+      bool recovered = false;
+      if (m.recovery_wait > 0) {
+        --m.recovery_wait;
+      } else if (const int rays = m.countUnexplained(p)) {
+        recovered = m.recoverLimbs(p, rays, m.opt.iterations);
+        if (!recovered) m.recovery_wait = kRecoveryWait;
+      }
       m.use_prior = false;
       result_.fit_rms_m = m.fitRms(p);
       result_.rim_rms_m = m.rimRms(p);
-      m.previous = m.pose;
+      // A recovered limb jumped: no velocity from it.
+      m.previous = recovered ? p : m.pose;
       m.pose = p;
       m.has_previous = true;
       if (!m.fitHolds(result_.fit_rms_m, result_.rim_rms_m)) {

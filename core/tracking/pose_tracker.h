@@ -110,7 +110,13 @@ struct TrackResult {
 // fewer), the bones' axis samples inside every silhouette (a distance transform of each
 // silhouette), and a temporal prior toward the constant-velocity prediction. A camera whose
 // silhouette misses much of the predicted body while every other camera's holds it (a
-// segmenter's mask that lost part of the actor) is left out of that frame.
+// segmenter's mask that lost part of the actor) is left out of that frame. A limb the fit left
+// where the actor's is not (an arm at the side while both hands are over the head: a local
+// minimum, the hull there pulling toward the other arm) is recovered where many silhouette edges
+// and hull samples are explained by no body part: each limb that reaches that hull is stretched
+// toward its far end and fitted alone, and the best kept when it lowers the cost and explains most
+// of those edges (at initialisation, and in tracking at most every tenth frame after a try that
+// found nothing).
 //
 // Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
 // is tried against every pose of a library (makeInitialisationPoses: the built-in clips' poses,

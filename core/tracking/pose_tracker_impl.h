@@ -226,7 +226,10 @@ struct PoseTracker::Impl {
   // on the capsule's axis).
   int nearestRimCapsule(size_t i, double& distance, Eigen::Vector3d& on_ray,
                         Eigen::Vector3d& on_segment) const;
+  // Levenberg-Marquardt from `p` over every degree of freedom but those in dof_held (empty: none
+  // held); returns the cost.
   double fit(Pose& p, int iterations);
+  std::vector<uint8_t> dof_held;
   double fitRms(const Pose& p);
   // The rays through the silhouettes' edges to the body's surface (those beyond rim_outlier_m
   // counted at it), RMS over the nearest four fifths, metres: how well the body explains the
@@ -237,6 +240,20 @@ struct PoseTracker::Impl {
     return hull_rms <= opt.lost_rms_m && (rim.empty() || rim_rms <= opt.lost_rim_m);
   }
   void apply(Pose& p, const Eigen::VectorXd& delta) const;
+  // Limb recovery (limb_recovery.cpp). When many rays through the silhouettes' edges pass far from
+  // the body posed in `p`, the hull samples that no capsule explains, into `unexplained`; returns
+  // the count of such rays, or 0 when too few of either to recover a limb from.
+  int countUnexplained(const Pose& p);
+  // The rays through the silhouettes' edges far from the capsules as placed.
+  int unexplainedRays() const;
+  // After countUnexplained(p) (its `rays`): each limb that can reach much unexplained hull tried
+  // there (stretched toward its far end, `iterations` of the fit from there, without the prior);
+  // the best kept in `p` when it lowers the fit's cost and explains most of those rays. Returns
+  // whether it did.
+  bool recoverLimbs(Pose& p, int rays, int iterations);
+  std::vector<Eigen::Vector3d> unexplained;
+  std::vector<Eigen::Isometry3d> limb_global;
+  int recovery_wait = 0;  // frames before the tracker tries to recover a limb again
   // `volume`: the stage's hull carved for it, m³.
   bool initialise(TrackResult& out, double& volume);
   // Initialisation (tracker_initialisation.cpp). The poses it starts from (makeInitialisationPoses

@@ -222,8 +222,16 @@ double PoseTracker::Impl::fit(Pose& p, int iterations) {
   for (int it = 0; it < iterations; ++it) {
     damped = H;
     for (int d = 0; d < damped.rows(); ++d) damped(d, d) += lambda * H(d, d) + 1e-6;
-    ldlt.compute(damped);
     delta = g;
+    // Degrees of freedom held: their rows and columns out of the system, their step zero.
+    for (int d = 0; d < int(dof_held.size()); ++d) {
+      if (!dof_held[d]) continue;
+      damped.row(d).setZero();
+      damped.col(d).setZero();
+      damped(d, d) = 1;
+      delta(d) = 0;
+    }
+    ldlt.compute(damped);
     ldlt.solveInPlace(delta);
     delta = -delta;
     candidate = p;

@@ -176,6 +176,13 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
       best = c, best_pose = p, best_shape = shape, best_upright = library_upright[h.pose];
   }
   setShape(best_shape);
+  // A limb the library's poses never hold (both hands over the head) is looked for where the
+  // hull is unexplained; the body's uprightness is then the pose's own, not its library pose's.
+  const int rays = countUnexplained(best_pose);
+  if (rays > 0 && recoverLimbs(best_pose, rays, opt.init_iterations)) {
+    best = evaluate(best_pose, false, H, g);
+    best_upright = uprightness(best_pose);
+  }
   // A hull that no hypothesis fits within twice the lost threshold (two people, a prop, a hull
   // carved by two cameras) is no body whose proportions a search could find: failed at once.
   double rms = fitRms(best_pose);

@@ -255,6 +255,28 @@ TEST(PoseTracker, FindsAnActorWhoEntersCrouchingAndMeasuresHimStanding) {
   EXPECT_NEAR(statureOf(tracker.shape()), statureOf(stage.config.actor.shape), 0.03);
 }
 
+// An actor found with both hands over his head, a pose no initialisation pose holds: the fit
+// alone leaves an arm at his side (the hull above the head pulls toward the other arm); the hull
+// and the silhouettes' edges that no body part explains bring it up.
+TEST(PoseTracker, AnActorFoundWithBothHandsOverHisHeadIsFoundWithThem) {
+  SyntheticStage stage(kStudio);
+  PoseTracker tracker(stage.config.rig, generic());
+  Pose hands_up = Pose::rest(kHumanJointCount);
+  hands_up.angles_rad[0] = Eigen::Vector3d(0, 0, 0.7);
+  hands_up.root_translation_m = Eigen::Vector3d(0.2, -0.3, 0);
+  hands_up.angles_rad[kRightShoulder] = Eigen::Vector3d(0, -1.35, 0.2);
+  hands_up.angles_rad[kLeftShoulder] = Eigen::Vector3d(0, 1.35, -0.2);
+  hands_up.angles_rad[kRightElbow] = Eigen::Vector3d(0, 0, 0.4);
+  hands_up.angles_rad[kLeftElbow] = Eigen::Vector3d(0, 0, -0.4);
+  const TrackResult& r = tracker.track(stage.render(hands_up));
+  for (int wrist : {kRightWrist, kLeftWrist})
+    ASSERT_GT(stage.joints[wrist].z(), stage.joints[kHead].z() + 0.1) << "not over the head";
+  ASSERT_TRUE(r.valid());
+  for (int wrist : {kRightWrist, kLeftWrist})
+    EXPECT_LT((r.joints[wrist] - stage.joints[wrist]).norm(), 0.1) << wrist;
+  EXPECT_LT(mpjpe(r.joints, stage.joints), 0.04);
+}
+
 TEST(PoseTracker, OneFrameWithoutAHullDoesNotLoseTheActor) {
   SyntheticStage stage(kStudio);
   PoseTracker tracker(stage.config.rig, generic());
