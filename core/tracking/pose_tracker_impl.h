@@ -267,8 +267,13 @@ struct PoseTracker::Impl {
   std::vector<Pose> library;
   std::vector<double> library_bottom, library_upright;
   std::vector<Hypothesis> hypotheses;
+  // The hull's samples and the rim thinned to every `stride`-th (the full sets kept in full_hull
+  // and full_rim), until fullSamples() puts them back.
+  void thinSamples(int stride);
+  void fullSamples();
   std::vector<Eigen::Vector3d> full_hull;
   std::vector<RimRay> full_rim;
+  bool thinned = false;
   void makeLibrary();
   // The body model's lowest and highest point (capsules) in pose `p` of the current skeleton.
   void modelExtent(const Pose& p, double& bottom, double& top);

@@ -24,11 +24,37 @@ constexpr double kCalibrateWithin = 2.0;
 // fitted in full.
 constexpr int kHeadings = 8;
 constexpr int kScoreStride = 8;
+// The best hypotheses fitted, and the shape calibration's trials, on every kFitStride-th sample
+// of the hull and the rim; the winner then on all of them. 4 against 1 on the development corpus
+// (seeds 1-20, 30 frames): MPJPE 19.6 -> 19.3 mm (built-in clips), 31.4 -> 27.5 mm (with the BVH
+// captures), initialisation 490 -> 305 ms on an 11-camera stage (2 gave two stages turned round).
+constexpr int kFitStride = 4;
 constexpr int kFittedHypotheses = 6;
 // A hull whose top is lower than this is nobody standing, crouching or sitting up (a bag, a box).
 constexpr double kLowestTopM = 0.8;
 
 }  // namespace
+
+void PoseTracker::Impl::thinSamples(int stride) {
+  if (!thinned) {
+    full_hull.swap(hull);
+    full_rim.swap(rim);
+    thinned = true;
+  }
+  hull.clear();
+  rim.clear();
+  for (size_t i = 0; i < full_hull.size(); i += size_t(stride)) hull.push_back(full_hull[i]);
+  for (size_t i = 0; i < full_rim.size(); i += size_t(stride)) rim.push_back(full_rim[i]);
+  candidates_valid = false;
+}
+
+void PoseTracker::Impl::fullSamples() {
+  if (!thinned) return;
+  hull.swap(full_hull);
+  rim.swap(full_rim);
+  thinned = false;
+  candidates_valid = false;
+}
 
 void PoseTracker::Impl::modelExtent(const Pose& p, double& bottom, double& top) {
   skeleton.forwardKinematics(p, global);
@@ -138,13 +164,7 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
 
   // Every library pose at every heading, over the hull's centroid, standing on its lowest point,
   // scaled (until calibrated) to the hull's height in that pose; scored on a thinned hull and rim.
-  full_hull = hull;
-  hull.clear();
-  for (size_t i = 0; i < full_hull.size(); i += kScoreStride) hull.push_back(full_hull[i]);
-  full_rim = rim;
-  rim.clear();
-  for (size_t i = 0; i < full_rim.size(); i += kScoreStride) rim.push_back(full_rim[i]);
-  candidates_valid = false;
+  thinSamples(kScoreStride);
   hypotheses.clear();
   for (int i = 0; i < int(library.size()); ++i) {
     if (calibrating) setShape(shapeSpanning(i, extent));
@@ -154,9 +174,8 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
       hypotheses.push_back({evaluate(p, false, H, g), i, heading, shape.height_m});
     }
   }
-  hull.swap(full_hull);
-  rim.swap(full_rim);
-  candidates_valid = false;
+  // The best fitted on a thinned hull and rim, the winner then on all of them.
+  thinSamples(kFitStride);
   const int fitted_count = std::min<int>(kFittedHypotheses, int(hypotheses.size()));
   std::partial_sort(hypotheses.begin(), hypotheses.begin() + fitted_count, hypotheses.end(),
                     [](const Hypothesis& a, const Hypothesis& b) { return a.cost < b.cost; });
@@ -175,7 +194,9 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
     if (c < best)
       best = c, best_pose = p, best_shape = shape, best_upright = library_upright[h.pose];
   }
+  fullSamples();
   setShape(best_shape);
+  best = fit(best_pose, opt.init_iterations / 2);
   // A limb the library's poses never hold (both hands over the head) is looked for where the
   // hull is unexplained; the body's uprightness is then the pose's own, not its library pose's.
   const int rays = countUnexplained(best_pose);
@@ -256,6 +277,9 @@ void PoseTracker::Impl::calibrateShape(Pose& best_pose, double extent, double up
     s.height_m = heightSpanning(extent, upright, v[2]);
     return s;
   };
+  // The trials on a thinned hull and rim; the result fitted on all of them.
+  thinSamples(kFitStride);
+  best = evaluate(best_pose, false, H, g);
   for (int round = 0; round < 5; ++round) {
     for (int i = 0; i < kParams; ++i) {
       if (!((calibrated_params >> i) & 1)) continue;
@@ -277,6 +301,7 @@ void PoseTracker::Impl::calibrateShape(Pose& best_pose, double extent, double up
     }
     for (double& s : steps) s *= 0.5;
   }
+  fullSamples();
   setShape(make(k));
   best = fit(best_pose, opt.init_iterations);
 }
