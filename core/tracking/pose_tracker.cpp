@@ -358,20 +358,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
   } else {
     // Constant-velocity prediction, damped, as the starting point and the prior.
     Pose& predicted = m.predicted;
-    predicted = m.pose;
-    if (m.has_previous) {
-      const double k = m.opt.velocity_gain;
-      predicted.root_translation_m +=
-          k * (m.pose.root_translation_m - m.previous.root_translation_m);
-      const Eigen::Matrix3d now = rotationFromVector(m.pose.angles_rad[0]),
-                            before = rotationFromVector(m.previous.angles_rad[0]);
-      const Eigen::AngleAxisd turn(now * before.transpose());
-      const Eigen::AngleAxisd root(Eigen::AngleAxisd(k * turn.angle(), turn.axis()) * now);
-      predicted.angles_rad[0] = root.angle() * root.axis();
-      for (int j = 1; j < int(predicted.angles_rad.size()); ++j)
-        predicted.angles_rad[j] += k * (m.pose.angles_rad[j] - m.previous.angles_rad[j]);
-      m.skeleton.clampToLimits(predicted);
-    }
+    predicted = m.has_previous ? m.predictFrom(m.pose, m.previous) : m.pose;
     // Carve only around the predicted body, with the cameras that hold it.
     m.skeleton.forwardKinematics(predicted, m.global);
     result_.left_out_camera = m.leaveOutDisagreeingCamera();
@@ -418,6 +405,11 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
       m.previous = recovered ? p : m.pose;
       m.pose = p;
       m.has_previous = true;
+      // In the first frames after an initialisation, its twin turned half round is tracked too.
+      if (m.twin_frames > 0 && m.trackTwin(m.evaluate(m.pose, false, m.H, m.g))) {
+        result_.fit_rms_m = m.fitRms(m.pose);
+        result_.rim_rms_m = m.rimRms(m.pose);
+      }
       if (!m.fitHolds(result_.fit_rms_m, result_.rim_rms_m)) {
         if (++m.bad_frames >= m.opt.lost_frames) m.tracking = false;
       } else {

@@ -116,7 +116,9 @@ struct TrackResult {
 // and hull samples are explained by no body part: each limb that reaches that hull is stretched
 // toward its far end and fitted alone, and the best kept when it lowers the cost and explains most
 // of those edges (at initialisation, and in tracking at most every tenth frame after a try that
-// found nothing).
+// found nothing). Silhouettes barely tell an actor's front from his back: for eight frames after
+// each initialisation the pose turned half round is tracked too, and replaces the pose when it
+// fitted better over them.
 //
 // Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
 // is tried against every pose of a library (makeInitialisationPoses: the built-in clips' poses,

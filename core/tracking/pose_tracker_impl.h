@@ -254,6 +254,19 @@ struct PoseTracker::Impl {
   std::vector<Eigen::Vector3d> unexplained;
   std::vector<Eigen::Isometry3d> limb_global;
   int recovery_wait = 0;  // frames before the tracker tries to recover a limb again
+  // The constant-velocity prediction from `before` to `now`, damped (velocity_gain), in limits.
+  Pose predictFrom(const Pose& now, const Pose& before) const;
+  // The turned twin (turned_twin.cpp): after an initialisation (`pose`, its fit's cost
+  // `pose_cost`), the pose turned half round and fitted (`iterations`); tracked beside the pose
+  // for a few frames unless it fits much worse at once.
+  void makeTwin(double pose_cost, int iterations);
+  // Each tracked frame after the pose's fit (its cost without the prior, `pose_cost`): the twin
+  // fitted from its own prediction; when its frames are done and it fitted better, it becomes the
+  // pose (and its previous one). Returns whether it did.
+  bool trackTwin(double pose_cost);
+  Pose twin, twin_previous;
+  int twin_frames = 0;  // left to track the twin for; 0: none
+  double twin_cost = 0, pose_cost_sum = 0;
   // `volume`: the stage's hull carved for it, m³.
   bool initialise(TrackResult& out, double& volume);
   // Initialisation (tracker_initialisation.cpp). The poses it starts from (makeInitialisationPoses

@@ -236,6 +236,7 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   }
   pose = previous = best_pose;
   has_previous = false;
+  makeTwin(best, opt.init_iterations);
   return true;
 }
 
