@@ -286,8 +286,9 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
       importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_Triangulate |
                                            aiProcess_GenSmoothNormals | aiProcess_SortByPType);
   if (scene == nullptr) {
+    // Assimp's reason may quote the rest of the file: shown shortened and escaped.
     fail(path, std::string("cannot read it as a mesh (unreadable or unsupported format): ") +
-                   importer.GetErrorString());
+                   printableInput(importer.GetErrorString(), 300));
   }
   if (scene->mRootNode == nullptr) fail(path, "no scene graph, expected a rigged mesh");
   // What follows walks the scene graph recursively: its depth is checked first, without recursion
