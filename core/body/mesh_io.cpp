@@ -4,6 +4,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -204,6 +205,40 @@ JointLimits importedLimits(const std::string& name, const Skeleton& human) {
   return {Eigen::Vector3d::Constant(-kPi), Eigen::Vector3d::Constant(kPi)};
 }
 
+// Vertices with more than four positive bone weights, and the most on one vertex, over the
+// triangle meshes `meshes`. Throws Error naming the file for a weight on a vertex the mesh has not.
+struct InfluenceCount {
+  int crowded = 0;
+  size_t most = 0;
+};
+
+InfluenceCount countInfluences(const aiScene& scene, const std::vector<unsigned>& meshes,
+                               const fs::path& path) {
+  InfluenceCount out;
+  std::vector<size_t> count;
+  for (unsigned i : meshes) {
+    const aiMesh* m = scene.mMeshes[i];
+    count.assign(m->mNumVertices, 0);
+    for (unsigned b = 0; b < m->mNumBones; ++b) {
+      const aiBone* bone = m->mBones[b];
+      for (unsigned w = 0; w < bone->mNumWeights; ++w) {
+        const aiVertexWeight& vw = bone->mWeights[w];
+        if (vw.mVertexId >= m->mNumVertices) {
+          fail(path,
+               fmt::format("bone '{}' weights vertex {} of mesh '{}', which has {}",
+                           bone->mName.C_Str(), vw.mVertexId, m->mName.C_Str(), m->mNumVertices));
+        }
+        if (vw.mWeight > 0) ++count[vw.mVertexId];
+      }
+    }
+    for (size_t c : count) {
+      if (c > kMaxInfluences) ++out.crowded;
+      out.most = std::max(out.most, c);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 void saveSkinnedMeshGltf(const SkinnedMesh& mesh, const fs::path& path) {
@@ -282,6 +317,8 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
   // FBX pivots would otherwise become helper nodes ("Hips_$AssimpFbx$_Rotation") between bones,
   // and so joints of ours.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
+  // For aiProcess_LimitBoneWeights, applied below once the skeleton is known.
+  importer.SetPropertyInteger(AI_CONFIG_PP_LBW_MAX_WEIGHTS, kMaxInfluences);
   const aiScene* scene =
       importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_Triangulate |
                                            aiProcess_GenSmoothNormals | aiProcess_SortByPType);
@@ -387,6 +424,18 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
   };
   addJoints(addJoints, skeleton_root, -1);
 
+  // More than four influences on a vertex: Assimp keeps the four largest and renormalises them.
+  // Counted (and vertex indices checked) before, as the step drops what it does not keep, bones
+  // left without weights included: the skeleton above was taken from all of them.
+  const InfluenceCount crowding = countInfluences(*scene, meshes, path);
+  if (crowding.most > static_cast<size_t>(kMaxInfluences)) {
+    scene = importer.ApplyPostProcessing(aiProcess_LimitBoneWeights);
+    if (scene == nullptr) {
+      fail(path,
+           std::string("limiting bone influences to four failed: ") + importer.GetErrorString());
+    }
+  }
+
   SkinnedMesh out;
   try {
     out.skeleton = Skeleton(std::move(joints));
@@ -426,12 +475,7 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
       const aiBone* bone = m->mBones[b];
       const int joint = joint_of.at(scene->mRootNode->FindNode(bone->mName));
       for (unsigned w = 0; w < bone->mNumWeights; ++w) {
-        const aiVertexWeight& vw = bone->mWeights[w];
-        if (vw.mVertexId >= m->mNumVertices) {
-          fail(path,
-               fmt::format("bone '{}' weights vertex {} of mesh '{}', which has {}",
-                           bone->mName.C_Str(), vw.mVertexId, m->mName.C_Str(), m->mNumVertices));
-        }
+        const aiVertexWeight& vw = bone->mWeights[w];  // indices checked by countInfluences
         if (vw.mWeight > 0) influences[base + vw.mVertexId].emplace_back(joint, vw.mWeight);
       }
     }
@@ -465,32 +509,34 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
                            material_meshes, meshes.size()));
   }
 
-  // Weights: at most four per vertex, each vertex weighted, normalised to sum 1.
-  int unweighted = 0, crowded = 0;
-  size_t most = 0;
-  for (const auto& list : influences) {
-    if (list.empty()) ++unweighted;
-    if (list.size() > kMaxInfluences) ++crowded;
-    most = std::max(most, list.size());
-  }
+  // Weights: each vertex weighted, at most four (the largest) kept, normalised to sum 1.
+  const int unweighted = static_cast<int>(
+      std::count_if(influences.begin(), influences.end(), [](const auto& l) { return l.empty(); }));
   if (unweighted > 0) {
     fail(path, fmt::format("{} of {} vertices have no bone weights, expected every vertex bound to "
                            "the skeleton",
                            unweighted, total));
   }
-  if (crowded > 0) {
-    fail(path, fmt::format("{} vertices have more than {} bone influences (up to {}), expected at "
-                           "most {}",
-                           crowded, kMaxInfluences, most, kMaxInfluences));
+  if (crowding.crowded > 0) {
+    spdlog::warn(
+        "{}: {} of {} vertices have more than {} bone influences (up to {}): keeping the "
+        "{} largest of each, renormalised",
+        path.string(), crowding.crowded, total, kMaxInfluences, crowding.most, kMaxInfluences);
   }
   out.skin.joints.assign(total, {0, 0, 0, 0});
   out.skin.weights.assign(total, {0, 0, 0, 0});
   for (size_t v = 0; v < total; ++v) {
+    auto& list = influences[v];
+    if (list.size() > kMaxInfluences) {  // Assimp's step has done this; here it is certain
+      std::partial_sort(list.begin(), list.begin() + kMaxInfluences, list.end(),
+                        [](const auto& a, const auto& b) { return a.second > b.second; });
+      list.resize(kMaxInfluences);
+    }
     float sum = 0;
-    for (const auto& [joint, weight] : influences[v]) sum += weight;
-    for (size_t k = 0; k < influences[v].size(); ++k) {
-      out.skin.joints[v][k] = static_cast<uint16_t>(influences[v][k].first);
-      out.skin.weights[v][k] = influences[v][k].second / sum;
+    for (const auto& [joint, weight] : list) sum += weight;
+    for (size_t k = 0; k < list.size(); ++k) {
+      out.skin.joints[v][k] = static_cast<uint16_t>(list[k].first);
+      out.skin.weights[v][k] = list[k].second / sum;
     }
   }
   try {

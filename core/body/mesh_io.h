@@ -22,15 +22,17 @@ namespace lumistage {
 // file: unknown extension, invalid mesh, export or rename failure.
 void saveSkinnedMeshGltf(const SkinnedMesh& mesh, const std::filesystem::path& path);
 
-// Reads any rigged, skinned mesh Assimp reads (glTF/GLB, FBX, COLLADA, ...). Identical vertices
-// are joined, polygons triangulated, missing normals generated. The skeleton is the bone nodes and
-// their ancestors up to the lowest common one; rest positions come from the bind pose (our rest
-// frames are world aligned, so a bind pose with rotated joint frames keeps only its positions).
-// Several meshes are merged when they share the skeleton. Joint limits come from the human
-// skeleton when a joint's name is one of ours (or a common alias, see humanJointNameFor in
-// bvh.h), else ±pi on every axis. Throws Error naming the file: unreadable or unsupported (with
-// Assimp's reason), no mesh, no bones, meshes on different skeletons, a vertex without weights,
-// vertices with more than four influences.
+// Reads any rigged, skinned mesh Assimp reads (glTF/GLB, FBX, COLLADA, ...). Identical
+// vertices are joined, polygons triangulated, missing normals generated. The skeleton is the bone
+// nodes and their ancestors up to the lowest common one; rest positions come from the bind pose
+// (our rest frames are world aligned, so a bind pose with rotated joint frames keeps only its
+// positions). Several meshes are merged when they share the skeleton. Joint limits come from the
+// human skeleton when a joint's name is one of ours (or a common alias, see humanJointNameFor in
+// bvh.h), else ±pi on every axis. A vertex with more than four bone influences keeps the four
+// largest (Assimp's aiProcess_LimitBoneWeights), renormalised to sum 1, and one warning names the
+// file and how many vertices had more; bones left without weights stay joints. Throws Error naming
+// the file: unreadable or unsupported (with Assimp's reason), no mesh, no bones, meshes on
+// different skeletons, a vertex without weights, a weight on a vertex that does not exist.
 SkinnedMesh loadSkinnedMesh(const std::filesystem::path& path);
 
 }  // namespace lumistage

@@ -297,13 +297,16 @@ TEST(MeshIo, BadFilesGiveClearErrors) {
 
 TEST(MeshIo, BadWeightsGiveClearErrors) {
   const fs::path folder = testFolder();
+  // Six equal influences on a vertex: four kept (mesh_import_test.cpp has more), and the two bones
+  // that so lose their only weight stay joints of the skeleton.
   writeRiggedTriangle(folder / "crowded.assbin", 6, true);
-  std::string m = testing::errorOf([&] { loadSkinnedMesh(folder / "crowded.assbin"); });
-  EXPECT_NE(m.find("crowded.assbin"), std::string::npos) << m;
-  EXPECT_NE(m.find("1 vertices have more than 4 bone influences (up to 6)"), std::string::npos)
-      << m;
+  const SkinnedMesh crowded = loadSkinnedMesh(folder / "crowded.assbin");
+  EXPECT_EQ(crowded.skeleton.jointCount(), 7);
+  for (const auto& weights : crowded.skin.weights) {
+    EXPECT_NEAR(weights[0] + weights[1] + weights[2] + weights[3], 1, 1e-5);
+  }
   writeRiggedTriangle(folder / "unweighted.assbin", 2, false);
-  m = testing::errorOf([&] { loadSkinnedMesh(folder / "unweighted.assbin"); });
+  std::string m = testing::errorOf([&] { loadSkinnedMesh(folder / "unweighted.assbin"); });
   EXPECT_NE(m.find("1 of 3 vertices have no bone weights"), std::string::npos) << m;
   // Well-formed: the skeleton is the bones and their common ancestor, weights normalised.
   writeRiggedTriangle(folder / "good.assbin", 3, true);
