@@ -25,6 +25,7 @@
 #include "core/body/bvh.h"
 #include "core/body/gltf_check.h"
 #include "core/body/human_skeleton.h"
+#include "core/body/mesh_axes.h"
 
 namespace lumistage {
 
@@ -404,25 +405,35 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
       bind_position[node] = mesh_global * offset.inverse().translation();
     }
   }
-  const Eigen::Matrix3f c = fileToOurs();
-  const Skeleton human = makeHumanSkeleton();
-  std::vector<Joint> joints;
-  std::vector<Eigen::Vector3f> world;
+  // The joints in the scene's coordinates, parents first; then the file's axes and units (and,
+  // where its format cannot tell, its skeleton) decide the map to ours.
+  std::vector<std::string> names;
+  std::vector<int> parents;
+  std::vector<Eigen::Vector3f> scene_positions;
   std::map<const aiNode*, int> joint_of;
   auto addJoints = [&](auto&& self, const aiNode* node, int parent) -> void {
     if (!in_skeleton.count(node)) return;
     const auto it = bind_position.find(node);
-    const Eigen::Vector3f p =
-        c * (it != bind_position.end() ? it->second : globalTransform(node).translation());
-    const int index = static_cast<int>(joints.size());
+    const int index = static_cast<int>(names.size());
     joint_of[node] = index;
-    const std::string name = node->mName.C_Str();
-    const Eigen::Vector3f offset = parent < 0 ? p : Eigen::Vector3f(p - world[parent]);
-    joints.push_back({name, parent, offset.cast<double>(), importedLimits(name, human)});
-    world.push_back(p);
+    names.emplace_back(node->mName.C_Str());
+    parents.push_back(parent);
+    scene_positions.push_back(it != bind_position.end() ? it->second
+                                                        : globalTransform(node).translation());
     for (unsigned k = 0; k < node->mNumChildren; ++k) self(self, node->mChildren[k], index);
   };
   addJoints(addJoints, skeleton_root, -1);
+  const Eigen::Matrix3f c = sceneToOurs(*scene, path, skeletonAxes(names, scene_positions));
+  const bool mirrored = c.determinant() < 0;
+  const Skeleton human = makeHumanSkeleton();
+  std::vector<Joint> joints;
+  for (size_t j = 0; j < names.size(); ++j) {
+    const Eigen::Vector3f p = c * scene_positions[j];
+    const Eigen::Vector3f offset =
+        parents[j] < 0 ? p : Eigen::Vector3f(p - c * scene_positions[parents[j]]);
+    joints.push_back(
+        {names[j], parents[j], offset.cast<double>(), importedLimits(names[j], human)});
+  }
 
   // More than four influences on a vertex: Assimp keeps the four largest and renormalises them.
   // Counted (and vertex indices checked) before, as the step drops what it does not keep, bones
@@ -446,6 +457,7 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
   // Vertices, triangles and weights of every mesh, merged.
   size_t total = 0;
   for (unsigned i : meshes) total += scene->mMeshes[i]->mNumVertices;
+  if (total == 0) fail(path, "its meshes have no vertices, expected a triangle mesh");
   out.rest.positions.resize(3, static_cast<Eigen::Index>(total));
   out.rest.normals.resize(3, static_cast<Eigen::Index>(total));
   std::vector<std::vector<std::pair<int, float>>> influences(total);
@@ -468,8 +480,10 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
     for (unsigned f = 0; f < m->mNumFaces; ++f) {
       const aiFace& face = m->mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines of a mixed mesh
-      out.rest.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1],
-                                      base + face.mIndices[2]);
+      // A mirror (a left-handed file) turns the winding: swap two corners back.
+      const int b = mirrored ? 2 : 1;
+      out.rest.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[b],
+                                      base + face.mIndices[3 - b]);
     }
     for (unsigned b = 0; b < m->mNumBones; ++b) {
       const aiBone* bone = m->mBones[b];
@@ -543,6 +557,14 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
     out.validate();
   } catch (const std::invalid_argument& e) {
     fail(path, std::string("unusable mesh: ") + e.what());
+  }
+  // A human's height tells whether the units were right where the file gave none (or wrong ones).
+  const float height = out.rest.positions.row(2).maxCoeff() - out.rest.positions.row(2).minCoeff();
+  if (!(height >= 0.2f && height <= 3.0f)) {
+    spdlog::warn(
+        "{}: the body stands {:.3g} m tall as read, expected 0.2 to 3 m: are its units "
+        "(or the file's unit scale) right?",
+        path.string(), height);
   }
   return out;
 }
