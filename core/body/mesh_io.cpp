@@ -4,6 +4,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -24,6 +25,7 @@
 #include "core/body/bvh.h"
 #include "core/body/gltf_check.h"
 #include "core/body/human_skeleton.h"
+#include "core/body/mesh_axes.h"
 
 namespace lumistage {
 
@@ -204,6 +206,40 @@ JointLimits importedLimits(const std::string& name, const Skeleton& human) {
   return {Eigen::Vector3d::Constant(-kPi), Eigen::Vector3d::Constant(kPi)};
 }
 
+// Vertices with more than four positive bone weights, and the most on one vertex, over the
+// triangle meshes `meshes`. Throws Error naming the file for a weight on a vertex the mesh has not.
+struct InfluenceCount {
+  int crowded = 0;
+  size_t most = 0;
+};
+
+InfluenceCount countInfluences(const aiScene& scene, const std::vector<unsigned>& meshes,
+                               const fs::path& path) {
+  InfluenceCount out;
+  std::vector<size_t> count;
+  for (unsigned i : meshes) {
+    const aiMesh* m = scene.mMeshes[i];
+    count.assign(m->mNumVertices, 0);
+    for (unsigned b = 0; b < m->mNumBones; ++b) {
+      const aiBone* bone = m->mBones[b];
+      for (unsigned w = 0; w < bone->mNumWeights; ++w) {
+        const aiVertexWeight& vw = bone->mWeights[w];
+        if (vw.mVertexId >= m->mNumVertices) {
+          fail(path,
+               fmt::format("bone '{}' weights vertex {} of mesh '{}', which has {}",
+                           bone->mName.C_Str(), vw.mVertexId, m->mName.C_Str(), m->mNumVertices));
+        }
+        if (vw.mWeight > 0) ++count[vw.mVertexId];
+      }
+    }
+    for (size_t c : count) {
+      if (c > kMaxInfluences) ++out.crowded;
+      out.most = std::max(out.most, c);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 void saveSkinnedMeshGltf(const SkinnedMesh& mesh, const fs::path& path) {
@@ -282,12 +318,15 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
   // FBX pivots would otherwise become helper nodes ("Hips_$AssimpFbx$_Rotation") between bones,
   // and so joints of ours.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
+  // For aiProcess_LimitBoneWeights, applied below once the skeleton is known.
+  importer.SetPropertyInteger(AI_CONFIG_PP_LBW_MAX_WEIGHTS, kMaxInfluences);
   const aiScene* scene =
       importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_Triangulate |
                                            aiProcess_GenSmoothNormals | aiProcess_SortByPType);
   if (scene == nullptr) {
+    // Assimp's reason may quote the rest of the file: shown shortened and escaped.
     fail(path, std::string("cannot read it as a mesh (unreadable or unsupported format): ") +
-                   importer.GetErrorString());
+                   printableInput(importer.GetErrorString(), 300));
   }
   if (scene->mRootNode == nullptr) fail(path, "no scene graph, expected a rigged mesh");
   // What follows walks the scene graph recursively: its depth is checked first, without recursion
@@ -366,25 +405,47 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
       bind_position[node] = mesh_global * offset.inverse().translation();
     }
   }
-  const Eigen::Matrix3f c = fileToOurs();
-  const Skeleton human = makeHumanSkeleton();
-  std::vector<Joint> joints;
-  std::vector<Eigen::Vector3f> world;
+  // The joints in the scene's coordinates, parents first; then the file's axes and units (and,
+  // where its format cannot tell, its skeleton) decide the map to ours.
+  std::vector<std::string> names;
+  std::vector<int> parents;
+  std::vector<Eigen::Vector3f> scene_positions;
   std::map<const aiNode*, int> joint_of;
   auto addJoints = [&](auto&& self, const aiNode* node, int parent) -> void {
     if (!in_skeleton.count(node)) return;
     const auto it = bind_position.find(node);
-    const Eigen::Vector3f p =
-        c * (it != bind_position.end() ? it->second : globalTransform(node).translation());
-    const int index = static_cast<int>(joints.size());
+    const int index = static_cast<int>(names.size());
     joint_of[node] = index;
-    const std::string name = node->mName.C_Str();
-    const Eigen::Vector3f offset = parent < 0 ? p : Eigen::Vector3f(p - world[parent]);
-    joints.push_back({name, parent, offset.cast<double>(), importedLimits(name, human)});
-    world.push_back(p);
+    names.emplace_back(node->mName.C_Str());
+    parents.push_back(parent);
+    scene_positions.push_back(it != bind_position.end() ? it->second
+                                                        : globalTransform(node).translation());
     for (unsigned k = 0; k < node->mNumChildren; ++k) self(self, node->mChildren[k], index);
   };
   addJoints(addJoints, skeleton_root, -1);
+  const Eigen::Matrix3f c = sceneToOurs(*scene, path, skeletonAxes(names, scene_positions));
+  const bool mirrored = c.determinant() < 0;
+  const Skeleton human = makeHumanSkeleton();
+  std::vector<Joint> joints;
+  for (size_t j = 0; j < names.size(); ++j) {
+    const Eigen::Vector3f p = c * scene_positions[j];
+    const Eigen::Vector3f offset =
+        parents[j] < 0 ? p : Eigen::Vector3f(p - c * scene_positions[parents[j]]);
+    joints.push_back(
+        {names[j], parents[j], offset.cast<double>(), importedLimits(names[j], human)});
+  }
+
+  // More than four influences on a vertex: Assimp keeps the four largest and renormalises them.
+  // Counted (and vertex indices checked) before, as the step drops what it does not keep, bones
+  // left without weights included: the skeleton above was taken from all of them.
+  const InfluenceCount crowding = countInfluences(*scene, meshes, path);
+  if (crowding.most > static_cast<size_t>(kMaxInfluences)) {
+    scene = importer.ApplyPostProcessing(aiProcess_LimitBoneWeights);
+    if (scene == nullptr) {
+      fail(path,
+           std::string("limiting bone influences to four failed: ") + importer.GetErrorString());
+    }
+  }
 
   SkinnedMesh out;
   try {
@@ -396,6 +457,7 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
   // Vertices, triangles and weights of every mesh, merged.
   size_t total = 0;
   for (unsigned i : meshes) total += scene->mMeshes[i]->mNumVertices;
+  if (total == 0) fail(path, "its meshes have no vertices, expected a triangle mesh");
   out.rest.positions.resize(3, static_cast<Eigen::Index>(total));
   out.rest.normals.resize(3, static_cast<Eigen::Index>(total));
   std::vector<std::vector<std::pair<int, float>>> influences(total);
@@ -418,19 +480,16 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
     for (unsigned f = 0; f < m->mNumFaces; ++f) {
       const aiFace& face = m->mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines of a mixed mesh
-      out.rest.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1],
-                                      base + face.mIndices[2]);
+      // A mirror (a left-handed file) turns the winding: swap two corners back.
+      const int b = mirrored ? 2 : 1;
+      out.rest.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[b],
+                                      base + face.mIndices[3 - b]);
     }
     for (unsigned b = 0; b < m->mNumBones; ++b) {
       const aiBone* bone = m->mBones[b];
       const int joint = joint_of.at(scene->mRootNode->FindNode(bone->mName));
       for (unsigned w = 0; w < bone->mNumWeights; ++w) {
-        const aiVertexWeight& vw = bone->mWeights[w];
-        if (vw.mVertexId >= m->mNumVertices) {
-          fail(path,
-               fmt::format("bone '{}' weights vertex {} of mesh '{}', which has {}",
-                           bone->mName.C_Str(), vw.mVertexId, m->mName.C_Str(), m->mNumVertices));
-        }
+        const aiVertexWeight& vw = bone->mWeights[w];  // indices checked by countInfluences
         if (vw.mWeight > 0) influences[base + vw.mVertexId].emplace_back(joint, vw.mWeight);
       }
     }
@@ -464,38 +523,48 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
                            material_meshes, meshes.size()));
   }
 
-  // Weights: at most four per vertex, each vertex weighted, normalised to sum 1.
-  int unweighted = 0, crowded = 0;
-  size_t most = 0;
-  for (const auto& list : influences) {
-    if (list.empty()) ++unweighted;
-    if (list.size() > kMaxInfluences) ++crowded;
-    most = std::max(most, list.size());
-  }
+  // Weights: each vertex weighted, at most four (the largest) kept, normalised to sum 1.
+  const int unweighted = static_cast<int>(
+      std::count_if(influences.begin(), influences.end(), [](const auto& l) { return l.empty(); }));
   if (unweighted > 0) {
     fail(path, fmt::format("{} of {} vertices have no bone weights, expected every vertex bound to "
                            "the skeleton",
                            unweighted, total));
   }
-  if (crowded > 0) {
-    fail(path, fmt::format("{} vertices have more than {} bone influences (up to {}), expected at "
-                           "most {}",
-                           crowded, kMaxInfluences, most, kMaxInfluences));
+  if (crowding.crowded > 0) {
+    spdlog::warn(
+        "{}: {} of {} vertices have more than {} bone influences (up to {}): keeping the "
+        "{} largest of each, renormalised",
+        path.string(), crowding.crowded, total, kMaxInfluences, crowding.most, kMaxInfluences);
   }
   out.skin.joints.assign(total, {0, 0, 0, 0});
   out.skin.weights.assign(total, {0, 0, 0, 0});
   for (size_t v = 0; v < total; ++v) {
+    auto& list = influences[v];
+    if (list.size() > kMaxInfluences) {  // Assimp's step has done this; here it is certain
+      std::partial_sort(list.begin(), list.begin() + kMaxInfluences, list.end(),
+                        [](const auto& a, const auto& b) { return a.second > b.second; });
+      list.resize(kMaxInfluences);
+    }
     float sum = 0;
-    for (const auto& [joint, weight] : influences[v]) sum += weight;
-    for (size_t k = 0; k < influences[v].size(); ++k) {
-      out.skin.joints[v][k] = static_cast<uint16_t>(influences[v][k].first);
-      out.skin.weights[v][k] = influences[v][k].second / sum;
+    for (const auto& [joint, weight] : list) sum += weight;
+    for (size_t k = 0; k < list.size(); ++k) {
+      out.skin.joints[v][k] = static_cast<uint16_t>(list[k].first);
+      out.skin.weights[v][k] = list[k].second / sum;
     }
   }
   try {
     out.validate();
   } catch (const std::invalid_argument& e) {
     fail(path, std::string("unusable mesh: ") + e.what());
+  }
+  // A human's height tells whether the units were right where the file gave none (or wrong ones).
+  const float height = out.rest.positions.row(2).maxCoeff() - out.rest.positions.row(2).minCoeff();
+  if (!(height >= 0.2f && height <= 3.0f)) {
+    spdlog::warn(
+        "{}: the body stands {:.3g} m tall as read, expected 0.2 to 3 m: are its units "
+        "(or the file's unit scale) right?",
+        path.string(), height);
   }
   return out;
 }

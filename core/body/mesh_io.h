@@ -8,10 +8,13 @@ namespace lumistage {
 
 // Skinned meshes in files, through Assimp.
 //
-// Axes: files are taken in Assimp's (and glTF's) convention, +Y up with the asset facing +Z (so
-// +X is the actor's left); ours is z up, facing +y, +x right (skeleton.h). Both functions convert,
-// so a saved actor stands upright in any glTF viewer. Lengths are metres both ways; a file in
-// other units (a centimetre FBX) comes in 100 times too large: no unit guessing.
+// Axes: ours is z up, facing +y, +x right (skeleton.h), in metres. glTF is +Y up with the asset
+// facing +Z (so +X is the actor's left), in metres: saveSkinnedMeshGltf converts, so a saved actor
+// stands upright in any glTF viewer. loadSkinnedMesh converts each format's axes and units
+// (mesh_axes.h): glTF's, an FBX file's GlobalSettings (up, front and side axes, UnitScaleFactor),
+// COLLADA's <up_axis> and <unit>, DirectX .X's Y up left-handed convention, and where a format
+// cannot tell (or, for .X, its skeleton stands otherwise) the skeleton's own head-above-feet
+// direction, with a warning. A body that stands outside 0.2 to 3 m tall gets a warning about units.
 
 // Writes glTF 2.0: binary (.glb) or JSON with a .bin buffer beside it (.gltf), chosen by the
 // extension. One mesh (positions, normals, triangles), the skeleton as a node hierarchy (node
@@ -22,15 +25,18 @@ namespace lumistage {
 // file: unknown extension, invalid mesh, export or rename failure.
 void saveSkinnedMeshGltf(const SkinnedMesh& mesh, const std::filesystem::path& path);
 
-// Reads any rigged, skinned mesh Assimp reads (glTF/GLB, FBX, COLLADA, ...). Identical vertices
-// are joined, polygons triangulated, missing normals generated. The skeleton is the bone nodes and
-// their ancestors up to the lowest common one; rest positions come from the bind pose (our rest
-// frames are world aligned, so a bind pose with rotated joint frames keeps only its positions).
-// Several meshes are merged when they share the skeleton. Joint limits come from the human
-// skeleton when a joint's name is one of ours (or a common alias, see humanJointNameFor in
-// bvh.h), else ±pi on every axis. Throws Error naming the file: unreadable or unsupported (with
-// Assimp's reason), no mesh, no bones, meshes on different skeletons, a vertex without weights,
-// vertices with more than four influences.
+// Reads any rigged, skinned mesh Assimp reads (glTF/GLB, FBX, COLLADA, DirectX .X, ...). Identical
+// vertices are joined, polygons triangulated, missing normals generated. The skeleton is the bone
+// nodes and their ancestors up to the lowest common one; rest positions come from the bind pose
+// (our rest frames are world aligned, so a bind pose with rotated joint frames keeps only its
+// positions). Several meshes are merged when they share the skeleton. Joint limits come from the
+// human skeleton when a joint's name is one of ours (or a common alias, see humanJointNameFor in
+// bvh.h), else ±pi on every axis. A vertex with more than four bone influences keeps the four
+// largest (Assimp's aiProcess_LimitBoneWeights), renormalised to sum 1, and one warning names the
+// file and how many vertices had more; bones left without weights stay joints. Throws Error naming
+// the file: unreadable or unsupported (with Assimp's reason), no mesh, no bones, meshes on
+// different skeletons, a vertex without weights, a weight on a vertex that does not exist, FBX
+// axis settings that make no frame (mesh_axes.h).
 SkinnedMesh loadSkinnedMesh(const std::filesystem::path& path);
 
 }  // namespace lumistage
