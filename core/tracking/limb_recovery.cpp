@@ -82,7 +82,8 @@ bool PoseTracker::Impl::recoverLimbs(Pose& p, int rays, int iterations) {
   const double base = evaluate(p, false, H, g);
   limb_global = global;
   const auto& rest = skeleton.restPositions();
-  Pose best = p;
+  Pose& best = limb_best;
+  best = p;
   double best_cost = base;
   for (const Limb& limb : kLimbs) {
     // The unexplained samples the limb reaches, and toward the farthest of them.
@@ -108,7 +109,8 @@ bool PoseTracker::Impl::recoverLimbs(Pose& p, int rays, int iterations) {
     target /= double(far);
     if ((limb_global[limb.end].translation() - target).norm() < kNearM) continue;
     // The limb straightened, then turned at its root so that it points at the target.
-    Pose q = p;
+    Pose& q = limb_trial;
+    q = p;
     q.angles_rad[size_t(limb.middle)].setZero();
     q.angles_rad[size_t(limb.end)].setZero();
     skeleton.forwardKinematics(q, global);

@@ -358,7 +358,11 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
   } else {
     // Constant-velocity prediction, damped, as the starting point and the prior.
     Pose& predicted = m.predicted;
-    predicted = m.has_previous ? m.predictFrom(m.pose, m.previous) : m.pose;
+    if (m.has_previous) {
+      m.predictFrom(m.pose, m.previous, predicted);
+    } else {
+      predicted = m.pose;
+    }
     // Carve only around the predicted body, with the cameras that hold it.
     m.skeleton.forwardKinematics(predicted, m.global);
     result_.left_out_camera = m.leaveOutDisagreeingCamera();

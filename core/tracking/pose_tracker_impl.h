@@ -253,9 +253,10 @@ struct PoseTracker::Impl {
   bool recoverLimbs(Pose& p, int rays, int iterations);
   std::vector<Eigen::Vector3d> unexplained;
   std::vector<Eigen::Isometry3d> limb_global;
+  Pose limb_best, limb_trial;
   int recovery_wait = 0;  // frames before the tracker tries to recover a limb again
   // The constant-velocity prediction from `before` to `now`, damped (velocity_gain), in limits.
-  Pose predictFrom(const Pose& now, const Pose& before) const;
+  void predictFrom(const Pose& now, const Pose& before, Pose& predicted) const;
   // The turned twin (turned_twin.cpp): after an initialisation (`pose`, its fit's cost
   // `pose_cost`), the pose turned half round and fitted (`iterations`); tracked beside the pose
   // for a few frames unless it fits much worse at once.

@@ -27,8 +27,8 @@ constexpr double kTwinRival = 1.5;
 
 }  // namespace
 
-Pose PoseTracker::Impl::predictFrom(const Pose& now, const Pose& before) const {
-  Pose predicted = now;
+void PoseTracker::Impl::predictFrom(const Pose& now, const Pose& before, Pose& predicted) const {
+  predicted = now;
   const double k = opt.velocity_gain;
   predicted.root_translation_m += k * (now.root_translation_m - before.root_translation_m);
   const Eigen::Matrix3d r_now = rotationFromVector(now.angles_rad[0]),
@@ -39,7 +39,6 @@ Pose PoseTracker::Impl::predictFrom(const Pose& now, const Pose& before) const {
   for (size_t j = 1; j < predicted.angles_rad.size(); ++j)
     predicted.angles_rad[j] += k * (now.angles_rad[j] - before.angles_rad[j]);
   skeleton.clampToLimits(predicted);
-  return predicted;
 }
 
 void PoseTracker::Impl::makeTwin(double pose_cost, int iterations) {
@@ -66,17 +65,15 @@ void PoseTracker::Impl::makeTwin(double pose_cost, int iterations) {
 
 bool PoseTracker::Impl::trackTwin(double pose_cost) {
   if (twin_frames <= 0) return false;
-  const Pose predicted_twin = predictFrom(twin, twin_previous);
+  predictFrom(twin, twin_previous, prior_pose);
   use_prior = true;
-  prior_pose = predicted_twin;
   prior_weight = opt.prior_weight;
-  Pose p = predicted_twin;
-  fit(p, opt.iterations);
-  use_prior = false;
-  twin_cost += evaluate(p, false, H, g);
-  pose_cost_sum += pose_cost;
   twin_previous = twin;
-  twin = p;
+  twin = prior_pose;
+  fit(twin, opt.iterations);
+  use_prior = false;
+  twin_cost += evaluate(twin, false, H, g);
+  pose_cost_sum += pose_cost;
   if (twin_cost > kTwinRival * pose_cost_sum) {  // fallen behind for good
     twin_frames = 0;
     return false;
