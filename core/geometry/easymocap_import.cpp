@@ -4,9 +4,12 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <opencv2/core.hpp>
+#include <stdexcept>
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/base/names.h"
+#include "core/geometry/file_storage_matrix.h"
 #include "core/geometry/file_storage_nesting.h"
 #include "core/geometry/rig_import.h"
 #include "core/geometry/rotation.h"
@@ -22,14 +25,9 @@ std::vector<double> numbersOf(const cv::FileStorage& storage, const std::string&
                               const std::vector<size_t>& counts, const fs::path& file) {
   const cv::FileNode node = storage[key];
   if (node.empty()) throw Error(fmt::format("{}: no '{}'", file.string(), key));
-  cv::Mat m;
-  try {
-    node >> m;
-  } catch (const cv::Exception& e) {
-    throw Error(fmt::format("{}: {}: expected a matrix: {}", file.string(), key, e.err));
-  }
-  m.convertTo(m, CV_64F);
-  std::vector<double> values(m.begin<double>(), m.end<double>());
+  const cv::Mat m = readFileStorageMatrix(node, file.string() + ": " + key);
+  std::vector<double> values;
+  if (!m.empty()) values.assign(m.begin<double>(), m.end<double>());
   bool counted = false;
   for (size_t n : counts) counted = counted || values.size() == n;
   if (!counted)
@@ -41,10 +39,22 @@ std::vector<double> numbersOf(const cv::FileStorage& storage, const std::string&
   return values;
 }
 
+// Image size `key` of `file`: a whole number of pixels (a double of one read as such), at most
+// kMaxPixels. Throws Error naming both.
+int pixels(const cv::FileStorage& storage, const std::string& key, const fs::path& file) {
+  constexpr double kMaxPixels = 1 << 20;
+  const cv::FileNode node = storage[key];
+  const double value = node.isInt() || node.isReal() ? double(node) : 0.0;
+  if (!(value >= 1 && value <= kMaxPixels) || value != std::floor(value))
+    throw Error(fmt::format("{}: {}: expected a whole number of pixels from 1 to {}", file.string(),
+                            key, kMaxPixels));
+  return static_cast<int>(value);
+}
+
 cv::FileStorage open(const fs::path& file) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) throw Error(file.string() + ": no such file");
-  checkFileStorageNesting(readFile(file), file.string());  // OpenCV's parsers recurse per level
+  checkFileStorageText(readFile(file), file.string());  // what OpenCV chokes on
   try {
     cv::FileStorage storage(file.string(), cv::FileStorage::READ);
     if (!storage.isOpened())
@@ -52,6 +62,11 @@ cv::FileStorage open(const fs::path& file) {
     return storage;
   } catch (const cv::Exception& e) {
     throw Error(file.string() + ": " + e.err);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    // OpenCV's parsers let other exceptions through too (std::length_error on a YAML key ": 3").
+    throw Error(file.string() + ": cannot read as an OpenCV FileStorage file: " + e.what());
   }
 }
 
@@ -61,7 +76,13 @@ std::vector<std::string> namesOf(const cv::FileStorage& storage, const fs::path&
   std::vector<std::string> names;
   for (const cv::FileNode& n : node) {
     // EasyMocap writes camera names as strings; some tools write numbers.
-    names.push_back(n.isString() ? std::string(n) : fmt::format("{}", int(double(n))));
+    const std::string name = n.isString() ? std::string(n)
+                             : n.isInt()  ? std::to_string(int(n))
+                                          : std::string();
+    if (!isValidName(name))
+      throw Error(fmt::format("{}: names: {} is not a camera name (1-64 of A-Za-z0-9_.-)",
+                              file.string(), n.isString() ? quotedInput(name) : "an entry"));
+    names.push_back(name);
   }
   return names;
 }
@@ -92,8 +113,8 @@ RigImport importEasyMocapRig(const fs::path& folder, const RigImportOptions& opt
     // The image size: EasyMocap leaves it out; H_ and W_ where a tool adds them, else the option.
     int width = options.width, height = options.height;
     if (!intri["W_" + name].empty() && !intri["H_" + name].empty()) {
-      width = int(double(intri["W_" + name]));
-      height = int(double(intri["H_" + name]));
+      width = pixels(intri, "W_" + name, intri_file);
+      height = pixels(intri, "H_" + name, intri_file);
     }
     if (width <= 0 || height <= 0)
       throw Error(fmt::format("{}: camera '{}' has no image size: give it (--image-size WxH)",
@@ -104,8 +125,12 @@ RigImport importEasyMocapRig(const fs::path& folder, const RigImportOptions& opt
       throw Error(
           fmt::format("{}: K_{}: expected positive focal lengths", intri_file.string(), name));
     const Distortion distortion{d[0], d[1], d[2], d[3], d.size() > 4 ? d[4] : 0.0};
-    cameras.emplace_back(name, width, height, Intrinsics::fromMatrix(K), distortion, R,
-                         Eigen::Vector3d(t[0], t[1], t[2]));
+    try {
+      cameras.emplace_back(name, width, height, Intrinsics::fromMatrix(K), distortion, R,
+                           Eigen::Vector3d(t[0], t[1], t[2]));
+    } catch (const std::invalid_argument& e) {
+      throw Error(intri_file.string() + ": " + e.what());
+    }
   }
   result.rig = assembleImportedRig(std::move(cameras), options, folder.string());
   return result;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <vector>
 
 #include "core/base/error.h"
@@ -108,7 +109,61 @@ void checkXmlNesting(std::string_view text, const std::string& source) {
   }
 }
 
+// OpenCV 4.6's YAML parser loops forever where a document after its first starts with '-' but not
+// "---" ("--- a: 0\n--x", "a: 0\n---\n -"): past a document it skips three bytes, taking them for
+// "---" or "...", and then waits for a "---" that never comes. So one document only, whose top
+// level starts at column 0 (then no line can end it before the end of the file): "---" alone on
+// its line and before the content, "..." only after it all, no line at column 0 starting with
+// '-' (OpenCV refuses a sequence at column 0 under a key anyway; a calibration's top level is a
+// mapping).
+void checkYamlDocument(std::string_view text, const std::string& source) {
+  const auto refuse = [&](int line, std::string_view what) {
+    throw Error(fmt::format("{}:{}: {}: only one YAML document, its keys at column 0, is read",
+                            source, line, what));
+  };
+  bool content = false, ended = false;
+  int line = 1;
+  for (size_t start = 0; start < text.size(); ++line) {
+    size_t end = text.find('\n', start);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view row = text.substr(start, end - start);
+    start = end + 1;
+    const size_t first = row.find_first_not_of(" \t\r");
+    if (first == std::string_view::npos || row[first] == '#') continue;
+    if (ended) refuse(line, "text after the document's end '...'");
+    if (row.starts_with("---")) {
+      const size_t rest = row.find_first_not_of(" \t\r", 3);
+      if (content) refuse(line, "a second document '---'");
+      if (rest != std::string_view::npos && rest == 3) refuse(line, "a line starting with '---'");
+      if (rest != std::string_view::npos && row[rest] != '#')
+        refuse(line, "content on the document's start line '---'");
+    } else if (row.starts_with("...")) {
+      ended = true;
+    } else if (row.starts_with('%') && !content) {
+      // A directive (%YAML:1.0).
+    } else if (row.starts_with('-')) {
+      refuse(line, "a line at column 0 starting with '-'");
+    } else if (!content && first != 0) {
+      refuse(line, "the document's first key not at column 0");
+    } else {
+      content = true;
+    }
+  }
+}
+
 }  // namespace
+
+void checkFileStorageText(std::string_view text, const std::string& source) {
+  if (const size_t nul = text.find('\0'); nul != std::string_view::npos) {
+    const auto line = 1 + std::count(text.begin(), text.begin() + std::ptrdiff_t(nul), '\n');
+    throw Error(
+        fmt::format("{}:{}: a NUL byte: not a text file (OpenCV YAML, XML or JSON)", source, line));
+  }
+  checkFileStorageNesting(text, source);
+  // YAML as OpenCV tells it: "%YAML" first, after a UTF-8 byte order mark.
+  const std::string_view body = text.starts_with("\xef\xbb\xbf") ? text.substr(3) : text;
+  if (body.starts_with("%YAML")) checkYamlDocument(text, source);
+}
 
 void checkFileStorageNesting(std::string_view text, const std::string& source) {
   // Both measures whatever the file's name or first bytes: OpenCV picks the format by either.

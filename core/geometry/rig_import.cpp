@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -13,6 +14,8 @@
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/base/names.h"
+#include "core/geometry/file_storage_matrix.h"
 #include "core/geometry/file_storage_nesting.h"
 #include "core/geometry/projection_matrix.h"
 #include "core/geometry/rotation.h"
@@ -46,20 +49,8 @@ cv::FileNode firstOf(const cv::FileNode& camera, std::initializer_list<const cha
 }
 
 Eigen::MatrixXd readMatrix(const cv::FileNode& node, const std::string& where) {
-  cv::Mat m;
-  try {
-    if (node.isSeq()) {
-      std::vector<double> values;
-      node >> values;
-      m = cv::Mat(values, true).reshape(1, 1);
-    } else {
-      node >> m;
-    }
-  } catch (const cv::Exception& e) {
-    throw Error(where + ": expected a matrix: " + e.err);
-  }
+  const cv::Mat m = readFileStorageMatrix(node, where);
   if (m.empty()) throw Error(where + ": expected a matrix, got nothing readable");
-  m.convertTo(m, CV_64F);
   Eigen::MatrixXd out;
   cv::cv2eigen(m, out);
   if (!out.allFinite()) throw Error(where + ": matrix has non-finite entries");
@@ -79,6 +70,9 @@ Camera readOpenCvCamera(const cv::FileNode& node, int index, const std::string& 
     if (!node["name"].isString())
       throw Error(fmt::format("{}: camera {}: name: expected text", source, index));
     name = static_cast<std::string>(node["name"]);
+    if (!isValidName(name))
+      throw Error(fmt::format("{}: camera {}: name {} is not a camera name (1-64 of A-Za-z0-9_.-)",
+                              source, index, quotedInput(name)));
   }
   const std::string where = fmt::format("{}: camera {} ('{}')", source, index, name);
   auto need = [&](std::initializer_list<const char*> keys, const char* expected) {
@@ -120,6 +114,11 @@ Camera readOpenCvCamera(const cv::FileNode& node, int index, const std::string& 
   if (cv::FileNode size = node["image_size"]; !size.empty()) {
     const Eigen::MatrixXd s = readMatrix(size, where + ": image_size");
     if (s.size() != 2) throw Error(where + ": image_size: expected [width, height]");
+    for (const double pixels : {s(0), s(1)}) {
+      // Checked before the conversion: a double past int's range converted is undefined.
+      if (!(pixels >= 1 && pixels <= 1 << 20) || pixels != std::floor(pixels))
+        throw Error(where + ": image_size: expected whole numbers of pixels from 1 to 1048576");
+    }
     width = static_cast<int>(s(0)), height = static_cast<int>(s(1));
   } else {
     width = readPositiveInt(need({"image_width"}, "the image width in pixels"),
@@ -298,7 +297,7 @@ std::pair<Distortion, double> refitDistortion(const Eigen::Matrix3d& K_p, const 
 RigImport importOpenCvRig(const fs::path& file, const RigImportOptions& options) {
   const std::string source = file.string();
   if (!fs::is_regular_file(file)) throw Error(source + ": no such file");
-  checkFileStorageNesting(readFile(file), source);  // OpenCV's parsers recurse per level
+  checkFileStorageText(readFile(file), source);  // what OpenCV chokes on
   cv::FileStorage storage;
   try {
     if (!storage.open(source, cv::FileStorage::READ)) {
@@ -306,6 +305,9 @@ RigImport importOpenCvRig(const fs::path& file, const RigImportOptions& options)
     }
   } catch (const cv::Exception& e) {
     throw Error(source + ": not a valid OpenCV FileStorage file: " + e.err);
+  } catch (const std::exception& e) {
+    // OpenCV's parsers let other exceptions through too (std::length_error on a YAML key ": 3").
+    throw Error(source + ": not a valid OpenCV FileStorage file: " + e.what());
   }
   std::vector<Camera> cameras;
   try {
@@ -320,6 +322,10 @@ RigImport importOpenCvRig(const fs::path& file, const RigImportOptions& options)
     }
   } catch (const cv::Exception& e) {
     throw Error(source + ": " + e.err);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(source + ": " + e.what());
   }
   return {assembleImportedRig(std::move(cameras), options, source), {}};
 }

@@ -340,6 +340,53 @@ TEST(OpenCvImport, DeeplyNestedFilesAreRefusedBeforeOpenCvParsesThem) {
             std::string::npos);
 }
 
+// Found by the file_reader_fuzz_opencv target: each was a crash, a hang, gigabytes asked for or an
+// exception that was not our Error, before OpenCV or inside it. Each is refused naming the file.
+TEST(OpenCvImport, FuzzedFilesAreRefusedNamingTheFile) {
+  TempFolder folder;
+  const std::string head = "%YAML:1.0\n---\n";
+  const std::string k =
+      "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n"
+      "  data: [500, 0, 320, 0, 500, 240, 0, 0, 1]\ndistortion_coefficients: [0, 0, 0, 0]\n";
+  const std::map<std::string, std::pair<std::string, std::string>> files = {
+      // OpenCV allocated the declared rows x cols (48 GB here) before counting the data.
+      {"huge.yaml",
+       {head + "camera_matrix: !!opencv-matrix\n  rows: 2000000000\n  cols: 3\n  dt: d\n"
+               "  data: [1]\n",
+        "huge.yaml: camera 0 ('cam01'): camera_matrix: expected a matrix of at most 4096 numbers"}},
+      // OpenCV's XML parser dereferenced a null pointer.
+      {"nul.xml",
+       {"<?xml version=\"1.0\"?>\n<opencv_storage>\n<a>" + std::string(2, '\0') +
+            "</a>\n</opencv_storage>\n",
+        "nul.xml:3: a NUL byte"}},
+      // OpenCV's YAML parser looped forever.
+      {"start.yaml", {"%YAML:1.0\n--- t: 0\n--x-\n", "start.yaml:2: content on the document's"}},
+      {"indented.yaml",
+       {"%YAML:1.\n -a\n---\n#\n -", "indented.yaml:2: the document's first key not at column 0"}},
+      {"end.yaml", {head + "t: 0\n...\n--x\n", "end.yaml:5: text after the document's end"}},
+      {"dash.yaml", {head + "t: 0\n--x\n", "dash.yaml:4: a line at column 0 starting with '-'"}},
+      // OpenCV's YAML parser threw std::length_error, which is no cv::Exception.
+      {"key.yaml",
+       {head + "K: !!opencv-matrix\n   rows: 3\n   : 3\n",
+        "key.yaml: not a valid OpenCV FileStorage file"}},
+      // A double past int's range was converted to int.
+      {"size.yaml",
+       {head + "image_size: [1e300, 720]\n" + k,
+        "size.yaml: camera 0 ('cam01'): image_size: expected whole numbers of pixels"}},
+      // A name from the file is shown quoted.
+      {"name.yaml",
+       {head + "name: \"cam 1/../x\"\n" + k, "name.yaml: camera 0: name 'cam 1/../x' is not"}}};
+  for (const auto& [name, file] : files) {
+    folder.write(name, file.first);
+    const std::string e = testing::errorOf([&] { importOpenCvRig(folder.path() / name, {}); });
+    EXPECT_NE(e.find(file.second), std::string::npos) << name << ": " << e;
+  }
+  // A calibration as a person writes it by hand still reads: "---" alone, "..." at the end.
+  folder.write("hand.yaml", head + "# by hand\nimage_width: 640\nimage_height: 480\n" + k +
+                                "rvec: [0, 0, 0]\ntvec: [0, 0, 2]\n...\n# the end\n");
+  EXPECT_EQ(importOpenCvRig(folder.path() / "hand.yaml", {}).rig.cameraCount(), 1);
+}
+
 std::vector<Camera> ringCameras(int count, int width, int height) {
   RingRigSpec spec;
   spec.cameras = count;
@@ -642,6 +689,41 @@ TEST(EasyMocapImport, DeeplyNestedFilesAreRefusedBeforeOpenCvParsesThem) {
   const std::string e = testing::errorOf([&] { importEasyMocapRig(folder.path(), {}); });
   EXPECT_NE(e.find("extri.yml:2: nested deeper than 64 levels"), std::string::npos)
       << e.substr(0, 300);
+}
+
+// Found by the file_reader_fuzz_easymocap target: an exception from OpenCV's parser that was not
+// our Error, an unbounded matrix, and image sizes past int's range. Each is refused naming the
+// file.
+TEST(EasyMocapImport, FuzzedFilesAreRefusedNamingTheFile) {
+  const std::vector<Camera> truth = ringCameras(2, 640, 480);
+  TempFolder folder;
+  RigImportOptions options;
+  options.width = 640;
+  options.height = 480;
+  const auto errorWith = [&](const std::string& intri) {
+    writeEasyMocap(folder.path(), truth, true);
+    folder.write("intri.yml", intri);
+    return testing::errorOf([&] { importEasyMocapRig(folder.path(), options); });
+  };
+  const std::string names = "%YAML:1.0\n---\nnames:\n   - \"cam01\"\n";
+  std::string e = errorWith(names + "K_cam01: !!opencv-matrix\n   rows: 3\n   : 3\n");
+  EXPECT_NE(e.find("intri.yml: cannot read as an OpenCV FileStorage file"), std::string::npos) << e;
+  e = errorWith(names +
+                "K_cam01: !!opencv-matrix\n   rows: 3\n   cols: 900000000\n   dt: d\n"
+                "   data: [1]\n");
+  EXPECT_NE(e.find("intri.yml: K_cam01: expected a matrix of at most 4096 numbers"),
+            std::string::npos)
+      << e;
+  const std::string camera =
+      "K_cam01: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+      "   data: [500, 0, 320, 0, 500, 240, 0, 0, 1]\ndist_cam01: [0, 0, 0, 0, 0]\n";
+  e = errorWith(names + camera + "W_cam01: 1e300\nH_cam01: 480\n");
+  EXPECT_NE(e.find("intri.yml: W_cam01: expected a whole number of pixels"), std::string::npos)
+      << e;
+  e = errorWith("%YAML:1.0\n---\nnames:\n   - \"cam 1/../x\"\n");
+  EXPECT_NE(e.find("intri.yml: names: 'cam 1/../x' is not a camera name"), std::string::npos) << e;
+  e = errorWith(names + camera + "--x\n");
+  EXPECT_NE(e.find("intri.yml:11: a line at column 0 starting with '-'"), std::string::npos) << e;
 }
 
 }  // namespace
