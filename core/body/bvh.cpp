@@ -19,16 +19,6 @@ namespace lumistage {
 
 namespace {
 
-// BVH (Y up, facing +Z, +X left) to ours (z up, facing +y, +x right): x = -X, y = Z, z = Y. A
-// proper rotation and its own inverse, so the same matrix converts back.
-Eigen::Matrix3d bvhToOurs() {
-  Eigen::Matrix3d c;
-  c << -1, 0, 0,  //
-      0, 0, 1,    //
-      0, 1, 0;
-  return c;
-}
-
 bool equalsIgnoreCase(std::string_view a, std::string_view b) {
   return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
            return std::tolower(static_cast<unsigned char>(x)) ==
@@ -439,7 +429,7 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
   const double scale = target_height / source_height;
   const Eigen::Vector3d rest_root(bvh.joints[0].offset.x(), source_height,
                                   bvh.joints[0].offset.z());
-  const Eigen::Matrix3d c = bvhToOurs();
+  const Eigen::Matrix3d c = yUpToOurs();
   // The file's rest pose need not be ours (a CMU skeleton's legs splay 20 degrees, a Biovision
   // one's arms may hang down): each joint's rotation is taken relative to the turn that brings
   // our bone (to its first mapped child) onto the file's at rest. Without it a CMU actor standing
@@ -526,7 +516,7 @@ void saveBvh(const MotionClip& clip, const Skeleton& skeleton, const std::filesy
                             path.string(), clip.name, clip.fps));
   }
   const int n = skeleton.jointCount();
-  const Eigen::Matrix3d c = bvhToOurs();
+  const Eigen::Matrix3d c = yUpToOurs();
   constexpr double kCm = 100.0;
   // The floor (y = 0) is at our lowest rest joint, as loadBvh measures the root height.
   double lowest = skeleton.restPositions()[0].z();

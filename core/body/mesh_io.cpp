@@ -33,16 +33,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Assimp / glTF (Y up, facing +Z, +X the actor's left) to ours (z up, facing +y, +x right):
-// x = -X, y = Z, z = Y. A proper rotation and its own inverse.
-Eigen::Matrix3f fileToOurs() {
-  Eigen::Matrix3f c;
-  c << -1, 0, 0,  //
-      0, 0, 1,    //
-      0, 1, 0;
-  return c;
-}
-
 constexpr const char* kMaterialsName = "lumistage_vertex_materials";
 
 aiVector3D toAi(const Eigen::Vector3f& v) {
@@ -68,7 +58,7 @@ aiMatrix4x4 translation(const Eigen::Vector3f& t) {
 
 std::unique_ptr<aiScene> buildScene(const SkinnedMesh& mesh) {
   const Skeleton& skeleton = mesh.skeleton;
-  const Eigen::Matrix3f c = fileToOurs();  // its own inverse: ours to the file's axes too
+  const Eigen::Matrix3f c = yUpToOurs().cast<float>();  // its own inverse: ours to the file's too
   auto scene = std::make_unique<aiScene>();
   scene->mRootNode = new aiNode("lumistage_actor");
 

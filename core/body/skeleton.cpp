@@ -26,6 +26,14 @@ Eigen::Vector3d eulerAnglesOf(const Eigen::Matrix3d& r) {
   return {std::atan2(-r(1, 2), r(2, 2)), b, std::atan2(-r(0, 1), r(0, 0))};
 }
 
+Eigen::Matrix3d yUpToOurs() {
+  Eigen::Matrix3d c;
+  c << -1, 0, 0,  //
+      0, 0, 1,    //
+      0, 1, 0;
+  return c;
+}
+
 Skeleton::Skeleton(std::vector<Joint> joints) : joints_(std::move(joints)) {
   if (joints_.empty()) throw std::invalid_argument("skeleton: no joints");
   rest_positions_.resize(joints_.size());

@@ -47,6 +47,11 @@ Eigen::Matrix3d eulerRotation(const Eigen::Vector3d& angles_rad);  // Rx(a.x) Ry
 // Its inverse: the angles of R = Rx(a) Ry(b) Rz(c) with b in [-pi/2, pi/2]; at gimbal lock c = 0.
 Eigen::Vector3d eulerAnglesOf(const Eigen::Matrix3d& r);
 
+// The Y-up convention of BVH, glTF and Assimp (Y up, facing +Z, +X the actor's left) to ours (z
+// up, facing +y, +x right): x = -X, y = Z, z = Y. A proper rotation and its own inverse, so the
+// same matrix converts back.
+Eigen::Matrix3d yUpToOurs();
+
 class Skeleton {
  public:
   Skeleton() = default;
