@@ -11,6 +11,7 @@
 #include "core/base/error.h"
 #include "core/capture/footage_import.h"
 #include "core/capture/take_merge.h"
+#include "core/eval/footage_sync.h"
 #include "core/geometry/rig_file.h"
 
 namespace lumistage {
@@ -38,11 +39,45 @@ fs::path footageIn(const fs::path& folder, const std::string& name) {
                   folder.string(), name, name, name));
 }
 
+// --offset CAMERA=N options by camera; throws Error naming the option.
+std::map<std::string, int> parseOffsets(const std::vector<std::string>& texts, const Rig& rig,
+                                        const std::string& rig_file) {
+  std::map<std::string, int> offsets;
+  for (const std::string& text : texts) {
+    const auto [name, value] = nameValue(text, "--offset");
+    try {
+      size_t used = 0;
+      offsets[name] = std::stoi(value, &used);
+      if (used != value.size()) throw std::invalid_argument(value);
+    } catch (const std::exception&) {
+      throw Error(fmt::format("--offset '{}': expected a whole number of frames", text));
+    }
+    if (!rig.findCamera(name))
+      throw Error(fmt::format("--offset '{}': {} has no camera '{}'", text, rig_file, name));
+  }
+  return offsets;
+}
+
+// The offsets the masks agree best under (footage_sync.h), printed as a table; `given` fixed.
+FootageSync syncFromMasks(const Rig& rig, const std::string& masks,
+                          const std::map<std::string, int>& given, int range) {
+  FootageSyncOptions options;
+  options.fixed = given;
+  options.range = range;
+  const FootageSync sync = estimateFootageSync(
+      rig, masks, options, [](int done, int total) { printProgress("syncing", done, total); });
+  for (const std::string& note : sync.notes) fmt::print("{}\n", note);
+  fmt::print("{}", describeFootageSync(sync));
+  return sync;
+}
+
 void addImportCommand(CLI::App& session) {
   struct Args {
     std::string rig, footage, out;
     std::vector<std::string> cameras, offsets;
     FootageImportOptions options;
+    bool sync = false;
+    int sync_range = 10;
   };
   auto a = std::make_shared<Args>();
   CLI::App* import = session.add_subcommand(
@@ -73,22 +108,16 @@ void addImportCommand(CLI::App& session) {
   import->add_option("--masks", a->options.masks,
                      "another tool's masks of the actor: MASKS/CAMERA/FFFFFF.png (the footage's "
                      "frame numbers, from 0); only frames every camera has one of are taken");
+  import->add_flag("--sync", a->sync,
+                   "find each camera's offset from the masks' agreement (needs --masks; cameras "
+                   "given --offset keep theirs)");
+  import->add_option("--sync-range", a->sync_range, "frames searched each way by --sync")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
   import->add_option("-o,--out", a->out, "the session's folder (new or empty)")->required();
   import->callback([a] {
     const Rig rig = loadRig(a->rig);
-  std::map<std::string, int> offsets;
-  for (const std::string& text : a->offsets) {
-    const auto [name, value] = nameValue(text, "--offset");
-    try {
-      size_t used = 0;
-      offsets[name] = std::stoi(value, &used);
-      if (used != value.size()) throw std::invalid_argument(value);
-    } catch (const std::exception&) {
-      throw Error(fmt::format("--offset '{}': expected a whole number of frames", text));
-    }
-    if (!rig.findCamera(name))
-      throw Error(fmt::format("--offset '{}': {} has no camera '{}'", text, a->rig, name));
-  }
+  std::map<std::string, int> offsets = parseOffsets(a->offsets, rig, a->rig);
   std::map<std::string, fs::path> paths;
   for (const std::string& text : a->cameras) {
     const auto [name, path] = nameValue(text, "--camera");
@@ -113,6 +142,12 @@ void addImportCommand(CLI::App& session) {
   if (!paths.empty())
     throw Error(fmt::format("--camera {}=...: {} has no camera '{}'", paths.begin()->first, a->rig,
                             paths.begin()->first));
+  if (a->sync) {
+    if (a->options.masks.empty())
+      throw Error("--sync: needs the actor's masks (--masks DIR) to compare the cameras");
+    const FootageSync sync = syncFromMasks(rig, a->options.masks.string(), offsets, a->sync_range);
+    for (size_t c = 0; c < sources.size(); ++c) sources[c].offset = sync.cameras[c].offset;
+  }
   const FootageImportReport report =
       importFootage(rig, sources, a->out, a->options,
                     [](int done, int total) { printProgress("importing", done, total); });
@@ -131,6 +166,32 @@ void addSessionCommands(CLI::App& app) {
   CLI::App* session = app.add_subcommand("session", "Work with recorded sessions and takes");
   session->require_subcommand(1);
   addImportCommand(*session);
+
+  struct SyncArgs {
+    std::string rig, masks;
+    std::vector<std::string> offsets;
+    int range = 10;
+  };
+  auto y = std::make_shared<SyncArgs>();
+  CLI::App* sync = session->add_subcommand(
+      "sync",
+      "Find how many frames each camera's footage runs behind the others, from masks of the "
+      "actor (the offsets under which the visual hull explains the most of every mask)");
+  sync->add_option("--rig", y->rig, "the cameras' calibration (rig file)")->required();
+  sync->add_option("--masks", y->masks, "the masks: MASKS/CAMERA/FFFFFF.png by frame")->required();
+  sync->add_option("--offset", y->offsets, "CAMERA=N: a camera whose offset is known");
+  sync->add_option("--range", y->range, "frames searched each way")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
+  sync->callback([y] {
+    const Rig rig = loadRig(y->rig);
+    const FootageSync found =
+        syncFromMasks(rig, y->masks, parseOffsets(y->offsets, rig, y->rig), y->range);
+    std::string line;
+    for (const FootageSyncCamera& c : found.cameras)
+      if (c.offset != 0) line += fmt::format(" --offset {}={}", c.camera, c.offset);
+    fmt::print("session import options:{}\n", line.empty() ? " (none: in step)" : line);
+  });
 
   struct MergeArgs {
     std::vector<std::string> parts;

@@ -101,6 +101,26 @@ class Footage {
 
 }  // namespace
 
+Camera cameraForFootage(const Camera& camera, int width, int height, const fs::path& file,
+                        std::string& note) {
+  note.clear();
+  const int dw = camera.width() - width, dh = camera.height() - height;
+  if (dw == 0 && dh == 0) return camera;
+  if (dw < 0 || dh < 0 || dw > kMaxCropPixels || dh > kMaxCropPixels)
+    throw Error(
+        fmt::format("{}: {}x{} pixels, camera '{}' is calibrated at {}x{}{}", file.string(), width,
+                    height, camera.name(), camera.width(), camera.height(),
+                    width == camera.height() && height == camera.width()
+                        ? ": the footage is turned a quarter (rotate it, or calibrate it as it is)"
+                        : ": not this camera's footage, or another calibration"));
+  note = fmt::format(
+      "camera '{}': footage {}x{}, calibrated {}x{}: taken as the calibrated image cropped by {} "
+      "px at the right and {} px at the bottom (intrinsics kept)",
+      camera.name(), width, height, camera.width(), camera.height(), dw, dh);
+  return Camera(camera.name(), width, height, camera.intrinsics(), camera.distortion(),
+                camera.rotation(), camera.translation());
+}
+
 FootageImportReport importFootage(const Rig& rig, const std::vector<FootageSource>& sources,
                                   const fs::path& out, const FootageImportOptions& options,
                                   const std::function<void(int, int)>& progress) {
@@ -126,24 +146,9 @@ FootageImportReport importFootage(const Rig& rig, const std::vector<FootageSourc
       throw Error(fmt::format("camera '{}': no footage given for it", camera.name()));
     const Footage& f = *footage[size_t(c)];
     if (fps <= 0 && f.fps() > 0) fps = f.fps();
-    const int dw = camera.width() - f.width(), dh = camera.height() - f.height();
-    if (dw == 0 && dh == 0) {
-      cameras.push_back(camera);
-      continue;
-    }
-    if (dw < 0 || dh < 0 || dw > kMaxCropPixels || dh > kMaxCropPixels)
-      throw Error(fmt::format(
-          "{}: {}x{} pixels, camera '{}' is calibrated at {}x{}{}", f.source().path.string(),
-          f.width(), f.height(), camera.name(), camera.width(), camera.height(),
-          f.width() == camera.height() && f.height() == camera.width()
-              ? ": the footage is turned a quarter (rotate it, or calibrate it as it is)"
-              : ": not this camera's footage, or another calibration"));
-    report.notes.push_back(fmt::format(
-        "camera '{}': footage {}x{}, calibrated {}x{}: taken as the calibrated image cropped by "
-        "{} px at the right and {} px at the bottom (intrinsics kept)",
-        camera.name(), f.width(), f.height(), camera.width(), camera.height(), dw, dh));
-    cameras.emplace_back(camera.name(), f.width(), f.height(), camera.intrinsics(),
-                         camera.distortion(), camera.rotation(), camera.translation());
+    std::string note;
+    cameras.push_back(cameraForFootage(camera, f.width(), f.height(), f.source().path, note));
+    if (!note.empty()) report.notes.push_back(std::move(note));
   }
   if (!(fps > 0)) throw Error("footage import: image folders carry no frame rate: give one (fps)");
   report.rig = Rig(cameras, rig.nodes());

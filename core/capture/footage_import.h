@@ -37,6 +37,13 @@ struct FootageImportReport {
   std::vector<std::string> notes;  // size adjustments, where each camera's footage ended
 };
 
+// `camera` as footage of `width` x `height` pixels shows it: itself at its calibrated size; a few
+// pixels smaller (up to 16: a video encoded 1080 wide for a 1088 sensor), the calibrated image
+// cropped at its right and bottom edges, its intrinsics kept, with `note` saying so (else empty).
+// Throws Error naming `file` for footage larger, smaller by more, or turned a quarter.
+Camera cameraForFootage(const Camera& camera, int width, int height,
+                        const std::filesystem::path& file, std::string& note);
+
 // Writes a session (docs/session-format.md, RGB images, source "import") of `rig`'s cameras from
 // their footage, one source for every camera of the rig. Each camera's frames are decoded in order
 // (no seeking: every frame is counted, so offsets are frame-exact). Footage a few pixels smaller

@@ -50,9 +50,9 @@ VisualHullLocator::VisualHullLocator(const Rig& rig, int silhouette_step, double
   }
 }
 
-ActorLocation VisualHullLocator::locate(
-    const std::vector<const LowResSilhouette*>& silhouettes) const {
-  std::vector<const LowResSilhouette*> by_camera(cameras_, nullptr);
+int VisualHullLocator::byCamera(const std::vector<const LowResSilhouette*>& silhouettes,
+                                std::vector<const LowResSilhouette*>& by_camera) const {
+  by_camera.assign(size_t(cameras_), nullptr);
   int present = 0;
   for (const LowResSilhouette* s : silhouettes) {
     if (s && s->camera >= 0 && s->camera < cameras_ && s->step == step_) {
@@ -60,25 +60,26 @@ ActorLocation VisualHullLocator::locate(
       ++present;
     }
   }
+  return present;
+}
+
+Eigen::Vector3d VisualHullLocator::centre(size_t v) const {
+  const int x = int(v % dims_.x()), y = int((v / dims_.x()) % dims_.y()),
+            z = int(v / (size_t(dims_.x()) * dims_.y()));
+  return lower_ + voxel_m_ * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
+}
+
+ActorLocation VisualHullLocator::locate(
+    const std::vector<const LowResSilhouette*>& silhouettes) const {
+  std::vector<const LowResSilhouette*> by_camera;
   ActorLocation out;
   out.voxel_m = voxel_m_;
-  if (present < 2) return out;
-  const size_t voxels = size_t(dims_.x()) * dims_.y() * dims_.z();
+  if (byCamera(silhouettes, by_camera) < 2) return out;
+  const size_t voxels = voxelCount();
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (size_t v = 0; v < voxels; ++v) {
-    int seen = 0;
-    bool inside = true;
-    for (int c = 0; c < cameras_ && inside; ++c) {
-      const LowResSilhouette* s = by_camera[c];
-      const int32_t cell = cell_[v * cameras_ + c];
-      if (!s || cell < 0) continue;
-      ++seen;
-      inside = s->at(cell % s->width, cell / s->width);
-    }
-    if (!inside || seen < 2) continue;
-    const int x = int(v % dims_.x()), y = int((v / dims_.x()) % dims_.y()),
-              z = int(v / (size_t(dims_.x()) * dims_.y()));
-    const Eigen::Vector3d p = lower_ + voxel_m_ * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
+    if (!keeps(v, by_camera)) continue;
+    const Eigen::Vector3d p = centre(v);
     if (out.voxels == 0) out.lower = out.upper = p;
     out.lower = out.lower.cwiseMin(p);
     out.upper = out.upper.cwiseMax(p);
@@ -88,6 +89,16 @@ ActorLocation VisualHullLocator::locate(
   out.found = out.voxels > 0;
   if (out.found) out.centroid = sum / out.voxels;
   return out;
+}
+
+void VisualHullLocator::carve(const std::vector<const LowResSilhouette*>& silhouettes,
+                              std::vector<uint32_t>& kept) const {
+  kept.clear();
+  std::vector<const LowResSilhouette*> by_camera;
+  if (byCamera(silhouettes, by_camera) < 2) return;
+  const size_t voxels = voxelCount();
+  for (size_t v = 0; v < voxels; ++v)
+    if (keeps(v, by_camera)) kept.push_back(uint32_t(v));
 }
 
 }  // namespace lumistage

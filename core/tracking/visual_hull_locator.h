@@ -36,7 +36,32 @@ class VisualHullLocator {
   // one do not carve. At least two cameras are needed to find anything.
   ActorLocation locate(const std::vector<const LowResSilhouette*>& silhouettes) const;
 
+  // The hull itself, for analyses of the silhouettes (footage_sync.h): the voxels locate() keeps,
+  // as indices (`kept` is reused), each voxel's cell in camera c's grid (y * width + x, -1 where
+  // the camera does not see it) and its centre.
+  void carve(const std::vector<const LowResSilhouette*>& silhouettes,
+             std::vector<uint32_t>& kept) const;
+  int32_t cell(size_t voxel, int camera) const { return cell_[voxel * cameras_ + camera]; }
+  Eigen::Vector3d centre(size_t voxel) const;
+  size_t voxelCount() const { return size_t(dims_.x()) * dims_.y() * dims_.z(); }
+
  private:
+  // The silhouettes by camera index (null where missing or of another step); how many there are.
+  int byCamera(const std::vector<const LowResSilhouette*>& silhouettes,
+               std::vector<const LowResSilhouette*>& by_camera) const;
+  // Whether voxel v is in the hull: at least two cameras see it, each of them the actor there.
+  bool keeps(size_t v, const std::vector<const LowResSilhouette*>& by_camera) const {
+    int seen = 0;
+    for (int c = 0; c < cameras_; ++c) {
+      const LowResSilhouette* s = by_camera[c];
+      const int32_t cell = cell_[v * cameras_ + c];
+      if (!s || cell < 0) continue;
+      if (!s->at(cell % s->width, cell / s->width)) return false;
+      ++seen;
+    }
+    return seen >= 2;
+  }
+
   int cameras_;
   int step_;
   double voxel_m_;

@@ -625,6 +625,18 @@ TEST(Cli, ImportedFootageWithMasksIsTrackedAndEvaluatedWithoutTruth) {
       << r.output;
   EXPECT_NE(r.output.find("imported 3 frames of 8 cameras"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(folder / "imported" / "masks" / "cam08" / "000002.png"));
+  // The cameras' offsets from the masks: filmed together, none.
+  r = run(kCli + " session sync --rig " + (folder / "studio" / "rig.yaml").string() +
+          " --masks " + (folder / "studio" / "truth" / "masks").string() + " --range 1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("session import options: (none: in step)"), std::string::npos)
+      << r.output;
+  r = run(kCli + " session import --rig " + (folder / "studio" / "rig.yaml").string() +
+          " --footage " + (folder / "studio").string() + " --fps 30 --sync --out " +
+          (folder / "unsynced").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--sync: needs the actor's masks (--masks DIR)"), std::string::npos)
+      << r.output;
   r = run(kCli + " eval --session " + (folder / "imported").string() + " --json " +
           (folder / "eval.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
