@@ -626,8 +626,8 @@ TEST(Cli, ImportedFootageWithMasksIsTrackedAndEvaluatedWithoutTruth) {
   EXPECT_NE(r.output.find("imported 3 frames of 8 cameras"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(folder / "imported" / "masks" / "cam08" / "000002.png"));
   // The cameras' offsets from the masks: filmed together, none.
-  r = run(kCli + " session sync --rig " + (folder / "studio" / "rig.yaml").string() +
-          " --masks " + (folder / "studio" / "truth" / "masks").string() + " --range 1");
+  r = run(kCli + " session sync --rig " + (folder / "studio" / "rig.yaml").string() + " --masks " +
+          (folder / "studio" / "truth" / "masks").string() + " --range 1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("session import options: (none: in step)"), std::string::npos)
       << r.output;
@@ -699,6 +699,10 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
           "\"statistics_deadline_ms\": ", "\"image_deadline_ms\": ", "\"deadlines_following\": "}) {
       EXPECT_NE(text.find(key), std::string::npos) << key << " in " << text;
     }
+    // The whole system's CPU a shown frame: the studio's and the nodes' processes, measured.
+    const size_t cpu = text.find("\"cpu_ms_per_frame\": ");
+    ASSERT_NE(cpu, std::string::npos) << text;
+    EXPECT_GT(std::stod(text.substr(cpu + 20)), 1.0) << text.substr(cpu, 40);
     fs::remove(json);
   }
   fs::remove_all(folder);
