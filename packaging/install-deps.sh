@@ -25,6 +25,9 @@ packages=(
   libzmq3-dev cppzmq-dev libflatbuffers-dev flatbuffers-compiler
   # compression of the nodes' refinement statistics
   libzstd-dev
+  # OSC for the skeleton's live feed (VMC protocol); the packages' runtime liblo7 comes from
+  # dpkg-shlibdeps
+  liblo-dev
   # logging, command line, config
   libspdlog-dev libfmt-dev libcli11-dev libyaml-cpp-dev libtoml11-dev
   # tests and benchmarks

@@ -4,13 +4,18 @@
 // counts: operator new, Eigen's dynamic matrices, zstd's contexts, std::vector growth alike. A
 // frame of the reference virtual studio goes through each stage twice; the second time must not
 // allocate.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <malloc.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdlib>
 
+#include "core/body/human_skeleton.h"
+#include "core/live/vmc_sender.h"
 #include "core/pipeline/posed_body.h"
 #include "core/pipeline/silhouettes.h"
 #include "core/refine/mesh_refiner.h"
@@ -237,6 +242,29 @@ TEST(HotPaths, TrackingAFrameAllocatesNothingAfterTheFirst) {
   Allocations allocations;
   tracker.track(given);
   EXPECT_EQ(allocations.stop(), 0);
+}
+
+// The live skeleton: a frame's VMC bundle made and sent (to a UDP socket of this test's on
+// 127.0.0.1), its bundle and messages built once.
+TEST(HotPaths, TheSkeletonsLiveBundleAllocatesNothingAfterTheFirst) {
+  const int receiver = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t size = sizeof(address);
+  ASSERT_EQ(::bind(receiver, reinterpret_cast<sockaddr*>(&address), size), 0);
+  ASSERT_EQ(::getsockname(receiver, reinterpret_cast<sockaddr*>(&address), &size), 0);
+  const Skeleton skeleton = makeHumanSkeleton();
+  VmcSender sender({"127.0.0.1", ntohs(address.sin_port)}, skeleton);
+  PoseData pose;
+  pose.angles.assign(size_t(3) * skeleton.jointCount(), 0.1f);
+  ASSERT_TRUE(sender.send(pose, true));
+  pose.angles[5] = 0.3f;
+  Allocations allocations;
+  const bool sent = sender.send(pose, true);
+  EXPECT_EQ(allocations.stop(), 0);
+  EXPECT_TRUE(sent);
+  ::close(receiver);
 }
 
 }  // namespace

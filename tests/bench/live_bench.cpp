@@ -1,0 +1,67 @@
+// Micro-benchmarks of the live feeds out of the studio: what each adds to a frame shown. Run:
+// ./studio bench (the target: under 5 ms a frame at the studio).
+#include <arpa/inet.h>
+#include <benchmark/benchmark.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <utility>
+#include <vector>
+
+#include "core/body/human_skeleton.h"
+#include "core/body/motion_library.h"
+#include "core/live/vmc_sender.h"
+
+namespace {
+
+// The studio's pose messages of a walk, as the nodes get them.
+std::vector<lumistage::PoseData> walkPoses(const lumistage::Skeleton& skeleton) {
+  const lumistage::MotionClip clip = lumistage::makeBuiltinClip("walk", skeleton, 30, 2);
+  std::vector<lumistage::PoseData> poses;
+  for (const lumistage::Pose& pose : clip.frames) {
+    lumistage::PoseData data;
+    for (int k = 0; k < 3; ++k) data.root[k] = float(pose.root_translation_m[k]);
+    for (const Eigen::Vector3d& a : pose.angles_rad)
+      data.angles.insert(data.angles.end(), {float(a.x()), float(a.y()), float(a.z())});
+    poses.push_back(std::move(data));
+  }
+  return poses;
+}
+
+// A UDP port on 127.0.0.1: bound (a receiver there, never read: the kernel drops what overflows
+// its buffer, the sender's cost is the same), or closed (nobody there).
+struct LoopbackPort {
+  int socket = -1, port = 0;
+  explicit LoopbackPort(bool keep) {
+    socket = ::socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t size = sizeof(address);
+    ::bind(socket, reinterpret_cast<sockaddr*>(&address), size);
+    ::getsockname(socket, reinterpret_cast<sockaddr*>(&address), &size);
+    port = ntohs(address.sin_port);
+    if (!keep) ::close(std::exchange(socket, -1));
+  }
+  ~LoopbackPort() {
+    if (socket >= 0) ::close(socket);
+  }
+};
+
+// One frame's VMC bundle: the bones' local poses in Unity's axes, the OSC bundle serialised by
+// liblo, one sendto() on loopback. Arg 1: a receiver bound to the port; 0: none there.
+void vmcSendFrame(benchmark::State& state) {
+  const lumistage::Skeleton skeleton = lumistage::makeHumanSkeleton();
+  const std::vector<lumistage::PoseData> poses = walkPoses(skeleton);
+  const LoopbackPort port(state.range(0) != 0);
+  lumistage::VmcSender sender({"127.0.0.1", port.port}, skeleton);
+  size_t f = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(sender.send(poses[f++ % poses.size()], true));
+  state.counters["bones"] = double(sender.bones().size());
+  state.counters["bytes"] = double(sender.bundleBytes());
+  state.counters["lost"] = double(sender.bundlesLost());
+}
+BENCHMARK(vmcSendFrame)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
