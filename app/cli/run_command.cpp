@@ -9,6 +9,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -21,6 +22,7 @@
 #include "core/base/error.h"
 #include "core/base/output_path.h"
 #include "core/base/stop_signal.h"
+#include "core/live/vmc_sender.h"
 #include "core/pipeline/local_run.h"
 #include "core/render/view_recorder.h"
 
@@ -169,7 +171,7 @@ std::vector<std::string> finishTake(LocalPipelineRun& pipeline, const std::strin
 void addRunCommand(CLI::App& app) {
   struct Args {
     std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size,
-                                     record_view, record_take, listen;
+                                     record_view, record_take, listen, osc;
     BodyDetail body = BodyDetail::kStandard;
     int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
     int64_t frames = 150;
@@ -220,6 +222,10 @@ void addRunCommand(CLI::App& app) {
                   "record the cameras' frames as a take: each node writes its cameras to "
                   "DIR/<node>/ from the first frame done to the end (lumistage session merge "
                   "DIR joins them)");
+  run->add_option("--osc", a->osc,
+                  "stream the tracked skeleton of every frame shown to HOST:PORT over OSC in the "
+                  "VMC protocol (VSeeFace, EVMC4U for Unity, VMC4UE for Unreal, Blender; their "
+                  "usual port is 39539)");
   run->callback([a] {
     // Ctrl-C (or SIGTERM, SIGHUP) stops the run as its end would: the take closed, the view's
     // recording finished, the figures told, the nodes stopped and the run's key store removed.
@@ -252,6 +258,14 @@ void addRunCommand(CLI::App& app) {
       const std::string extension = lowercaseExtension(path);
       if (!path.empty() && extension != ".png" && extension != ".jpg" && extension != ".jpeg")
         throw Error(std::string(option) + " " + path + ": expected a .png or .jpg file");
+    }
+    std::optional<OscTarget> osc;
+    if (!a->osc.empty()) {
+      try {
+        osc = parseOscTarget(a->osc);
+      } catch (const Error& e) {
+        throw CLI::ValidationError("--osc", e.what());
+      }
     }
     LocalRunOptions options;
     options.session = a->session;
@@ -303,6 +317,10 @@ void addRunCommand(CLI::App& app) {
       view.width = width;
       view.height = height;
       studio.setView(view);
+    }
+    if (osc) {
+      pipeline.streamSkeleton(*osc);
+      fmt::print("streaming the skeleton to {} (VMC over OSC)\n", osc->text());
     }
     if (!a->record_view.empty()) {
       pipeline.recordView(a->record_view, [](const std::string& error) {
@@ -414,6 +432,10 @@ void addRunCommand(CLI::App& app) {
         fmt::print("      {:<8} {:6.1f} fps, {} frames, {} dropped{}\n", c.camera, c.frame_rate_hz,
                    c.frames, c.dropped, c.last_error.empty() ? "" : ", " + c.last_error);
       }
+    }
+    if (const VmcSender* sender = pipeline.skeletonStream()) {
+      fmt::print("skeleton to {}: {} bundles sent, {} lost\n", sender->target().text(),
+                 sender->bundlesSent(), sender->bundlesLost());
     }
     if (!a->json.empty() || !a->plot.empty()) {
       const MachineInfo machine = describeMachine();

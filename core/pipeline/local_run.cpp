@@ -212,6 +212,20 @@ std::unique_ptr<ViewRecorder> LocalPipelineRun::stopRecordingView() {
   return std::move(view_recorder_);
 }
 
+void LocalPipelineRun::streamSkeleton(const OscTarget& target) {
+  stopStreamingSkeleton();
+  skeleton_stream_ = std::make_unique<VmcSender>(target, body().skeleton);
+  studio_->setShownPoseSink(
+      [sender = skeleton_stream_.get()](int64_t, const PoseData& pose, bool tracked) {
+        sender->send(pose, tracked);
+      });
+}
+
+void LocalPipelineRun::stopStreamingSkeleton() {
+  studio_->setShownPoseSink({});
+  skeleton_stream_.reset();
+}
+
 std::vector<std::string> LocalPipelineRun::takeExits() {
   return std::exchange(exits_, {});
 }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/body/human_model.h"
+#include "core/live/vmc_sender.h"
 #include "core/pipeline/studio_coordinator.h"
 #include "core/render/view_recorder.h"
 
@@ -82,6 +83,12 @@ class LocalPipelineRun {
   // not the pipeline, and is given to `stopped`.
   void recordView(const std::filesystem::path& file,
                   std::function<void(const std::string&)> stopped = {});
+  // Streams the skeleton of every frame shown to `target` in the VMC protocol (VmcSender: an OSC
+  // bundle a frame, sent without waiting), the pose its images were rendered with; replaces a
+  // stream under way. Throws Error when the host does not resolve.
+  void streamSkeleton(const OscTarget& target);
+  void stopStreamingSkeleton();
+  const VmcSender* skeletonStream() const { return skeleton_stream_.get(); }
   // Ends the recording and hands back its closed recorder (file, frames, size, rate); none when
   // none was made.
   std::unique_ptr<ViewRecorder> stopRecordingView();
@@ -101,6 +108,7 @@ class LocalPipelineRun {
  private:
   LocalRunOptions options_;
   std::unique_ptr<ViewRecorder> view_recorder_;
+  std::unique_ptr<VmcSender> skeleton_stream_;
   bool view_recorder_failed_ = false;
   Rig rig_;
   std::vector<std::string> names_;

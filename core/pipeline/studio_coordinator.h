@@ -199,6 +199,14 @@ class StudioCoordinator {
   void setBlendedSink(std::function<void(int view, const BlendedImage&)> sink) {
     blended_sink_ = std::move(sink);
   }
+  // Called once for every frame shown (after its blended images), with the pose its images were
+  // rendered with and whether the tracker found the actor in it (else: the generic human at rest
+  // where the hull is, or the tracker's first frames): what a live feed of the skeleton sends
+  // (VmcSender), on this thread, so it must not block. An empty function stops it.
+  void setShownPoseSink(
+      std::function<void(int64_t frame_id, const PoseData& pose, bool tracked)> sink) {
+    shown_pose_sink_ = std::move(sink);
+  }
   // The body pose the motion capture module sent the nodes last (for overlays); its frame id.
   const PoseData& lastPose() const { return last_pose_; }
   int64_t lastPoseFrame() const { return last_pose_frame_; }
@@ -236,6 +244,7 @@ class StudioCoordinator {
     bool mocap_begun = false;  // handed to the motion capture thread
     int64_t pose_sent_ns = 0;
     PoseData pose;                    // sent to the nodes
+    bool tracked = false;             // the pose is the tracker's (not the placed generic human)
     RefinementStatistics refine_sum;  // the nodes' statistics, combined exactly
     int64_t offsets_sent_ns = 0;      // the refinement began (its deadline counts from here)
     int64_t offsets_out_ns = 0;       // the offsets went out to the nodes
@@ -326,7 +335,8 @@ class StudioCoordinator {
     int64_t frame_id = 0;
     std::vector<LowResSilhouette> silhouettes;
     PoseData pose;
-    double ms = 0;  // how long the fit took
+    bool tracked = false;  // the tracker found the actor (else: placed at rest)
+    double ms = 0;         // how long the fit took
   };
   void onMessage(const ReceivedMessage& received);
   // Admits the frame (max_frames_in_flight) and hands its silhouettes to the motion capture
@@ -417,6 +427,7 @@ class StudioCoordinator {
   std::vector<ViewData> views_;
   std::map<int, BlendedImage> last_images_;
   std::function<void(int, const BlendedImage&)> blended_sink_;
+  std::function<void(int64_t, const PoseData&, bool)> shown_pose_sink_;
   std::vector<uint8_t> decoded_;  // a partial image, reused
   PoseData last_pose_;
   int64_t last_pose_frame_ = -1;

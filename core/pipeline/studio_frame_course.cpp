@@ -22,6 +22,7 @@ void StudioCoordinator::FrameState::clearForReuse() {
   pose_nodes.clear();
   statistics_nodes.clear();
   pose = PoseData();
+  tracked = false;
   refine_sum.vertex_count = 0;  // reset() when the first node's statistics arrive
   image_nodes.clear();
   for (auto& [view, blender] : blends) blender.reset(blender.width(), blender.height());
@@ -111,7 +112,8 @@ void StudioCoordinator::mocapLoop() {
         tracker_->reset();
       }
     }
-    if (tracked && tracked->valid()) {
+    job.tracked = tracked && tracked->valid();
+    if (job.tracked) {
       // The tracked angles on the nodes' generic human, scaled to the actor (posed_body.h).
       job.pose =
           poseMessageFor(*generic_skeleton_, tracker_->skeleton(), tracked->pose, tracked->joints);
@@ -142,6 +144,7 @@ void StudioCoordinator::takePoses() {
       FrameState& frame = it->second;
       std::swap(frame.silhouettes, job.silhouettes);
       frame.pose = job.pose;
+      frame.tracked = job.tracked;
       sendPose(job.frame_id, frame);
     }
     job.silhouettes.clear();
@@ -289,6 +292,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     blender.finish(image.rgba);
     if (blended_sink_) blended_sink_(view, image);
   }
+  if (shown && shown_pose_sink_) shown_pose_sink_(frame_id, frame.pose, frame.tracked);
 
   // A run asked for max_frames counts exactly those: frames that complete together (several are
   // in flight) beyond it are still shown, not counted. A frame that no node's image reached (their

@@ -1,0 +1,112 @@
+// The live feeds out of `lumistage run`, received as other programs receive them: real processes,
+// a real OSC server on 127.0.0.1.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "tests/osc_receiver.h"
+#include "tests/test_util.h"
+
+namespace lumistage {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::OscBundle;
+using testing::OscReceiver;
+
+const std::string kCli = LUMISTAGE_CLI;
+
+struct Result {
+  int exit_code;
+  std::string output;  // stdout and stderr together
+};
+
+Result run(const std::string& command) {
+  Result result{-1, ""};
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return result;
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    result.output.append(buffer.data(), n);
+  const int status = ::pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+// folder/session: a synthetic take of the virtual studio, 4 cameras on 2 nodes.
+::testing::AssertionResult synthSession(const fs::path& folder) {
+  Result r =
+      run(kCli + " rig ring --cameras 4 --width 320 --height 240 --cameras-per-node 2 --out " +
+          (folder / "rig.yaml").string());
+  if (r.exit_code != 0) return ::testing::AssertionFailure() << r.output;
+  std::ofstream(folder / "studio.yaml")
+      << "format: lumistage-studio\nversion: 1\nrig: rig.yaml\nactor:\n  vertices: 2000\n";
+  r = run(kCli + " synth --config " + (folder / "studio.yaml").string() +
+          " --frames 6 --bayer --out " + (folder / "session").string());
+  if (r.exit_code != 0) return ::testing::AssertionFailure() << r.output;
+  return ::testing::AssertionSuccess();
+}
+
+TEST(LiveOut, RunStreamsTheSkeletonOfEveryFrameShownOverOsc) {
+  const fs::path folder = testing::testFolder("live_out");
+  ASSERT_TRUE(synthSession(folder));
+  OscReceiver receiver;
+  ASSERT_GT(receiver.port(), 0);
+  const std::string target = "127.0.0.1:" + std::to_string(receiver.port());
+  const Result r = run(kCli + " run --session " + (folder / "session").string() +
+                       " --frames 12 --seconds 60 --osc " + target);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("streaming the skeleton to " + target), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("12 frames in all"), std::string::npos) << r.output;
+  std::smatch said;
+  const std::regex sent_re("skeleton to " + std::regex_replace(target, std::regex("\\."), "\\.") +
+                           ": ([0-9]+) bundles sent, ([0-9]+) lost");
+  ASSERT_TRUE(std::regex_search(r.output, said, sent_re)) << r.output;
+  const size_t sent = std::stoul(said[1]);
+  EXPECT_EQ(said[2], "0");
+  // A bundle for every frame shown: the 12 counted, and any shown before the figures began to
+  // count or while the run ended.
+  EXPECT_GE(sent, 12u);
+  const std::vector<OscBundle> bundles = receiver.waitForBundles(sent);
+  EXPECT_EQ(bundles.size(), sent);
+  EXPECT_EQ(receiver.loose(), 0u);
+  int tracked = 0;
+  for (const OscBundle& bundle : bundles) {
+    ASSERT_EQ(bundle.size(), 25u);
+    EXPECT_EQ(bundle.front().path, "/VMC/Ext/Root/Pos");
+    ASSERT_EQ(bundle[1].text(0), "Hips");
+    // The actor stands on the stage: hips a metre up (Unity's Y), within the ring of cameras.
+    EXPECT_GT(bundle[1].number(2), 0.6f);
+    EXPECT_LT(bundle[1].number(2), 1.3f);
+    EXPECT_LT(std::abs(bundle[1].number(1)), 3.0f);
+    EXPECT_LT(std::abs(bundle[1].number(3)), 3.0f);
+    EXPECT_EQ(bundle[23].path, "/VMC/Ext/OK");
+    tracked += bundle[23].integer(1) == 3;
+  }
+  // The tracker finds the synthetic actor (its first frames may be the placed generic human).
+  EXPECT_GE(tracked, 6) << bundles.size() << " bundles";
+  // The sender's clock in each bundle never goes back: one bundle a frame, in order.
+  for (size_t b = 1; b < bundles.size(); ++b)
+    EXPECT_GE(bundles[b].back().number(0), bundles[b - 1].back().number(0)) << b;
+}
+
+TEST(LiveOut, RunRefusesAnOscTargetThatIsNotHostAndPortBeforeStartingNodes) {
+  for (const char* bad : {"localhost", "127.0.0.1:0", "127.0.0.1:99999", ":39539"}) {
+    const Result r = run(kCli + " run --session /nonexistent --frames 1 --osc " + bad);
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("--osc"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("HOST:PORT"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("starting"), std::string::npos) << r.output;
+  }
+}
+
+}  // namespace
+}  // namespace lumistage
