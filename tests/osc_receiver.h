@@ -4,11 +4,11 @@
 // keeps every bundle that arrives, each message's address and arguments. The tests send it only
 // from 127.0.0.1 (liblo 0.31 binds a unicast server to every interface, on a port the system
 // picks).
-#include <gtest/gtest.h>
 #include <lo/lo.h>
 
 #include <chrono>
 #include <condition_variable>
+#include <cstdio>
 #include <mutex>
 #include <string>
 #include <variant>
@@ -29,10 +29,7 @@ class OscReceiver {
  public:
   OscReceiver() {
     server_ = lo_server_thread_new_with_proto(nullptr, LO_UDP, &OscReceiver::onError);
-    if (!server_) {
-      ADD_FAILURE() << "liblo could not start a UDP server";
-      return;
-    }
+    if (!server_) return;  // port() 0: the test says so
     lo_server_thread_add_method(server_, nullptr, nullptr, &OscReceiver::onMessage, this);
     lo_server_add_bundle_handlers(lo_server_thread_get_server(server_), &OscReceiver::onStart,
                                   &OscReceiver::onEnd, this);
@@ -66,8 +63,8 @@ class OscReceiver {
 
  private:
   static void onError(int number, const char* message, const char* where) {
-    ADD_FAILURE() << "liblo error " << number << ": " << (message ? message : "") << " at "
-                  << (where ? where : "");
+    std::fprintf(stderr, "liblo error %d: %s at %s\n", number, message ? message : "",
+                 where ? where : "");
   }
   static int onStart(lo_timetag, void* self) {
     static_cast<OscReceiver*>(self)->open_ = OscBundle();

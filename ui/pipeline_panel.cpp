@@ -188,6 +188,10 @@ void PipelineWorker::run() {
       s.take = pipeline.studio().take();
       s.take_recording = pipeline.studio().recordingTake();
       s.takes_folder = QString::fromStdString(options_.takes.string());
+      if (const VmcSender* sender = pipeline.skeletonStream()) {
+        s.skeleton_target = QString::fromStdString(sender->target().text());
+        s.skeleton_bundles = sender->bundlesSent();
+      }
       emit snapshot(s);
     }
     finishRecording(pipeline);  // a recording under way ends with the pipeline
@@ -213,6 +217,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
       take_name_(new QLineEdit("take-001", this)),
       take_button_(new QPushButton(tr("Record take"), this)),
       take_status_(new QLabel(this)),
+      live_out_(new LiveOutControl(this)),
       takes_folder_(QDir::homePath() + "/lumistage-takes") {
   qRegisterMetaType<lumistage::RunReport>();
   qRegisterMetaType<lumistage::PipelineSnapshot>();
@@ -277,6 +282,8 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   take_button_->setObjectName("record_take");
   take_button_->setEnabled(false);
   buttons->addWidget(take_button_);
+  buttons->addSpacing(24);
+  buttons->addWidget(live_out_);
   buttons->addStretch(1);
   take_status_->setObjectName("take_status");
   take_status_->setWordWrap(true);
@@ -300,6 +307,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   connect(start_button_, &QPushButton::clicked, this, &PipelinePanel::startChosen);
   connect(stop_button_, &QPushButton::clicked, this, &PipelinePanel::stop);
   connect(take_button_, &QPushButton::clicked, this, &PipelinePanel::toggleTake);
+  connect(live_out_, &LiveOutControl::toggled, this, &PipelinePanel::applyLiveOut);
 }
 
 PipelinePanel::~PipelinePanel() {
@@ -415,6 +423,9 @@ void PipelinePanel::start(LocalRunOptions options) {
           });
   connect(worker_, &PipelineWorker::recordingEnded, this, &PipelinePanel::recordingEnded);
   connect(worker_, &PipelineWorker::takeRefused, this, &PipelinePanel::refuseTake);
+  connect(worker_, &PipelineWorker::skeletonStreamFailed, live_out_,
+          [this](const QString& why) { live_out_->streamFailed(why); });
+  applyLiveOut();  // the live skeleton from the first frame, when its box is checked
   start_button_->setEnabled(false);
   stop_button_->setEnabled(true);
   take_button_->setEnabled(true);
@@ -454,6 +465,7 @@ void PipelinePanel::stop() {
     take_status_->setText(tr("Take %1 ended with the pipeline.")
                               .arg(QString::fromStdString(last_.take.take).toHtmlEscaped()));
   take_name_->setEnabled(true);
+  live_out_->showStream({}, 0);
   // The panels forget the pipeline: the viewport its last image and body, the overlay its pose,
   // the camera health its nodes' reports (the source's own figures show again).
   last_ = PipelineSnapshot();
@@ -609,6 +621,7 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   if (s.take_recording) take_error_.clear();
   take_button_->setText(s.take_recording ? tr("Stop take") : tr("Record take"));
   take_name_->setEnabled(!s.take_recording);
+  live_out_->showStream(s.skeleton_target, s.skeleton_bundles);
   const QString takes = s.takes_folder.isEmpty()
                             ? tr("its own takes folder (lumistage-node --takes)")
                             : s.takes_folder.toHtmlEscaped();

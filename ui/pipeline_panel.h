@@ -16,6 +16,7 @@
 #include "core/body/skinned_mesh.h"
 #include "core/pipeline/local_run.h"
 #include "core/render/view_recorder.h"
+#include "ui/live_out_control.h"
 
 class QComboBox;
 class QLineEdit;
@@ -47,6 +48,9 @@ struct PipelineSnapshot : PipelineView {
   RecordData take;  // the take asked of the nodes (name empty: none yet); theirs in report.nodes
   bool take_recording = false;
   QString takes_folder;  // where the nodes write their parts of a take
+  // The skeleton's live stream (VMC over OSC): its receiver (empty: none) and frames sent.
+  QString skeleton_target;
+  int64_t skeleton_bundles = 0;
 };
 
 // The pipeline panel's line of figures (rich text): the rate now and since the start, latency,
@@ -76,6 +80,10 @@ class PipelineWorker : public QObject {
   // StudioCoordinator::startTake) until stopTake(); why it cannot start comes as message().
   void startTake(const QString& name);
   void stopTake();
+  // Thread-safe: streams the skeleton of every frame shown to `target` (LocalPipelineRun::
+  // streamSkeleton) until stopStreamingSkeleton() or the pipeline stops (live_out_control.cpp).
+  void streamSkeleton(const OscTarget& target);
+  void stopStreamingSkeleton();
 
  public slots:
   void run();
@@ -87,8 +95,9 @@ class PipelineWorker : public QObject {
   // The view's recording started: the file it is written to until it closes, and a partial file
   // of its name that an earlier recording left (empty: none).
   void recordingStarted(QString partial, QString leftover);
-  void recordingEnded();             // stopped, failed, or the pipeline stopped
-  void takeRefused(QString reason);  // startTake(): why the take cannot start
+  void recordingEnded();                      // stopped, failed, or the pipeline stopped
+  void takeRefused(QString reason);           // startTake(): why the take cannot start
+  void skeletonStreamFailed(QString reason);  // streamSkeleton(): why it cannot stream
   void finished();
 
  private:
@@ -158,6 +167,8 @@ class PipelinePanel : public QWidget {
   void startChosen();
   void toggleTake();
   void refuseTake(const QString& reason);
+  // The live skeleton's box, checked or not, to the running pipeline (live_out_control.cpp).
+  void applyLiveOut();
 
   QLabel* summary_;
   QLabel* view_;  // the pipeline's output: the blended view
@@ -170,6 +181,7 @@ class PipelinePanel : public QWidget {
   QLineEdit* take_name_;
   QPushButton* take_button_;
   QLabel* take_status_;
+  LiveOutControl* live_out_;
   QString take_error_;  // why the last take asked for could not start; shown until the next
   QString takes_folder_;
   QThread* thread_ = nullptr;

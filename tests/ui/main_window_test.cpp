@@ -1,6 +1,7 @@
 // The studio's main window under Qt's offscreen platform.
 #include "ui/main_window.h"
 
+#include <QCheckBox>
 #include <QComboBox>
 #include <QDir>
 #include <QDockWidget>
@@ -17,6 +18,7 @@
 #include <QMouseEvent>
 #include <QProcess>
 #include <QPushButton>
+#include <QRegularExpression>
 #include <QSettings>
 #include <QSignalSpy>
 #include <QSlider>
@@ -37,6 +39,7 @@
 #include "core/geometry/ring_rig.h"
 #include "core/render/view_recorder.h"
 #include "core/sim/virtual_studio.h"
+#include "tests/osc_receiver.h"
 #include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
 #include "ui/camera_overlay_view.h"
@@ -1044,6 +1047,48 @@ class MainWindowTest : public QObject {
     QTRY_COMPARE_WITH_TIMEOUT(health->verdict(kept).state, lumistage::HealthState::kStreaming,
                               3000);
     QTRY_COMPARE_WITH_TIMEOUT(health->table()->item(killed, 1)->text(), QString("lost"), 500);
+    window.pipeline()->stop();
+  }
+  // The live skeleton: checked, every frame shown goes to its receiver as a VMC bundle (a liblo
+  // server here, on 127.0.0.1), from the pipeline's first frame; unchecked, none; a receiver that
+  // is not HOST:PORT is refused beside the box, which unchecks.
+  void theLiveSkeletonBoxStreamsEveryFrameShownToItsReceiver() {
+    QTemporaryDir dir;
+    writeStudioSession(dir.filePath("session"), 6);
+    lumistage::testing::OscReceiver receiver;
+    QVERIFY(receiver.port() > 0);
+    MainWindow window;
+    auto* box = window.pipeline()->findChild<QCheckBox*>("live_skeleton");
+    auto* target = window.pipeline()->findChild<QLineEdit*>("live_skeleton_target");
+    auto* status = window.pipeline()->findChild<QLabel*>("live_skeleton_status");
+    QVERIFY(box && target && status);
+    target->setText("localhost");
+    box->setChecked(true);
+    QVERIFY(!box->isChecked());
+    QVERIFY2(status->text().contains("expected HOST:PORT"), qPrintable(status->text()));
+    QVERIFY2(status->toolTip().contains("no port"), qPrintable(status->toolTip()));
+    target->setText(QString("127.0.0.1:%1").arg(receiver.port()));
+    box->setChecked(true);
+    QVERIFY(box->isChecked());
+    lumistage::LocalRunOptions options;
+    options.session = dir.filePath("session").toStdString();
+    options.node_binary = LUMISTAGE_NODE;
+    window.pipeline()->start(options);
+    QTRY_VERIFY_WITH_TIMEOUT(receiver.bundles().size() >= 5, 30000);
+    QCOMPARE(receiver.bundles().front().size(), size_t(25));
+    QCOMPARE(receiver.bundles().front()[1].text(0), std::string("Hips"));
+    QTRY_VERIFY_WITH_TIMEOUT(status->text().contains("frames sent"), 5000);
+    // Unchecked: the stream stops, after the frames the panel says, every one received.
+    box->setChecked(false);
+    auto* summary = window.pipeline()->findChild<QLabel*>("pipeline_summary");
+    const QRegularExpression stopped("Stopped the skeleton's stream to .* after (\\d+) frames");
+    QTRY_VERIFY_WITH_TIMEOUT(stopped.match(summary->text()).hasMatch(), 5000);
+    const size_t sent = stopped.match(summary->text()).captured(1).toULongLong();
+    QTRY_COMPARE_WITH_TIMEOUT(receiver.bundles().size(), sent, 5000);
+    const int64_t frames = window.pipeline()->lastReport().frames;
+    QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames > frames + 5, 20000);
+    QCOMPARE(receiver.bundles().size(), sent);
+    QCOMPARE(QSettings("Lumistage", "Studio").value("pipeline/osc").toString(), target->text());
     window.pipeline()->stop();
   }
 };

@@ -1,0 +1,42 @@
+#pragma once
+
+#include <QString>
+#include <QWidget>
+#include <cstdint>
+#include <optional>
+
+#include "core/live/vmc_sender.h"
+
+class QCheckBox;
+class QLabel;
+class QLineEdit;
+
+namespace lumistage {
+
+// The studio's live feed of the skeleton (VMC over OSC, as `lumistage run --osc`): a check box
+// and the receiver's HOST:PORT, remembered between sessions (settings pipeline/osc). Checked while
+// the pipeline runs, every frame shown goes out; the pipeline panel asks its worker.
+class LiveOutControl : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit LiveOutControl(QWidget* parent = nullptr);
+  // The receiver when the box is checked and its text is HOST:PORT; none otherwise (a text that
+  // is not one unchecks the box and says why beside it).
+  std::optional<OscTarget> wantedTarget();
+  // What the pipeline's snapshot says of the stream: its target (empty: none) and bundles sent.
+  void showStream(const QString& target, int64_t bundles);
+  // The stream could not start (a receiver that is not HOST:PORT, a host that does not resolve):
+  // unchecked; `briefly` beside the box, `why` on hovering.
+  void streamFailed(const QString& why, const QString& briefly = {});
+
+ signals:
+  void toggled();  // checked or unchecked
+
+ private:
+  QCheckBox* box_;
+  QLineEdit* target_;
+  QLabel* status_;
+};
+
+}  // namespace lumistage
