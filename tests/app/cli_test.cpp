@@ -37,6 +37,7 @@
 #include "core/geometry/rig_file.h"
 #include "core/geometry/ring_rig.h"
 #include "core/net/curve_keys.h"
+#include "core/render/video_file.h"
 
 namespace lumistage {
 namespace {
@@ -626,8 +627,8 @@ TEST(Cli, ImportedFootageWithMasksIsTrackedAndEvaluatedWithoutTruth) {
   EXPECT_NE(r.output.find("imported 3 frames of 8 cameras"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(folder / "imported" / "masks" / "cam08" / "000002.png"));
   // The cameras' offsets from the masks: filmed together, none.
-  r = run(kCli + " session sync --rig " + (folder / "studio" / "rig.yaml").string() +
-          " --masks " + (folder / "studio" / "truth" / "masks").string() + " --range 1");
+  r = run(kCli + " session sync --rig " + (folder / "studio" / "rig.yaml").string() + " --masks " +
+          (folder / "studio" / "truth" / "masks").string() + " --range 1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("session import options: (none: in step)"), std::string::npos)
       << r.output;
@@ -900,6 +901,7 @@ TEST(Cli, RenderWritesAVideoAndAFailedRenderReplacesNothing) {
     return c.isOpened() ? int(c.get(cv::CAP_PROP_FRAME_COUNT)) : -1;
   };
   ASSERT_EQ(frames(), 3);
+  EXPECT_EQ(probeVideoFile(video).codec, "h264");  // .avi: Motion-JPEG (video_file_test)
   {
     cv::VideoCapture c(video.string());
     cv::Mat first;
@@ -1093,7 +1095,8 @@ TEST(Cli, RunStoppedByCtrlCClosesItsTakeAndVideoAndStopsItsNodes) {
   const fs::path folder = tempPath("ctrl_c");
   ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
                                "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
-  const fs::path video = folder / "view.avi", take = folder / "takes" / "take-1";
+  // The view as H.264 (RunWritesTheFiguresAsJson records Motion-JPEG).
+  const fs::path video = folder / "view.mp4", take = folder / "takes" / "take-1";
   Started pipeline(
       {kCli, "run", "--session", (folder / "session").string(), "--frames", "100000", "--seconds",
        "120", "--record-view", video.string(), "--record-take", take.string()},
@@ -1125,8 +1128,9 @@ TEST(Cli, RunStoppedByCtrlCClosesItsTakeAndVideoAndStopsItsNodes) {
     EXPECT_GE(std::count(index.begin(), index.end(), '\n'), 3) << node << ": " << index;
   }
   EXPECT_NE(out.find("recorded the view to " + video.string()), std::string::npos) << out;
-  EXPECT_FALSE(fs::exists(folder / "view.partial.avi"));
-  cv::VideoCapture capture(video.string(), cv::CAP_OPENCV_MJPEG);
+  EXPECT_FALSE(fs::exists(folder / "view.partial.mp4"));
+  EXPECT_EQ(probeVideoFile(video).codec, "h264");
+  cv::VideoCapture capture(video.string(), cv::CAP_FFMPEG);
   cv::Mat first;
   EXPECT_TRUE(capture.read(first)) << "the view's video does not read back";
   EXPECT_EQ(temporaryKeyStores(pipeline.pid()), 0);
