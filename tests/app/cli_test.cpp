@@ -949,7 +949,7 @@ TEST(Cli, ExportWritesTheCaptureAsBvhGltfAndPlyThatReadBack) {
   ASSERT_TRUE(synthRingSession(folder, "--cameras 8 --width 640 --height 480",
                                "actor:\n  vertices: 2000\n", "--frames 5"));
   Result r = run(kCli + " export --session " + session.string() + " --out " + out.string() +
-                 " --bvh --glb --ply");
+                 " --bvh --fbx --glb --ply");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("5 frames exported"), std::string::npos) << r.output;
 
@@ -957,6 +957,15 @@ TEST(Cli, ExportWritesTheCaptureAsBvhGltfAndPlyThatReadBack) {
   const SkinnedMesh generic = loadGenericHuman();
   const MotionClip clip = loadBvh(out / "skeleton.bvh", generic.skeleton);
   EXPECT_EQ(clip.frames.size(), 5u);
+  // The FBX (binary, for Blender: core/body/fbx_export_test reads such files back): every joint
+  // of the generic skeleton as a skeleton node, the skinned body, one take.
+  const std::string fbx = readFile(out / "actor.fbx");
+  EXPECT_EQ(fbx.substr(0, 20), "Kaydara FBX Binary  ");
+  for (const Joint& joint : generic.skeleton.joints())
+    EXPECT_NE(fbx.find(joint.name + std::string("\0\x01Model", 7)), std::string::npos)
+        << joint.name;
+  EXPECT_NE(fbx.find(std::string("body\0\x01Model", 11)), std::string::npos);
+  EXPECT_NE(fbx.find("AnimStack"), std::string::npos);
   // The animated glTF: a mesh of the generic human's size per frame, a node animation.
   Assimp::Importer importer;
   const aiScene* scene = importer.ReadFile((out / "surface.glb").string(), 0);
