@@ -23,6 +23,8 @@ packages=(
   iproute2 util-linux
   # transport and messages
   libzmq3-dev cppzmq-dev libflatbuffers-dev flatbuffers-compiler
+  # video files: MP4/H.264 (libx264 through libavcodec) and Motion-JPEG AVI
+  libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   # compression of the nodes' refinement statistics
   libzstd-dev
   # OSC for the skeleton's live feed (VMC protocol); the packages' runtime liblo7 comes from

@@ -385,7 +385,8 @@ void MainWindow::chooseRig() {
 void MainWindow::chooseRecording() {
   const QString partial = QFileDialog::getOpenFileName(
       this, tr("Recover a recording of the view"), QString(),
-      tr("Recordings that never closed (*.partial.avi *.partial-*.avi);;Videos (*.avi)"));
+      tr("Recordings that never closed (*.partial.avi *.partial-*.avi *.partial.mp4 "
+         "*.partial-*.mp4);;Videos (*.avi *.mp4)"));
   if (!partial.isEmpty()) recoverRecording(partial);
 }
 

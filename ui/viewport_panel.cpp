@@ -446,7 +446,8 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
   auto* save = new QPushButton(tr("Save image..."), this);
   save->setToolTip(tr("Write the pipeline's current view (without overlays) as PNG or JPEG"));
   record_->setCheckable(true);
-  record_->setToolTip(tr("Record every frame of this view to a video (.avi, Motion-JPEG)"));
+  record_->setToolTip(
+      tr("Record every frame of this view to a video (.mp4, H.264; or .avi, Motion-JPEG)"));
   layers->addWidget(save);
   layers->addWidget(record_);
   connect(save, &QPushButton::clicked, this, [this] {
@@ -460,13 +461,19 @@ ViewportPanel::ViewportPanel(CloneSet* clones, QWidget* parent)
     QString file;
     if (on) {
       // The suffix is added by the dialog, before it asks whether to replace a file of that name.
-      QFileDialog dialog(this, tr("Record the view"), "view.avi", tr("Motion-JPEG video (*.avi)"));
+      QFileDialog dialog(this, tr("Record the view"), "view.mp4",
+                         tr("H.264 video (*.mp4);;Motion-JPEG video (*.avi)"));
       dialog.setAcceptMode(QFileDialog::AcceptSave);
-      dialog.setDefaultSuffix("avi");
+      dialog.setDefaultSuffix("mp4");
+      connect(&dialog, &QFileDialog::filterSelected, &dialog, [&dialog](const QString& filter) {
+        dialog.setDefaultSuffix(filter.contains("*.avi") ? "avi" : "mp4");
+      });
       if (dialog.exec() == QDialog::Accepted && !dialog.selectedFiles().isEmpty())
         file = dialog.selectedFiles().front();
-      if (!file.isEmpty() && QFileInfo(file).suffix().compare("avi", Qt::CaseInsensitive) != 0) {
-        file += ".avi";  // another suffix typed: a name the dialog did not check
+      // Another suffix typed: the chosen kind's is added, a name the dialog did not check.
+      const QString suffix = QFileInfo(file).suffix().toLower();
+      if (!file.isEmpty() && suffix != "mp4" && suffix != "avi") {
+        file += "." + dialog.defaultSuffix();
         if (QFileInfo::exists(file) &&
             QMessageBox::question(this, tr("Record the view"),
                                   tr("%1 already exists. Replace it?").arg(file)) !=

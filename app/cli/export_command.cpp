@@ -10,6 +10,7 @@
 #include "core/base/error.h"
 #include "core/base/output_path.h"
 #include "core/body/bvh.h"
+#include "core/body/fbx_export.h"
 #include "core/body/human_model.h"
 #include "core/body/mesh_sequence_io.h"
 #include "core/capture/session_reader.h"
@@ -30,25 +31,30 @@ void addExportCommand(CLI::App& app) {
   struct Args {
     std::string session, out;
     int frames = 0;
-    bool bvh = false, glb = false, ply = false, obj = false, unrefined = false;
+    bool bvh = false, fbx = false, glb = false, ply = false, obj = false, unrefined = false;
   };
   auto args = std::make_shared<Args>();
   CLI::App* exp = app.add_subcommand(
       "export",
-      "Capture a session for other tools: the tracked skeleton as BVH, the captured surface as "
-      "an animated glTF and per-frame PLY/OBJ (default: --bvh --glb)");
+      "Capture a session for other tools: the tracked skeleton as BVH or FBX (with the skinned "
+      "body), the captured surface as an animated glTF and per-frame PLY/OBJ (default: --bvh "
+      "--glb)");
   exp->add_option("--session", args->session, "the recorded session")->required();
   exp->add_option("-o,--out", args->out, "folder to write into (created)")->required();
   exp->add_option("--frames", args->frames, "only the first N frames (default: all)")
       ->check(within(1, 1e9));
   exp->add_flag("--bvh", args->bvh, "skeleton.bvh: the tracked motion, the actor's bone lengths");
+  exp->add_flag("--fbx", args->fbx,
+                "actor.fbx: the tracked motion on the generic body's skeleton, with the skinned "
+                "body (binary FBX, for Blender, Maya, Unity, Unreal)");
   exp->add_flag("--glb", args->glb, "surface.glb: the surface of every frame, animated");
   exp->add_flag("--ply", args->ply, "meshes/NNNNNN.ply: the surface of each frame");
   exp->add_flag("--obj", args->obj, "meshes/NNNNNN.obj: the same as OBJ, with normals");
   exp->add_flag("--unrefined", args->unrefined,
                 "the posed generic mesh as it is, without the refinement from the images");
   exp->callback([args] {
-    if (!args->bvh && !args->glb && !args->ply && !args->obj) args->bvh = args->glb = true;
+    if (!args->bvh && !args->fbx && !args->glb && !args->ply && !args->obj)
+      args->bvh = args->glb = true;
     refuseOutputOverInputs("--out", args->out, {{"--session", args->session}});
     const SessionReader session(args->session);
     const fs::path out(args->out);
@@ -84,6 +90,22 @@ void addExportCommand(CLI::App& app) {
     if (args->bvh) {
       saveBvh(clip, mocap.skeleton, out / "skeleton.bvh");
       fmt::print("wrote {}\n", (out / "skeleton.bvh").string());
+    }
+    if (args->fbx) {
+      // The generic body as the studio poses it (posed_body.h): its own skeleton's angles fitted
+      // to the tracked joints, scaled to the actor.
+      MotionClip body_clip;
+      body_clip.name = clip.name;
+      body_clip.fps = clip.fps;
+      double scale = 1;
+      for (size_t i = 0; i < clip.frames.size(); ++i) {
+        const PoseData data =
+            poseMessageFor(generic.skeleton, mocap.skeleton, clip.frames[i], joints[i]);
+        body_clip.frames.push_back(poseFromMessage(data, generic.skeleton.jointCount()));
+        if (i == 0) scale = data.scale;  // one for the actor: from the rest skeletons
+      }
+      saveAnimatedBodyFbx(generic, body_clip, out / "actor.fbx", scale);
+      fmt::print("wrote {}\n", (out / "actor.fbx").string());
     }
 
     // The surface: the generic human where the tracker sees the actor, refined from the images.

@@ -8,8 +8,6 @@
 #include <cmath>
 #include <filesystem>
 #include <numbers>
-#include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 
 #include "app/cli/checks.h"
 #include "app/cli/progress.h"
@@ -24,6 +22,7 @@
 #include "core/render/frame_inputs.h"
 #include "core/render/lumigraph_renderer.h"
 #include "core/render/silhouette_feather.h"
+#include "core/render/video_file.h"
 #include "core/render/view_recorder.h"
 
 namespace lumistage {
@@ -68,7 +67,7 @@ void addRenderCommand(CLI::App& app) {
   render->add_option("--session", a->session, "recorded session")->required();
   render->add_option("--path", a->path, "camera path: orbit, or a camera's name")
       ->capture_default_str();
-  render->add_option("--out", a->out, "video file (.mp4, .avi)")->required();
+  render->add_option("--out", a->out, "video file: .mp4 (H.264) or .avi (Motion-JPEG)")->required();
   render
       ->add_option("--mesh", a->mesh,
                    "geometry: truth (the session's truth/surface) or a folder of NNNNNN.ply")
@@ -85,9 +84,7 @@ void addRenderCommand(CLI::App& app) {
   render->callback([a] {
     refuseOutputOverInputs("--out", a->out, {{"--session", a->session}});
     const std::filesystem::path out(a->out);
-    const std::string extension = lowercaseExtension(out);
-    if (extension != ".mp4" && extension != ".avi")
-      throw Error(a->out + ": expected a video file ending in .mp4 or .avi (MPEG-4)");
+    const VideoCodec codec = videoCodecFor(out);  // .mp4 H.264, .avi Motion-JPEG
     requireOutputFolder("--out", out);
     const SessionReader session(a->session);
     const Rig& rig = session.rig();
@@ -111,10 +108,6 @@ void addRenderCommand(CLI::App& app) {
     // renamed over it once it reads back whole: a failed frame, a full disk or an interrupted
     // render never replaces a good video with a torn one.
     const std::filesystem::path partial = partialVideoPath(out);
-    cv::VideoWriter video(partial.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'),
-                          a->fps > 0 ? a->fps : session.fps(),
-                          cv::Size(first.width(), first.height()));
-    if (!video.isOpened()) throw Error(a->out + ": cannot open a video writer (OpenCV/FFmpeg)");
     struct RemovePartial {
       const std::filesystem::path& path;
       bool keep = false;
@@ -123,19 +116,20 @@ void addRenderCommand(CLI::App& app) {
         if (!keep) std::filesystem::remove(path, ignored);
       }
     } remove_partial{partial};
+    VideoFileWriter video(partial, first.width(), first.height(),
+                          a->fps > 0 ? a->fps : session.fps(), codec);
+    if (!video.warning().empty()) fmt::print(stderr, "lumistage render: {}\n", video.warning());
     fmt::print("rendering {} frames of {}x{} on {}\n", frames, first.width(), first.height(),
                gl.description());
     std::vector<CameraFrame> images;
     FrameInputs inputs;
     std::vector<uint8_t> rgba;
-    cv::Mat bgr;
     double ms = -1;
     // Ctrl-C (SIGTERM, SIGHUP) ends the render between frames: the video begun is removed, and an
     // older one of that name is left as it was.
     const std::atomic<bool>& stop = stopOnSignals();
     for (int i = 0; i < frames; ++i) {
       if (stop) {
-        video.release();
         if (isatty(STDERR_FILENO)) fmt::print(stderr, "\n");  // below the progress bar
         throw Error(fmt::format(
             "stopped by {} after {} of {} frames: {}", stopSignalName(stopSignal()), i, frames,
@@ -152,16 +146,14 @@ void addRenderCommand(CLI::App& app) {
       const Camera view = pathCamera(a->path, rig, double(i) / frames, a->width, a->height);
       renderer.render(view, clones, rgba);
       finishSingleProcessView(rgba, view.width(), view.height());  // as the studio shows a view
-      const cv::Mat image(view.height(), view.width(), CV_8UC4, rgba.data());
-      cv::cvtColor(image, bgr, cv::COLOR_RGBA2BGR);
-      video.write(bgr);
+      video.write(rgba.data(), PixelOrder::kRgba);
       const double took =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
               .count();
       ms = ms < 0 ? took : 0.9 * ms + 0.1 * took;
       printProgress("render", i + 1, frames, ms);
     }
-    video.release();
+    video.close();
     if (const std::string error = finishPartialVideo(partial, out, frames); !error.empty()) {
       throw Error(
           error + "; " +

@@ -216,8 +216,8 @@ void addRunCommand(CLI::App& app) {
   run->add_option("--image", a->image,
                   "write the last blended view as PNG (the pipeline's output)");
   run->add_option("--record-view", a->record_view,
-                  "record every blended view to this video (.avi, Motion-JPEG, at the cameras' "
-                  "rate)");
+                  "record every blended view to this video at the cameras' rate (.mp4: H.264; "
+                  ".avi: Motion-JPEG)");
   run->add_option("--record-take", a->record_take,
                   "record the cameras' frames as a take: each node writes its cameras to "
                   "DIR/<node>/ from the first frame done to the end (lumistage session merge "

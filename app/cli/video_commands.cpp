@@ -21,19 +21,26 @@ void addVideoCommands(CLI::App& app) {
   auto a = std::make_shared<RecoverArgs>();
   CLI::App* recover = video->add_subcommand(
       "recover",
-      "Make a whole video of a recording of the view that never closed (NAME.partial.avi, left "
-      "when the studio or lumistage run was killed, crashed or lost power): its whole frames, "
-      "copied as they are");
-  recover->add_option("partial", a->partial, "the recording left behind: NAME.partial.avi")
+      "Make a whole video of a recording of the view that never closed (NAME.partial.avi or "
+      ".mp4, left when the studio or lumistage run was killed, crashed or lost power): its whole "
+      "frames (an MP4's whole seconds), copied as they are");
+  recover
+      ->add_option("partial", a->partial,
+                   "the recording left behind: NAME.partial.avi or NAME.partial.mp4")
       ->required();
   recover->add_option(
       "--out", a->out,
-      "the video to write (default: NAME-recovered.avi, or -recovered-2.avi... where that exists)");
+      "the video to write, of the same kind (default: NAME-recovered.avi or .mp4, or "
+      "-recovered-2... where that exists)");
   recover->callback([a] {
     const std::filesystem::path out =
         a->out.empty() ? recoveredVideoPath(a->partial) : std::filesystem::path(a->out);
-    if (lowercaseExtension(out) != ".avi")
-      throw CLI::ValidationError("--out", out.string() + ": the video is an AVI: name it .avi");
+    const std::string kind = lowercaseExtension(a->partial);
+    if (lowercaseExtension(out) != kind)
+      throw CLI::ValidationError("--out", out.string() +
+                                              ": the video is of the recording's kind: "
+                                              "name it " +
+                                              kind);
     refuseOutputOverInputs("--out", out, {{"partial", a->partial}});
     requireOutputFolder("--out", out);
     const RecoveredVideo r = recoverPartialVideo(a->partial, out);

@@ -1,5 +1,7 @@
 #include "core/render/view_recorder.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cstring>
 #include <fstream>
@@ -11,6 +13,7 @@
 #include "core/base/error.h"
 #include "core/base/output_path.h"
 #include "core/net/message_codec.h"
+#include "core/render/video_file.h"
 
 namespace lumistage {
 
@@ -25,7 +28,8 @@ std::filesystem::path recoveredVideoPath(const std::filesystem::path& partial, i
   std::string stem = partial.stem().string();
   if (const size_t dot = stem.rfind(".partial"); dot != std::string::npos) stem.resize(dot);
   return partial.parent_path() /
-         (stem + "-recovered" + (k > 1 ? "-" + std::to_string(k) : std::string()) + ".avi");
+         (stem + "-recovered" + (k > 1 ? "-" + std::to_string(k) : std::string()) +
+          partial.extension().string());
 }
 
 }  // namespace
@@ -49,10 +53,13 @@ bool wasRecovered(const std::filesystem::path& partial) {
 }
 
 std::string finishPartialVideo(const std::filesystem::path& partial,
-                               const std::filesystem::path& file, int64_t frames, int api) {
-  cv::VideoCapture check(partial.string(), api);
-  const int64_t read_back = check.isOpened() ? int64_t(check.get(cv::CAP_PROP_FRAME_COUNT)) : 0;
-  check.release();
+                               const std::filesystem::path& file, int64_t frames) {
+  int64_t read_back = 0;
+  try {
+    read_back = probeVideoFile(partial).frames;
+  } catch (const Error&) {
+    // Not even a header: no frame reads back.
+  }
   if (read_back != frames) {
     return file.string() + ": the video reads back " + std::to_string(read_back) + " of its " +
            std::to_string(frames) + " frames (disk full?)";
@@ -82,8 +89,45 @@ bool isCode(const std::string& d, size_t at, const char* code) {
 
 }  // namespace
 
+namespace {
+
+// A live MP4 is fragmented (video_file.h): its whole fragments are copied into a plain MP4.
+RecoveredVideo recoverPartialMp4(const std::filesystem::path& partial,
+                                 const std::filesystem::path& out) {
+  std::error_code error;
+  if (std::filesystem::exists(out, error))
+    throw Error(out.string() + ": exists; recover " + partial.string() + " under another name");
+  RecoveredVideo r;
+  try {
+    r.fps = probeVideoFile(partial).fps;
+  } catch (const Error& e) {
+    throw Error(std::string(e.what()) + "; not a recording of the view that can be recovered");
+  }
+  // Written beside `out`, then renamed: a recovery cut short leaves nothing under the name.
+  const std::filesystem::path temporary = partialVideoPath(out);
+  try {
+    r.frames = copyVideoFile(partial, temporary);
+  } catch (const Error&) {
+    std::filesystem::remove(temporary, error);
+    throw;
+  }
+  if (r.frames == 0) {
+    std::filesystem::remove(temporary, error);
+    throw Error(partial.string() + ": not one whole frame in it");
+  }
+  std::filesystem::rename(temporary, out, error);
+  if (error) {
+    std::filesystem::remove(temporary, error);
+    throw Error(out.string() + ": cannot put the video in its place");
+  }
+  return r;
+}
+
+}  // namespace
+
 RecoveredVideo recoverPartialVideo(const std::filesystem::path& partial,
                                    const std::filesystem::path& out) {
+  if (lowercaseExtension(partial) == ".mp4") return recoverPartialMp4(partial, out);
   const std::string name = partial.string();
   auto fail = [&](const std::string& why) {
     return Error(name + ": " + why + "; not a recording of the view that can be recovered");
@@ -206,20 +250,58 @@ struct ViewRecorder::Impl {
   std::string error;
   double fps = 30;
   int max_gap = 30;
-  cv::VideoWriter writer;
+  bool mp4 = false;        // H.264 in MP4 through FFmpeg, else OpenCV's Motion-JPEG AVI
+  cv::VideoWriter writer;  // .avi
+  std::unique_ptr<VideoFileWriter> video;  // .mp4
   bool closed = false;
   int width = 0, height = 0;
   int64_t last_id = -1, written = 0;
-  cv::Mat bgr, scaled, last;  // last: the previous frame as written
+  cv::Mat converted, scaled, last;  // last: the previous frame as written (BGR; RGBA for MP4)
+
+  bool isOpen() const { return mp4 ? video != nullptr : writer.isOpened(); }
+  void open(int width, int height);
+  void write(const cv::Mat& frame);
 };
+
+void ViewRecorder::Impl::open(int first_width, int first_height) {
+  // Opened with the first image, whose size the video keeps.
+  if (mp4) {
+    video = std::make_unique<VideoFileWriter>(partial, first_width, first_height, fps,
+                                              VideoCodec::kH264, VideoSpeed::kLive);
+    if (!video->warning().empty()) spdlog::warn("{}", video->warning());
+  } else {
+    // OpenCV's own MJPEG writer (no FFmpeg): the same on every machine, and the layout that
+    // recoverPartialVideo reads.
+    writer.open(partial.string(), cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+                fps, cv::Size(first_width, first_height));
+    if (!writer.isOpened()) throw Error(file.string() + ": cannot write the view's video there");
+  }
+  width = first_width;
+  height = first_height;
+}
+
+void ViewRecorder::Impl::write(const cv::Mat& frame) {
+  if (mp4) {
+    try {
+      video->write(frame.data, PixelOrder::kRgba, int(frame.step[0]));
+    } catch (const Error& e) {  // names the partial file: said under the recording's name
+      throw Error(file.string() + ": the recording stops: " + e.what());
+    }
+  } else {
+    writer.write(frame);
+  }
+}
 
 ViewRecorder::ViewRecorder(const std::filesystem::path& file, double fps, int max_gap_frames)
     : impl_(std::make_unique<Impl>()) {
   if (!(fps > 0 && fps <= 1000))
     throw Error(file.string() + ": cannot record the view at " + std::to_string(fps) +
                 " frames a second (expected 0 to 1000)");
-  if (lowercaseExtension(file) != ".avi")
-    throw Error(file.string() + ": the view is recorded as Motion-JPEG in an AVI: name it .avi");
+  const std::string extension = lowercaseExtension(file);
+  if (extension != ".avi" && extension != ".mp4")
+    throw Error(file.string() +
+                ": the view is recorded as H.264 in an MP4 or Motion-JPEG in an AVI: name it .mp4 "
+                "or .avi");
   const std::filesystem::path folder = file.has_parent_path() ? file.parent_path() : ".";
   std::error_code error;
   if (!std::filesystem::is_directory(folder, error))
@@ -234,6 +316,7 @@ ViewRecorder::ViewRecorder(const std::filesystem::path& file, double fps, int ma
     impl_->partial = file.parent_path() / (file.stem().string() + ".partial-" + std::to_string(k) +
                                            file.extension().string());
   }
+  impl_->mp4 = extension == ".mp4";
   impl_->fps = fps;
   impl_->max_gap = std::max(0, max_gap_frames);
 }
@@ -252,36 +335,28 @@ bool ViewRecorder::add(int64_t frame_id, int width, int height, std::span<const 
     if (frame_id >= r.last_id - kFrameIdWindow) return false;
     r.last_id = -1;
   }
-  if (!r.writer.isOpened()) {
-    // Opened with the first image, whose size the video keeps. OpenCV's own MJPEG writer (no
-    // FFmpeg): the same on every machine.
-    r.writer.open(r.partial.string(), cv::CAP_OPENCV_MJPEG,
-                  cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), r.fps, cv::Size(width, height));
-    if (!r.writer.isOpened())
-      throw Error(r.file.string() + ": cannot write the view's video there");
-    r.width = width;
-    r.height = height;
-  }
+  if (!r.isOpen()) r.open(width, height);
+  // MP4: FFmpeg takes RGBA as it is; OpenCV's AVI writer wants BGR.
   const cv::Mat image(height, width, CV_8UC4, const_cast<uint8_t*>(rgba.data()));
-  cv::cvtColor(image, r.bgr, cv::COLOR_RGBA2BGR);
-  const cv::Mat* frame = &r.bgr;
+  if (!r.mp4) cv::cvtColor(image, r.converted, cv::COLOR_RGBA2BGR);
+  const cv::Mat* frame = r.mp4 ? &image : &r.converted;
   if (width != r.width || height != r.height) {
-    cv::resize(r.bgr, r.scaled, cv::Size(r.width, r.height), 0, 0, cv::INTER_AREA);
+    cv::resize(*frame, r.scaled, cv::Size(r.width, r.height), 0, 0, cv::INTER_AREA);
     frame = &r.scaled;
   }
   // The frames skipped since the last one hold the last image (the new one when too long a gap).
   const int64_t skipped = r.last_id >= 0 ? frame_id - r.last_id - 1 : 0;
   if (skipped > 0 && skipped <= r.max_gap) {
     for (int64_t k = 0; k < skipped; ++k) {
-      r.writer.write(r.last);
+      r.write(r.last);
       ++r.written;
     }
   }
-  r.writer.write(*frame);
+  r.write(*frame);
   frame->copyTo(r.last);
   ++r.written;
   r.last_id = frame_id;
-  // OpenCV's writer drops write errors: the disk's room is watched instead.
+  // OpenCV's writer drops write errors (FFmpeg's throw): the disk's room is watched too.
   if (r.written % kFreeCheckFrames == 0) {
     std::error_code error;
     const std::filesystem::space_info space = std::filesystem::space(r.partial, error);
@@ -296,9 +371,18 @@ bool ViewRecorder::close() {
   Impl& r = *impl_;
   if (r.closed) return r.error.empty();
   r.closed = true;
-  if (!r.writer.isOpened()) return true;  // nothing recorded: no file
-  r.writer.release();
-  r.error = finishPartialVideo(r.partial, r.file, r.written, cv::CAP_OPENCV_MJPEG);
+  if (!r.isOpen()) return true;  // nothing recorded: no file
+  if (r.mp4) {
+    try {
+      r.video->close();
+    } catch (const Error& e) {
+      r.error = e.what();
+    }
+    r.video.reset();
+  } else {
+    r.writer.release();
+  }
+  if (r.error.empty()) r.error = finishPartialVideo(r.partial, r.file, r.written);
   if (!r.error.empty()) {
     r.error += "; what was written is kept as " + r.partial.string() +
                " (lumistage video recover makes a video of its whole frames)";

@@ -37,6 +37,7 @@
 #include "core/geometry/rig_file.h"
 #include "core/geometry/ring_rig.h"
 #include "core/net/curve_keys.h"
+#include "core/render/video_file.h"
 
 namespace lumistage {
 namespace {
@@ -904,6 +905,7 @@ TEST(Cli, RenderWritesAVideoAndAFailedRenderReplacesNothing) {
     return c.isOpened() ? int(c.get(cv::CAP_PROP_FRAME_COUNT)) : -1;
   };
   ASSERT_EQ(frames(), 3);
+  EXPECT_EQ(probeVideoFile(video).codec, "h264");  // .avi: Motion-JPEG (video_file_test)
   {
     cv::VideoCapture c(video.string());
     cv::Mat first;
@@ -951,7 +953,7 @@ TEST(Cli, ExportWritesTheCaptureAsBvhGltfAndPlyThatReadBack) {
   ASSERT_TRUE(synthRingSession(folder, "--cameras 8 --width 640 --height 480",
                                "actor:\n  vertices: 2000\n", "--frames 5"));
   Result r = run(kCli + " export --session " + session.string() + " --out " + out.string() +
-                 " --bvh --glb --ply");
+                 " --bvh --fbx --glb --ply");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("5 frames exported"), std::string::npos) << r.output;
 
@@ -959,6 +961,15 @@ TEST(Cli, ExportWritesTheCaptureAsBvhGltfAndPlyThatReadBack) {
   const SkinnedMesh generic = loadGenericHuman();
   const MotionClip clip = loadBvh(out / "skeleton.bvh", generic.skeleton);
   EXPECT_EQ(clip.frames.size(), 5u);
+  // The FBX (binary, for Blender: core/body/fbx_export_test reads such files back): every joint
+  // of the generic skeleton as a skeleton node, the skinned body, one take.
+  const std::string fbx = readFile(out / "actor.fbx");
+  EXPECT_EQ(fbx.substr(0, 20), "Kaydara FBX Binary  ");
+  for (const Joint& joint : generic.skeleton.joints())
+    EXPECT_NE(fbx.find(joint.name + std::string("\0\x01Model", 7)), std::string::npos)
+        << joint.name;
+  EXPECT_NE(fbx.find(std::string("body\0\x01Model", 11)), std::string::npos);
+  EXPECT_NE(fbx.find("AnimStack"), std::string::npos);
   // The animated glTF: a mesh of the generic human's size per frame, a node animation.
   Assimp::Importer importer;
   const aiScene* scene = importer.ReadFile((out / "surface.glb").string(), 0);
@@ -1097,7 +1108,8 @@ TEST(Cli, RunStoppedByCtrlCClosesItsTakeAndVideoAndStopsItsNodes) {
   const fs::path folder = tempPath("ctrl_c");
   ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
                                "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
-  const fs::path video = folder / "view.avi", take = folder / "takes" / "take-1";
+  // The view as H.264 (RunWritesTheFiguresAsJson records Motion-JPEG).
+  const fs::path video = folder / "view.mp4", take = folder / "takes" / "take-1";
   Started pipeline(
       {kCli, "run", "--session", (folder / "session").string(), "--frames", "100000", "--seconds",
        "120", "--record-view", video.string(), "--record-take", take.string()},
@@ -1129,8 +1141,9 @@ TEST(Cli, RunStoppedByCtrlCClosesItsTakeAndVideoAndStopsItsNodes) {
     EXPECT_GE(std::count(index.begin(), index.end(), '\n'), 3) << node << ": " << index;
   }
   EXPECT_NE(out.find("recorded the view to " + video.string()), std::string::npos) << out;
-  EXPECT_FALSE(fs::exists(folder / "view.partial.avi"));
-  cv::VideoCapture capture(video.string(), cv::CAP_OPENCV_MJPEG);
+  EXPECT_FALSE(fs::exists(folder / "view.partial.mp4"));
+  EXPECT_EQ(probeVideoFile(video).codec, "h264");
+  cv::VideoCapture capture(video.string(), cv::CAP_FFMPEG);
   cv::Mat first;
   EXPECT_TRUE(capture.read(first)) << "the view's video does not read back";
   EXPECT_EQ(temporaryKeyStores(pipeline.pid()), 0);

@@ -130,9 +130,9 @@ TEST(ViewRecorder, AFullDiskLeavesTheOlderVideoAndSaysSo) {
 
 TEST(ViewRecorder, RefusesWhatItCannotWriteByName) {
   const std::filesystem::path dir = testFolder("view_recorder");
-  EXPECT_NE(errorOf([&] { ViewRecorder(dir / "view.mp4", 30); })
-                .find("view.mp4: the view is "
-                      "recorded as Motion-JPEG"),
+  EXPECT_NE(errorOf([&] {
+              ViewRecorder(dir / "view.mkv", 30);
+            }).find("view.mkv: the view is recorded as H.264 in an MP4 or Motion-JPEG in an AVI"),
             std::string::npos);
   EXPECT_NE(errorOf([&] { ViewRecorder(dir / "missing" / "view.avi", 30); }).find("no folder"),
             std::string::npos);

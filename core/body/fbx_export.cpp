@@ -1,0 +1,308 @@
+#include "core/body/fbx_export.h"
+
+#include <assimp/scene.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <assimp/Exporter.hpp>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+#include <system_error>
+#include <vector>
+
+#include "core/base/atomic_file.h"
+#include "core/base/error.h"
+
+namespace lumistage {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// FBX's unit is the centimetre (Assimp writes UnitScaleFactor 1): Blender, Maya and Unity scale
+// by it, so positions in metres would stand a body 1.7 cm tall.
+constexpr double kCentimetres = 100;
+
+aiVector3D toAi(const Eigen::Vector3d& v) {
+  return {float(v.x()), float(v.y()), float(v.z())};
+}
+
+aiMatrix4x4 translation(const Eigen::Vector3d& t) {
+  aiMatrix4x4 m;  // identity
+  m.a4 = float(t.x());
+  m.b4 = float(t.y());
+  m.c4 = float(t.z());
+  return m;
+}
+
+// The joint nodes under the scene's root, in the file's axes and units (`c` converts, `s` scales):
+// rest frames are world aligned, so each node's rest transform is a translation.
+std::vector<aiNode*> jointNodes(const Skeleton& skeleton, const Eigen::Matrix3d& c, double s,
+                                aiNode* root) {
+  const int n = skeleton.jointCount();
+  std::vector<aiNode*> nodes(n);
+  std::vector<std::vector<int>> children(n);
+  for (int j = 1; j < n; ++j) children[skeleton.joint(j).parent].push_back(j);
+  for (int j = 0; j < n; ++j) {
+    nodes[j] = new aiNode(skeleton.joint(j).name);
+    nodes[j]->mTransformation = translation(s * (c * skeleton.joint(j).offset_m));
+  }
+  for (int j = 0; j < n; ++j) {
+    nodes[j]->mParent = j == 0 ? root : nodes[skeleton.joint(j).parent];
+    if (children[j].empty()) continue;
+    nodes[j]->mNumChildren = unsigned(children[j].size());
+    nodes[j]->mChildren = new aiNode*[children[j].size()];
+    for (size_t k = 0; k < children[j].size(); ++k) nodes[j]->mChildren[k] = nodes[children[j][k]];
+  }
+  return nodes;
+}
+
+aiMesh* skinnedMesh(const SkinnedMesh& body, const Eigen::Matrix3d& c, double s) {
+  auto* m = new aiMesh;
+  m->mName = "body";
+  m->mMaterialIndex = 0;
+  m->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+  const int n = body.rest.vertexCount();
+  m->mNumVertices = unsigned(n);
+  m->mVertices = new aiVector3D[n];
+  m->mNormals = new aiVector3D[n];
+  for (int v = 0; v < n; ++v) {
+    m->mVertices[v] = toAi(s * (c * body.rest.positions.col(v).cast<double>()));
+    m->mNormals[v] = toAi(c * body.rest.normals.col(v).cast<double>());
+  }
+  m->mNumFaces = unsigned(body.rest.triangles.size());
+  m->mFaces = new aiFace[m->mNumFaces];
+  for (size_t t = 0; t < body.rest.triangles.size(); ++t) {
+    m->mFaces[t].mNumIndices = 3;
+    m->mFaces[t].mIndices = new unsigned[3];
+    for (int k = 0; k < 3; ++k) m->mFaces[t].mIndices[k] = unsigned(body.rest.triangles[t][k]);
+  }
+  // One bone per joint, on the node of its name; its offset matrix undoes the rest position.
+  const Skeleton& skeleton = body.skeleton;
+  std::vector<std::vector<aiVertexWeight>> weights(skeleton.jointCount());
+  for (int v = 0; v < n; ++v) {
+    for (int k = 0; k < kMaxInfluences; ++k) {
+      if (body.skin.weights[v][k] > 0)
+        weights[body.skin.joints[v][k]].emplace_back(unsigned(v), body.skin.weights[v][k]);
+    }
+  }
+  m->mNumBones = unsigned(skeleton.jointCount());
+  m->mBones = new aiBone*[m->mNumBones];
+  for (int j = 0; j < skeleton.jointCount(); ++j) {
+    auto* bone = new aiBone;
+    bone->mName = skeleton.joint(j).name;
+    bone->mOffsetMatrix = translation(-s * (c * skeleton.restPositions()[j]));
+    bone->mNumWeights = unsigned(weights[j].size());
+    bone->mWeights = new aiVertexWeight[std::max<size_t>(weights[j].size(), 1)];
+    std::copy(weights[j].begin(), weights[j].end(), bone->mWeights);
+    m->mBones[j] = bone;
+  }
+  return m;
+}
+
+// A key per frame on every joint: its local translation (the rest offset; the root's moves) and
+// rotation in the file's axes, scale 1.
+aiAnimation* animation(const Skeleton& skeleton, const MotionClip& clip, const Eigen::Matrix3d& c,
+                       double s) {
+  auto* a = new aiAnimation;
+  a->mName = clip.name.empty() ? "take" : clip.name;
+  // Assimp 5.2's FBX exporter takes key times in seconds, whatever mTicksPerSecond says, and
+  // writes the take's end as whole seconds, mDuration / mTicksPerSecond rounded down: 1 tick a
+  // second, the duration rounded up (not 0, so that setFbxTiming finds it and sets it exactly).
+  a->mTicksPerSecond = 1;
+  a->mDuration = std::max(1.0, std::ceil(double(clip.frames.size() - 1) / clip.fps));
+  const int joints = skeleton.jointCount();
+  const unsigned frames = unsigned(clip.frames.size());
+  a->mNumChannels = unsigned(joints);
+  a->mChannels = new aiNodeAnim*[joints];
+  for (int j = 0; j < joints; ++j) {
+    auto* channel = new aiNodeAnim;
+    channel->mNodeName = skeleton.joint(j).name;
+    channel->mNumPositionKeys = channel->mNumRotationKeys = channel->mNumScalingKeys = frames;
+    channel->mPositionKeys = new aiVectorKey[frames];
+    channel->mRotationKeys = new aiQuatKey[frames];
+    channel->mScalingKeys = new aiVectorKey[frames];
+    for (unsigned f = 0; f < frames; ++f) {
+      const Pose& pose = clip.frames[f];
+      const Eigen::Vector3d angles = pose.angles_rad[size_t(j)];
+      Eigen::Matrix3d r;
+      Eigen::Vector3d t = skeleton.joint(j).offset_m;
+      if (j == 0) {
+        const double angle = angles.norm();
+        r = angle > 0 ? Eigen::AngleAxisd(angle, angles / angle).toRotationMatrix()
+                      : Eigen::Matrix3d::Identity();
+        t += pose.root_translation_m;
+      } else {
+        r = eulerRotation(angles);
+      }
+      const Eigen::Quaterniond q(c * r * c);  // c is its own inverse
+      const double time = f / clip.fps;
+      channel->mPositionKeys[f] = aiVectorKey(time, toAi(s * (c * t)));
+      channel->mRotationKeys[f] =
+          aiQuatKey(time, aiQuaternion(float(q.w()), float(q.x()), float(q.y()), float(q.z())));
+      channel->mScalingKeys[f] = aiVectorKey(time, aiVector3D(1, 1, 1));
+    }
+    a->mChannels[j] = channel;
+  }
+  return a;
+}
+
+// FBX time: 46186158000 ticks a second. Assimp writes a key at int64(seconds * that).
+constexpr int64_t kFbxSecond = 46186158000;
+
+// FBX's TimeMode for a frame rate: the standard one where there is one, else 14 (custom, the rate
+// in CustomFrameRate).
+int fbxTimeMode(double fps) {
+  const std::pair<double, int> modes[] = {{120, 1}, {100, 2}, {60, 3},  {50, 4},
+                                          {48, 5},  {30, 6},  {25, 10}, {24, 11}};
+  for (const auto& [rate, mode] : modes)
+    if (std::abs(fps - rate) < 1e-9) return mode;
+  return 14;
+}
+
+// A binary FBX property record's head: its name, type, label and flags as 'S' strings, then the
+// value's type code.
+std::string binaryProperty(const std::string& name, const std::string& type,
+                           const std::string& label, char code) {
+  std::string head;
+  for (const std::string* text : {&name, &type, &label}) {
+    const uint32_t length = uint32_t(text->size());
+    head += 'S';
+    head.append(reinterpret_cast<const char*>(&length), 4);
+    head += *text;
+  }
+  head += std::string("S\0\0\0\0", 5);
+  head += code;
+  return head;
+}
+
+// Sets a property's value in every record of it (a KTime left 0, the templates', stays 0).
+template <typename T>
+int setBinaryProperty(std::string& data, const std::string& head, T value, bool keep_zero) {
+  int set = 0;
+  for (size_t at = data.find(head); at != std::string::npos; at = data.find(head, at + 1)) {
+    const size_t where = at + head.size();
+    if (where + sizeof(T) > data.size()) break;
+    T old{};
+    std::memcpy(&old, data.data() + where, sizeof(T));
+    if (keep_zero && old == T{}) continue;
+    std::memcpy(data.data() + where, &value, sizeof(T));
+    ++set;
+  }
+  return set;
+}
+
+// The same in an ASCII file: the value after `P: "NAME", ...,`.
+int setAsciiProperty(std::string& data, const std::string& name, const std::string& value,
+                     bool keep_zero) {
+  int set = 0;
+  const std::string head = "P: \"" + name + "\", ";
+  for (size_t at = data.find(head); at != std::string::npos; at = data.find(head, at + 1)) {
+    const size_t end = data.find('\n', at);
+    const size_t comma = data.rfind(',', end);
+    if (end == std::string::npos || comma == std::string::npos || comma < at) break;
+    const size_t start = comma + 2;
+    if (keep_zero && data.compare(start, end - start, "0") == 0) continue;
+    data.replace(start, end - start, value);
+    ++set;
+  }
+  return set;
+}
+
+// Assimp 5.2's FBX exporter writes 24 fps and a one-second timeline whatever the take: the
+// file's rate (TimeMode, CustomFrameRate), timeline (TimeSpanStop) and the take's end (LocalStop,
+// ReferenceStop) are set to the clip's, so that Blender and Maya open it at the capture's rate
+// and length. Returns how many of the five were found.
+int setFbxTiming(std::string& data, double fps, int64_t stop, FbxEncoding encoding) {
+  const int mode = fbxTimeMode(fps);
+  if (encoding == FbxEncoding::kAscii) {
+    return setAsciiProperty(data, "TimeMode", std::to_string(mode), false) +
+           setAsciiProperty(data, "CustomFrameRate", fmt::format("{}", fps), false) +
+           setAsciiProperty(data, "TimeSpanStop", std::to_string(stop), false) +
+           setAsciiProperty(data, "LocalStop", std::to_string(stop), true) +
+           setAsciiProperty(data, "ReferenceStop", std::to_string(stop), true);
+  }
+  return setBinaryProperty(data, binaryProperty("TimeMode", "enum", "", 'I'), int32_t(mode),
+                           false) +
+         setBinaryProperty(data, binaryProperty("CustomFrameRate", "double", "Number", 'D'), fps,
+                           false) +
+         setBinaryProperty(data, binaryProperty("TimeSpanStop", "KTime", "Time", 'L'), stop,
+                           false) +
+         setBinaryProperty(data, binaryProperty("LocalStop", "KTime", "Time", 'L'), stop, true) +
+         setBinaryProperty(data, binaryProperty("ReferenceStop", "KTime", "Time", 'L'), stop, true);
+}
+
+std::unique_ptr<aiScene> buildScene(const SkinnedMesh& body, const MotionClip& clip, double scale) {
+  const Eigen::Matrix3d c = yUpToOurs();  // its own inverse: ours to the file's too
+  const double s = kCentimetres * scale;
+  auto scene = std::make_unique<aiScene>();
+  aiNode* root = scene->mRootNode = new aiNode("lumistage_actor");
+  const std::vector<aiNode*> joints = jointNodes(body.skeleton, c, s, root);
+  auto* mesh_node = new aiNode("body");
+  mesh_node->mParent = root;
+  mesh_node->mNumMeshes = 1;
+  mesh_node->mMeshes = new unsigned[1]{0};
+  root->mNumChildren = 2;
+  root->mChildren = new aiNode* [2] { joints[0], mesh_node };
+
+  scene->mNumMaterials = 1;
+  scene->mMaterials = new aiMaterial* [1] { new aiMaterial };
+  const aiString material_name("lumistage_skin");
+  scene->mMaterials[0]->AddProperty(&material_name, AI_MATKEY_NAME);
+  scene->mNumMeshes = 1;
+  scene->mMeshes = new aiMesh* [1] { skinnedMesh(body, c, s) };
+  scene->mNumAnimations = 1;
+  scene->mAnimations = new aiAnimation* [1] { animation(body.skeleton, clip, c, s) };
+  return scene;
+}
+
+}  // namespace
+
+void saveAnimatedBodyFbx(const SkinnedMesh& body, const MotionClip& clip, const fs::path& file,
+                         double scale, FbxEncoding encoding) {
+  const std::string name = file.string();
+  try {
+    body.validate();
+  } catch (const std::invalid_argument& e) {
+    throw Error(name + ": cannot write the body: " + e.what());
+  }
+  const int joints = body.skeleton.jointCount();
+  for (size_t f = 0; f < clip.frames.size(); ++f) {
+    if (clip.frames[f].angles_rad.size() != size_t(joints))
+      throw Error(name + ": frame " + std::to_string(f) + " of the motion poses " +
+                  std::to_string(clip.frames[f].angles_rad.size()) + " joints, the body has " +
+                  std::to_string(joints));
+  }
+  if (clip.frames.empty()) throw Error(name + ": no frame of motion to write");
+  if (!(clip.fps > 0)) throw Error(name + ": the motion has no frame rate");
+  if (!(scale > 0)) throw Error(name + ": the body's scale must be above 0");
+  const std::unique_ptr<aiScene> scene = buildScene(body, clip, scale);
+  // Written beside its name, its timing set, then written whole under its name: an export cut
+  // short leaves nothing there.
+  const fs::path partial = file.parent_path() / (file.stem().string() + ".partial.fbx");
+  Assimp::Exporter exporter;
+  const char* format = encoding == FbxEncoding::kBinary ? "fbx" : "fbxa";
+  if (exporter.Export(scene.get(), format, partial.string()) != AI_SUCCESS) {
+    std::error_code ignored;
+    fs::remove(partial, ignored);
+    throw Error(name + ": FBX export failed: " + exporter.GetErrorString());
+  }
+  std::string data;
+  try {
+    data = readFile(partial);
+  } catch (const Error&) {
+    std::error_code ignored;
+    fs::remove(partial, ignored);
+    throw;
+  }
+  std::error_code ignored;
+  fs::remove(partial, ignored);
+  const int64_t stop = int64_t(double(clip.frames.size() - 1) / clip.fps * double(kFbxSecond));
+  if (setFbxTiming(data, clip.fps, stop, encoding) < 5)
+    throw Error(name + ": FBX export failed: Assimp's file lacks the timing this writer sets");
+  writeFileAtomically(file, data, {.sync = false});
+}
+
+}  // namespace lumistage
