@@ -11,6 +11,7 @@
 
 #include "app/cli/checks.h"
 #include "core/base/error.h"
+#include "core/body/body_mapping.h"
 #include "core/body/human_model.h"
 #include "core/body/mesh_io.h"
 
@@ -18,7 +19,7 @@ namespace lumistage {
 
 namespace {
 
-// Prints a rigged mesh's surface and skeleton (body show).
+// Prints a rigged mesh's surface and skeleton, and how its joints map onto ours (body show).
 void showBody(const std::string& file) {
   const SkinnedMesh mesh = loadSkinnedMesh(file);
   const std::string manifold = checkClosedManifold(mesh.rest);
@@ -36,6 +37,18 @@ void showBody(const std::string& file) {
     fmt::print("  {:<16} parent {:<16} at ({:6.3f}, {:6.3f}, {:6.3f})\n", joint.name,
                joint.parent < 0 ? "-" : mesh.skeleton.joint(joint.parent).name, p.x(), p.y(),
                p.z());
+  }
+  // How --body FILE would pose it: its joints on ours, or why it cannot.
+  try {
+    const BodyMapping mapping = mapHumanJoints(mesh.skeleton, file);
+    fmt::print("{}", describeBodyMapping(mapping, mesh.skeleton));
+    const SkinnedMesh body = fitToHumanSkeleton(mesh, mapping, file);
+    const auto& rest = body.skeleton.restPositions();
+    fmt::print("as a body (--body {}): {:.2f} m tall, wrists {:.2f} m apart at rest\n", file,
+               body.rest.positions.row(2).maxCoeff(),
+               (rest[kRightWrist] - rest[kLeftWrist]).norm());
+  } catch (const Error& e) {
+    fmt::print("not usable as a body (--body): {}\n", e.what());
   }
 }
 
