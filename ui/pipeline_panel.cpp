@@ -385,7 +385,7 @@ void PipelinePanel::start(LocalRunOptions options) {
     entry =
         QString::fromStdString(options.session) == demo_session_ ? kDemoSession : kRecordedSession;
   source_->setCurrentIndex(entry);
-  options.body = body();
+  options.body = BodyChoice{body(), {}};
   body_->setEnabled(false);  // the nodes pose it until they stop
   // Nodes started here record takes into the studio's folder; nodes on the stage's PCs into
   // their own (lumistage-node --takes).

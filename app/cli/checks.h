@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/base/error.h"
 #include "core/body/human_model.h"
 
 namespace lumistage {
@@ -30,18 +31,27 @@ inline CLI::Validator within(double lo, double hi) {
       fmt::format("[{} - {}]", lo, hi));
 }
 
-// --body standard|fine: which generic human the studio and its nodes pose and refine; every
-// process of a stage must be given the same.
-inline CLI::Option* addBodyOption(CLI::App& app, BodyDetail& body) {
+// --body standard|fine|FILE: which human the studio and its nodes pose and refine; every process
+// of a stage must be given the same.
+inline CLI::Option* addBodyOption(CLI::App& app, BodyChoice& body) {
   return app
       .add_option_function<std::string>(
-          "--body", [&body](const std::string& name) { body = parseBodyDetail(name); },
-          "the generic human posed and refined: standard (about 2000 vertices: four nodes and the "
-          "studio on one PC) or fine (about 4000: nodes on PCs of their own; sharper views, twice "
-          "the nodes' work); the studio and every node alike")
-      ->check(
-          CLI::IsMember({bodyDetailName(BodyDetail::kStandard), bodyDetailName(BodyDetail::kFine)}))
-      ->default_str(bodyDetailName(body));
+          "--body", [&body](const std::string& name) { body = parseBodyChoice(name); },
+          "the human posed and refined: standard (the generic human, about 2000 vertices: four "
+          "nodes and the studio on one PC), fine (about 4000: nodes on PCs of their own; sharper "
+          "views, twice the nodes' work) or the actor's own rigged human from a file (glTF/GLB, "
+          "FBX, DAE, X; see docs/bodies.md); the studio and every node alike")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            try {
+              parseBodyChoice(text);
+              return {};
+            } catch (const Error& e) {
+              return e.what();
+            }
+          },
+          "standard|fine|FILE"))
+      ->default_str(bodyChoiceName(body));
 }
 
 }  // namespace lumistage

@@ -100,7 +100,7 @@ void addCorpusCommand(CLI::App& app) {
   struct Args {
     std::string seeds, out, json;
     StageDrawOptions draw;
-    BodyDetail body = BodyDetail::kStandard;
+    BodyChoice body;
   };
   auto args = std::make_shared<Args>();
   CLI::App* corpus = app.add_subcommand(
@@ -130,7 +130,7 @@ void addCorpusCommand(CLI::App& app) {
     std::error_code ec;
     fs::create_directories(args->out, ec);
     if (ec) throw Error("--out " + args->out + ": cannot create: " + ec.message());
-    const SkinnedMesh generic = loadGenericHuman(args->body);
+    const SkinnedMesh generic = loadBody(args->body);
     std::vector<CorpusStageResult> results;
     for (const uint32_t seed : seeds) {
       const std::string label = fmt::format("stage {}", seed);

@@ -208,7 +208,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
 void addEvalCommand(CLI::App& app) {
   struct Args {
     std::string session, json, config, loo_pictures, fit_pictures;
-    BodyDetail body = BodyDetail::kStandard;
+    BodyChoice body;
     int cameras = 0, frames = 0, loo_frames = 3, fit_every = 1;
     bool quiet = false, mocap_only = false;
   };
@@ -269,7 +269,7 @@ void addEvalCommand(CLI::App& app) {
       mocap.max_frames = args->frames;
       mocap.pictures = args->fit_pictures;
       mocap.picture_every = args->fit_every;
-      evaluateMocap(session, loadGenericHuman(args->body), mocap, report);
+      evaluateMocap(session, loadBody(args->body), mocap, report);
       if (!args->json.empty()) writeFileAtomically(args->json, report.toJson());
       if (!args->quiet) fmt::print("{}", report.toText());
       if (session.hasTruth()) return;
@@ -299,7 +299,7 @@ void addEvalCommand(CLI::App& app) {
     mocap.max_frames = args->frames;
     mocap.pictures = args->fit_pictures;
     mocap.picture_every = args->fit_every;
-    const SkinnedMesh generic = loadGenericHuman(args->body);
+    const SkinnedMesh generic = loadBody(args->body);
     report.set("mocap", "body_vertices", double(generic.rest.vertexCount()));
     const MocapEvalResult tracked = evaluateMocap(session, generic, mocap, report);
     SurfaceEvaluationOptions surface;

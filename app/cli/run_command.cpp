@@ -172,7 +172,7 @@ void addRunCommand(CLI::App& app) {
   struct Args {
     std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size,
                                      record_view, record_take, listen, osc;
-    BodyDetail body = BodyDetail::kStandard;
+    BodyChoice body;
     int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
     int64_t frames = 150;
     double seconds = 60;

@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
   double fps = 25;
   bool plain = false, monitor = false;
   std::string monitor_screenshot, takes;
-  lumistage::BodyDetail body = lumistage::BodyDetail::kStandard;
+  lumistage::BodyChoice body;
   app.add_option("--rig", rig_path, "rig file (default with --session: the session's)");
   app.add_option("--node", node_name, "this node's name in the rig")->required();
   app.add_option("--session", session, "serve this node's cameras of a recorded session");
@@ -168,7 +168,7 @@ int main(int argc, char** argv) {
       endpoint.studio_public_key = store.studioPublicKey();
     }
     lumistage::CameraNode camera_node(rig, node.name, std::move(source), endpoint,
-                                      lumistage::loadGenericHuman(body), node_options);
+                                      lumistage::loadBody(body), node_options);
     // SIGINT, SIGTERM or SIGHUP: the node closes its take and stops (a second one ends it at once).
     std::atomic<bool>& stop = lumistage::stopOnSignals();
     fmt::print("node {}: {} cameras, serving {}\n", node.name, node.cameras.size(), studio);

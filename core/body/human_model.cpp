@@ -1,11 +1,14 @@
 #include "core/body/human_model.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <set>
 
 #include "core/base/error.h"
 #include "core/base/resource_path.h"
+#include "core/body/body_mapping.h"
 #include "core/body/mesh_io.h"
 #include "core/body/surface_nets.h"
 
@@ -239,6 +242,36 @@ SkinnedMesh loadGenericHuman(BodyDetail detail) {
     throw Error(e.what());
   }
   return mesh;
+}
+
+std::string bodyChoiceName(const BodyChoice& choice) {
+  return choice.file.empty() ? bodyDetailName(choice.detail) : choice.file.string();
+}
+
+BodyChoice parseBodyChoice(const std::string& text) {
+  if (text == "standard" || text == "fine") return {parseBodyDetail(text), {}};
+  std::error_code ec;
+  if (text.empty() || !std::filesystem::is_regular_file(text, ec)) {
+    throw Error(
+        fmt::format("{} is neither standard nor fine nor a file: expected standard, fine "
+                    "or a rigged human's file (glTF/GLB, FBX, DAE, X)",
+                    quotedInput(text)));
+  }
+  return {BodyDetail::kStandard, text};
+}
+
+SkinnedMesh loadBody(const BodyChoice& choice) {
+  return choice.file.empty() ? loadGenericHuman(choice.detail) : loadHumanBody(choice.file);
+}
+
+SkinnedMesh trackingModelFor(const SkinnedMesh& body) {
+  static const Skeleton generic = makeHumanSkeleton();
+  bool same = body.skeleton.jointCount() == generic.jointCount();
+  for (int j = 0; same && j < generic.jointCount(); ++j) {
+    same = body.skeleton.joint(j).name == generic.joint(j).name &&
+           (body.skeleton.restPositions()[j] - generic.restPositions()[j]).norm() < 1e-3;
+  }
+  return same ? body : loadGenericHuman();
 }
 
 }  // namespace lumistage

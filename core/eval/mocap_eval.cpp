@@ -9,6 +9,7 @@
 #include <ctime>
 
 #include "core/base/error.h"
+#include "core/body/human_model.h"
 #include "core/body/human_skeleton.h"
 #include "core/eval/fit_picture.h"
 #include "core/eval/percentile.h"
@@ -39,7 +40,7 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   for (int k = 0; k < count; ++k) cameras.push_back(k * all / count);
   PoseTrackerOptions tracker_options = options.tracker;
   tracker_options.silhouette_step = options.silhouette_step;
-  PoseTracker tracker(rig, generic, tracker_options);
+  PoseTracker tracker(rig, trackingModelFor(generic), tracker_options);
 
   std::vector<std::vector<Eigen::Vector3d>> truth;
   std::vector<std::string> names;
@@ -124,7 +125,8 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
     report.setFrame(f, "fit_rms_mm", r.fit_rms_m * 1e3);
     report.setFrame(f, "rim_rms_mm", r.rim_rms_m * 1e3);
     report.setFrame(f, "left_out_camera", r.left_out_camera);
-    // The generic human posed as the nodes pose it, against each camera's silhouette.
+    // The body (the generic human or a file's) posed as the nodes pose it, against each camera's
+    // silhouette.
     const PoseData message = poseMessageFor(generic.skeleton, tracker.skeleton(), r.pose, r.joints);
     posedBodyMesh(generic, message, body_pose, transforms, positions, normals);
     double frame_iou = 0;

@@ -32,8 +32,9 @@ struct MocapEvalResult {
 
 // Replays a session as the studio sees it: every camera's image keyed at low resolution
 // (GreenScreenKeyer at the cells' centres, as CameraNode does; the session's own masks where it
-// carries them), the silhouettes fed to a PoseTracker, the generic human posed as the nodes pose
-// it compared with each silhouette (silhouette_iou, per camera silhouette_iou_<camera>: the
+// carries them), the silhouettes fed to a PoseTracker (its capsules from
+// trackingModelFor(generic)), `generic` (the generic human or a file's body) posed as the nodes
+// pose it compared with each silhouette (silhouette_iou, per camera silhouette_iou_<camera>: the
 // cells of both over the cells of either, mean over tracked frames), and the tracked joints
 // compared with truth/joints.csv when the session has it.
 // Adds section "mocap" to `report`: frames, frames_tracked, cameras, mpjpe_mm (mean over tracked

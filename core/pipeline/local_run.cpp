@@ -43,6 +43,11 @@ void removeStaleKeyStores() {
   }
 }
 
+// --body for the node processes: a body file's absolute path, whatever their working folder.
+std::string bodyArgument(const BodyChoice& body) {
+  return body.file.empty() ? bodyDetailName(body.detail) : fs::absolute(body.file).string();
+}
+
 }  // namespace
 
 LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move(options)) {
@@ -84,11 +89,10 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
     endpoint.studio_key = store.studioKey();
     endpoint.authorized = store.authorizedNodes();
   }
-  // The nodes pose the generic human: the refinement's smoothness needs its triangles, the
+  // The nodes pose the body chosen: the refinement's smoothness needs its triangles, the
   // visibility the studio sends them its posed and refined vertices.
   if (!options_.coordinator.body)
-    options_.coordinator.body =
-        std::make_shared<const SkinnedMesh>(loadGenericHuman(options_.body));
+    options_.coordinator.body = std::make_shared<const SkinnedMesh>(loadBody(options_.body));
   studio_ =
       std::make_unique<StudioCoordinator>(rig_, endpoint, kHumanJointCount, options_.coordinator);
 
@@ -106,7 +110,7 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
                   {"--session", options_.session.string(), "--replay", options_.replay});
     }
     if (!options_.takes.empty()) args.insert(args.end(), {"--takes", options_.takes.string()});
-    args.insert(args.end(), {"--body", bodyDetailName(options_.body)});
+    args.insert(args.end(), {"--body", bodyArgument(options_.body)});
     if (options_.plain) {
       args.push_back("--plain");
     } else {

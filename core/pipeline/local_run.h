@@ -28,9 +28,10 @@ struct LocalRunOptions {
   std::filesystem::path keys;         // key store; empty: fresh keys in a temporary folder
   std::filesystem::path node_binary;  // lumistage-node; empty: beside this executable
   std::filesystem::path takes;        // where the nodes record takes; empty: none
-  // The generic human the studio and the nodes it starts pose (nodes on the stage's PCs are given
-  // theirs by their own --body); unused when coordinator.body is set.
-  BodyDetail body = BodyDetail::kStandard;
+  // The human the studio and the nodes it starts pose: the generic human or a file, whose path
+  // the nodes are given (nodes on the stage's PCs are given theirs by their own --body); unused
+  // when coordinator.body is set.
+  BodyChoice body;
   // Nodes on the stage's PCs instead (lumistage-node --studio, e.g. from its systemd unit): the
   // studio listens here (e.g. tcp://*:5570) for the rig's nodes and starts no node process; needs
   // `rig` and the key store they were given (or `plain`).

@@ -79,7 +79,9 @@ StudioCoordinator::StudioCoordinator(const Rig& rig, StudioEndpointConfig endpoi
     tracking.stage = stage_.box;
     tracking.stage_from_cameras = !rig_.stage();
     tracker_ = std::make_unique<PoseTracker>(rig, generic, tracking);
-    generic_skeleton_ = generic.skeleton;
+    // Pose messages are fitted to the skeleton of the body the nodes pose (a file's own body
+    // stands on its own proportions; either generic human on the generic skeleton).
+    generic_skeleton_ = options.body ? options.body->skeleton : generic.skeleton;
   }
   if (stage_.guessed) {
     spdlog::warn("stage: {}", stage_.how);

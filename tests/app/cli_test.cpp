@@ -381,9 +381,11 @@ TEST(Cli, NumbersOutOfRangeAreRefusedByTheirOption) {
       {" virtual-cameras --config " + std::string(LUMISTAGE_TEST_RESOURCE_DIR) +
            "/studio/reference.yaml --frames 100000",
        "--frames 100000: 100000 frames of 12 cameras need"},
-      // A generic human that is not shipped.
+      // A generic human that is not shipped, and a body file that is not there.
       {" run --session /nonexistent/session --body coarse",
-       "--body: coarse not in {standard,fine}"},
+       "--body: 'coarse' is neither standard nor fine nor a file"},
+      {" eval --session /nonexistent/session --body /nonexistent/actor.glb",
+       "--body: '/nonexistent/actor.glb' is neither standard nor fine nor a file"},
       // Where a run would write, checked before it starts, not after its minute.
       {" run --session /nonexistent/session --json /nonexistent/r.json",
        "--json /nonexistent/r.json: no folder /nonexistent to write it into"},
@@ -482,6 +484,33 @@ TEST(Cli, RunPosesTheFineBodyInTheStudioAndItsNodes) {
     bytes[body] = std::stod(text.substr(at + 24));
   }
   EXPECT_GT(bytes["fine"], 1.5 * bytes["standard"]) << bytes["fine"] << " " << bytes["standard"];
+  fs::remove_all(folder);
+}
+
+// --body FILE (Khronos' CesiumMan from ../shared/realdata, where present): body show prints how
+// its joints map onto ours; eval tracks with it; run starts nodes that pose the same file (a node
+// posing another body would say its offsets are "not used").
+TEST(Cli, TheActorsOwnBodyFromAFileIsShownEvaluatedAndRun) {
+  const fs::path cesium = fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" /
+                          "realdata" / "bodies" / "CesiumMan.glb";
+  if (!fs::exists(cesium)) GTEST_SKIP() << "no " << cesium.string();
+  const Result shown = run(kCli + " body show " + cesium.string());
+  ASSERT_EQ(shown.exit_code, 0) << shown.output;
+  EXPECT_NE(shown.output.find("left_elbow      <- Skeleton_arm_joint_L__3_"), std::string::npos)
+      << shown.output;
+  const fs::path folder = tempPath("body_file");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
+                               "actor:\n  vertices: 2000\n", "--frames 6"));
+  const Result eval = run(kCli + " eval --session " + (folder / "session").string() +
+                          " --mocap-only --body " + cesium.string());
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  EXPECT_NE(eval.output.find("frames_tracked                        6"), std::string::npos)
+      << eval.output;
+  const Result r = run(kCli + " run --session " + (folder / "session").string() +
+                       " --frames 12 --seconds 60 --body " + cesium.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("12 frames in all"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("not used"), std::string::npos) << r.output;
   fs::remove_all(folder);
 }
 
