@@ -38,29 +38,15 @@
 #include "core/geometry/ring_rig.h"
 #include "core/net/curve_keys.h"
 #include "core/render/video_file.h"
+#include "tests/app/shell_command.h"
 
 namespace lumistage {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code;
-  std::string output;  // stdout and stderr together
-};
-
-Result run(const std::string& command) {
-  Result result{-1, ""};
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return result;
-  std::array<char, 4096> buffer;
-  size_t n;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
-    result.output.append(buffer.data(), n);
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using testing::Result;
+using testing::run;
 
 const std::string kCli = LUMISTAGE_CLI;
 const std::string kNode = LUMISTAGE_NODE;

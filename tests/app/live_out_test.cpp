@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/app/shell_command.h"
 #include "tests/osc_receiver.h"
 #include "tests/test_util.h"
 
@@ -23,23 +24,8 @@ using testing::OscReceiver;
 
 const std::string kCli = LUMISTAGE_CLI;
 
-struct Result {
-  int exit_code;
-  std::string output;  // stdout and stderr together
-};
-
-Result run(const std::string& command) {
-  Result result{-1, ""};
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return result;
-  std::array<char, 4096> buffer;
-  size_t n;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
-    result.output.append(buffer.data(), n);
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using testing::Result;
+using testing::run;
 
 // folder/session: a synthetic take of the virtual studio, 4 cameras on 2 nodes.
 ::testing::AssertionResult synthSession(const fs::path& folder) {

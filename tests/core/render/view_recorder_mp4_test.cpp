@@ -9,6 +9,7 @@
 #include "core/base/error.h"
 #include "core/render/video_file.h"
 #include "core/render/view_recorder.h"
+#include "tests/core/render/recorded_video.h"
 #include "tests/test_util.h"
 
 namespace lumistage {
@@ -17,27 +18,11 @@ namespace {
 using testing::errorOf;
 using testing::testFolder;
 
-std::vector<uint8_t> solid(int width, int height, uint8_t r, uint8_t g, uint8_t b) {
-  std::vector<uint8_t> rgba(size_t(width) * height * 4, 255);
-  for (size_t p = 0; p < rgba.size(); p += 4) {
-    rgba[p] = r;
-    rgba[p + 1] = g;
-    rgba[p + 2] = b;
-  }
-  return rgba;
-}
+using testing::solid;
 
-// Every frame of the video through OpenCV's FFmpeg reader, as the mean B, G, R of each.
+// Every frame of the video, as the mean B, G, R of each.
 std::vector<cv::Scalar> readBack(const std::filesystem::path& file, cv::Size* size) {
-  cv::VideoCapture video(file.string(), cv::CAP_FFMPEG);
-  EXPECT_TRUE(video.isOpened()) << file;
-  std::vector<cv::Scalar> means;
-  cv::Mat frame;
-  while (video.read(frame)) {
-    *size = frame.size();
-    means.push_back(cv::mean(frame));
-  }
-  return means;
+  return testing::readBack(file, size, cv::CAP_FFMPEG);
 }
 
 TEST(ViewRecorderMp4, WritesEveryFrameAtTheCamerasRateAsH264) {
