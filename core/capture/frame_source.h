@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/capture/image.h"
 #include "core/geometry/rig.h"
@@ -15,6 +16,9 @@ struct CameraFrame {
   int64_t frame_id = -1;     // the camera's frame counter (GigE Vision block id) or the session's
   int64_t timestamp_ns = 0;  // the camera's timestamp (or the recording's), nanoseconds
   Image image;
+  // The actor's mask from another tool, when the source has one (FrameSource::hasMasks): one byte
+  // a pixel of the image's size, non-zero on the actor; empty otherwise. Reused as the image is.
+  std::vector<uint8_t> mask;
 };
 
 // Counters of one camera of a source, for camera health.
@@ -41,6 +45,9 @@ class FrameSource {
   // it did not.
   virtual std::string failure() const { return {}; }
   virtual CameraStats stats(int camera) const = 0;
+  // Whether every frame of the camera carries the actor's mask (CameraFrame::mask), which then
+  // stands for the key: a recording without a green screen, segmented by another tool.
+  virtual bool hasMasks(int /*camera*/) const { return false; }
   // Whether its frame ids only count instants, so that another count that numbers the same
   // instants may replace it (cameras, live): true. A recording's ids, or the virtual studio's,
   // name their frames' content, which a shifted count would pair with other nodes' frames of other

@@ -471,6 +471,38 @@ std::vector<uint8_t> SessionReader::readMask(int camera, int i) const {
   return readMaskFile(maskPath(camera, i), rig_.camera(camera), "actor's mask");
 }
 
+void SessionReader::readMasks(int i, std::vector<CameraFrame>& out,
+                              std::vector<std::string>& errors,
+                              const std::vector<int>& cameras) const {
+  out.resize(rig_.cameraCount());
+  errors.resize(rig_.cameraCount());
+  const int count = cameras.empty() ? rig_.cameraCount() : static_cast<int>(cameras.size());
+  cv::parallel_for_(cv::Range(0, count), [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k) {
+      const int c = cameras.empty() ? k : cameras[k];
+      const Camera& camera = rig_.camera(c);
+      const fs::path path = maskPath(c, i);
+      errors[c].clear();
+      std::vector<uint8_t>& mask = out[c].mask;
+      try {
+        const cv::Mat decoded = existsButIsNotARegularFile(path)
+                                    ? cv::Mat()
+                                    : cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
+        if (!decoded.empty() && decoded.cols == camera.width() && decoded.rows == camera.height() &&
+            decoded.isContinuous()) {
+          mask.assign(decoded.data, decoded.data + decoded.total());  // keeps the buffer
+          continue;
+        }
+      } catch (const cv::Exception&) {
+      }
+      mask.clear();
+      errors[c] =
+          fmt::format("{}: frame {}: cannot read the actor's mask ({}x{} PNG, camera {})",
+                      path.string(), frameId(i), camera.width(), camera.height(), camera.name());
+    }
+  });
+}
+
 void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
                               const std::vector<int>& cameras) const {
   const int64_t id = frameId(i), timestamp = timestampNs(i);

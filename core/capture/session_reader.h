@@ -63,6 +63,11 @@ class SessionReader {
   std::filesystem::path maskPath(int camera, int i) const;
   // Throws Error naming the file when it is missing, unreadable or of another size.
   std::vector<uint8_t> readMask(int camera, int i) const;
+  // Frame i's masks into `out[c].mask` (indexed by rig camera, as readFrame; only `cameras`, or
+  // all), reusing their buffers. A camera whose mask is missing, unreadable or of another size gets
+  // an empty mask and, in `errors[c]`, why, naming the file; the others' are read.
+  void readMasks(int i, std::vector<CameraFrame>& out, std::vector<std::string>& errors,
+                 const std::vector<int>& cameras = {}) const;
 
  private:
   struct FrameEntry {

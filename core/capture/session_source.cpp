@@ -17,12 +17,18 @@ namespace {
 void copyImage(const CameraFrame& from, CameraFrame& to) {
   to.image.resize(from.image.format, from.image.width, from.image.height);  // keeps the buffer
   std::memcpy(to.image.pixels.data(), from.image.pixels.data(), from.image.pixels.size());
+  to.mask.assign(from.mask.begin(), from.mask.end());  // keeps the buffer too
 }
 
 }  // namespace
 
 SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions options)
-    : reader_(folder), options_(options), delivered_(reader_.rig().cameraCount(), 0) {
+    : reader_(folder),
+      options_(options),
+      delivered_(reader_.rig().cameraCount(), 0),
+      masks_(options.masks && reader_.hasMasks()),
+      mask_errors_(reader_.rig().cameraCount()),
+      mask_dropped_(reader_.rig().cameraCount(), 0) {
   for (int c : options_.cameras) {
     if (c < 0 || c >= reader_.rig().cameraCount()) {
       throw Error(fmt::format("{}: replay of camera index {}, but the rig has {} cameras",
@@ -42,8 +48,8 @@ SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions 
   }
   finished_ = frames == 0;
   if (options_.mode != ReplayMode::kFromMemory) return;
-  const size_t set_bytes =
-      size_t(reader_.rig().pixelsPerSet(cameras_)) * bytesPerPixel(reader_.pixelFormat());
+  const size_t set_bytes = size_t(reader_.rig().pixelsPerSet(cameras_)) *
+                           (bytesPerPixel(reader_.pixelFormat()) + (masks_ ? 1 : 0));
   const size_t needed = set_bytes * size_t(frames);
   if (needed > options_.memory_limit_bytes) {
     throw Error(fmt::format(
@@ -54,16 +60,20 @@ SessionSource::SessionSource(const std::filesystem::path& folder, ReplayOptions 
   }
   memory_.resize(frames);
   memory_errors_.resize(frames);
+  memory_mask_errors_.resize(frames);
   int damaged = 0;
   for (int i = 0; i < frames; ++i) {
     if (options_.cancel && options_.cancel->load())
       throw Error(folder.string() + ": replay stopped while its frames were being loaded");
     try {
       reader_.readFrame(i, memory_[i], cameras_);
+      if (masks_) reader_.readMasks(i, memory_[i], memory_mask_errors_[i], cameras_);
+      memory_mask_errors_[i].resize(reader_.rig().cameraCount());
     } catch (const Error& e) {
       // Served as a set that failed (loadSet), as from disk.
       memory_[i].clear();
       memory_errors_[i] = e.what();
+      memory_mask_errors_[i].assign(reader_.rig().cameraCount(), std::string());
       ++damaged;
     }
   }
@@ -80,6 +90,7 @@ bool SessionSource::loadSet() {
   } else {
     try {
       reader_.readFrame(next_set_, set_, cameras_);
+      if (masks_) reader_.readMasks(next_set_, set_, mask_errors_, cameras_);
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -160,12 +171,21 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout, 
   if (next_camera_ == 0 && !loadSet()) return false;
 
   const int c = cameras_[next_camera_];
+  if (masks_ && maskFailed(c)) {
+    // This camera's frame goes without its mask: skipped, the set's other cameras served.
+    if (++next_camera_ == static_cast<int>(cameras_.size())) {
+      next_camera_ = 0;
+      advanceSet();
+    }
+    return false;
+  }
   frame.camera = c;
   if (with_image && options_.mode == ReplayMode::kFromMemory) {
     copyImage(memory_[next_set_][c], frame);
   } else if (with_image) {
     // Swapped, not copied: the caller's old buffer receives the next decode.
     std::swap(frame.image, set_[c].image);
+    std::swap(frame.mask, set_[c].mask);
   }
   frame.frame_id = options_.synchronized ? tick_ : reader_.frameId(next_set_) + loop_ * id_span_;
   frame.timestamp_ns = timestamp;
@@ -180,11 +200,31 @@ bool SessionSource::next(CameraFrame& frame, std::chrono::milliseconds timeout, 
   return true;
 }
 
+bool SessionSource::hasMasks(int camera) const {
+  return masks_ && std::find(cameras_.begin(), cameras_.end(), camera) != cameras_.end();
+}
+
+bool SessionSource::maskFailed(int c) {
+  const std::string& error = maskErrors()[c];
+  if (error.empty()) return false;
+  ++mask_dropped_[c];
+  error_ = error;
+  const size_t told = size_t(next_set_) * reader_.rig().cameraCount() + c;
+  mask_told_.resize(size_t(reader_.frameCount()) * reader_.rig().cameraCount(), 0);
+  if (!mask_told_[told]) {
+    mask_told_[told] = 1;
+    spdlog::warn(
+        "replay: {}; camera {}'s frame {} skipped (counted as dropped), the replay goes on", error,
+        reader_.rig().camera(c).name(), reader_.frameId(next_set_));
+  }
+  return true;
+}
+
 CameraStats SessionSource::stats(int camera) const {
   CameraStats stats;
   stats.frames = delivered_.at(camera);
   if (std::find(cameras_.begin(), cameras_.end(), camera) != cameras_.end())
-    stats.dropped = skipped_ + damaged_;
+    stats.dropped = skipped_ + damaged_ + mask_dropped_[camera];
   const double seconds = std::chrono::duration<double>(last_delivery_ - first_delivery_).count();
   stats.frame_rate_hz = stats.frames > 1 && seconds > 0 ? (stats.frames - 1) / seconds : 0.0;
   stats.temperature_c = std::nan("");  // a recording has no sensor

@@ -27,6 +27,9 @@ struct ReplayOptions {
   size_t memory_limit_bytes = size_t(2) << 30;
   // Only these rig cameras (a camera node replays its own); empty: all of them.
   std::vector<int> cameras;
+  // A session with masks of the actor (masks/, another tool's): every frame carries its mask
+  // (CameraFrame::mask), read with its image; false: the images only.
+  bool masks = true;
   // Paced by the machine's monotonic clock instead of from the first call: the set shown at time
   // t is number floor(t / period) (looping), stamped with that tick as frame id and tick x period
   // as timestamp. Every process replaying the session on a machine then shows the same frame at
@@ -50,7 +53,8 @@ class SessionSource : public FrameSource {
   // image cannot be decoded (a file damaged since the session was opened): that set is skipped,
   // said once with its file, counted as dropped for every camera, and replay goes on
   // (stats().last_error says which file). Only when every set in a row fails does it finish, with
-  // failure() saying why.
+  // failure() saying why. With masks, a camera whose mask cannot be read skips that frame alone:
+  // said once with its file, counted as dropped for that camera, and replay goes on.
   bool next(CameraFrame& frame, std::chrono::milliseconds timeout) override {
     return next(frame, timeout, true);
   }
@@ -65,6 +69,7 @@ class SessionSource : public FrameSource {
   std::string failure() const override { return failure_; }
   bool idsCountInstants() const override { return false; }
   CameraStats stats(int camera) const override;
+  bool hasMasks(int camera) const override;
 
   const SessionReader& reader() const { return reader_; }
 
@@ -98,6 +103,19 @@ class SessionSource : public FrameSource {
   int64_t damaged_ = 0, damaged_in_a_row_ = 0;
   std::vector<uint8_t> damage_told_;
   std::vector<std::string> memory_errors_;  // kFromMemory: each set's decoding error, if any
+  // With masks: why each rig camera's mask of the set being served could not be read (empty: it
+  // was), kFromMemory every set's; frames lost to them per camera, and for each set and camera
+  // whether it was said.
+  bool masks_ = false;
+  std::vector<std::string> mask_errors_;
+  std::vector<std::vector<std::string>> memory_mask_errors_;
+  std::vector<int64_t> mask_dropped_;
+  std::vector<uint8_t> mask_told_;
+  const std::vector<std::string>& maskErrors() const {
+    return options_.mode == ReplayMode::kFromMemory ? memory_mask_errors_[next_set_] : mask_errors_;
+  }
+  // Whether camera c's frame of the set being served has no mask (said once, counted dropped).
+  bool maskFailed(int c);
 };
 
 }  // namespace lumistage

@@ -1,8 +1,11 @@
 #include "core/capture/session_source.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <opencv2/imgcodecs.hpp>
 #include <thread>
 
 #include "core/base/error.h"
@@ -326,6 +329,94 @@ TEST(Replay, ASynchronizedReplayCountsTheTicksItsReaderMissedAsDropped) {
   EXPECT_EQ(source.stats(0).dropped, missed);
   EXPECT_EQ(source.stats(2).dropped, missed);
   EXPECT_EQ(source.stats(1).dropped, 0);  // not replayed here
+  fs::remove_all(folder);
+}
+
+// Frame f's mask of camera c (another tool's): a band of columns that moves with f and c.
+std::vector<uint8_t> bandMask(const Camera& camera, int f, int c) {
+  std::vector<uint8_t> mask(size_t(camera.width()) * camera.height(), 0);
+  for (int y = 0; y < camera.height(); ++y)
+    for (int x = 8 + f + 3 * c; x < 24 + f + 3 * c; ++x) mask[size_t(y) * camera.width() + x] = 255;
+  return mask;
+}
+
+// A session of `count` frames with masks/ (what lumistage session import --masks writes).
+void writeMasks(const fs::path& folder, const Rig& rig, int count) {
+  for (int c = 0; c < rig.cameraCount(); ++c) {
+    const Camera& camera = rig.camera(c);
+    fs::create_directories(folder / "masks" / camera.name());
+    for (int f = 0; f < count; ++f) {
+      std::vector<uint8_t> mask = bandMask(camera, f, c);
+      const cv::Mat image(camera.height(), camera.width(), CV_8UC1, mask.data());
+      ASSERT_TRUE(cv::imwrite(
+          (folder / "masks" / camera.name() / fmt::format("{:06}.png", f)).string(), image));
+    }
+  }
+}
+
+TEST(Replay, EveryModeDeliversEachFramesMaskWithIt) {
+  const Rig rig = smallRig();
+  constexpr int kFrames = 4;
+  const fs::path folder = freshFolder("replay_masks");
+  writeSession(folder, rig, PixelFormat::kRgb8, kFrames);
+  {
+    SessionSource without(folder, replay(ReplayMode::kAsFastAsPossible));
+    EXPECT_FALSE(without.hasMasks(0));
+    CameraFrame frame;
+    ASSERT_TRUE(without.next(frame, milliseconds(5)));
+    EXPECT_TRUE(frame.mask.empty());
+  }
+  writeMasks(folder, rig, kFrames);
+  for (ReplayMode mode :
+       {ReplayMode::kRecordedRate, ReplayMode::kAsFastAsPossible, ReplayMode::kFromMemory}) {
+    SCOPED_TRACE(int(mode));
+    SessionSource source(folder, replay(mode));
+    EXPECT_TRUE(source.hasMasks(2));
+    CameraFrame frame;
+    int got = 0;
+    while (!source.finished()) {
+      if (!source.next(frame, milliseconds(5))) continue;
+      const int set = got / 3;
+      EXPECT_EQ(frame.frame_id, set);
+      EXPECT_TRUE(frame.mask == bandMask(rig.camera(frame.camera), set, frame.camera))
+          << "camera " << frame.camera << ", frame " << set;
+      ++got;
+    }
+    EXPECT_EQ(got, kFrames * 3);
+  }
+  // Asked for the images alone: none.
+  ReplayOptions images_only = replay(ReplayMode::kAsFastAsPossible);
+  images_only.masks = false;
+  SessionSource source(folder, images_only);
+  EXPECT_FALSE(source.hasMasks(0));
+  fs::remove_all(folder);
+}
+
+TEST(Replay, AFrameWhoseMaskCannotBeReadIsSkippedForItsCameraAlone) {
+  const Rig rig = smallRig();
+  constexpr int kFrames = 3;
+  const fs::path folder = freshFolder("replay_bad_mask");
+  writeSession(folder, rig, PixelFormat::kRgb8, kFrames);
+  writeMasks(folder, rig, kFrames);
+  const fs::path bad = folder / "masks" / rig.camera(1).name() / "000001.png";
+  truncateFile(bad, 20);
+  for (ReplayMode mode : {ReplayMode::kAsFastAsPossible, ReplayMode::kFromMemory}) {
+    SCOPED_TRACE(int(mode));
+    SessionSource source(folder, replay(mode));
+    CameraFrame frame;
+    std::vector<std::pair<int64_t, int>> delivered;
+    while (!source.finished()) {
+      if (source.next(frame, milliseconds(5))) delivered.push_back({frame.frame_id, frame.camera});
+    }
+    // Every frame but camera 1's of frame 1.
+    ASSERT_EQ(delivered.size(), size_t(kFrames * 3 - 1));
+    EXPECT_EQ(std::count(delivered.begin(), delivered.end(), std::pair<int64_t, int>(1, 1)), 0);
+    EXPECT_EQ(std::count(delivered.begin(), delivered.end(), std::pair<int64_t, int>(1, 2)), 1);
+    EXPECT_EQ(source.stats(1).dropped, 1);
+    EXPECT_EQ(source.stats(0).dropped, 0);
+    EXPECT_NE(source.stats(1).last_error.find(bad.string()), std::string::npos)
+        << source.stats(1).last_error;
+  }
   fs::remove_all(folder);
 }
 
