@@ -9,6 +9,7 @@
 #include <QVBoxLayout>
 #include <algorithm>
 
+#include "core/net/message_codec.h"
 #include "ui/live_table.h"
 
 namespace lumistage {
@@ -185,6 +186,7 @@ void HealthPanel::showSnapshot(const PipelineSnapshot& s) {
         row.fps = c.frame_rate_hz;
         setDropped(row, c.dropped);
         row.last_error = QString::fromStdString(c.last_error);
+        row.key = QString::fromStdString(c.key);
       }
       if (exited || node.lost) row.fps = 0;
       history_.add(row.camera.toStdString() + "/fps", t, row.fps);
@@ -257,7 +259,10 @@ void HealthPanel::refresh() {
     const QColor colour = stateColour(v.state);
     setLiveCell(*table_, r, kState, QString::fromUtf8(healthStateName(v.state)), Qt::white);
     table_->item(r, kState)->setBackground(colour);
-    setLiveCell(*table_, r, kProblem, QString::fromStdString(v.words),
+    // A camera keyed from the session's masks (a stage without a green screen) says so.
+    QString words = QString::fromStdString(v.words);
+    if (row.key == QLatin1String(kKeyedFromMasks)) words += "; " + row.key;
+    setLiveCell(*table_, r, kProblem, words,
                 v.state == HealthState::kStreaming ? palette().text().color() : colour);
     setLiveCell(*table_, r, kFps, QString::number(row.fps, 'f', 1));
     setLiveCell(*table_, r, kDropped, QString::number(row.dropped));

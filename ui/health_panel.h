@@ -67,6 +67,7 @@ class HealthPanel : public QWidget {
     int64_t dropped = 0, dropped_recently = 0;
     QElapsedTimer since_drop;  // valid once a frame was dropped
     QString last_error;
+    QString key;  // how its node keys it (CameraHealth::key), from the pipeline's report
     bool has_frame = false;
     QElapsedTimer since_frame, since_thumbnail;
   };

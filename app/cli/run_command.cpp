@@ -63,13 +63,16 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
   for (const NodeReport& n : r.nodes) {
     std::string cameras;
     for (const CameraHealth& c : n.cameras) {
-      std::string error;
-      for (char ch : c.last_error)
-        error += (ch == '"' || ch == '\\' || ch < ' ') ? ' ' : ch;  // JSON-safe
+      const auto json_safe = [](const std::string& text) {
+        std::string safe;
+        for (char ch : text) safe += (ch == '"' || ch == '\\' || ch < ' ') ? ' ' : ch;
+        return safe;
+      };
       cameras += fmt::format(
           "{}{{\"camera\": \"{}\", \"frames\": {}, \"dropped\": {}, \"fps\": {:.2f}, "
-          "\"last_error\": \"{}\"}}",
-          cameras.empty() ? "" : ", ", c.camera, c.frames, c.dropped, c.frame_rate_hz, error);
+          "\"last_error\": \"{}\", \"key\": \"{}\"}}",
+          cameras.empty() ? "" : ", ", c.camera, c.frames, c.dropped, c.frame_rate_hz,
+          json_safe(c.last_error), json_safe(c.key));
     }
     nodes += fmt::format(
         "{}\n    {{\"name\": \"{}\", \"lost\": {}, \"messages\": {}, \"bytes\": {}, "
@@ -90,7 +93,7 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       "  \"frames_incomplete\": {},\n  \"max_frames_in_flight\": {},\n"
       "  \"statistics_deadline_ms\": {:.1f},\n  \"image_deadline_ms\": {:.1f},\n"
       "  \"deadlines_following\": {},\n"
-      "  \"hull_agreement\": {:.4f},\n  \"refusals\": {},\n"
+      "  \"hull_agreement\": {:.4f},\n  \"frames_tracked\": {},\n  \"refusals\": {},\n"
       "  \"view\": \"{}x{}\",\n  \"cpu_cores_studio\": {:.3f},\n  \"cpu_cores_nodes\": {:.3f},\n"
       "  \"cpu_ms_per_frame\": {},\n"
       "  \"machine\": {},\n  \"nodes\": [{}\n  ]\n}}\n",
@@ -98,9 +101,9 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       r.raw_bytes_per_frame_per_node, r.node_bytes_per_s, r.frames, r.frames_dropped,
       r.frames_refused, r.frames_overtaken, r.frames_unshown, r.frames_held, r.frames_incomplete,
       max_in_flight, r.statistics_deadline_ms, r.image_deadline_ms,
-      r.deadlines_following ? "true" : "false", r.hull_agreement, r.refusals, view.width,
-      view.height, cpu.studio_cores, cpu.nodes_cores, measured(cpuMsPerFrame(cpu, r.fps), 2),
-      machine, nodes);
+      r.deadlines_following ? "true" : "false", r.hull_agreement, r.frames_tracked, r.refusals,
+      view.width, view.height, cpu.studio_cores, cpu.nodes_cores,
+      measured(cpuMsPerFrame(cpu, r.fps), 2), machine, nodes);
 }
 
 // Once every node has told its takes' disk (true then): the disk that fills first, and a warning
@@ -403,6 +406,10 @@ void addRunCommand(CLI::App& app) {
         "second; latency {:.1f} ms (median), {:.1f} ms (95%)\n",
         r.frames, r.frames_dropped, r.frames_refused, r.frames_overtaken, r.frames_unshown,
         r.frames_held, r.frames_incomplete, r.fps, r.latency_ms_p50, r.latency_ms_p95);
+    fmt::print(
+        "motion capture: {} of the {} frames tracked; {:.3f} of the posed body inside the "
+        "silhouettes\n",
+        r.frames_tracked, r.frames, r.hull_agreement);
     for (const auto& [stage, ms] : r.stage_ms) fmt::print("  {:<16} {:8.3f} ms\n", stage, ms);
     fmt::print("deadlines now: statistics {:.0f} ms, images {:.0f} ms{}\n",
                r.statistics_deadline_ms, r.image_deadline_ms,
@@ -429,8 +436,11 @@ void addRunCommand(CLI::App& app) {
           n.name, n.lost ? "lost" : "streaming", n.messages, n.frames_missed, n.times_lost,
           n.bad_messages, answers);
       for (const CameraHealth& c : n.cameras) {
-        fmt::print("      {:<8} {:6.1f} fps, {} frames, {} dropped{}\n", c.camera, c.frame_rate_hz,
-                   c.frames, c.dropped, c.last_error.empty() ? "" : ", " + c.last_error);
+        // The key said where it is not the green screen (a stage filmed without one).
+        const bool masks = c.key == kKeyedFromMasks;
+        fmt::print("      {:<8} {:6.1f} fps, {} frames, {} dropped{}{}\n", c.camera,
+                   c.frame_rate_hz, c.frames, c.dropped, masks ? ", " + c.key : "",
+                   c.last_error.empty() ? "" : ", " + c.last_error);
       }
     }
     if (const VmcSender* sender = pipeline.skeletonStream()) {

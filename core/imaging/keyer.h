@@ -160,6 +160,50 @@ class BackgroundModel {
   std::vector<float> mean_, limit2_;  // per block: mean colour, squared distance limit
 };
 
+// For footage without a screen to key, segmented by another tool (a matting tool, a segmenter):
+// the frame's mask of the actor (one byte a pixel, non-zero on the actor, the image's size) as a
+// key whose background level depends on the position only: -1 on the actor, +1 off it. Levels
+// interpolated between pixels then cross the bound (0) half a pixel beyond the actor's last pixel,
+// on the pixels' border: the sampler's sub-pixel edge (RefinementSampler) lies on the mask's edge.
+// On a Bayer image, whose colour is its 2x2 cell's (colourAt), a pixel's level is its cell's mean.
+// A view of the mask, which must outlive the key; made afresh per frame, it allocates nothing.
+class MaskKey {
+ public:
+  MaskKey() = default;
+  // `cells`: the image is Bayer (levels of 2x2 cells). Sizes of at least 2x2 for cells.
+  MaskKey(const uint8_t* mask, int width, int height, bool cells = false)
+      : mask_(mask), width_(width), height_(height), cells_(cells) {}
+
+  bool isForeground(const ImageView& /*image*/, int x, int y) const { return level(x, y) < 0.0f; }
+  bool isForeground(const Rgb& /*c*/, int x, int y) const { return level(x, y) < 0.0f; }
+  // The pixel's level, whatever its colour: GreenScreenKeyer::backgroundLevel's counterpart.
+  float backgroundLevel(const Rgb& /*c*/, int x, int y) const { return level(x, y); }
+  bool isForegroundLevel(float level, int /*x*/, int /*y*/) const { return level < 0.0f; }
+  // A level the background takes less than `purity` / 2 of (the actor's level is -1, the
+  // background's +1): under purity x the bound, as a green key's (GreenScreenKeyer).
+  bool isPureForegroundLevel(float level, int /*x*/, int /*y*/, float purity) const {
+    return level < purity - 1.0f;
+  }
+  // -1 on the actor, +1 off it (a cell's mean on Bayer); +1 beyond the mask.
+  float level(int x, int y) const {
+    if (x < 0 || y < 0 || x >= width_ || y >= height_) return 1.0f;
+    if (!cells_) return mask_[size_t(y) * width_ + x] ? -1.0f : 1.0f;
+    // The cell that holds the pixel, as colourAt reads it (an odd size's last column or row: the
+    // cell before it).
+    const size_t x0 = std::min(size_t(x), size_t(width_ - 2)) & ~size_t(1),
+                 y0 = std::min(size_t(y), size_t(height_ - 2)) & ~size_t(1);
+    const uint8_t* p = mask_ + y0 * width_ + x0;
+    const int actor = (p[0] != 0) + (p[1] != 0) + (p[width_] != 0) + (p[width_ + 1] != 0);
+    return 1.0f - 0.5f * float(actor);
+  }
+  const uint8_t* mask() const { return mask_; }
+
+ private:
+  const uint8_t* mask_ = nullptr;
+  int width_ = 0, height_ = 0;
+  bool cells_ = false;
+};
+
 // The mean colour of the 3x3 pixels around (x, y), those beyond the image's edge left out. On
 // Bayer the window's pixels lie in at most 2x2 cells: each cell's colour is read once, weighted by
 // how many of the window's pixels it holds.

@@ -44,7 +44,9 @@ struct BodyEncoder {
     for (const CameraHealthData& c : m.cameras) {
       const auto name = b.CreateString(c.camera);
       const auto error = b.CreateString(c.last_error);
-      cameras.push_back(fb::CreateCameraHealth(b, name, c.frames, c.dropped, c.frame_rate, error));
+      const auto key = b.CreateString(c.key);
+      cameras.push_back(
+          fb::CreateCameraHealth(b, name, c.frames, c.dropped, c.frame_rate, error, key));
     }
     const auto vector = b.CreateVector(cameras);
     const TakeStatusData& t = m.take;
@@ -221,8 +223,9 @@ Check decodeHeartbeat(const fb::Heartbeat& in, const MessageLimits& limits, Hear
     if (Check e = checkString(c->last_error(), "heartbeat: last error", limits); !e.empty()) {
       return e;
     }
+    if (Check e = checkString(c->key(), "heartbeat: key", limits); !e.empty()) return e;
     out.cameras.push_back({copyString(c->camera()), c->frames(), c->dropped(), c->frame_rate(),
-                           copyString(c->last_error())});
+                           copyString(c->last_error()), copyString(c->key())});
   }
   if (const fb::TakeStatus* t = in.take()) {
     if (Check e = checkString(t->take(), "heartbeat: take name", limits); !e.empty()) return e;

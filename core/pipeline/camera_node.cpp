@@ -40,6 +40,15 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
   screen_measured_.resize(cameras_.size());
   published_keyers_ = std::make_shared<const std::vector<GreenScreenKeyer>>(keyers_);
   screen_warnings_.resize(cameras_.size());
+  masked_.resize(cameras_.size());
+  mask_keys_.resize(cameras_.size());
+  for (size_t k = 0; k < cameras_.size(); ++k) {
+    masked_[k] = source_->hasMasks(cameras_[k]);
+    if (masked_[k]) {
+      spdlog::info("node {}: camera {}: keyed from the session's masks (no green screen learnt)",
+                   name_, rig_.camera(cameras_[k]).name());
+    }
+  }
 }
 
 Message CameraNode::silhouettesOf(const Set& set) const {
@@ -47,8 +56,14 @@ Message CameraNode::silhouettesOf(const Set& set) const {
   LowResSilhouette s;
   for (size_t k = 0; k < cameras_.size(); ++k) {
     if (!set.has(k)) continue;  // a camera that delivers nothing: the studio goes without it
-    computeSilhouette(silhouette_keyer_, set.frames[k].image.view(), cameras_[k],
-                      options_.silhouette_step, s);
+    const CameraFrame& frame = set.frames[k];
+    if (keyedFromMask(k, frame)) {
+      maskSilhouette(frame.mask.data(), frame.image.width, frame.image.height, cameras_[k],
+                     options_.silhouette_step, s);
+    } else {
+      computeSilhouette(silhouette_keyer_, frame.image.view(), cameras_[k],
+                        options_.silhouette_step, s);
+    }
     silhouettes.masks.push_back({s.camera, s.width, s.height, std::move(s.bits)});
   }
   Message message;
@@ -74,8 +89,15 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
   sampler_camera_index_.clear();
   for (size_t k = 0; k < cameras_.size(); ++k) {
     if (!set->has(k)) continue;
-    sampler_cameras_.push_back(
-        {&rig_.camera(cameras_[k]), set->frames[k].image.view(), &(*set->keyers)[k], nullptr});
+    const CameraFrame& frame = set->frames[k];
+    SamplerCamera camera{&rig_.camera(cameras_[k]), frame.image.view(), &(*set->keyers)[k]};
+    if (keyedFromMask(k, frame)) {
+      mask_keys_[k] = MaskKey(frame.mask.data(), frame.image.width, frame.image.height,
+                              isBayer(frame.image.format));
+      camera.green_screen = nullptr;
+      camera.mask = &mask_keys_[k];
+    }
+    sampler_cameras_.push_back(camera);
     sampler_camera_index_.push_back(static_cast<int>(k));
   }
   // Seen through the surface the studio refined an earlier frame to, if a recent one (the frames
@@ -143,9 +165,15 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
     const ImageView image = set.frames[k].image.view();
     renderer_->setImage(static_cast<int>(k), image);
     // Where the mesh reaches beyond the actor in this camera, its colour is the screen's: the
-    // camera's silhouette in 4-pixel cells (49,000 pixels keyed, 0.07 ms) masks it out.
-    setForegroundMask(*renderer_, static_cast<int>(k), (*set.keyers)[k], image, mask_silhouette_,
-                      mask_);
+    // camera's silhouette in 4-pixel cells (49,000 pixels keyed, 0.07 ms) masks it out, or the
+    // frame's mask in those cells.
+    if (keyedFromMask(k, set.frames[k])) {
+      setForegroundMask(*renderer_, static_cast<int>(k), set.frames[k].mask, image.width,
+                        image.height, mask_silhouette_, mask_);
+    } else {
+      setForegroundMask(*renderer_, static_cast<int>(k), (*set.keyers)[k], image, mask_silhouette_,
+                        mask_);
+    }
   }
   for (const ViewData& view : views) {
     if (view.width <= 0 || view.height <= 0 || view.rotation.size() != 9 ||
@@ -572,7 +600,8 @@ void CameraNode::run(const std::atomic<bool>& stop) {
           const CameraStats s = source_->stats(c);
           heartbeat.cameras.push_back({rig_.camera(c).name(), s.frames, s.dropped,
                                        float(s.frame_rate_hz),
-                                       s.last_error.empty() ? screen_warnings_[k] : s.last_error});
+                                       s.last_error.empty() ? screen_warnings_[k] : s.last_error,
+                                       masked_[k] ? kKeyedFromMasks : kKeyedOnGreen});
         }
       }
       heartbeat.bytes_sent = bytes_sent_;

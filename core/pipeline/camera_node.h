@@ -190,6 +190,14 @@ class CameraNode {
   // Per own camera, what learning its green screen found wrong (empty: nothing); under
   // source_mutex_, written by the capture thread, sent in every heartbeat.
   std::vector<std::string> screen_warnings_;
+  // Per own camera, 1 where its frames carry the actor's mask (FrameSource::hasMasks: a session
+  // filmed without a green screen, segmented by another tool): its silhouettes, the refinement's
+  // keying and the renderer's masks come from the masks, and no green screen is learnt for it.
+  std::vector<uint8_t> masked_;
+  // Whether own camera k's frame `frame` is keyed from its mask (one of the image's size).
+  bool keyedFromMask(size_t k, const CameraFrame& frame) const {
+    return masked_[k] && frame.mask.size() == size_t(frame.image.width) * frame.image.height;
+  }
   NodeEndpoint endpoint_;  // the network thread's alone
   SkinnedMesh body_;       // the statistics thread's alone
   CameraNodeOptions options_;
@@ -256,6 +264,7 @@ class CameraNode {
   RefinementStatistics refine_stats_;
   RefinementStatisticsCodec statistics_codec_;  // compresses them for the wire
   std::vector<SamplerCamera> sampler_cameras_;
+  std::vector<MaskKey> mask_keys_;  // per own camera, over the frame's mask (when keyed from it)
   std::vector<int> sampler_camera_index_;  // each sampler camera's index among the node's
   std::vector<uint8_t> told_sees_nobody_;  // said that the camera is left out (that thread's)
   struct Posed {

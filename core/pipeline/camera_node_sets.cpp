@@ -96,6 +96,7 @@ std::string screenWarning(int excess) {
 void CameraNode::checkScreens(const Set& set) {
   bool changed = false;
   for (size_t c = 0; c < cameras_.size(); ++c) {
+    if (masked_[c]) continue;  // keyed from its masks: no screen to follow
     GreenScreenKeyer measured;
     measured.learnScreen(set.frames[c].image.view());
     const int was = keyers_[c].screenExcess(), excess = measured.screenExcess();
@@ -135,6 +136,7 @@ void CameraNode::checkScreens(const Set& set) {
 void CameraNode::learnScreens(const Set& set) {
   bool clean = true;
   for (size_t c = 0; c < cameras_.size(); ++c) {
+    if (masked_[c]) continue;  // keyed from its masks (said when the node was made)
     keyers_[c].learnScreen(set.frames[c].image.view());
     clean = clean && keyers_[c].screenExcess() >= GreenScreenKeyer::kDimScreenExcess;
   }
@@ -143,6 +145,7 @@ void CameraNode::learnScreens(const Set& set) {
   if (!clean && screen_sets_learnt_ < kScreenWarmupSets) return;  // settling, perhaps
   screen_sets_learnt_ = kScreenWarmupSets;  // learnt; checked every kScreenRetrySets from now on
   for (size_t c = 0; c < cameras_.size(); ++c) {
+    if (masked_[c]) continue;
     const std::string& camera = rig_.camera(cameras_[c]).name();
     std::string warning = screenWarning(keyers_[c].screenExcess());
     if (warning.empty()) {

@@ -243,8 +243,8 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     // its take's error and disk) reaches the log, `lumistage run`'s report and the health panel
     // escaped and cut short, so that no node can forge a line or move a terminal's cursor there.
     for (const CameraHealthData& c : heartbeat->cameras) {
-      node.report.cameras.push_back(
-          {c.camera, c.frames, c.dropped, c.frame_rate, printableInput(c.last_error)});
+      node.report.cameras.push_back({c.camera, c.frames, c.dropped, c.frame_rate,
+                                     printableInput(c.last_error), printableInput(c.key, 64)});
     }
     node.report.take = heartbeat->take;
     node.report.take.error = printableInput(heartbeat->take.error);
@@ -556,6 +556,7 @@ RunReport StudioCoordinator::report() const {
   r.stage_ms["combine"] = mean(combine_ms_);
   r.stage_ms["blend"] = mean(blend_ms_);
   r.hull_agreement = frames_done_ > 0 ? hull_agreement_sum_ / frames_done_ : 0;
+  r.frames_tracked = frames_tracked_;
   double per_second = 0, raw = 0;
   std::map<std::string, double> take_bytes_per_s;  // by disk
   int64_t shown_bytes = 0, shown_frames = 0;

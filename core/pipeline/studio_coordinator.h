@@ -71,6 +71,7 @@ struct CameraHealth {
   int64_t frames = 0, dropped = 0;
   double frame_rate_hz = 0;
   std::string last_error;
+  std::string key = {};  // how its frames are keyed, in words (kKeyedFromMasks...); empty: unknown
 };
 
 struct NodeReport {
@@ -140,6 +141,9 @@ struct RunReport {
   double statistics_deadline_ms = 0, image_deadline_ms = 0;
   bool deadlines_following = false;
   double hull_agreement = 0;  // share of posed vertices seen inside the silhouettes
+  // Of the frames done, those whose pose the tracker gave (the others: nobody tracked, the generic
+  // human placed where the hull is, in its rest pose).
+  int64_t frames_tracked = 0;
   std::vector<NodeReport> nodes;
   // Connections turned away: keys refused and handshakes that failed (StudioEndpoint).
   int64_t refusals = 0;
@@ -459,6 +463,7 @@ class StudioCoordinator {
   bool counting_ = false;
   int64_t first_message_ns_ = 0;
   double hull_agreement_sum_ = 0;
+  int64_t frames_tracked_ = 0;  // counted frames whose pose the tracker gave
 };
 
 }  // namespace lumistage

@@ -309,6 +309,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     blend_ms_.add((steadyNowNs() - combined) / 1e6);
     if (frame.pose_sent_ns > 0) statistics_wait_ms_.add((now - frame.pose_sent_ns) / 1e6);
     if (seen_vertices > 0) hull_agreement_sum_ += double(agreeing) / seen_vertices;
+    frames_tracked_ += frame.tracked;
     // From the capture to the image shown, both on the wall clock (the nodes may be other PCs).
     // Beyond a minute either way the clocks are not in step: the latency is not measured, and the
     // log says why once.

@@ -328,7 +328,9 @@ void RefinementSampler::sample(std::span<const SamplerCamera> cameras,
         markContour(*c.camera, depth_maps_[k], config_, surface, normals, out.contour);
     };
     static const GreenScreenKeyer kDefaultKeyer;
-    if (c.background) {
+    if (c.mask) {
+      sampleWith(*c.mask);
+    } else if (c.background) {
       sampleWith(*c.background);
     } else {
       sampleWith(c.green_screen ? *c.green_screen : kDefaultKeyer);

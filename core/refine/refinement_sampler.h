@@ -14,12 +14,14 @@
 namespace lumistage {
 
 // One camera's input to the sampler: its calibration, its image, and how to segment it — a green
-// screen keyer or a background model learnt from the empty stage (exactly one of the two).
+// screen keyer, a background model learnt from the empty stage, or the frame's mask of the actor
+// from another tool (at most one of the three; none: a default green screen keyer).
 struct SamplerCamera {
   const Camera* camera = nullptr;
   ImageView image;
   const GreenScreenKeyer* green_screen = nullptr;
   const BackgroundModel* background = nullptr;
+  const MaskKey* mask = nullptr;
 };
 
 // The tangent along which a vertex's window points lie (RefineConfig::window_points): the unit

@@ -10,6 +10,14 @@ void setForegroundMask(LumigraphRenderer& renderer, int own_index, const GreenSc
   renderer.setMask(own_index, mask, silhouette.width, silhouette.height);
 }
 
+void setForegroundMask(LumigraphRenderer& renderer, int own_index,
+                       const std::vector<uint8_t>& actor_mask, int width, int height,
+                       LowResSilhouette& silhouette, std::vector<uint8_t>& mask) {
+  maskSilhouette(actor_mask.data(), width, height, own_index, kMaskStep, silhouette);
+  silhouetteMask(silhouette, mask);
+  renderer.setMask(own_index, mask, silhouette.width, silhouette.height);
+}
+
 void FrameInputs::set(LumigraphRenderer& renderer, const std::vector<CameraFrame>& frames) {
   const bool learn = keyers_.size() != frames.size();
   if (learn) keyers_.assign(frames.size(), GreenScreenKeyer());

@@ -16,6 +16,11 @@ namespace lumistage {
 void setForegroundMask(LumigraphRenderer& renderer, int own_index, const GreenScreenKeyer& keyer,
                        const ImageView& image, LowResSilhouette& silhouette,
                        std::vector<uint8_t>& mask);
+// The same from the frame's mask of the actor (another tool's: one byte a pixel, non-zero on the
+// actor, `width` x `height`).
+void setForegroundMask(LumigraphRenderer& renderer, int own_index,
+                       const std::vector<uint8_t>& actor_mask, int width, int height,
+                       LowResSilhouette& silhouette, std::vector<uint8_t>& mask);
 
 // A single-process renderer's inputs for a frame of a session (leave-one-out, `lumistage render`):
 // every camera's image and its foreground mask, as the nodes give theirs — the camera's

@@ -11,6 +11,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 
@@ -173,6 +174,40 @@ TEST(HotPaths, ANodesFrameAllocatesNothingAfterTheFirst) {
   nodeFrame();
   EXPECT_EQ(allocations.stop(), 0);
   EXPECT_GT(wire.size(), 1000u);  // it did the work
+}
+
+// A node's frame keyed from another tool's masks (a stage without a green screen): the silhouettes
+// and the renderer's masks from the masks, the statistics sampled with a key made over each
+// frame's mask.
+TEST(HotPaths, ANodesFrameKeyedFromMasksAllocatesNothingAfterTheFirst) {
+  const Frame& f = frame();
+  RefinementSampler sampler(f.config.refine);
+  RefinementStatistics stats;
+  std::vector<LowResSilhouette> silhouettes(3);
+  std::vector<uint8_t> mask;
+  std::vector<MaskKey> keys(3);
+  std::vector<SamplerCamera> cameras = f.camerasOf(0);
+  const auto nodeFrame = [&] {
+    for (int k = 0; k < 3; ++k) {
+      const int c = f.config.rig.nodes()[0].cameras[k];
+      const Image& image = f.images[c];
+      const std::vector<uint8_t>& actor = f.frame.masks[c];
+      maskSilhouette(actor.data(), image.width, image.height, c, kMaskStep, silhouettes[k]);
+      silhouetteMask(silhouettes[k], mask);
+      keys[k] = MaskKey(actor.data(), image.width, image.height, isBayer(image.format));
+      cameras[k].green_screen = nullptr;
+      cameras[k].mask = &keys[k];
+    }
+    sampler.sample(cameras, f.positions, f.normals, f.generic.rest.triangles, stats);
+  };
+  nodeFrame();
+  Allocations allocations;
+  nodeFrame();
+  EXPECT_EQ(allocations.stop(), 0);
+  for (uint8_t nobody : sampler.seesNobody()) EXPECT_EQ(nobody, 0);  // it did the work
+  EXPECT_GT(std::count_if(stats.colour_count.begin(), stats.colour_count.end(),
+                          [](uint8_t n) { return n > 0; }),
+            1000);
 }
 
 // The studio's frame: the nodes' statistics combined, the offsets chosen, which cameras see each

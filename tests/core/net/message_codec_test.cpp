@@ -23,7 +23,8 @@ Message envelope(MessageBody body) {
 std::vector<Message> oneOfEach() {
   HelloData hello{"node2", {"cam04", "cam05", "cam06"}, kProtocolVersion, {"silhouettes", "rle"}};
   HeartbeatData heartbeat{
-      {{"cam04", 1000, 3, 29.97f, ""}, {"cam05", 998, 5, 30.f, "timeout"}},
+      {{"cam04", 1000, 3, 29.97f, "", kKeyedOnGreen},
+       {"cam05", 998, 5, 30.f, "timeout", kKeyedFromMasks}},
       123456789,
       0.42f,
       {"take-7", 120, 480, 300, 2, 123456, false, "disk full", 987654321, "node2-pc:5f3a"}};
