@@ -32,6 +32,7 @@ void addExportCommand(CLI::App& app) {
     std::string session, out;
     int frames = 0;
     bool bvh = false, fbx = false, glb = false, ply = false, obj = false, unrefined = false;
+    BodyChoice body;
   };
   auto args = std::make_shared<Args>();
   CLI::App* exp = app.add_subcommand(
@@ -45,13 +46,15 @@ void addExportCommand(CLI::App& app) {
       ->check(within(1, 1e9));
   exp->add_flag("--bvh", args->bvh, "skeleton.bvh: the tracked motion, the actor's bone lengths");
   exp->add_flag("--fbx", args->fbx,
-                "actor.fbx: the tracked motion on the generic body's skeleton, with the skinned "
-                "body (binary FBX, for Blender, Maya, Unity, Unreal)");
+                "actor.fbx: the tracked motion on the body's skeleton (the generic human's, or "
+                "--body FILE's), with the skinned body (binary FBX, for Blender, Maya, Unity, "
+                "Unreal)");
   exp->add_flag("--glb", args->glb, "surface.glb: the surface of every frame, animated");
   exp->add_flag("--ply", args->ply, "meshes/NNNNNN.ply: the surface of each frame");
   exp->add_flag("--obj", args->obj, "meshes/NNNNNN.obj: the same as OBJ, with normals");
   exp->add_flag("--unrefined", args->unrefined,
                 "the posed generic mesh as it is, without the refinement from the images");
+  addBodyOption(*exp, args->body);
   exp->callback([args] {
     if (!args->bvh && !args->fbx && !args->glb && !args->ply && !args->obj)
       args->bvh = args->glb = true;
@@ -63,7 +66,7 @@ void addExportCommand(CLI::App& app) {
     if (ec) throw Error(out.string() + ": cannot create: " + ec.message());
 
     // The studio's motion capture, offline: every camera keyed at low resolution, tracked.
-    const SkinnedMesh generic = loadGenericHuman();
+    const SkinnedMesh generic = loadBody(args->body);
     MocapEvalOptions options;
     options.max_frames = args->frames;
     EvalReport report;
@@ -92,8 +95,8 @@ void addExportCommand(CLI::App& app) {
       fmt::print("wrote {}\n", (out / "skeleton.bvh").string());
     }
     if (args->fbx) {
-      // The generic body as the studio poses it (posed_body.h): its own skeleton's angles fitted
-      // to the tracked joints, scaled to the actor.
+      // The body as the studio poses it (posed_body.h): its own skeleton's angles fitted to the
+      // tracked joints, scaled to the actor.
       MotionClip body_clip;
       body_clip.name = clip.name;
       body_clip.fps = clip.fps;

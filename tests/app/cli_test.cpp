@@ -497,6 +497,21 @@ TEST(Cli, TheActorsOwnBodyFromAFileIsShownEvaluatedAndRun) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("12 frames in all"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("not used"), std::string::npos) << r.output;
+  // Exported as FBX: that body, skinned, on our skeleton (its vertices, not the generic human's).
+  const Result exported =
+      run(kCli + " export --session " + (folder / "session").string() + " --out " +
+          (folder / "export").string() + " --fbx --unrefined --body " + cesium.string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  const std::string fbx = readFile(folder / "export" / "actor.fbx");
+  EXPECT_NE(fbx.find(std::string("left_elbow\0\x01Model", 17)), std::string::npos);
+  // The mesh's Vertices node: its array property ('d', then its length: three a vertex).
+  const size_t at = fbx.find("Vertices");
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(fbx[at + 8], 'd');
+  uint32_t values = 0;
+  std::memcpy(&values, fbx.data() + at + 9, 4);
+  EXPECT_EQ(int(values), 3 * loadBody(parseBodyChoice(cesium.string())).rest.vertexCount());
+  EXPECT_NE(int(values), 3 * loadGenericHuman().rest.vertexCount());
   fs::remove_all(folder);
 }
 
