@@ -14,6 +14,7 @@
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/body/assimp_scene.h"
 
 namespace lumistage {
 
@@ -24,83 +25,6 @@ namespace fs = std::filesystem;
 // FBX's unit is the centimetre (Assimp writes UnitScaleFactor 1): Blender, Maya and Unity scale
 // by it, so positions in metres would stand a body 1.7 cm tall.
 constexpr double kCentimetres = 100;
-
-aiVector3D toAi(const Eigen::Vector3d& v) {
-  return {float(v.x()), float(v.y()), float(v.z())};
-}
-
-aiMatrix4x4 translation(const Eigen::Vector3d& t) {
-  aiMatrix4x4 m;  // identity
-  m.a4 = float(t.x());
-  m.b4 = float(t.y());
-  m.c4 = float(t.z());
-  return m;
-}
-
-// The joint nodes under the scene's root, in the file's axes and units (`c` converts, `s` scales):
-// rest frames are world aligned, so each node's rest transform is a translation.
-std::vector<aiNode*> jointNodes(const Skeleton& skeleton, const Eigen::Matrix3d& c, double s,
-                                aiNode* root) {
-  const int n = skeleton.jointCount();
-  std::vector<aiNode*> nodes(n);
-  std::vector<std::vector<int>> children(n);
-  for (int j = 1; j < n; ++j) children[skeleton.joint(j).parent].push_back(j);
-  for (int j = 0; j < n; ++j) {
-    nodes[j] = new aiNode(skeleton.joint(j).name);
-    nodes[j]->mTransformation = translation(s * (c * skeleton.joint(j).offset_m));
-  }
-  for (int j = 0; j < n; ++j) {
-    nodes[j]->mParent = j == 0 ? root : nodes[skeleton.joint(j).parent];
-    if (children[j].empty()) continue;
-    nodes[j]->mNumChildren = unsigned(children[j].size());
-    nodes[j]->mChildren = new aiNode*[children[j].size()];
-    for (size_t k = 0; k < children[j].size(); ++k) nodes[j]->mChildren[k] = nodes[children[j][k]];
-  }
-  return nodes;
-}
-
-aiMesh* skinnedMesh(const SkinnedMesh& body, const Eigen::Matrix3d& c, double s) {
-  auto* m = new aiMesh;
-  m->mName = "body";
-  m->mMaterialIndex = 0;
-  m->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
-  const int n = body.rest.vertexCount();
-  m->mNumVertices = unsigned(n);
-  m->mVertices = new aiVector3D[n];
-  m->mNormals = new aiVector3D[n];
-  for (int v = 0; v < n; ++v) {
-    m->mVertices[v] = toAi(s * (c * body.rest.positions.col(v).cast<double>()));
-    m->mNormals[v] = toAi(c * body.rest.normals.col(v).cast<double>());
-  }
-  m->mNumFaces = unsigned(body.rest.triangles.size());
-  m->mFaces = new aiFace[m->mNumFaces];
-  for (size_t t = 0; t < body.rest.triangles.size(); ++t) {
-    m->mFaces[t].mNumIndices = 3;
-    m->mFaces[t].mIndices = new unsigned[3];
-    for (int k = 0; k < 3; ++k) m->mFaces[t].mIndices[k] = unsigned(body.rest.triangles[t][k]);
-  }
-  // One bone per joint, on the node of its name; its offset matrix undoes the rest position.
-  const Skeleton& skeleton = body.skeleton;
-  std::vector<std::vector<aiVertexWeight>> weights(skeleton.jointCount());
-  for (int v = 0; v < n; ++v) {
-    for (int k = 0; k < kMaxInfluences; ++k) {
-      if (body.skin.weights[v][k] > 0)
-        weights[body.skin.joints[v][k]].emplace_back(unsigned(v), body.skin.weights[v][k]);
-    }
-  }
-  m->mNumBones = unsigned(skeleton.jointCount());
-  m->mBones = new aiBone*[m->mNumBones];
-  for (int j = 0; j < skeleton.jointCount(); ++j) {
-    auto* bone = new aiBone;
-    bone->mName = skeleton.joint(j).name;
-    bone->mOffsetMatrix = translation(-s * (c * skeleton.restPositions()[j]));
-    bone->mNumWeights = unsigned(weights[j].size());
-    bone->mWeights = new aiVertexWeight[std::max<size_t>(weights[j].size(), 1)];
-    std::copy(weights[j].begin(), weights[j].end(), bone->mWeights);
-    m->mBones[j] = bone;
-  }
-  return m;
-}
 
 // A key per frame on every joint: its local translation (the rest offset; the root's moves) and
 // rotation in the file's axes, scale 1.
@@ -239,7 +163,7 @@ std::unique_ptr<aiScene> buildScene(const SkinnedMesh& body, const MotionClip& c
   const double s = kCentimetres * scale;
   auto scene = std::make_unique<aiScene>();
   aiNode* root = scene->mRootNode = new aiNode("lumistage_actor");
-  const std::vector<aiNode*> joints = jointNodes(body.skeleton, c, s, root);
+  const std::vector<aiNode*> joints = skeletonNodes(body.skeleton, c, s, root);
   auto* mesh_node = new aiNode("body");
   mesh_node->mParent = root;
   mesh_node->mNumMeshes = 1;
@@ -252,7 +176,7 @@ std::unique_ptr<aiScene> buildScene(const SkinnedMesh& body, const MotionClip& c
   const aiString material_name("lumistage_skin");
   scene->mMaterials[0]->AddProperty(&material_name, AI_MATKEY_NAME);
   scene->mNumMeshes = 1;
-  scene->mMeshes = new aiMesh* [1] { skinnedMesh(body, c, s) };
+  scene->mMeshes = new aiMesh* [1] { skinnedAiMesh(body, "body", c, s) };
   scene->mNumAnimations = 1;
   scene->mAnimations = new aiAnimation* [1] { animation(body.skeleton, clip, c, s) };
   return scene;

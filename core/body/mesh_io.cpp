@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "core/base/error.h"
+#include "core/body/assimp_scene.h"
 #include "core/body/bvh.h"
 #include "core/body/gltf_check.h"
 #include "core/body/human_skeleton.h"
@@ -35,10 +36,6 @@ namespace fs = std::filesystem;
 
 constexpr const char* kMaterialsName = "lumistage_vertex_materials";
 
-aiVector3D toAi(const Eigen::Vector3f& v) {
-  return {v.x(), v.y(), v.z()};
-}
-
 Eigen::Affine3f toEigen(const aiMatrix4x4& m) {
   Eigen::Matrix4f e;
   e << m.a1, m.a2, m.a3, m.a4,  //
@@ -48,38 +45,11 @@ Eigen::Affine3f toEigen(const aiMatrix4x4& m) {
   return Eigen::Affine3f(e);
 }
 
-aiMatrix4x4 translation(const Eigen::Vector3f& t) {
-  aiMatrix4x4 m;  // identity
-  m.a4 = t.x();
-  m.b4 = t.y();
-  m.c4 = t.z();
-  return m;
-}
-
 std::unique_ptr<aiScene> buildScene(const SkinnedMesh& mesh) {
-  const Skeleton& skeleton = mesh.skeleton;
-  const Eigen::Matrix3f c = yUpToOurs().cast<float>();  // its own inverse: ours to the file's too
+  const Eigen::Matrix3d c = yUpToOurs();  // its own inverse: ours to the file's too
   auto scene = std::make_unique<aiScene>();
   scene->mRootNode = new aiNode("lumistage_actor");
-
-  // Skeleton nodes: rest frames are world aligned, so each node's transform is a translation.
-  std::vector<aiNode*> nodes(skeleton.jointCount());
-  std::vector<std::vector<int>> children(skeleton.jointCount());
-  for (int j = 1; j < skeleton.jointCount(); ++j) children[skeleton.joint(j).parent].push_back(j);
-  for (int j = 0; j < skeleton.jointCount(); ++j) {
-    nodes[j] = new aiNode(skeleton.joint(j).name);
-    nodes[j]->mTransformation = translation(c * skeleton.joint(j).offset_m.cast<float>());
-  }
-  for (int j = 0; j < skeleton.jointCount(); ++j) {
-    aiNode* parent = j == 0 ? scene->mRootNode : nodes[skeleton.joint(j).parent];
-    nodes[j]->mParent = parent;
-    if (!children[j].empty()) {
-      nodes[j]->mNumChildren = static_cast<unsigned>(children[j].size());
-      nodes[j]->mChildren = new aiNode*[children[j].size()];
-      for (size_t k = 0; k < children[j].size(); ++k)
-        nodes[j]->mChildren[k] = nodes[children[j][k]];
-    }
-  }
+  const std::vector<aiNode*> nodes = skeletonNodes(mesh.skeleton, c, 1.0, scene->mRootNode);
   scene->mRootNode->mNumChildren = 1;
   scene->mRootNode->mChildren = new aiNode* [1] { nodes[0] };
   scene->mRootNode->mNumMeshes = 1;
@@ -90,54 +60,15 @@ std::unique_ptr<aiScene> buildScene(const SkinnedMesh& mesh) {
   const aiString material_name(mesh.materials.empty() ? "lumistage_skin" : kMaterialsName);
   scene->mMaterials[0]->AddProperty(&material_name, AI_MATKEY_NAME);
 
-  auto* m = new aiMesh;
+  aiMesh* m = skinnedAiMesh(mesh, "actor", c, 1.0);
   scene->mNumMeshes = 1;
   scene->mMeshes = new aiMesh* [1] { m };
-  m->mName = "actor";
-  m->mMaterialIndex = 0;
-  m->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
-  const int n = mesh.rest.vertexCount();
-  m->mNumVertices = static_cast<unsigned>(n);
-  m->mVertices = new aiVector3D[n];
-  m->mNormals = new aiVector3D[n];
-  for (int v = 0; v < n; ++v) {
-    m->mVertices[v] = toAi(c * mesh.rest.positions.col(v));
-    m->mNormals[v] = toAi(c * mesh.rest.normals.col(v));
-  }
   if (!mesh.materials.empty()) {
     // Material indices ride in texture coordinate set 0, u = index (exact in a float), v = 0.
+    const int n = mesh.rest.vertexCount();
     m->mTextureCoords[0] = new aiVector3D[n];
     m->mNumUVComponents[0] = 2;
     for (int v = 0; v < n; ++v) m->mTextureCoords[0][v] = aiVector3D(mesh.materials[v], 0, 0);
-  }
-  m->mNumFaces = static_cast<unsigned>(mesh.rest.triangles.size());
-  m->mFaces = new aiFace[m->mNumFaces];
-  for (size_t t = 0; t < mesh.rest.triangles.size(); ++t) {
-    m->mFaces[t].mNumIndices = 3;
-    m->mFaces[t].mIndices = new unsigned[3];
-    for (int k = 0; k < 3; ++k) m->mFaces[t].mIndices[k] = mesh.rest.triangles[t][k];
-  }
-
-  // One bone per joint; its offset (inverse bind) matrix undoes the rest position.
-  std::vector<std::vector<aiVertexWeight>> weights(skeleton.jointCount());
-  for (int v = 0; v < n; ++v) {
-    for (int k = 0; k < kMaxInfluences; ++k) {
-      if (mesh.skin.weights[v][k] > 0) {
-        weights[mesh.skin.joints[v][k]].emplace_back(static_cast<unsigned>(v),
-                                                     mesh.skin.weights[v][k]);
-      }
-    }
-  }
-  m->mNumBones = static_cast<unsigned>(skeleton.jointCount());
-  m->mBones = new aiBone*[m->mNumBones];
-  for (int j = 0; j < skeleton.jointCount(); ++j) {
-    auto* bone = new aiBone;
-    bone->mName = skeleton.joint(j).name;
-    bone->mOffsetMatrix = translation(-(c * skeleton.restPositions()[j].cast<float>()));
-    bone->mNumWeights = static_cast<unsigned>(weights[j].size());
-    bone->mWeights = new aiVertexWeight[std::max<size_t>(weights[j].size(), 1)];
-    std::copy(weights[j].begin(), weights[j].end(), bone->mWeights);
-    m->mBones[j] = bone;
   }
   return scene;
 }
