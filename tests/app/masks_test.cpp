@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "core/base/atomic_file.h"
 #include "tests/app/shell_command.h"
 
 namespace lumistage {
@@ -23,11 +24,6 @@ using testing::Result;
 using testing::run;
 
 const std::string kCli = LUMISTAGE_CLI;
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
 
 // The integer after `key` in `json`, or -1.
 long jsonInteger(const std::string& json, const std::string& key) {

@@ -80,40 +80,15 @@ TEST(RefinementSampler, KeyedFromMasksLocatesTheMasksEdgeBelowAPixel) {
   RefinementStatistics stats;
   sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
   for (uint8_t nobody : sampler.seesNobody()) EXPECT_EQ(nobody, 0);
-  const auto inside = [&](const Eigen::Vector3d& p) {
-    for (int c = 0; c < rig.cameraCount(); ++c) {
-      const Eigen::Vector3d o = rig.camera(c).centre();
-      if (shape.hit(o, (p - o).normalized()) <= 0) return false;
-    }
-    return true;
-  };
   // A pixel's width at the ellipsoid's centre, from the nearest camera.
   const Camera& first = rig.camera(0);
   const double pixel = (first.centre() - shape.centre).norm() / first.intrinsics().fy;
+  const testing::EdgeDistances e = testing::hullEdgeDistances(rig, shape, sphere, config, stats);
   const double step = config.offsetAt(1) - config.offsetAt(0);
-  double located = 0, halfway = 0;
-  int edges = 0, leaving = 0;
-  for (int v = 0; v < sphere.vertexCount(); ++v) {
-    const Eigen::Vector3d p = sphere.positions.col(v).cast<double>(),
-                          n = sphere.normals.col(v).cast<double>();
-    for (int i = 0; i + 1 < config.offset_count; ++i) {
-      const size_t s = size_t(v) * config.offset_count + i;
-      if (!stats.leavesHull(s)) continue;
-      ++leaving;
-      double lo = config.offsetAt(i) - step, hi = config.offsetAt(i + 1) + step;
-      if (!inside(p + lo * n) || inside(p + hi * n)) continue;
-      for (int k = 0; k < 40; ++k) (inside(p + 0.5 * (lo + hi) * n) ? lo : hi) = 0.5 * (lo + hi);
-      if (stats.edges[s] == 0) continue;
-      ++edges;
-      const double at =
-          config.offsetAt(i) + step * (stats.edges[s] - 1) / RefinementStatistics::kEdgeLevels;
-      located += std::abs(at - lo);
-      halfway += std::abs(config.offsetAt(i) + step / 2 - lo);
-    }
-  }
+  const int edges = e.edges, leaving = e.leaving;
+  const double located = e.located, halfway = e.halfway;
   ASSERT_GT(edges, 100) << leaving << " samples where the hull leaves";
   EXPECT_GT(edges, leaving * 9 / 10);
-  located /= edges, halfway /= edges;
   // A step is 2.9 pixels at the ellipsoid: halfway misses by a quarter step on average (0.77 pixels
   // when written), the located edges by 0.19 pixels, within a mask's own uncertainty (its pixels
   // are whole: half a pixel at most).

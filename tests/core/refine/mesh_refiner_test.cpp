@@ -410,38 +410,11 @@ TEST(RefinementSampler, LocatesTheHullsEdgeBelowAPixel) {
   RefinementSampler sampler(config);
   RefinementStatistics stats;
   sampler.sample(cameras, sphere.positions, sphere.normals, sphere.triangles, stats);
-  // The true hull: inside while every camera's ray through the point meets the ellipsoid.
-  const auto inside = [&](const Eigen::Vector3d& p) {
-    for (int c = 0; c < rig.cameraCount(); ++c) {
-      const Eigen::Vector3d o = rig.camera(c).centre();
-      if (shape.hit(o, (p - o).normalized()) <= 0) return false;
-    }
-    return true;
-  };
-  const double step = config.offsetAt(1) - config.offsetAt(0);
-  double located = 0, halfway = 0;
-  int edges = 0, leaving = 0;
-  for (int v = 0; v < sphere.vertexCount(); ++v) {
-    const Eigen::Vector3d p = sphere.positions.col(v).cast<double>(),
-                          n = sphere.normals.col(v).cast<double>();
-    for (int i = 0; i + 1 < config.offset_count; ++i) {
-      const size_t s = size_t(v) * config.offset_count + i;
-      if (!stats.leavesHull(s)) continue;
-      ++leaving;
-      double lo = config.offsetAt(i) - step, hi = config.offsetAt(i + 1) + step;
-      if (!inside(p + lo * n) || inside(p + hi * n)) continue;
-      for (int k = 0; k < 40; ++k) (inside(p + 0.5 * (lo + hi) * n) ? lo : hi) = 0.5 * (lo + hi);
-      if (stats.edges[s] == 0) continue;
-      ++edges;
-      const double at =
-          config.offsetAt(i) + step * (stats.edges[s] - 1) / RefinementStatistics::kEdgeLevels;
-      located += std::abs(at - lo);
-      halfway += std::abs(config.offsetAt(i) + step / 2 - lo);
-    }
-  }
+  const testing::EdgeDistances e = testing::hullEdgeDistances(rig, shape, sphere, config, stats);
+  const int edges = e.edges, leaving = e.leaving;
+  const double located = e.located, halfway = e.halfway;
   ASSERT_GT(edges, 100) << leaving << " samples where the hull leaves";
   EXPECT_GT(edges, leaving * 9 / 10);
-  located /= edges, halfway /= edges;
   // A step is 9 mm, 1.5 pixels at the ellipsoid: halfway misses by a quarter step on average, the
   // located edges by less than a sixth of a pixel (0.8 mm against 2.3 when written).
   EXPECT_GT(halfway, 0.0015);

@@ -11,6 +11,8 @@
 #include "core/body/skinned_mesh.h"
 #include "core/capture/image.h"
 #include "core/geometry/ring_rig.h"
+#include "core/refine/refine_config.h"
+#include "core/refine/refinement_statistics.h"
 
 namespace lumistage::testing {
 
@@ -121,6 +123,49 @@ inline TriangleMesh icosphere(const Eigen::Vector3d& centre, double radius, int 
   mesh.normals.resize(3, v.size());
   for (size_t i = 0; i < v.size(); ++i) mesh.normals.col(i) = v[i].cast<float>();
   return mesh;
+}
+
+// Where the sampler located the hull's edge against where the true hull of `shape` leaves each
+// vertex's normal: over the samples where the hull leaves (`leaving`) and those of them that hold a
+// located edge (`edges`), the mean distance of the located edge (`located`) and of the point
+// halfway between the two samples (`halfway`) from the true crossing, metres.
+struct EdgeDistances {
+  double located = 0, halfway = 0;
+  int edges = 0, leaving = 0;
+};
+inline EdgeDistances hullEdgeDistances(const Rig& rig, const Ellipsoid& shape,
+                                       const TriangleMesh& sphere, const RefineConfig& config,
+                                       const RefinementStatistics& stats) {
+  // The true hull: inside while every camera's ray through the point meets the ellipsoid.
+  const auto inside = [&](const Eigen::Vector3d& p) {
+    for (int c = 0; c < rig.cameraCount(); ++c) {
+      const Eigen::Vector3d o = rig.camera(c).centre();
+      if (shape.hit(o, (p - o).normalized()) <= 0) return false;
+    }
+    return true;
+  };
+  const double step = config.offsetAt(1) - config.offsetAt(0);
+  EdgeDistances out;
+  for (int v = 0; v < sphere.vertexCount(); ++v) {
+    const Eigen::Vector3d p = sphere.positions.col(v).cast<double>(),
+                          n = sphere.normals.col(v).cast<double>();
+    for (int i = 0; i + 1 < config.offset_count; ++i) {
+      const size_t s = size_t(v) * config.offset_count + i;
+      if (!stats.leavesHull(s)) continue;
+      ++out.leaving;
+      double lo = config.offsetAt(i) - step, hi = config.offsetAt(i + 1) + step;
+      if (!inside(p + lo * n) || inside(p + hi * n)) continue;
+      for (int k = 0; k < 40; ++k) (inside(p + 0.5 * (lo + hi) * n) ? lo : hi) = 0.5 * (lo + hi);
+      if (stats.edges[s] == 0) continue;
+      ++out.edges;
+      const double at =
+          config.offsetAt(i) + step * (stats.edges[s] - 1) / RefinementStatistics::kEdgeLevels;
+      out.located += std::abs(at - lo);
+      out.halfway += std::abs(config.offsetAt(i) + step / 2 - lo);
+    }
+  }
+  if (out.edges > 0) out.located /= out.edges, out.halfway /= out.edges;
+  return out;
 }
 
 }  // namespace lumistage::testing
