@@ -163,6 +163,17 @@ void checkFileStorageText(std::string_view text, const std::string& source) {
   // YAML as OpenCV tells it: "%YAML" first, after a UTF-8 byte order mark.
   const std::string_view body = text.starts_with("\xef\xbb\xbf") ? text.substr(3) : text;
   if (body.starts_with("%YAML")) checkYamlDocument(text, source);
+  // XML as OpenCV tells it ("<" first, after blanks): its parser dereferenced a null pointer on a
+  // declaration cut short ("<?xml version="). The declaration must close, and the root element be
+  // OpenCV's.
+  const size_t first = body.find_first_not_of(" \t\r\n");
+  if (first != std::string_view::npos && body[first] == '<') {
+    const std::string_view xml = body.substr(first);
+    if (xml.starts_with("<?") && xml.find("?>") == std::string_view::npos)
+      throw Error(fmt::format("{}:1: an XML declaration that does not end ('?>')", source));
+    if (xml.find("<opencv_storage") == std::string_view::npos)
+      throw Error(fmt::format("{}: XML without OpenCV's root element <opencv_storage>", source));
+  }
 }
 
 void checkFileStorageNesting(std::string_view text, const std::string& source) {

@@ -15,9 +15,10 @@ void checkFileStorageNesting(std::string_view text, const std::string& source);
 
 // Everything checked of a FileStorage file's text before OpenCV reads it, each found by fuzzing
 // OpenCV 4.6 (tests/fuzz): its nesting (above); no NUL byte (the XML parser dereferenced a null
-// pointer on one; no FileStorage text holds one); and YAML as one document with its top level at
-// column 0 (the YAML parser looped forever on some text after a first document). Throws Error
-// "source:line: ...".
+// pointer on one; no FileStorage text holds one); YAML as one document with its top level at
+// column 0 (the YAML parser looped forever on some text after a first document); and XML with a
+// closed declaration and OpenCV's root element (the XML parser crashed on "<?xml version=").
+// Throws Error "source:line: ...".
 void checkFileStorageText(std::string_view text, const std::string& source);
 
 }  // namespace lumistage

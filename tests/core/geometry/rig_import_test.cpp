@@ -359,6 +359,11 @@ TEST(OpenCvImport, FuzzedFilesAreRefusedNamingTheFile) {
        {"<?xml version=\"1.0\"?>\n<opencv_storage>\n<a>" + std::string(2, '\0') +
             "</a>\n</opencv_storage>\n",
         "nul.xml:3: a NUL byte"}},
+      // ... and on a declaration cut short.
+      {"declaration.xml",
+       {"<?xml version=", "declaration.xml:1: an XML declaration that does not"}},
+      {"root.xml",
+       {"<?xml version=\"1.0\"?>\n<a>1</a>\n", "root.xml: XML without OpenCV's root element"}},
       // OpenCV's YAML parser looped forever.
       {"start.yaml", {"%YAML:1.0\n--- t: 0\n--x-\n", "start.yaml:2: content on the document's"}},
       {"indented.yaml",
