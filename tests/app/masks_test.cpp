@@ -105,7 +105,9 @@ TEST(Masks, AStageWithoutAGreenScreenIsTrackedAndRenderedFromTheSessionsMasks) {
   // The actor rendered in his own colours: the stage's grey keyed out of the view.
   const auto [masks_grey, masks_opaque] = greyShare(folder / "masks.png");
   EXPECT_GT(masks_opaque, 1000);
-  EXPECT_LT(masks_grey, 0.1) << masks_opaque << " opaque pixels";  // 0.013 and 0.033 in two runs
+  // 0.013, 0.033 and 0.12 in three runs (the last view shown depends on the run's timing), against
+  // 0.43 and 0.85 keyed on green.
+  EXPECT_LT(masks_grey, 0.2) << masks_opaque << " opaque pixels";
   fs::remove_all(folder);
 }
 
