@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Builds the message decoder fuzz target with clang (libFuzzer + AddressSanitizer) whatever the
-# project's compiler, seeds a corpus with valid messages, and fuzzes for a bounded time. Fails on
-# a crash, a leak, a sanitizer report or a build failure; the crashing input is kept in OUT_DIR.
-# Usage: run_fuzz.sh SOURCE_DIR GENERATED_DIR OUT_DIR [SECONDS]
+# project's compiler), seeds a corpus with valid messages, and fuzzes RUNS inputs drawn from
+# libFuzzer's random seed LUMISTAGE_FUZZ_RANDOM_SEED (default 1: the same inputs on every machine;
+# 0: a new seed each run), at most 120 s. Fails on a crash, a leak, a sanitizer report or a build
+# failure; the crashing input is kept in OUT_DIR.
+# Usage: run_fuzz.sh SOURCE_DIR GENERATED_DIR OUT_DIR [RUNS]
 set -euo pipefail
-src=$1 generated=$2 out=$3 seconds=${4:-20}
+src=$1 generated=$2 out=$3 runs=${4:-2000000}
 
 clang=$(command -v clang++ || command -v clang++-14 || true)
 if [[ -z "$clang" ]]; then
@@ -30,7 +32,8 @@ if [[ ! -x "$binary" || "$src/core/net/message_codec.cpp" -nt "$binary" ||
 fi
 cd "$out"
 set +e
-LUMISTAGE_FUZZ_SEED_DIR="$out/corpus" "$binary" -max_total_time="$seconds" -rss_limit_mb=1024 \
+LUMISTAGE_FUZZ_SEED_DIR="$out/corpus" "$binary" -runs="$runs" \
+  -seed="${LUMISTAGE_FUZZ_RANDOM_SEED:-1}" -max_total_time=120 -rss_limit_mb=1024 \
   -timeout=10 -max_len=4096 -print_final_stats=1 -artifact_prefix="$out/" corpus >fuzz.log 2>&1
 status=$?
 set -e
