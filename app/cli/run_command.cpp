@@ -55,6 +55,9 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
   std::string stages;
   for (const auto& [name, ms] : r.stage_ms)
     stages += fmt::format("{}\"{}\": {:.3f}", stages.empty() ? "" : ", ", name, ms);
+  std::string parts;
+  for (const auto& [name, ms] : r.latency_parts_ms)
+    parts += fmt::format("{}\"{}\": {:.3f}", parts.empty() ? "" : ", ", name, ms);
   // Figures a node never gave (it sent nothing, or no frame of it was shown) are null.
   const auto measured = [](double v, int decimals) {
     return v < 0 ? std::string("null") : fmt::format("{:.{}f}", v, decimals);
@@ -85,7 +88,7 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
   }
   return fmt::format(
       "{{\n  \"fps\": {:.3f},\n  \"latency_ms_p50\": {:.3f},\n  \"latency_ms_p95\": {:.3f},\n  "
-      "\"stage_ms\": {{{}}},\n"
+      "\"stage_ms\": {{{}}},\n  \"latency_parts_ms\": {{{}}},\n"
       "  \"node_bytes_per_frame\": {:.1f},\n  \"raw_bytes_per_frame_per_node\": {:.1f},\n  "
       "\"node_bytes_per_s\": {:.0f},\n  \"frames\": {},\n"
       "  \"frames_dropped\": {},\n  \"frames_refused\": {},\n  \"frames_overtaken\": {},\n"
@@ -97,7 +100,7 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       "  \"view\": \"{}x{}\",\n  \"cpu_cores_studio\": {:.3f},\n  \"cpu_cores_nodes\": {:.3f},\n"
       "  \"cpu_ms_per_frame\": {},\n"
       "  \"machine\": {},\n  \"nodes\": [{}\n  ]\n}}\n",
-      r.fps, r.latency_ms_p50, r.latency_ms_p95, stages, r.node_bytes_per_frame,
+      r.fps, r.latency_ms_p50, r.latency_ms_p95, stages, parts, r.node_bytes_per_frame,
       r.raw_bytes_per_frame_per_node, r.node_bytes_per_s, r.frames, r.frames_dropped,
       r.frames_refused, r.frames_overtaken, r.frames_unshown, r.frames_held, r.frames_incomplete,
       max_in_flight, r.statistics_deadline_ms, r.image_deadline_ms,
@@ -411,6 +414,10 @@ void addRunCommand(CLI::App& app) {
         "silhouettes\n",
         r.frames_tracked, r.frames, r.hull_agreement);
     for (const auto& [stage, ms] : r.stage_ms) fmt::print("  {:<16} {:8.3f} ms\n", stage, ms);
+    std::string parts;
+    for (const auto& [part, ms] : r.latency_parts_ms)
+      parts += fmt::format("{}{} {:.1f}", parts.empty() ? "" : ", ", part, ms);
+    if (!parts.empty()) fmt::print("where a frame's latency went (ms, mean): {}\n", parts);
     fmt::print("deadlines now: statistics {:.0f} ms, images {:.0f} ms{}\n",
                r.statistics_deadline_ms, r.image_deadline_ms,
                r.deadlines_following ? " (stretched to a late node's answers)" : "");

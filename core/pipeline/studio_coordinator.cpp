@@ -555,6 +555,8 @@ RunReport StudioCoordinator::report() const {
   r.stage_ms["visibility"] = mean(visibility_ms_);
   r.stage_ms["combine"] = mean(combine_ms_);
   r.stage_ms["blend"] = mean(blend_ms_);
+  for (size_t i = 0; i < kLatencyParts.size(); ++i)
+    r.latency_parts_ms.emplace_back(kLatencyParts[i], mean(latency_parts_ms_[i]));
   r.hull_agreement = frames_done_ > 0 ? hull_agreement_sum_ / frames_done_ : 0;
   r.frames_tracked = frames_tracked_;
   double per_second = 0, raw = 0;

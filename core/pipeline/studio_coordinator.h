@@ -119,6 +119,13 @@ struct RunReport {
   static constexpr size_t kRecentFrames = 60;
   double latency_ms_p50 = 0, latency_ms_p95 = 0;  // node capture to frame done
   std::map<std::string, double> stage_ms;         // mean per stage
+  // Where a shown frame's latency went, mean ms, in the frame's order (kLatencyParts): to_studio
+  // (capture, keying and the network to the studio's first silhouettes), silhouettes (waiting for
+  // the last node's), mocap_queued (for the tracker), mocap (the fit), pose_out (the pose to the
+  // nodes), statistics (the nodes' sampling, its queue and the network), refine (with the
+  // visibility), images (the nodes' rendering, its queue and the network) and blend. They add up
+  // to the mean latency: the first is the rest of it (the nodes' clocks against the studio's).
+  std::vector<std::pair<std::string, double>> latency_parts_ms;
   // What a node sends for a frame shown (its silhouettes, statistics and images), mean over the
   // nodes and frames; and what it sends a second, everything, mean over the nodes.
   double node_bytes_per_frame = 0, node_bytes_per_s = 0;
@@ -242,6 +249,8 @@ class StudioCoordinator {
  private:
   struct FrameState {
     int64_t first_ns = 0;     // steady clock, when the first node's silhouettes arrived
+    int64_t admitted_ns = 0;  // handed to the tracker's queue
+    int64_t mocap_start_ns = 0, mocap_end_ns = 0;  // the fit
     int64_t captured_ns = 0;  // the earliest node capture time (wall clock: wallNowNs)
     std::vector<LowResSilhouette> silhouettes;
     std::set<std::string> silhouette_nodes, pose_nodes, statistics_nodes;
@@ -341,6 +350,7 @@ class StudioCoordinator {
     PoseData pose;
     bool tracked = false;  // the tracker found the actor (else: placed at rest)
     double ms = 0;         // how long the fit took
+    int64_t start_ns = 0;  // when it began (steady clock)
   };
   void onMessage(const ReceivedMessage& received);
   // Admits the frame (max_frames_in_flight) and hands its silhouettes to the motion capture
@@ -371,6 +381,11 @@ class StudioCoordinator {
   // the offsets to the nodes, with which cameras see each vertex of the refined body.
   void runRefinement(int64_t frame_id, FrameState& frame);
   void finishFrame(int64_t frame_id, FrameState& frame);
+  // A shown frame's latency (`latency_ms`, from its capture) split into its parts
+  // (latency_parts_ms_), from its timestamps: `finish_ns` when it was finished, `now_ns` after it
+  // was blended. A frame missing one (not refined) is left out.
+  void addLatencyParts(const FrameState& frame, double latency_ms, int64_t finish_ns,
+                       int64_t now_ns);
   void checkDeadlines(int64_t now_ns);
   // Reads what the nodes sent (waiting up to 10 ms for the first message or a pose), sends the
   // poses made meanwhile, then checks deadlines.
@@ -425,6 +440,11 @@ class StudioCoordinator {
   int64_t start_ns_ = 0, last_done_ns_ = 0;
   static constexpr size_t kTimelineFrames = 1 << 16;
   std::vector<std::pair<int64_t, float>> timeline_;  // done (steady ns), latency (ms)
+  // Per part of a shown frame's latency (RunReport::latency_parts_ms), in that order.
+  static constexpr std::array<const char*, 9> kLatencyParts = {
+      "to_studio",  "silhouettes", "mocap_queued", "mocap", "pose_out",
+      "statistics", "refine",      "images",       "blend"};
+  std::array<RecentSamples, kLatencyParts.size()> latency_parts_ms_;
   RecentSamples latencies_ms_, mocap_ms_, combine_ms_, statistics_wait_ms_, blend_ms_, refine_ms_,
       visibility_ms_;
   RecentSamples recent_done_ns_{RunReport::kRecentFrames};  // when the latest frames were shown

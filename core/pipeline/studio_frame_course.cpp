@@ -69,6 +69,7 @@ void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
   }
   if (counting_) peak_frames_begun_ = std::max(peak_frames_begun_, begun + 1);
   frame.mocap_begun = true;
+  frame.admitted_ns = steadyNowNs();
   MocapJob job;
   if (!spare_jobs_.empty()) {
     job = std::move(spare_jobs_.back());
@@ -127,6 +128,7 @@ void StudioCoordinator::mocapLoop() {
       job.pose.angles.assign(size_t(3) * joints_, 0.0f);
     }
     job.ms = (steadyNowNs() - start) / 1e6;
+    job.start_ns = start;
     mocap_done_.push(std::move(job));
     mocap_ready_.notify();
   }
@@ -145,6 +147,8 @@ void StudioCoordinator::takePoses() {
       std::swap(frame.silhouettes, job.silhouettes);
       frame.pose = job.pose;
       frame.tracked = job.tracked;
+      frame.mocap_start_ns = job.start_ns;
+      frame.mocap_end_ns = job.start_ns + int64_t(job.ms * 1e6);
       sendPose(job.frame_id, frame);
     }
     job.silhouettes.clear();
@@ -316,6 +320,7 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     const double latency_ms = (wallNowNs() - frame.captured_ns) / 1e6;
     if (latency_ms >= 0 && latency_ms < 60'000) {
       latencies_ms_.add(latency_ms);
+      addLatencyParts(frame, latency_ms, now, steadyNowNs());
       if (timeline_.size() < kTimelineFrames) timeline_.emplace_back(now, float(latency_ms));
     } else if (!told_clocks_) {
       told_clocks_ = true;
@@ -344,6 +349,23 @@ void StudioCoordinator::finishFrame(int64_t frame_id, FrameState& frame) {
     it = retireFrame(it);
   }
   newest_done_ = frame_id;
+}
+
+void StudioCoordinator::addLatencyParts(const FrameState& frame, double latency_ms,
+                                        int64_t finish_ns, int64_t now_ns) {
+  const int64_t at[] = {frame.first_ns,       frame.admitted_ns,  frame.mocap_start_ns,
+                        frame.mocap_end_ns,   frame.pose_sent_ns, frame.offsets_sent_ns,
+                        frame.offsets_out_ns, finish_ns,          now_ns};
+  static_assert(std::size(at) == kLatencyParts.size());
+  for (const int64_t t : at)
+    if (t <= 0) return;
+  double studio_ms = 0;
+  for (size_t i = 1; i < std::size(at); ++i) {
+    const double ms = std::max<int64_t>(0, at[i] - at[i - 1]) / 1e6;
+    latency_parts_ms_[i].add(ms);
+    studio_ms += ms;
+  }
+  latency_parts_ms_[0].add(std::max(0.0, latency_ms - studio_ms));
 }
 
 }  // namespace lumistage
