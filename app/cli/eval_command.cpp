@@ -75,20 +75,29 @@ void addOffsetErrors(std::vector<double>& error_mm, EvalReport& report) {
 // unrefined, with each vertex at its best offset (what a refinement could reach on the tracked
 // mesh), and on the true surface (the upper bound).
 // With `pictures` given, every refined view is also written there beside the camera's image and
-// their error map (comparisonPicture), as <frame id>_<camera>.png.
+// their error map (comparisonPicture), as <frame id>_<camera>.png. On a session without truth
+// (a real take) the views are scored over the masks it carries, or keyed (ScoreMasks), and the
+// variants that need the true surface (best offsets, the true surface) are left out.
 void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
                     const MocapEvalResult& tracked, const RefineConfig& refine, int frame_count,
                     const fs::path& pictures, EvalReport& report) {
   const int total = std::min<int>(session.frameCount(), static_cast<int>(tracked.poses.size()));
-  std::vector<int> frames;
-  for (int i : spreadFrames(total, frame_count))
-    if (i < static_cast<int>(tracked.valid.size()) && tracked.valid[i]) frames.push_back(i);
+  // Spread over the tracked frames (a real take may hold the actor in a few of them only).
+  std::vector<int> tracked_frames, frames;
+  for (int i = 0; i < total && i < static_cast<int>(tracked.valid.size()); ++i)
+    if (tracked.valid[i]) tracked_frames.push_back(i);
+  for (int k : spreadFrames(int(tracked_frames.size()), frame_count))
+    frames.push_back(tracked_frames[k]);
+  const bool has_truth = session.hasTruth();
+  report.setText("render", "loo_masks", scoreMasksName(scoreMasksOf(session)));
   EglContext gl;
   LumigraphParams fine;  // the true surface is finely tessellated: rendered as it is
   fine.phong_subdivision = false;
-  const LeaveOneOutSummary truth = evaluateLeaveOneOut(
-      session, frames, [&](int i, int) { return truthSurface(session, i); },
-      LeaveOneOutMeshes::kOnePerFrame, fine);
+  LeaveOneOutSummary truth;
+  if (has_truth)
+    truth = evaluateLeaveOneOut(
+        session, frames, [&](int i, int) { return truthSurface(session, i); },
+        LeaveOneOutMeshes::kOnePerFrame, fine);
   Pose pose;
   std::vector<Eigen::Affine3f> transforms;
   Eigen::Matrix3Xf positions, normals;
@@ -110,19 +119,21 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   // where the pose is off, the nearest point may lie on another limb). Each frame's are kept (m
   // along the posed normals) to measure the refinement's against.
   std::map<int, std::vector<float>> best_offset_m;
-  const LeaveOneOutSummary best_offsets = evaluateLeaveOneOut(session, frames, [&](int i, int) {
-    posed(i);
-    TriangleMesh mesh;
-    mesh.triangles = generic.rest.triangles;
-    nearestOffsetsAlongNormals(positions, normals, SurfaceDistance(truthSurface(session, i)),
-                               refine.t_inward_m, refine.t_max_m, 0.0005, mesh.positions);
-    std::vector<float>& t = best_offset_m[i];
-    t.resize(positions.cols());
-    for (Eigen::Index v = 0; v < positions.cols(); ++v)
-      t[v] = (mesh.positions.col(v) - positions.col(v)).dot(normals.col(v));
-    mesh.computeNormals();
-    return mesh;
-  });
+  LeaveOneOutSummary best_offsets;
+  if (has_truth)
+    best_offsets = evaluateLeaveOneOut(session, frames, [&](int i, int) {
+      posed(i);
+      TriangleMesh mesh;
+      mesh.triangles = generic.rest.triangles;
+      nearestOffsetsAlongNormals(positions, normals, SurfaceDistance(truthSurface(session, i)),
+                                 refine.t_inward_m, refine.t_max_m, 0.0005, mesh.positions);
+      std::vector<float>& t = best_offset_m[i];
+      t.resize(positions.cols());
+      for (Eigen::Index v = 0; v < positions.cols(); ++v)
+        t[v] = (mesh.positions.col(v) - positions.col(v)).dot(normals.col(v));
+      mesh.computeNormals();
+      return mesh;
+    });
   // The refinement's offsets less the best ones (mm, outward positive), every vertex of every
   // scored frame.
   std::vector<double> offset_error_mm;
@@ -137,7 +148,8 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
       for (int f = std::max(0, i - kWarmFrames); f <= i; ++f)
         if (f == i || tracked.valid[f]) window.push_back(f);
       window_images.resize(window.size());
-      for (size_t k = 0; k < window.size(); ++k) session.readFrame(window[k], window_images[k]);
+      for (size_t k = 0; k < window.size(); ++k)
+        readFrameWithMasks(session, window[k], window_images[k]);
       window_for = i;
     }
     // As the pipeline refines: frame after frame, each pulled toward the previous one's offsets
@@ -149,7 +161,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
       posed(window[k]);
       refiner.refine(window_images[k], positions, normals, mesh.positions, left_out);
     }
-    if (left_out < 0) {
+    if (left_out < 0 && has_truth) {
       const std::vector<float>& best = best_offset_m.at(i);
       for (size_t v = 0; v < best.size(); ++v)
         offset_error_mm.push_back(
@@ -174,7 +186,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   const LeaveOneOutSummary strict =
       evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerLeftOutCamera);
   report.set("render", "loo_frames", double(frames.size()));
-  addOffsetErrors(offset_error_mm, report);
+  if (has_truth) addOffsetErrors(offset_error_mm, report);
   const std::pair<const char*, const ViewScore*> variants[] = {
       {"", &refined.mean},
       {"_unrefined", &unrefined.mean},
@@ -182,6 +194,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
       {"_best_offsets", &best_offsets.mean},
       {"_truth_surface", &truth.mean}};
   for (const auto& [suffix, mean] : variants) {
+    if (!has_truth && (mean == &best_offsets.mean || mean == &truth.mean)) continue;
     const std::string s = suffix;
     report.set("render", "loo_psnr_db" + s, mean->psnr_db);
     report.set("render", "loo_ssim" + s, mean->ssim);
@@ -190,7 +203,11 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     report.set("render", "loo_beyond_pct" + s, mean->beyond_pct);
     report.set("render", "loo_missed_error_pct" + s, mean->missed_error_pct);
   }
-  for (size_t c = 0; c < truth.per_camera.size(); ++c) {
+  for (size_t k = 0; k < frames.size(); ++k) {
+    report.setFrame(session.frameId(frames[k]), "loo_psnr_db", refined.per_frame[k].psnr_db);
+    report.setFrame(session.frameId(frames[k]), "loo_ssim", refined.per_frame[k].ssim);
+  }
+  for (size_t c = 0; c < refined.per_camera.size(); ++c) {
     const std::string name = session.rig().camera(int(c)).name();
     report.set("render", "loo_psnr_db_" + name, refined.per_camera[c].psnr_db);
     report.set("render", "loo_ssim_" + name, refined.per_camera[c].ssim);
@@ -198,6 +215,9 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     report.set("render", "loo_ssim_unrefined_" + name, unrefined.per_camera[c].ssim);
     report.set("render", "loo_psnr_db_strict_" + name, strict.per_camera[c].psnr_db);
     report.set("render", "loo_ssim_strict_" + name, strict.per_camera[c].ssim);
+    report.set("render", "loo_missed_pct_" + name, refined.per_camera[c].missed_pct);
+    report.set("render", "loo_beyond_pct_" + name, refined.per_camera[c].beyond_pct);
+    if (!has_truth) continue;
     report.set("render", "loo_psnr_db_truth_surface_" + name, truth.per_camera[c].psnr_db);
     report.set("render", "loo_ssim_truth_surface_" + name, truth.per_camera[c].ssim);
   }
@@ -216,7 +236,9 @@ void addEvalCommand(CLI::App& app) {
   CLI::App* eval = app.add_subcommand(
       "eval",
       "measure the studio's stages against a session's ground truth (truth/); on a session "
-      "without one, motion capture's frames tracked and silhouettes");
+      "without one (a real take), motion capture's frames tracked and silhouettes, and each "
+      "camera's view rendered from the others against its image over the actor's mask (the "
+      "session's masks, or keyed)");
   eval->add_option("--session", args->session, "session folder (lumistage synth writes one)")
       ->required();
   eval->add_option("--json", args->json, "write the report as JSON (docs/eval-report.md)");
@@ -262,21 +284,34 @@ void addEvalCommand(CLI::App& app) {
     EvalReport report;
     report.setText("session", "session", args->session);
     if (!session.hasTruth() || args->mocap_only) {
-      // Motion capture alone: all a real take can be measured by without the truth (frames
-      // tracked, the posed body against every silhouette), and against truth/ where it is.
+      // Without the truth (a real take): motion capture's frames tracked and the posed body
+      // against every silhouette, and unless asked for motion capture only, every camera left out
+      // and rendered from the others over the actor's mask. Against truth/ where it is.
       MocapEvalOptions mocap;
       mocap.camera_count = args->cameras;
       mocap.max_frames = args->frames;
       mocap.pictures = args->fit_pictures;
       mocap.picture_every = args->fit_every;
-      evaluateMocap(session, loadBody(args->body), mocap, report);
+      const SkinnedMesh body = loadBody(args->body);
+      const MocapEvalResult tracked = evaluateMocap(session, body, mocap, report);
+      const bool render = !args->mocap_only && args->loo_frames > 0;
+      if (render) {
+        RefineConfig refine;
+        if (!args->config.empty()) refine = loadStudioConfig(args->config).refine;
+        addLeaveOneOut(session, body, tracked, refine, args->loo_frames, args->loo_pictures,
+                       report);
+      }
       if (!args->json.empty()) writeFileAtomically(args->json, report.toJson());
       if (!args->quiet) fmt::print("{}", report.toText());
       if (session.hasTruth()) return;
       fmt::print(stderr,
-                 "eval: {} has no ground truth (truth/): motion capture's frames and silhouettes "
-                 "only\n",
-                 args->session);
+                 "eval: {} has no ground truth (truth/): motion capture's frames and "
+                 "silhouettes{}\n",
+                 args->session,
+                 render ? fmt::format(", and every camera's view rendered from the others over "
+                                      "its {} masks",
+                                      scoreMasksName(scoreMasksOf(session)))
+                        : std::string(" only"));
       return;
     }
     // Stages add their sections in pipeline order; a later stage may use an earlier one's result.

@@ -5,7 +5,9 @@
 #include <cmath>
 #include <limits>
 
+#include "core/base/error.h"
 #include "core/body/ply_mesh.h"
+#include "core/imaging/keyer.h"
 #include "core/render/frame_inputs.h"
 
 namespace lumistage {
@@ -45,6 +47,33 @@ class ScoreMean {
 
 }  // namespace
 
+void readFrameWithMasks(const SessionReader& session, int i, std::vector<CameraFrame>& out) {
+  session.readFrame(i, out);
+  if (!session.hasMasks()) return;
+  std::vector<std::string> errors;
+  session.readMasks(i, out, errors);
+  for (const std::string& e : errors)
+    if (!e.empty()) throw Error(e);
+}
+
+ScoreMasks scoreMasksOf(const SessionReader& session) {
+  return session.hasTruth()   ? ScoreMasks::kTruth
+         : session.hasMasks() ? ScoreMasks::kGiven
+                              : ScoreMasks::kKeyed;
+}
+
+const char* scoreMasksName(ScoreMasks masks) {
+  switch (masks) {
+    case ScoreMasks::kTruth:
+      return "truth";
+    case ScoreMasks::kGiven:
+      return "given";
+    case ScoreMasks::kKeyed:
+      break;
+  }
+  return "keyed";
+}
+
 TriangleMesh truthSurface(const SessionReader& session, int i) {
   return readPlyMesh(session.folder() / "truth" / "surface" /
                      fmt::format("{:06}.ply", session.frameId(i)));
@@ -60,18 +89,37 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
   for (int c = 0; c < n; ++c) all[c] = c;
   LumigraphRenderer renderer(rig, all, params);
   LeaveOneOutSummary summary;
+  summary.masks = scoreMasksOf(session);
+  std::vector<GreenScreenKeyer> keyers(summary.masks == ScoreMasks::kKeyed ? n : 0);
+  bool keyers_learnt = false;
   std::vector<ScoreMean> per_camera(n);
   std::vector<CameraFrame> images;
   std::vector<std::vector<uint8_t>> truth(n), masks(n);
   std::vector<uint8_t> rendered;
   FrameInputs inputs;  // images and foreground masks, as the nodes give theirs
   for (int i : frames) {
-    session.readFrame(i, images);
+    readFrameWithMasks(session, i, images);
     inputs.set(renderer, images);
     for (int c = 0; c < n; ++c) {
-      imageToRgba(images[c].image.view(), truth[c]);
-      masks[c] = session.readTruthMask(c, i);
+      const ImageView image = images[c].image.view();
+      imageToRgba(image, truth[c]);
+      switch (summary.masks) {
+        case ScoreMasks::kTruth:
+          masks[c] = session.readTruthMask(c, i);
+          break;
+        case ScoreMasks::kGiven:
+          masks[c] = session.readMask(c, i);
+          break;
+        case ScoreMasks::kKeyed:
+          if (!keyers_learnt) keyers[c].learnScreen(image);
+          masks[c].resize(size_t(image.width) * image.height);
+          for (int y = 0; y < image.height; ++y)
+            for (int x = 0; x < image.width; ++x)
+              masks[c][size_t(y) * image.width + x] = keyers[c].isForeground(image, x, y);
+          break;
+      }
     }
+    keyers_learnt = true;
     std::vector<ViewScore> scores;
     const bool mesh_per_camera = meshes == LeaveOneOutMeshes::kOnePerLeftOutCamera;
     for (int c = 0; c < n; ++c) {
@@ -82,7 +130,12 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
       scores.push_back(leaveOneOut(renderer, rig, truth, masks, c, &rendered));
       if (views) views(i, c, rendered, truth[c], masks[c]);
     }
-    for (int c = 0; c < n; ++c) per_camera[c].add(scores[c]);
+    ScoreMean frame;
+    for (int c = 0; c < n; ++c) {
+      per_camera[c].add(scores[c]);
+      frame.add(scores[c]);
+    }
+    summary.per_frame.push_back(frame.mean());
     ++summary.frames;
   }
   // Each camera's mean over its frames, then their mean (no frame scored: every figure NaN).

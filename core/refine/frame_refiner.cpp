@@ -13,7 +13,8 @@ FrameRefiner::FrameRefiner(const Rig& rig, const RefineConfig& config, int verte
       triangles_(triangles),
       sampler_(config),
       refiner_(config, vertex_count, triangles),
-      keyers_(rig.cameraCount()) {}
+      keyers_(rig.cameraCount()),
+      mask_keys_(rig.cameraCount()) {}
 
 void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::Matrix3Xf& positions,
                           const Eigen::Matrix3Xf& normals, Eigen::Matrix3Xf& refined,
@@ -27,9 +28,19 @@ void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::M
   wire_bytes_ = 0;
   for (const RigNode& node : rig_.nodes()) {
     inputs_.clear();
-    for (int c : node.cameras)
-      if (c != left_out)
-        inputs_.push_back({&rig_.camera(c), frames[c].image.view(), &keyers_[c], nullptr});
+    for (int c : node.cameras) {
+      if (c == left_out) continue;
+      const CameraFrame& frame = frames[c];
+      const ImageView image = frame.image.view();
+      SamplerCamera input{&rig_.camera(c), image, &keyers_[c], nullptr, nullptr};
+      if (!frame.mask.empty()) {
+        mask_keys_[c] =
+            MaskKey(frame.mask.data(), image.width, image.height, isBayer(image.format));
+        input.green_screen = nullptr;
+        input.mask = &mask_keys_[c];
+      }
+      inputs_.push_back(input);
+    }
     // The visibility from the surface the last frame refined to, as the pipeline's nodes do.
     sampler_.sample(inputs_, positions, normals, triangles_, node_stats_, offsets_);
     codec_.encode(node_stats_, wire_);

@@ -15,7 +15,8 @@ namespace lumistage {
 // The whole refinement of one frame in one process, node by node as the distributed pipeline
 // does it (each node samples its own cameras, its statistics go through the compressed wire form,
 // the module combines and refines): for offline work on a session — evaluation, export. The
-// green-screen keyers learn the screen from the first frame's images; from the second frame on,
+// green-screen keyers learn the screen from the first frame's images (a camera whose frame carries
+// a mask from another tool, CameraFrame::mask, is keyed by it instead); from the second frame on,
 // the nodes' visibility comes from the surface the frame before was refined to (as the nodes have
 // the studio's offsets of an earlier frame), so frames are to be given in order.
 class FrameRefiner {
@@ -41,6 +42,7 @@ class FrameRefiner {
   RefinementSampler sampler_;
   MeshRefiner refiner_;
   std::vector<GreenScreenKeyer> keyers_;
+  std::vector<MaskKey> mask_keys_;
   bool keyers_learnt_ = false;
   RefinementStatistics node_stats_, combined_;
   RefinementStatisticsCodec codec_;

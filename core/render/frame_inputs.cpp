@@ -25,7 +25,11 @@ void FrameInputs::set(LumigraphRenderer& renderer, const std::vector<CameraFrame
     const ImageView image = frames[c].image.view();
     renderer.setImage(static_cast<int>(c), image);
     if (learn) keyers_[c].learnScreen(image);
-    setForegroundMask(renderer, static_cast<int>(c), keyers_[c], image, silhouette_, mask_);
+    if (!frames[c].mask.empty())
+      setForegroundMask(renderer, static_cast<int>(c), frames[c].mask, image.width, image.height,
+                        silhouette_, mask_);
+    else
+      setForegroundMask(renderer, static_cast<int>(c), keyers_[c], image, silhouette_, mask_);
   }
 }
 

@@ -25,7 +25,8 @@ void setForegroundMask(LumigraphRenderer& renderer, int own_index,
 // A single-process renderer's inputs for a frame of a session (leave-one-out, `lumistage render`):
 // every camera's image and its foreground mask, as the nodes give theirs — the camera's
 // silhouette keyed in kMaskStep-pixel cells by a green-screen keyer that learns the screen from
-// the first frame given. Buffers are reused.
+// the first frame given, or taken from the frame's mask where it carries one (CameraFrame::mask).
+// Buffers are reused.
 class FrameInputs {
  public:
   // `frames` indexed by the renderer's own cameras (all of the rig's, in order).
