@@ -108,7 +108,13 @@ class FeedReceiver {
     AVFrame* frame = av_frame_alloc();
     SwsContext* scaler = nullptr;
     std::string error;
-    int code = avformat_open_input(&format, url_.c_str(), nullptr, nullptr);
+    // A live stream's analysis done on its first pictures: a short feed (a run of 20 frames)
+    // holds fewer than FFmpeg's default 20 to measure the rate on.
+    AVDictionary* options = nullptr;
+    av_dict_set(&options, "fpsprobesize", "2", 0);
+    av_dict_set(&options, "analyzeduration", "500000", 0);
+    int code = avformat_open_input(&format, url_.c_str(), nullptr, &options);
+    av_dict_free(&options);
     if (code < 0) {
       error = "cannot open " + url_ + ": " + std::to_string(code);
       format = nullptr;
