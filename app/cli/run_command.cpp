@@ -51,17 +51,21 @@ double cpuMsPerFrame(const CpuUse& cpu, double fps) {
   return fps > 0 ? 1000.0 * (cpu.studio_cores + cpu.nodes_cores) / fps : -1.0;
 }
 
+// Text for a JSON string: quotes, backslashes and control characters made spaces.
+std::string jsonSafe(const std::string& text) {
+  std::string safe;
+  for (char ch : text) safe += (ch == '"' || ch == '\\' || ch < ' ') ? ' ' : ch;
+  return safe;
+}
+
 // The view's live feed in the report: null when there was none.
 std::string feedJson(const VideoFeed* feed) {
   if (!feed) return "null";
-  std::string error;
-  for (char ch : feed->error()) error += (ch == '"' || ch == '\\' || ch < ' ') ? ' ' : ch;
-  std::string url;
-  for (char ch : feed->target().url) url += (ch == '"' || ch == '\\' || ch < ' ') ? ' ' : ch;
   return fmt::format(
       "{{\"url\": \"{}\", \"frames_sent\": {}, \"frames_dropped\": {}, \"send_ms\": {:.3f}, "
       "\"connections\": {}, \"error\": \"{}\"}}",
-      url, feed->framesSent(), feed->framesDropped(), feed->sendMs(), feed->connections(), error);
+      jsonSafe(feed->target().url), feed->framesSent(), feed->framesDropped(), feed->sendMs(),
+      feed->connections(), jsonSafe(feed->error()));
 }
 
 std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string& machine,
@@ -77,16 +81,11 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
   for (const NodeReport& n : r.nodes) {
     std::string cameras;
     for (const CameraHealth& c : n.cameras) {
-      const auto json_safe = [](const std::string& text) {
-        std::string safe;
-        for (char ch : text) safe += (ch == '"' || ch == '\\' || ch < ' ') ? ' ' : ch;
-        return safe;
-      };
       cameras += fmt::format(
           "{}{{\"camera\": \"{}\", \"frames\": {}, \"dropped\": {}, \"fps\": {:.2f}, "
           "\"last_error\": \"{}\", \"key\": \"{}\"}}",
           cameras.empty() ? "" : ", ", c.camera, c.frames, c.dropped, c.frame_rate_hz,
-          json_safe(c.last_error), json_safe(c.key));
+          jsonSafe(c.last_error), jsonSafe(c.key));
     }
     nodes += fmt::format(
         "{}\n    {{\"name\": \"{}\", \"lost\": {}, \"messages\": {}, \"bytes\": {}, "

@@ -312,7 +312,8 @@ std::string VideoFeed::Impl::session(bool& opened) {
         code = av_write_frame(format, packet);
         av_packet_unref(packet);
         if (code < 0 || format->pb->error < 0) {
-          why = "cannot send (" + ffmpegError(code < 0 ? code : format->pb->error) + ")";
+          why = "cannot send (" + ffmpegError(code < 0 ? code : format->pb->error) +
+                "): the receiver gone or the network down";
           break;
         }
       }
