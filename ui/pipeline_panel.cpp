@@ -60,6 +60,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
       take_button_(new QPushButton(tr("Record take"), this)),
       take_status_(new QLabel(this)),
       live_out_(new LiveOutControl(this)),
+      live_feed_(new LiveFeedControl(this)),
       takes_folder_(QDir::homePath() + "/lumistage-takes") {
   qRegisterMetaType<lumistage::RunReport>();
   qRegisterMetaType<lumistage::PipelineSnapshot>();
@@ -124,15 +125,19 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   take_button_->setObjectName("record_take");
   take_button_->setEnabled(false);
   buttons->addWidget(take_button_);
-  buttons->addSpacing(24);
-  buttons->addWidget(live_out_);
   buttons->addStretch(1);
+  auto* live = new QHBoxLayout;  // what goes out live: the skeleton, the view
+  live->addWidget(live_out_);
+  live->addSpacing(24);
+  live->addWidget(live_feed_);
+  live->addStretch(1);
   take_status_->setObjectName("take_status");
   take_status_->setWordWrap(true);
   take_status_->setTextInteractionFlags(Qt::TextSelectableByMouse);
   auto* layout = new QVBoxLayout(this);
   layout->addWidget(summary_);
   layout->addLayout(buttons);
+  layout->addLayout(live);
   layout->addWidget(take_status_);
   auto* row = new QHBoxLayout;
   row->addWidget(table_, 1);
@@ -150,6 +155,7 @@ PipelinePanel::PipelinePanel(QWidget* parent)
   connect(stop_button_, &QPushButton::clicked, this, &PipelinePanel::stop);
   connect(take_button_, &QPushButton::clicked, this, &PipelinePanel::toggleTake);
   connect(live_out_, &LiveOutControl::toggled, this, &PipelinePanel::applyLiveOut);
+  connect(live_feed_, &LiveFeedControl::toggled, this, &PipelinePanel::applyLiveFeed);
 }
 
 PipelinePanel::~PipelinePanel() {
@@ -267,7 +273,10 @@ void PipelinePanel::start(LocalRunOptions options) {
   connect(worker_, &PipelineWorker::takeRefused, this, &PipelinePanel::refuseTake);
   connect(worker_, &PipelineWorker::skeletonStreamFailed, live_out_,
           [this](const QString& why) { live_out_->streamFailed(why); });
-  applyLiveOut();  // the live skeleton from the first frame, when its box is checked
+  connect(worker_, &PipelineWorker::viewFeedFailed, live_feed_,
+          [this](const QString& why) { live_feed_->feedFailed(why); });
+  applyLiveOut();   // the live skeleton from the first frame, when its box is checked
+  applyLiveFeed();  // the live view too
   start_button_->setEnabled(false);
   stop_button_->setEnabled(true);
   take_button_->setEnabled(true);
@@ -308,6 +317,7 @@ void PipelinePanel::stop() {
                               .arg(QString::fromStdString(last_.take.take).toHtmlEscaped()));
   take_name_->setEnabled(true);
   live_out_->showStream({}, 0);
+  live_feed_->showFeed({}, 0, 0, {});
   // The panels forget the pipeline: the viewport its last image and body, the overlay its pose,
   // the camera health its nodes' reports (the source's own figures show again).
   last_ = PipelineSnapshot();
@@ -464,6 +474,7 @@ void PipelinePanel::show(const PipelineSnapshot& s) {
   take_button_->setText(s.take_recording ? tr("Stop take") : tr("Record take"));
   take_name_->setEnabled(!s.take_recording);
   live_out_->showStream(s.skeleton_target, s.skeleton_bundles);
+  live_feed_->showFeed(s.feed_url, s.feed_sent, s.feed_dropped, s.feed_error);
   const QString takes = s.takes_folder.isEmpty()
                             ? tr("its own takes folder (lumistage-node --takes)")
                             : s.takes_folder.toHtmlEscaped();

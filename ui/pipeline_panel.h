@@ -16,6 +16,7 @@
 #include "core/body/skinned_mesh.h"
 #include "core/pipeline/local_run.h"
 #include "core/render/view_recorder.h"
+#include "ui/live_feed_control.h"
 #include "ui/live_out_control.h"
 
 class QComboBox;
@@ -51,6 +52,10 @@ struct PipelineSnapshot : PipelineView {
   // The skeleton's live stream (VMC over OSC): its receiver (empty: none) and frames sent.
   QString skeleton_target;
   int64_t skeleton_bundles = 0;
+  // The view's live feed: its URL (empty: none), frames sent and dropped, why it stopped.
+  QString feed_url;
+  int64_t feed_sent = 0, feed_dropped = 0;
+  QString feed_error;
 };
 
 // The pipeline panel's line of figures (rich text): the rate now and since the start, latency,
@@ -84,6 +89,10 @@ class PipelineWorker : public QObject {
   // streamSkeleton) until stopStreamingSkeleton() or the pipeline stops (live_out_control.cpp).
   void streamSkeleton(const OscTarget& target);
   void stopStreamingSkeleton();
+  // Thread-safe: sends the director's view live to `target` (LocalPipelineRun::feedView) until
+  // stopFeedingView() or the pipeline stops (live_feed_control.cpp).
+  void feedView(const FeedTarget& target);
+  void stopFeedingView();
 
  public slots:
   void run();
@@ -98,6 +107,7 @@ class PipelineWorker : public QObject {
   void recordingEnded();                      // stopped, failed, or the pipeline stopped
   void takeRefused(QString reason);           // startTake(): why the take cannot start
   void skeletonStreamFailed(QString reason);  // streamSkeleton(): why it cannot stream
+  void viewFeedFailed(QString reason);        // feedView(): why it cannot feed
   void finished();
 
  private:
@@ -169,6 +179,8 @@ class PipelinePanel : public QWidget {
   void refuseTake(const QString& reason);
   // The live skeleton's box, checked or not, to the running pipeline (live_out_control.cpp).
   void applyLiveOut();
+  // The live view's box, checked or not, to the running pipeline (live_feed_control.cpp).
+  void applyLiveFeed();
 
   QLabel* summary_;
   QLabel* view_;  // the pipeline's output: the blended view
@@ -182,6 +194,7 @@ class PipelinePanel : public QWidget {
   QPushButton* take_button_;
   QLabel* take_status_;
   LiveOutControl* live_out_;
+  LiveFeedControl* live_feed_;
   QString take_error_;  // why the last take asked for could not start; shown until the next
   QString takes_folder_;
   QThread* thread_ = nullptr;

@@ -157,6 +157,12 @@ void PipelineWorker::run() {
         s.skeleton_target = QString::fromStdString(sender->target().text());
         s.skeleton_bundles = sender->bundlesSent();
       }
+      if (const VideoFeed* feed = pipeline.viewFeed()) {
+        s.feed_url = QString::fromStdString(feed->target().url);
+        s.feed_sent = feed->framesSent();
+        s.feed_dropped = feed->framesDropped();
+        s.feed_error = QString::fromStdString(feed->error());
+      }
       emit snapshot(s);
     }
     finishRecording(pipeline);  // a recording under way ends with the pipeline

@@ -22,6 +22,7 @@
 #include "core/base/error.h"
 #include "core/base/output_path.h"
 #include "core/base/stop_signal.h"
+#include "core/live/video_feed.h"
 #include "core/live/vmc_sender.h"
 #include "core/pipeline/local_run.h"
 #include "core/render/view_recorder.h"
@@ -50,8 +51,25 @@ double cpuMsPerFrame(const CpuUse& cpu, double fps) {
   return fps > 0 ? 1000.0 * (cpu.studio_cores + cpu.nodes_cores) / fps : -1.0;
 }
 
+// Text for a JSON string: quotes, backslashes and control characters made spaces.
+std::string jsonSafe(const std::string& text) {
+  std::string safe;
+  for (char ch : text) safe += (ch == '"' || ch == '\\' || ch < ' ') ? ' ' : ch;
+  return safe;
+}
+
+// The view's live feed in the report: null when there was none.
+std::string feedJson(const VideoFeed* feed) {
+  if (!feed) return "null";
+  return fmt::format(
+      "{{\"url\": \"{}\", \"frames_sent\": {}, \"frames_dropped\": {}, \"send_ms\": {:.3f}, "
+      "\"connections\": {}, \"error\": \"{}\"}}",
+      jsonSafe(feed->target().url), feed->framesSent(), feed->framesDropped(), feed->sendMs(),
+      feed->connections(), jsonSafe(feed->error()));
+}
+
 std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string& machine,
-                       const ViewData& view, int max_in_flight) {
+                       const ViewData& view, int max_in_flight, const VideoFeed* feed) {
   std::string stages;
   for (const auto& [name, ms] : r.stage_ms)
     stages += fmt::format("{}\"{}\": {:.3f}", stages.empty() ? "" : ", ", name, ms);
@@ -66,16 +84,11 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
   for (const NodeReport& n : r.nodes) {
     std::string cameras;
     for (const CameraHealth& c : n.cameras) {
-      const auto json_safe = [](const std::string& text) {
-        std::string safe;
-        for (char ch : text) safe += (ch == '"' || ch == '\\' || ch < ' ') ? ' ' : ch;
-        return safe;
-      };
       cameras += fmt::format(
           "{}{{\"camera\": \"{}\", \"frames\": {}, \"dropped\": {}, \"fps\": {:.2f}, "
           "\"last_error\": \"{}\", \"key\": \"{}\"}}",
           cameras.empty() ? "" : ", ", c.camera, c.frames, c.dropped, c.frame_rate_hz,
-          json_safe(c.last_error), json_safe(c.key));
+          jsonSafe(c.last_error), jsonSafe(c.key));
     }
     nodes += fmt::format(
         "{}\n    {{\"name\": \"{}\", \"lost\": {}, \"messages\": {}, \"bytes\": {}, "
@@ -98,7 +111,7 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       "  \"deadlines_following\": {},\n"
       "  \"hull_agreement\": {:.4f},\n  \"frames_tracked\": {},\n  \"refusals\": {},\n"
       "  \"view\": \"{}x{}\",\n  \"cpu_cores_studio\": {:.3f},\n  \"cpu_cores_nodes\": {:.3f},\n"
-      "  \"cpu_ms_per_frame\": {},\n"
+      "  \"cpu_ms_per_frame\": {},\n  \"feed\": {},\n"
       "  \"machine\": {},\n  \"nodes\": [{}\n  ]\n}}\n",
       r.fps, r.latency_ms_p50, r.latency_ms_p95, stages, parts, r.node_bytes_per_frame,
       r.raw_bytes_per_frame_per_node, r.node_bytes_per_s, r.frames, r.frames_dropped,
@@ -106,7 +119,7 @@ std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string&
       max_in_flight, r.statistics_deadline_ms, r.image_deadline_ms,
       r.deadlines_following ? "true" : "false", r.hull_agreement, r.frames_tracked, r.refusals,
       view.width, view.height, cpu.studio_cores, cpu.nodes_cores,
-      measured(cpuMsPerFrame(cpu, r.fps), 2), machine, nodes);
+      measured(cpuMsPerFrame(cpu, r.fps), 2), feedJson(feed), machine, nodes);
 }
 
 // Once every node has told its takes' disk (true then): the disk that fills first, and a warning
@@ -177,7 +190,7 @@ std::vector<std::string> finishTake(LocalPipelineRun& pipeline, const std::strin
 void addRunCommand(CLI::App& app) {
   struct Args {
     std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size,
-                                     record_view, record_take, listen, osc;
+                                     record_view, record_take, listen, osc, feed;
     BodyChoice body;
     int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
     int64_t frames = 150;
@@ -232,6 +245,10 @@ void addRunCommand(CLI::App& app) {
                   "stream the tracked skeleton of every frame shown to HOST:PORT over OSC in the "
                   "VMC protocol (VSeeFace, EVMC4U for Unity, VMC4UE for Unreal, Blender; their "
                   "usual port is 39539)");
+  run->add_option("--feed", a->feed,
+                  "send the view live as H.264 in MPEG-TS to this URL, for OBS, vMix, ffplay or a "
+                  "vision mixer: udp://HOST:PORT, srt://HOST:PORT (calling a receiver that "
+                  "listens) or srt://:PORT?mode=listener (the receiver calls)");
   run->callback([a] {
     // Ctrl-C (or SIGTERM, SIGHUP) stops the run as its end would: the take closed, the view's
     // recording finished, the figures told, the nodes stopped and the run's key store removed.
@@ -271,6 +288,14 @@ void addRunCommand(CLI::App& app) {
         osc = parseOscTarget(a->osc);
       } catch (const Error& e) {
         throw CLI::ValidationError("--osc", e.what());
+      }
+    }
+    std::optional<FeedTarget> feed;
+    if (!a->feed.empty()) {
+      try {
+        feed = parseFeedUrl(a->feed);
+      } catch (const Error& e) {
+        throw CLI::ValidationError("--feed", e.what());
       }
     }
     LocalRunOptions options;
@@ -327,6 +352,14 @@ void addRunCommand(CLI::App& app) {
     if (osc) {
       pipeline.streamSkeleton(*osc);
       fmt::print("streaming the skeleton to {} (VMC over OSC)\n", osc->text());
+    }
+    if (feed) {
+      pipeline.feedView(*feed, [](const std::string& error) {
+        fmt::print(stderr, "lumistage run: {}; the run goes on\n", error);
+      });
+      fmt::print("feeding the view to {} (H.264 in MPEG-TS, {}x{}){}\n", feed->url,
+                 pipeline.viewFeed()->width(), pipeline.viewFeed()->height(),
+                 feed->listener ? "; waiting for a receiver to call" : "");
     }
     if (!a->record_view.empty()) {
       pipeline.recordView(a->record_view, [](const std::string& error) {
@@ -403,6 +436,13 @@ void addRunCommand(CLI::App& app) {
                    recorder->height(), recorder->fps());
       }
     }
+    const std::unique_ptr<VideoFeed> view_feed = pipeline.stopFeedingView();
+    if (view_feed) {
+      fmt::print(
+          "view fed to {}: {} frames sent, {} dropped, {:.1f} ms a frame to encode and send{}\n",
+          view_feed->target().url, view_feed->framesSent(), view_feed->framesDropped(),
+          view_feed->sendMs(), view_feed->error().empty() ? "" : "; " + view_feed->error());
+    }
     fmt::print(
         "{} frames in all ({} dropped: {} at admission, {} overtaken by newer frames, {} without "
         "a node's image, {} of these held back for one; {} shown without one), {:.1f} frames a "
@@ -457,8 +497,8 @@ void addRunCommand(CLI::App& app) {
     if (!a->json.empty() || !a->plot.empty()) {
       const MachineInfo machine = describeMachine();
       if (!a->json.empty())
-        writeFileAtomically(
-            a->json, reportJson(r, cpu, machineJson(machine), studio.view(), a->max_in_flight));
+        writeFileAtomically(a->json, reportJson(r, cpu, machineJson(machine), studio.view(),
+                                                a->max_in_flight, view_feed.get()));
       if (!a->plot.empty()) {
         const std::string source = a->session.empty() ? "Aravis cameras" : a->session;
         writeRunPlot(r,

@@ -193,27 +193,71 @@ void LocalPipelineRun::recordView(const std::filesystem::path& file,
   stopRecordingView();
   view_recorder_ = std::make_unique<ViewRecorder>(file, frameRate());
   view_recorder_failed_ = false;
-  studio_->setBlendedSink([this, file, stopped](int view, const BlendedImage& image) {
-    if (view != 0 || view_recorder_failed_) return;
-    try {
-      if (view_recorder_->framesWritten() == 0) {
-        const std::optional<double> fps = reportedFrameRate();
-        if (!fps) return;  // no camera has measured its rate yet
-        if (*fps != view_recorder_->fps())
-          view_recorder_ = std::make_unique<ViewRecorder>(file, *fps);
-      }
-      view_recorder_->add(image.frame_id, image.width, image.height, image.rgba);
-    } catch (const std::exception& e) {
-      view_recorder_failed_ = true;
-      if (stopped) stopped(e.what());
+  view_recorder_file_ = file;
+  view_recorder_stopped_ = std::move(stopped);
+  sinkBlendedViews();
+}
+
+void LocalPipelineRun::recordImage(const BlendedImage& image) {
+  if (!view_recorder_ || view_recorder_failed_) return;
+  try {
+    if (view_recorder_->framesWritten() == 0) {
+      const std::optional<double> fps = reportedFrameRate();
+      if (!fps) return;  // no camera has measured its rate yet
+      if (*fps != view_recorder_->fps())
+        view_recorder_ = std::make_unique<ViewRecorder>(view_recorder_file_, *fps);
     }
+    view_recorder_->add(image.frame_id, image.width, image.height, image.rgba);
+  } catch (const std::exception& e) {
+    view_recorder_failed_ = true;
+    if (view_recorder_stopped_) view_recorder_stopped_(e.what());
+  }
+}
+
+void LocalPipelineRun::feedView(const FeedTarget& target,
+                                std::function<void(const std::string&)> stopped) {
+  stopFeedingView();
+  const ViewData& view = studio_->view();
+  view_feed_ = std::make_unique<VideoFeed>(target, view.width, view.height, frameRate());
+  view_feed_stopped_ = std::move(stopped);
+  view_feed_told_ = false;
+  sinkBlendedViews();
+}
+
+void LocalPipelineRun::feedImage(const BlendedImage& image) {
+  if (!view_feed_ || view_feed_told_) return;
+  // Premultiplied RGBA: the empty pixels are black, as in the recording.
+  view_feed_->offer(image.width, image.height, image.rgba, PixelOrder::kRgba);
+  if (std::string error = view_feed_->error(); !error.empty()) {
+    view_feed_told_ = true;
+    if (view_feed_stopped_) view_feed_stopped_(error);
+  }
+}
+
+std::unique_ptr<VideoFeed> LocalPipelineRun::stopFeedingView() {
+  std::unique_ptr<VideoFeed> feed = std::move(view_feed_);
+  sinkBlendedViews();
+  if (feed) feed->close();
+  return feed;
+}
+
+void LocalPipelineRun::sinkBlendedViews() {
+  if (!view_recorder_ && !view_feed_) {
+    studio_->setBlendedSink({});
+    return;
+  }
+  studio_->setBlendedSink([this](int view, const BlendedImage& image) {
+    if (view != 0) return;
+    recordImage(image);
+    feedImage(image);
   });
 }
 
 std::unique_ptr<ViewRecorder> LocalPipelineRun::stopRecordingView() {
-  studio_->setBlendedSink({});
-  if (view_recorder_) view_recorder_->close();
-  return std::move(view_recorder_);
+  std::unique_ptr<ViewRecorder> recorder = std::move(view_recorder_);
+  sinkBlendedViews();
+  if (recorder) recorder->close();
+  return recorder;
 }
 
 void LocalPipelineRun::streamSkeleton(const OscTarget& target) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/body/human_model.h"
+#include "core/live/video_feed.h"
 #include "core/live/vmc_sender.h"
 #include "core/pipeline/studio_coordinator.h"
 #include "core/render/view_recorder.h"
@@ -90,6 +91,17 @@ class LocalPipelineRun {
   void streamSkeleton(const OscTarget& target);
   void stopStreamingSkeleton();
   const VmcSender* skeletonStream() const { return skeleton_stream_.get(); }
+  // Sends the director's view (view 0), every blended image as it is made, live to `target`
+  // (VideoFeed: H.264 in MPEG-TS over UDP or SRT, at the view's size, scaled to it should the
+  // view change), beside a recording if one is under way; replaces a feed under way. Never waits
+  // on the network: pictures the feed cannot take are dropped and counted. A feed that fails (the
+  // connection refused or lost) stops, not the pipeline, and its one line is given to `stopped`
+  // once, on the pipeline's thread.
+  void feedView(const FeedTarget& target, std::function<void(const std::string&)> stopped = {});
+  // Ends the feed and hands back its closed VideoFeed (frames sent, dropped, its error); none when
+  // none was made.
+  std::unique_ptr<VideoFeed> stopFeedingView();
+  const VideoFeed* viewFeed() const { return view_feed_.get(); }
   // Ends the recording and hands back its closed recorder (file, frames, size, rate); none when
   // none was made.
   std::unique_ptr<ViewRecorder> stopRecordingView();
@@ -111,6 +123,15 @@ class LocalPipelineRun {
   std::unique_ptr<ViewRecorder> view_recorder_;
   std::unique_ptr<VmcSender> skeleton_stream_;
   bool view_recorder_failed_ = false;
+  std::function<void(const std::string&)> view_recorder_stopped_;
+  std::filesystem::path view_recorder_file_;
+  std::unique_ptr<VideoFeed> view_feed_;
+  std::function<void(const std::string&)> view_feed_stopped_;
+  bool view_feed_told_ = false;  // its failure given to view_feed_stopped_
+  // Hands view 0's blended images to the recording and the feed, whichever are under way.
+  void sinkBlendedViews();
+  void recordImage(const BlendedImage& image);
+  void feedImage(const BlendedImage& image);
   Rig rig_;
   std::vector<std::string> names_;
   std::filesystem::path keys_;

@@ -16,9 +16,11 @@ namespace lumistage {
 enum class VideoCodec { kH264, kMjpeg };
 
 // How hard libx264 works: kQuality (preset veryfast) for files made offline (`lumistage render`),
-// kLive (preset ultrafast, larger files) where frames come from the running pipeline and must not
-// hold it up (the view recorder). Other encoders ignore it.
-enum class VideoSpeed { kQuality, kLive };
+// kLive (preset ultrafast, larger files, a key frame a second) where frames come from the running
+// pipeline and must not hold it up (the view recorder), kFeed (kLive tuned for latency: no
+// look-ahead nor B-frames, a capped rate, pictures stamped by the clock) for a network feed
+// (VideoFeed, core/live/video_feed.h; a file takes it as kLive). Motion-JPEG ignores it.
+enum class VideoSpeed { kQuality, kLive, kFeed };
 
 // The codec a file's name asks for: .mp4 (and .mov, .mkv) H.264, .avi Motion-JPEG. Throws Error
 // naming the file for any other extension.
@@ -31,8 +33,8 @@ enum class PixelOrder { kRgb, kRgba, kBgr, kBgra };
 // to 4:2:0 YUV, which needs even sizes: an odd width or height loses its last column or row (the
 // video is width & ~1 by height & ~1; width() and height() say). The header is written when it
 // opens, the trailer (MP4's index, AVI's) by close(). Once open, write() allocates nothing of its
-// own (the YUV frame, the packet and the scaler are reused; the encoder allocates its packets).
-// Not thread-safe.
+// own (the YUV frame, the packet and the scaler are reused, VideoEncoder in video_encoder.h; the
+// encoder allocates its packets). Not thread-safe.
 class VideoFileWriter {
  public:
   // `codec`: default, the one the name asks for (videoCodecFor); given, the container is that

@@ -1,17 +1,24 @@
 // The live feeds out of `lumistage run`, received as other programs receive them: real processes,
-// a real OSC server on 127.0.0.1.
+// a real OSC server and a real FFmpeg video receiver on 127.0.0.1.
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <string>
 #include <vector>
 
 #include "tests/app/shell_command.h"
+#include "tests/feed_receiver.h"
 #include "tests/osc_receiver.h"
 #include "tests/test_util.h"
 
@@ -90,6 +97,67 @@ TEST(LiveOut, RunRefusesAnOscTargetThatIsNotHostAndPortBeforeStartingNodes) {
     EXPECT_NE(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("--osc"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("HOST:PORT"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("starting"), std::string::npos) << r.output;
+  }
+}
+
+TEST(LiveOut, RunFeedsTheViewOverUdpToAReceiverThatDecodesIt) {
+  const fs::path folder = testing::testFolder("live_feed");
+  ASSERT_TRUE(synthSession(folder));
+  // A port nobody holds now: the system's choice, released.
+  const int port = [] {
+    const int s = socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    bind(s, reinterpret_cast<sockaddr*>(&address), sizeof address);
+    socklen_t length = sizeof address;
+    getsockname(s, reinterpret_cast<sockaddr*>(&address), &length);
+    close(s);
+    return int(ntohs(address.sin_port));
+  }();
+  const std::string url = "udp://127.0.0.1:" + std::to_string(port);
+  // As ffplay udp://127.0.0.1:PORT would: bound before the run starts, it gives up at its
+  // deadline should nothing come.
+  testing::FeedReceiver receiver(url, 3, std::chrono::seconds(120));
+  ASSERT_TRUE(testing::waitForUdpPort(port, std::chrono::seconds(30)));
+  const fs::path json = folder / "run.json";
+  const Result r = run(kCli + " run --session " + (folder / "session").string() +
+                       " --frames 20 --seconds 60 --json " + json.string() + " --feed " + url);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("feeding the view to " + url + " (H.264 in MPEG-TS, 320x240)"),
+            std::string::npos)
+      << r.output;
+  std::smatch said;
+  const std::regex sent_re("view fed to udp://127\\.0\\.0\\.1:" + std::to_string(port) +
+                           ": ([0-9]+) frames sent, ([0-9]+) dropped");
+  ASSERT_TRUE(std::regex_search(r.output, said, sent_re)) << r.output;
+  EXPECT_GE(std::stoul(said[1]), 3u) << r.output;
+  const std::vector<testing::DecodedPicture> pictures = receiver.wait();
+  ASSERT_EQ(pictures.size(), 3u) << receiver.error();
+  for (const testing::DecodedPicture& p : pictures) {
+    EXPECT_EQ(p.width, 320);
+    EXPECT_EQ(p.height, 240);
+    // The view: the actor rendered over black, so neither all black nor all one colour.
+    const auto [least, most] = std::minmax_element(p.rgb.begin(), p.rgb.end());
+    EXPECT_LT(*least, 30);
+    EXPECT_GT(*most, 80);
+  }
+  std::ifstream in(json);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(
+      text.find("\"feed\": {\"url\": \"" + url + "\", \"frames_sent\": " + std::string(said[1])),
+      std::string::npos)
+      << text;
+}
+
+TEST(LiveOut, RunRefusesAFeedThatIsNotUdpOrSrtBeforeStartingNodes) {
+  for (const char* bad :
+       {"rtmp://127.0.0.1/live", "udp://127.0.0.1", "view.ts", "udp://127.0.0.1:99999"}) {
+    const Result r = run(kCli + " run --session /nonexistent --frames 1 --feed " + bad);
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("--feed"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("udp://HOST:PORT or srt://HOST:PORT"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("starting"), std::string::npos) << r.output;
   }
 }

@@ -16,6 +16,7 @@
 #include <cstdlib>
 
 #include "core/body/human_skeleton.h"
+#include "core/live/video_feed.h"
 #include "core/live/vmc_sender.h"
 #include "core/pipeline/posed_body.h"
 #include "core/pipeline/silhouettes.h"
@@ -300,6 +301,18 @@ TEST(HotPaths, TheSkeletonsLiveBundleAllocatesNothingAfterTheFirst) {
   EXPECT_EQ(allocations.stop(), 0);
   EXPECT_TRUE(sent);
   ::close(receiver);
+}
+
+// The view's live feed: offer() copies the picture into a slot it keeps (the thread that encodes
+// and sends allocates the encoder's packets on its own time). To a UDP port nobody listens on.
+TEST(HotPaths, TheViewsLiveFeedTakesAPictureAllocatingNothing) {
+  VideoFeed feed(parseFeedUrl("udp://127.0.0.1:9"), 320, 240, 30);
+  const std::vector<uint8_t> rgba(size_t(320) * 240 * 4, 128);
+  ASSERT_TRUE(feed.offer(320, 240, rgba));
+  Allocations allocations;
+  const bool offered = feed.offer(320, 240, rgba);
+  EXPECT_EQ(allocations.stop(), 0);
+  EXPECT_TRUE(offered);
 }
 
 }  // namespace

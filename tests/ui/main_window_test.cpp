@@ -1,6 +1,10 @@
 // The studio's main window under Qt's offscreen platform.
 #include "ui/main_window.h"
 
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <QCheckBox>
 #include <QComboBox>
 #include <QDir>
@@ -39,6 +43,7 @@
 #include "core/geometry/ring_rig.h"
 #include "core/render/view_recorder.h"
 #include "core/sim/virtual_studio.h"
+#include "tests/feed_receiver.h"
 #include "tests/osc_receiver.h"
 #include "ui/calibration_panel.h"
 #include "ui/camera_grid_panel.h"
@@ -1089,6 +1094,60 @@ class MainWindowTest : public QObject {
     QTRY_VERIFY_WITH_TIMEOUT(window.pipeline()->lastReport().frames > frames + 5, 20000);
     QCOMPARE(receiver.bundles().size(), sent);
     QCOMPARE(QSettings("Lumistage", "Studio").value("pipeline/osc").toString(), target->text());
+    window.pipeline()->stop();
+  }
+  // The live view: checked, the director's view goes out as H.264 in MPEG-TS to its URL, here
+  // udp:// to an FFmpeg receiver on 127.0.0.1 that decodes it; a URL that is not a feed's is
+  // refused beside the box, which unchecks; unchecked, the feed stops and says what it sent.
+  void theLiveViewBoxFeedsTheViewToAReceiver() {
+    QTemporaryDir dir;
+    writeStudioSession(dir.filePath("session"), 6);
+    MainWindow window;
+    auto* box = window.pipeline()->findChild<QCheckBox*>("live_feed");
+    auto* url = window.pipeline()->findChild<QLineEdit*>("live_feed_url");
+    auto* status = window.pipeline()->findChild<QLabel*>("live_feed_status");
+    QVERIFY(box && url && status);
+    url->setText("rtmp://127.0.0.1/live");
+    box->setChecked(true);
+    QVERIFY(!box->isChecked());
+    QVERIFY2(status->text().contains("expected udp:// or srt://"), qPrintable(status->text()));
+    QVERIFY2(status->toolTip().contains("not 'rtmp'"), qPrintable(status->toolTip()));
+    const int port = [] {  // a port nobody holds now: the system's choice, released
+      const int s = ::socket(AF_INET, SOCK_DGRAM, 0);
+      sockaddr_in address{};
+      address.sin_family = AF_INET;
+      address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+      ::bind(s, reinterpret_cast<sockaddr*>(&address), sizeof address);
+      socklen_t length = sizeof address;
+      ::getsockname(s, reinterpret_cast<sockaddr*>(&address), &length);
+      ::close(s);
+      return int(ntohs(address.sin_port));
+    }();
+    const QString feed = QString("udp://127.0.0.1:%1").arg(port);
+    lumistage::testing::FeedReceiver receiver(feed.toStdString(), 3, std::chrono::seconds(120));
+    QVERIFY(lumistage::testing::waitForUdpPort(port, std::chrono::seconds(30)));
+    url->setText(feed);
+    box->setChecked(true);
+    QVERIFY(box->isChecked());
+    lumistage::LocalRunOptions options;
+    options.session = dir.filePath("session").toStdString();
+    options.node_binary = LUMISTAGE_NODE;
+    window.pipeline()->start(options);
+    QTRY_VERIFY_WITH_TIMEOUT(receiver.finished(), 120000);
+    const std::vector<lumistage::testing::DecodedPicture> pictures = receiver.wait();
+    QVERIFY2(pictures.size() == 3, receiver.error().c_str());
+    // At the view's size when the feed started (the viewport may size the view since: scaled).
+    for (const lumistage::testing::DecodedPicture& p : pictures) {
+      QVERIFY(p.width >= 16 && p.height >= 16);
+      QCOMPARE(p.width % 2, 0);
+    }
+    QTRY_VERIFY_WITH_TIMEOUT(status->text().contains(" sent, "), 5000);
+    box->setChecked(false);
+    auto* summary = window.pipeline()->findChild<QLabel*>("pipeline_summary");
+    const QRegularExpression stopped("Stopped the view's feed to .* after (\\d+) frames");
+    QTRY_VERIFY_WITH_TIMEOUT(stopped.match(summary->text()).hasMatch(), 5000);
+    QVERIFY(stopped.match(summary->text()).captured(1).toLongLong() >= 3);
+    QCOMPARE(QSettings("Lumistage", "Studio").value("pipeline/feed").toString(), feed);
     window.pipeline()->stop();
   }
 };

@@ -1,0 +1,43 @@
+#pragma once
+
+#include <QString>
+#include <QWidget>
+#include <cstdint>
+#include <optional>
+
+#include "core/live/video_feed.h"
+
+class QCheckBox;
+class QLabel;
+class QLineEdit;
+
+namespace lumistage {
+
+// The studio's live feed of the director's view (H.264 in MPEG-TS over UDP or SRT, as
+// `lumistage run --feed`): a check box and the feed's URL, remembered between sessions (settings
+// pipeline/feed). Checked while the pipeline runs, every blended view goes out; the pipeline panel
+// asks its worker.
+class LiveFeedControl : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit LiveFeedControl(QWidget* parent = nullptr);
+  // The feed's target when the box is checked and its text is a feed's URL; none otherwise (a
+  // text that is not one unchecks the box and says why beside it).
+  std::optional<FeedTarget> wantedTarget();
+  // What the pipeline's snapshot says of the feed: its URL (empty: none), frames sent and dropped,
+  // and why it stopped (empty while it runs).
+  void showFeed(const QString& url, int64_t sent, int64_t dropped, const QString& error);
+  // The feed could not start or stopped: unchecked; `briefly` beside the box, `why` on hovering.
+  void feedFailed(const QString& why, const QString& briefly = {});
+
+ signals:
+  void toggled();  // checked or unchecked
+
+ private:
+  QCheckBox* box_;
+  QLineEdit* url_;
+  QLabel* status_;
+};
+
+}  // namespace lumistage
