@@ -13,6 +13,7 @@
 #include "core/capture/take_merge.h"
 #include "core/eval/footage_sync.h"
 #include "core/geometry/rig_file.h"
+#include "core/geometry/rig_import.h"
 
 namespace lumistage {
 
@@ -71,6 +72,14 @@ FootageSync syncFromMasks(const Rig& rig, const std::string& masks,
   return sync;
 }
 
+// The cameras' calibration as given: a rig file, or another tool's calibration read as `rig
+// import` reads it (its notes printed).
+Rig calibrationRig(const std::string& path) {
+  RigImport calibration = importCalibration(path, {});
+  for (const std::string& note : calibration.notes) fmt::print("{}: {}\n", path, note);
+  return std::move(calibration.rig);
+}
+
 void addImportCommand(CLI::App& session) {
   struct Args {
     std::string rig, footage, out;
@@ -84,7 +93,11 @@ void addImportCommand(CLI::App& session) {
       "import",
       "Make a session of footage filmed elsewhere: a video file or an image folder per camera of "
       "a rig, with each camera's frame offset");
-  import->add_option("--rig", a->rig, "the cameras' calibration (rig file; `rig import` makes one)")
+  import
+      ->add_option("--rig", a->rig,
+                   "the cameras' calibration: a rig file, or another tool's as `rig import` reads "
+                   "it (Qualisys .qca.txt, Pose2Sim/anipose .toml, OpenCV .yaml/.xml, an EasyMocap "
+                   "folder)")
       ->required();
   import->add_option("--footage", a->footage,
                      "a folder holding each camera's footage as CAMERA.mp4 (.mkv, .avi, .mov, "
@@ -116,7 +129,7 @@ void addImportCommand(CLI::App& session) {
       ->check(CLI::Range(1, 1000));
   import->add_option("-o,--out", a->out, "the session's folder (new or empty)")->required();
   import->callback([a] {
-    const Rig rig = loadRig(a->rig);
+    const Rig rig = calibrationRig(a->rig);
   std::map<std::string, int> offsets = parseOffsets(a->offsets, rig, a->rig);
   std::map<std::string, fs::path> paths;
   for (const std::string& text : a->cameras) {
@@ -177,14 +190,15 @@ void addSessionCommands(CLI::App& app) {
       "sync",
       "Find how many frames each camera's footage runs behind the others, from masks of the "
       "actor (the offsets under which the visual hull explains the most of every mask)");
-  sync->add_option("--rig", y->rig, "the cameras' calibration (rig file)")->required();
+  sync->add_option("--rig", y->rig, "the cameras' calibration (a rig file, or as session import)")
+      ->required();
   sync->add_option("--masks", y->masks, "the masks: MASKS/CAMERA/FFFFFF.png by frame")->required();
   sync->add_option("--offset", y->offsets, "CAMERA=N: a camera whose offset is known");
   sync->add_option("--range", y->range, "frames searched each way")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
   sync->callback([y] {
-    const Rig rig = loadRig(y->rig);
+    const Rig rig = calibrationRig(y->rig);
     const FootageSync found =
         syncFromMasks(rig, y->masks, parseOffsets(y->offsets, rig, y->rig), y->range);
     std::string line;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -18,6 +19,7 @@
 #include "core/geometry/file_storage_matrix.h"
 #include "core/geometry/file_storage_nesting.h"
 #include "core/geometry/projection_matrix.h"
+#include "core/geometry/rig_file.h"
 #include "core/geometry/rotation.h"
 
 namespace lumistage {
@@ -417,6 +419,39 @@ RigImport importSvobodaRig(const fs::path& folder, const RigImportOptions& optio
   }
   result.rig = assembleImportedRig(std::move(cameras), options, source);
   return result;
+}
+
+RigImport importCalibration(const fs::path& path, const RigImportOptions& options) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    if (fs::exists(path / "intri.yml") && fs::exists(path / "extri.yml"))
+      return importEasyMocapRig(path, options);
+    for (const fs::directory_entry& entry : fs::directory_iterator(path, ec))
+      if (entry.path().filename().string().ends_with(".Pmat.cal"))
+        return importSvobodaRig(path, options);
+    throw Error(path.string() +
+                ": a folder of no calibration Lumistage reads (EasyMocap's intri.yml and "
+                "extri.yml, or MultiCamSelfCal's *.Pmat.cal)");
+  }
+  if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": no such file");
+  const std::string name = path.filename().string();
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (name.ends_with(".qca.txt")) return importQualisysRig(path, options);
+  if (extension == ".toml") return importTomlRig(path, options);
+  if (extension == ".yaml" || extension == ".yml" || extension == ".xml" || extension == ".json") {
+    // A rig file says so in its first lines (rig_file.h writes them); anything else of these
+    // endings is taken for OpenCV's.
+    std::ifstream in(path);
+    std::string line;
+    for (int i = 0; i < 16 && std::getline(in, line); ++i)
+      if (line.starts_with("format: lumistage-rig")) return {loadRig(path), {}};
+    return importOpenCvRig(path, options);
+  }
+  throw Error(path.string() +
+              ": not a calibration Lumistage reads (a rig file .yaml, Qualisys .qca.txt, "
+              "Pose2Sim/anipose .toml, OpenCV .yaml/.yml/.xml/.json, or an EasyMocap or "
+              "MultiCamSelfCal folder)");
 }
 
 }  // namespace lumistage

@@ -62,6 +62,14 @@ RigImport importTomlRig(const std::filesystem::path& file, const RigImportOption
 // the file and key.
 RigImport importEasyMocapRig(const std::filesystem::path& folder, const RigImportOptions& options);
 
+// Any calibration a user may hand over, its format told by what it is: a Lumistage rig file
+// (`format: lumistage-rig`), a Qualisys `.qca.txt`, a Pose2Sim/anipose `.toml`, an OpenCV
+// FileStorage file (any other `.yaml`, `.yml`, `.xml`, `.json`), or a folder of EasyMocap's
+// intri.yml and extri.yml, or of MultiCamSelfCal's `*.Pmat.cal` (with options.width and height).
+// A rig file comes back as it is written (its own nodes; no notes). Throws Error naming the path
+// for anything else, listing what is read.
+RigImport importCalibration(const std::filesystem::path& path, const RigImportOptions& options);
+
 // Imported cameras dealt to nodes as RigImportOptions says; throws Error naming `source` for an
 // empty list or cameras a rig cannot hold (duplicate names).
 Rig assembleImportedRig(std::vector<Camera> cameras, const RigImportOptions& options,
