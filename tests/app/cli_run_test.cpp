@@ -234,6 +234,27 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
     const size_t cpu = text.find("\"cpu_ms_per_frame\": ");
     ASSERT_NE(cpu, std::string::npos) << text;
     EXPECT_GT(std::stod(text.substr(cpu + 20)), 1.0) << text.substr(cpu, 40);
+    // Where the frames' latency went: every part measured, the nodes' work and the fit taking
+    // time, and together no more than the slowest frame's latency.
+    const size_t parts = text.find("\"latency_parts_ms\": {");
+    ASSERT_NE(parts, std::string::npos) << text;
+    double sum = 0;
+    for (const char* part : {"to_studio", "silhouettes", "mocap_queued", "mocap", "pose_out",
+                             "statistics", "refine", "images", "blend"}) {
+      const size_t at = text.find(std::string("\"") + part + "\": ", parts);
+      ASSERT_NE(at, std::string::npos) << part << " in " << text;
+      const double ms = std::stod(text.substr(at + std::strlen(part) + 4));
+      EXPECT_GE(ms, 0.0) << part;
+      sum += ms;
+    }
+    for (const char* part : {"mocap", "statistics", "images"}) {
+      const size_t at = text.find(std::string("\"") + part + "\": ", parts);
+      EXPECT_GT(std::stod(text.substr(at + std::strlen(part) + 4)), 0.0) << part << " in " << text;
+    }
+    const std::string p95_key = "\"latency_ms_p95\": ";
+    const double p95 = std::stod(text.substr(text.find(p95_key) + p95_key.size()));
+    EXPECT_GT(sum, 0.0);
+    EXPECT_LE(sum, p95 * 1.5) << text;
     fs::remove(json);
   }
   fs::remove_all(folder);
