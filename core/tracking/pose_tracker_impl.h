@@ -265,6 +265,10 @@ struct PoseTracker::Impl {
   // fitted from its own prediction; when its frames are done and it fitted better, it becomes the
   // pose (and its previous one). Returns whether it did.
   bool trackTwin(double pose_cost);
+  // How far ahead of each ankle (toward its toes, metres, the feet's mean) the hull's samples
+  // around that foot lie, for the body in pose `p`: positive when the pose faces the way the
+  // actor's feet point.
+  double feetAhead(const Pose& p);
   Pose twin, twin_previous;
   int twin_frames = 0;  // left to track the twin for; 0: none
   double twin_cost = 0, pose_cost_sum = 0;

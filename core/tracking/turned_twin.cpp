@@ -3,11 +3,14 @@
 // and an initialisation that picks the wrong one keeps it: every joint of the left side on the
 // right. So the pose found is tracked with its twin, turned half round about the vertical, for the
 // first frames after each initialisation; as the actor moves (a knee bends, an elbow bends: each
-// only one way) the wrong one fits worse, and the better of the two is kept.
+// only one way) the wrong one fits worse, and the better of the two is kept. An actor who holds
+// still gives the fit nothing to tell them by: the feet, whose toes reach ahead of the ankles,
+// decide.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
 
+#include "core/body/human_skeleton.h"
 #include "core/tracking/pose_tracker_impl.h"
 
 namespace lumistage {
@@ -24,6 +27,13 @@ constexpr int kTwinFrames = 8;
 constexpr double kTwinWins = 0.9;
 // A twin that fits this much worse than the pose at once is no rival: silhouettes told them apart.
 constexpr double kTwinRival = 1.5;
+// Between kTwinWins and as good as the pose, the cost cannot tell them (a still, symmetric pose:
+// an A-pose held, on few cameras): the feet do. The twin then takes over when its toes reach this
+// much further into the hull's feet than the pose's (each foot's low hull lies mostly ahead of its
+// ankle, toward the toes).
+constexpr double kFeetMarginM = 0.02;
+// The hull's feet: its samples this high above a foot's ankle at most, within this reach of it.
+constexpr double kFootAboveAnkleM = 0.04, kFootReachM = 0.22;
 
 }  // namespace
 
@@ -63,6 +73,34 @@ void PoseTracker::Impl::makeTwin(double pose_cost, int iterations) {
   twin_frames = kTwinFrames;
 }
 
+double PoseTracker::Impl::feetAhead(const Pose& p) {
+  skeleton.forwardKinematics(p, global);
+  double sum = 0;
+  int feet = 0;
+  for (const auto& [ankle_joint, foot_joint] :
+       {std::pair{kRightAnkle, kRightFoot}, std::pair{kLeftAnkle, kLeftFoot}}) {
+    const Eigen::Vector3d ankle = global[ankle_joint].translation();
+    const Eigen::Vector3d other =
+        global[ankle_joint == kRightAnkle ? kLeftAnkle : kRightAnkle].translation();
+    Eigen::Vector2d toes = (global[foot_joint].translation() - ankle).head<2>();
+    if (toes.norm() < 1e-3) continue;
+    toes.normalize();
+    Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+    int count = 0;
+    for (const Eigen::Vector3d& h : hull) {
+      if (h.z() > ankle.z() + kFootAboveAnkleM) continue;
+      const Eigen::Vector2d d = (h - ankle).head<2>();
+      if (d.norm() > kFootReachM || d.squaredNorm() > (h - other).head<2>().squaredNorm()) continue;
+      centroid += d;
+      ++count;
+    }
+    if (count == 0) continue;
+    sum += (centroid / count).dot(toes);
+    ++feet;
+  }
+  return feet > 0 ? sum / feet : 0.0;
+}
+
 bool PoseTracker::Impl::trackTwin(double pose_cost) {
   if (twin_frames <= 0) return false;
   predictFrom(twin, twin_previous, prior_pose);
@@ -78,7 +116,10 @@ bool PoseTracker::Impl::trackTwin(double pose_cost) {
     twin_frames = 0;
     return false;
   }
-  if (--twin_frames > 0 || !(twin_cost < kTwinWins * pose_cost_sum)) return false;
+  if (--twin_frames > 0) return false;
+  if (!(twin_cost < kTwinWins * pose_cost_sum) &&
+      !(twin_cost < pose_cost_sum && feetAhead(twin) > feetAhead(pose) + kFeetMarginM))
+    return false;
   previous = twin_previous;
   pose = twin;
   return true;
