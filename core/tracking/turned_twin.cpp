@@ -65,8 +65,15 @@ void PoseTracker::Impl::makeTwin(double pose_cost, int iterations) {
   const Eigen::Vector3d root = global[0].translation();
   const Eigen::Vector3d turned = mean + half * (root - mean);
   twin.root_translation_m += turned - root;
-  const double cost = fit(twin, iterations);
+  double cost = fit(twin, iterations);
   if (!(cost < kTwinRival * pose_cost)) return;
+  // As close in cost as the fit cannot tell apart: the one whose toes point into the hull's feet
+  // is tracked from now on, the other as its twin (which motion may still bring back).
+  if (cost < pose_cost / kTwinWins && feetAhead(twin) > feetAhead(pose) + kFeetMarginM) {
+    std::swap(pose, twin);
+    std::swap(cost, pose_cost);
+    previous = pose;
+  }
   twin_previous = twin;
   twin_cost = cost;
   pose_cost_sum = pose_cost;
