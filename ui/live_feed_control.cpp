@@ -1,12 +1,6 @@
 #include "ui/live_feed_control.h"
 
-#include <QCheckBox>
-#include <QHBoxLayout>
-#include <QLabel>
-#include <QLineEdit>
 #include <QMutexLocker>
-#include <QSettings>
-#include <QSignalBlocker>
 #include <exception>
 
 #include "core/base/error.h"
@@ -14,46 +8,37 @@
 
 namespace lumistage {
 
-LiveFeedControl::LiveFeedControl(QWidget* parent)
-    : QWidget(parent),
-      box_(new QCheckBox(tr("Live view to"), this)),
-      url_(new QLineEdit(this)),
-      status_(new QLabel(this)) {
-  box_->setObjectName("live_feed");
-  box_->setToolTip(
-      tr("Sends the director's view live as H.264 in MPEG-TS, as lumistage run --feed: OBS (a "
-         "Media Source with the URL), vMix or ffplay take it"));
-  url_->setObjectName("live_feed_url");
-  url_->setToolTip(
-      tr("udp://HOST:PORT, srt://HOST:PORT (calling a receiver that listens) or "
-         "srt://:PORT?mode=listener (the receiver calls the studio)"));
-  url_->setText(QSettings("Lumistage", "Studio")
-                    .value("pipeline/feed", QString("srt://:9000?mode=listener"))
-                    .toString());
-  url_->setMinimumWidth(190);
-  url_->setMaximumWidth(230);
-  status_->setObjectName("live_feed_status");
-  auto* layout = new QHBoxLayout(this);
-  layout->setContentsMargins(0, 0, 0, 0);
-  layout->addWidget(box_);
-  layout->addWidget(url_);
-  layout->addWidget(status_);
-  connect(box_, &QCheckBox::toggled, this, [this] {
-    status_->clear();
-    status_->setToolTip({});
-    emit toggled();
-  });
-  // Another URL, typed while feeding: Enter moves the feed there.
-  connect(url_, &QLineEdit::returnPressed, this, [this] {
-    if (box_->isChecked()) emit toggled();
-  });
+namespace {
+
+LiveTargetRowSpec viewFeedRow() {
+  LiveTargetRowSpec spec;
+  spec.label = QObject::tr("Live view to");
+  spec.box_name = "live_feed";
+  spec.box_tip = QObject::tr(
+      "Sends the director's view live as H.264 in MPEG-TS, as lumistage run --feed: OBS (a "
+      "Media Source with the URL), vMix or ffplay take it");
+  spec.target_name = "live_feed_url";
+  spec.target_tip = QObject::tr(
+      "udp://HOST:PORT, srt://HOST:PORT (calling a receiver that listens) or "
+      "srt://:PORT?mode=listener (the receiver calls the studio)");
+  spec.default_target = "srt://:9000?mode=listener";
+  spec.target_min_width = 190;
+  spec.target_max_width = 230;
+  spec.setting = "pipeline/feed";
+  spec.status_name = "live_feed_status";
+  return spec;
 }
 
+}  // namespace
+
+LiveFeedControl::LiveFeedControl(QWidget* parent) : LiveTargetRow(viewFeedRow(), parent) {}
+
 std::optional<FeedTarget> LiveFeedControl::wantedTarget() {
-  if (!box_->isChecked()) return std::nullopt;
+  const QString text = checkedTarget();
+  if (text.isEmpty()) return std::nullopt;
   try {
-    FeedTarget target = parseFeedUrl(url_->text().trimmed().toStdString());
-    QSettings("Lumistage", "Studio").setValue("pipeline/feed", url_->text().trimmed());
+    FeedTarget target = parseFeedUrl(text.toStdString());
+    rememberTarget();
     return target;
   } catch (const Error& e) {
     feedFailed(QString::fromStdString(e.what()), tr("expected udp:// or srt://"));
@@ -64,27 +49,21 @@ std::optional<FeedTarget> LiveFeedControl::wantedTarget() {
 void LiveFeedControl::showFeed(const QString& url, int64_t sent, int64_t dropped,
                                const QString& error) {
   if (url.isEmpty()) {
-    if (!status_->text().startsWith("<b")) status_->clear();  // a failure stays until a new try
+    showStatus({});
     return;
   }
   if (!error.isEmpty()) {
     feedFailed(error, tr("stopped"));
     return;
   }
-  status_->setText(tr("%1 sent, %2 dropped").arg(sent).arg(dropped));
-  status_->setToolTip(tr("Frames of the view sent to %1, and dropped when the feed could not "
-                         "take them (busy, or no receiver yet)")
-                          .arg(url));
+  showStatus(tr("%1 sent, %2 dropped").arg(sent).arg(dropped),
+             tr("Frames of the view sent to %1, and dropped when the feed could not take them "
+                "(busy, or no receiver yet)")
+                 .arg(url));
 }
 
 void LiveFeedControl::feedFailed(const QString& why, const QString& briefly) {
-  {
-    const QSignalBlocker quiet(box_);  // unchecked here: nothing to stop
-    box_->setChecked(false);
-  }
-  const QString words = briefly.isEmpty() ? tr("not sent") : tr("not sent: %1").arg(briefly);
-  status_->setText("<b style='color:#e33'>" + words.toHtmlEscaped() + "</b>");
-  status_->setToolTip(why);
+  failed(why, briefly);
 }
 
 // The pipeline worker's side of it, here beside the control.

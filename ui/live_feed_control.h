@@ -1,15 +1,11 @@
 #pragma once
 
 #include <QString>
-#include <QWidget>
 #include <cstdint>
 #include <optional>
 
 #include "core/live/video_feed.h"
-
-class QCheckBox;
-class QLabel;
-class QLineEdit;
+#include "ui/live_target_row.h"
 
 namespace lumistage {
 
@@ -17,7 +13,7 @@ namespace lumistage {
 // `lumistage run --feed`): a check box and the feed's URL, remembered between sessions (settings
 // pipeline/feed). Checked while the pipeline runs, every blended view goes out; the pipeline panel
 // asks its worker.
-class LiveFeedControl : public QWidget {
+class LiveFeedControl : public LiveTargetRow {
   Q_OBJECT
 
  public:
@@ -30,14 +26,6 @@ class LiveFeedControl : public QWidget {
   void showFeed(const QString& url, int64_t sent, int64_t dropped, const QString& error);
   // The feed could not start or stopped: unchecked; `briefly` beside the box, `why` on hovering.
   void feedFailed(const QString& why, const QString& briefly = {});
-
- signals:
-  void toggled();  // checked or unchecked
-
- private:
-  QCheckBox* box_;
-  QLineEdit* url_;
-  QLabel* status_;
 };
 
 }  // namespace lumistage

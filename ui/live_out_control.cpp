@@ -1,12 +1,6 @@
 #include "ui/live_out_control.h"
 
-#include <QCheckBox>
-#include <QHBoxLayout>
-#include <QLabel>
-#include <QLineEdit>
 #include <QMutexLocker>
-#include <QSettings>
-#include <QSignalBlocker>
 #include <exception>
 
 #include "core/base/error.h"
@@ -14,46 +8,38 @@
 
 namespace lumistage {
 
-LiveOutControl::LiveOutControl(QWidget* parent)
-    : QWidget(parent),
-      box_(new QCheckBox(tr("Live skeleton to"), this)),
-      target_(new QLineEdit(this)),
-      status_(new QLabel(this)) {
-  box_->setObjectName("live_skeleton");
-  box_->setToolTip(
-      tr("Streams the tracked skeleton of every frame shown over OSC in the VMC protocol, as "
-         "lumistage run --osc: VSeeFace, EVMC4U for Unity, VMC4UE for Unreal and the Blender "
-         "add-ons receive it (their usual port is %1)")
-          .arg(VmcSender::kDefaultPort));
-  target_->setObjectName("live_skeleton_target");
-  target_->setToolTip(tr("The receiver: HOST:PORT (IPv6 in brackets)"));
-  target_->setText(QSettings("Lumistage", "Studio")
-                       .value("pipeline/osc", QString("127.0.0.1:%1").arg(VmcSender::kDefaultPort))
-                       .toString());
-  target_->setMinimumWidth(150);
-  target_->setMaximumWidth(170);
-  status_->setObjectName("live_skeleton_status");
-  auto* layout = new QHBoxLayout(this);
-  layout->setContentsMargins(0, 0, 0, 0);
-  layout->addWidget(box_);
-  layout->addWidget(target_);
-  layout->addWidget(status_);
-  connect(box_, &QCheckBox::toggled, this, [this] {
-    status_->clear();
-    status_->setToolTip({});
-    emit toggled();
-  });
-  // Another receiver, typed while streaming: Enter moves the stream there.
-  connect(target_, &QLineEdit::returnPressed, this, [this] {
-    if (box_->isChecked()) emit toggled();
-  });
+namespace {
+
+LiveTargetRowSpec skeletonRow() {
+  LiveTargetRowSpec spec;
+  spec.label = QObject::tr("Live skeleton to");
+  spec.box_name = "live_skeleton";
+  spec.box_tip =
+      QObject::tr(
+          "Streams the tracked skeleton of every frame shown over OSC in the VMC protocol, as "
+          "lumistage run --osc: VSeeFace, EVMC4U for Unity, VMC4UE for Unreal and the Blender "
+          "add-ons receive it (their usual port is %1)")
+          .arg(VmcSender::kDefaultPort);
+  spec.target_name = "live_skeleton_target";
+  spec.target_tip = QObject::tr("The receiver: HOST:PORT (IPv6 in brackets)");
+  spec.default_target = QString("127.0.0.1:%1").arg(VmcSender::kDefaultPort);
+  spec.target_min_width = 150;
+  spec.target_max_width = 170;
+  spec.setting = "pipeline/osc";
+  spec.status_name = "live_skeleton_status";
+  return spec;
 }
 
+}  // namespace
+
+LiveOutControl::LiveOutControl(QWidget* parent) : LiveTargetRow(skeletonRow(), parent) {}
+
 std::optional<OscTarget> LiveOutControl::wantedTarget() {
-  if (!box_->isChecked()) return std::nullopt;
+  const QString text = checkedTarget();
+  if (text.isEmpty()) return std::nullopt;
   try {
-    OscTarget target = parseOscTarget(target_->text().trimmed().toStdString());
-    QSettings("Lumistage", "Studio").setValue("pipeline/osc", target_->text().trimmed());
+    OscTarget target = parseOscTarget(text.toStdString());
+    rememberTarget();
     return target;
   } catch (const Error& e) {
     streamFailed(QString::fromStdString(e.what()), tr("expected HOST:PORT"));
@@ -63,22 +49,15 @@ std::optional<OscTarget> LiveOutControl::wantedTarget() {
 
 void LiveOutControl::showStream(const QString& target, int64_t bundles) {
   if (target.isEmpty()) {
-    if (!status_->text().startsWith("<b")) status_->clear();  // a failure stays until a new try
+    showStatus({});
     return;
   }
-  status_->setText(tr("%1 frames sent").arg(bundles));
-  status_->setToolTip(tr("VMC bundles sent to %1, one a frame shown").arg(target));
+  showStatus(tr("%1 frames sent").arg(bundles),
+             tr("VMC bundles sent to %1, one a frame shown").arg(target));
 }
 
 void LiveOutControl::streamFailed(const QString& why, const QString& briefly) {
-  {
-    const QSignalBlocker quiet(box_);  // unchecked here: nothing to stop
-    box_->setChecked(false);
-  }
-  // A few words on the row, the whole of it on hovering (the row has no room for a sentence).
-  const QString words = briefly.isEmpty() ? tr("not sent") : tr("not sent: %1").arg(briefly);
-  status_->setText("<b style='color:#e33'>" + words.toHtmlEscaped() + "</b>");
-  status_->setToolTip(why);
+  failed(why, briefly);
 }
 
 // The pipeline worker's side of it, here beside the control.

@@ -1,22 +1,18 @@
 #pragma once
 
 #include <QString>
-#include <QWidget>
 #include <cstdint>
 #include <optional>
 
 #include "core/live/vmc_sender.h"
-
-class QCheckBox;
-class QLabel;
-class QLineEdit;
+#include "ui/live_target_row.h"
 
 namespace lumistage {
 
 // The studio's live feed of the skeleton (VMC over OSC, as `lumistage run --osc`): a check box
 // and the receiver's HOST:PORT, remembered between sessions (settings pipeline/osc). Checked while
 // the pipeline runs, every frame shown goes out; the pipeline panel asks its worker.
-class LiveOutControl : public QWidget {
+class LiveOutControl : public LiveTargetRow {
   Q_OBJECT
 
  public:
@@ -29,14 +25,6 @@ class LiveOutControl : public QWidget {
   // The stream could not start (a receiver that is not HOST:PORT, a host that does not resolve):
   // unchecked; `briefly` beside the box, `why` on hovering.
   void streamFailed(const QString& why, const QString& briefly = {});
-
- signals:
-  void toggled();  // checked or unchecked
-
- private:
-  QCheckBox* box_;
-  QLineEdit* target_;
-  QLabel* status_;
 };
 
 }  // namespace lumistage
