@@ -16,10 +16,10 @@
 #include <cstdlib>
 
 #include "core/body/human_skeleton.h"
+#include "core/imaging/silhouettes.h"
 #include "core/live/video_feed.h"
 #include "core/live/vmc_sender.h"
 #include "core/pipeline/posed_body.h"
-#include "core/pipeline/silhouettes.h"
 #include "core/refine/mesh_refiner.h"
 #include "core/refine/refinement_sampler.h"
 #include "core/refine/refinement_statistics.h"
