@@ -249,12 +249,6 @@ class MessageEncoder {
   std::unique_ptr<flatbuffers::FlatBufferBuilder> builder_;
 };
 
-// The rle_rgba encoding of PartialImage: runs of up to 256 equal pixels as 5 bytes (length-1,
-// R, G, B, A). Mostly transparent partial renders shrink a lot.
-std::vector<uint8_t> encodeRleRgba(std::span<const uint8_t> rgba);
-// Empty when `rle` is not a valid encoding of exactly pixel_count pixels.
-std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_count);
-
 // The name of the body's type, for logs ("heartbeat", "vertex statistics", ...).
 const char* messageTypeName(const MessageBody& body);
 

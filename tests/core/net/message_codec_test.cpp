@@ -6,7 +6,7 @@
 #include <limits>
 #include <random>
 
-#include "core/render/partial_image_codec.h"
+#include "core/imaging/partial_image_codec.h"
 
 namespace lumistage {
 namespace {
