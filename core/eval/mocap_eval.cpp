@@ -15,7 +15,7 @@
 #include "core/eval/percentile.h"
 #include "core/imaging/keyer.h"
 #include "core/imaging/silhouettes.h"
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 #include "core/tracking/mesh_silhouette.h"
 
 namespace lumistage {

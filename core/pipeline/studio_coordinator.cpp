@@ -12,7 +12,7 @@
 #include "core/body/human_model.h"
 #include "core/geometry/stage_volume.h"
 #include "core/imaging/partial_image_codec.h"
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 #include "core/render/lumigraph_renderer.h"
 
 namespace lumistage {

@@ -20,7 +20,7 @@
 #include "core/imaging/silhouettes.h"
 #include "core/live/video_feed.h"
 #include "core/live/vmc_sender.h"
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 #include "core/refine/mesh_refiner.h"
 #include "core/refine/refinement_sampler.h"
 #include "core/refine/refinement_statistics.h"

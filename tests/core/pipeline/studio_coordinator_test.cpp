@@ -8,7 +8,7 @@
 #include "core/body/human_skeleton.h"
 #include "core/geometry/ring_rig.h"
 #include "core/imaging/partial_image_codec.h"
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 #include "core/refine/refinement_statistics.h"
 #include "core/render/lumigraph_renderer.h"
 
