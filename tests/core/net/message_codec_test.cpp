@@ -89,16 +89,6 @@ TEST(MessageCodec, EveryMessageSurvivesARoundTrip) {
   }
 }
 
-TEST(MessageCodec, RleRoundTripAndBadRuns) {
-  std::vector<uint8_t> rgba(300 * 4, 7);
-  rgba[4 * 299] = 1;
-  const std::vector<uint8_t> rle = encodeRleRgba(rgba);
-  EXPECT_EQ(rle.size(), 3u * 5u);  // 256 + 43 equal pixels, then one other
-  EXPECT_EQ(decodeRleRgba(rle, 300), rgba);
-  EXPECT_TRUE(decodeRleRgba(rle, 299).empty());
-  EXPECT_TRUE(decodeRleRgba(std::span(rle).first(7), 300).empty());
-}
-
 TEST(MessageCodec, AlphaRunPartialImagesAreCheckedOnDecoding) {
   std::vector<uint8_t> rgba(40 * 30 * 4, 0), runs;
   for (int i = 100; i < 400; ++i) rgba[4 * i] = uint8_t(i), rgba[4 * i + 3] = 200;
