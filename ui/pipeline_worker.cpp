@@ -5,7 +5,7 @@
 #include <exception>
 
 #include "core/body/human_model.h"
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 #include "ui/pipeline_panel.h"
 
 namespace lumistage {

@@ -21,7 +21,7 @@
 #include "core/eval/segmentation_eval.h"
 #include "core/eval/surface_metrics.h"
 #include "core/eval/view_metrics.h"
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 #include "core/refine/frame_refiner.h"
 #include "core/render/egl_context.h"
 #include "core/sim/studio_config.h"

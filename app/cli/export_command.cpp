@@ -16,7 +16,7 @@
 #include "core/capture/session_reader.h"
 #include "core/eval/eval_report.h"
 #include "core/eval/mocap_eval.h"
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 #include "core/refine/frame_refiner.h"
 
 namespace lumistage {

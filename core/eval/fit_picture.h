@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "core/capture/image.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/imaging/silhouettes.h"
 
 namespace lumistage {
 

@@ -17,7 +17,7 @@
 #include "core/base/error.h"
 #include "core/capture/footage_import.h"
 #include "core/geometry/stage_volume.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/imaging/silhouettes.h"
 #include "core/tracking/visual_hull_locator.h"
 
 namespace lumistage {

@@ -14,8 +14,8 @@
 #include "core/eval/fit_picture.h"
 #include "core/eval/percentile.h"
 #include "core/imaging/keyer.h"
-#include "core/pipeline/posed_body.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/imaging/silhouettes.h"
+#include "core/net/posed_body.h"
 #include "core/tracking/mesh_silhouette.h"
 
 namespace lumistage {

@@ -14,7 +14,7 @@
 #include <utility>
 
 #include "core/base/error.h"
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 
 namespace lumistage {
 

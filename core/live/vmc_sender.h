@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/body/skeleton.h"
-#include "core/net/message_codec.h"
+#include "core/net/message_types.h"
 
 namespace lumistage {
 

@@ -8,8 +8,8 @@
 #include <type_traits>
 
 #include "core/base/names.h"
+#include "core/imaging/partial_image_codec.h"
 #include "core/refine/refinement_statistics.h"
-#include "core/render/partial_image_codec.h"
 #include "messages_generated.h"
 
 namespace lumistage {
@@ -618,36 +618,6 @@ MessageEncoder::~MessageEncoder() = default;
 std::span<const uint8_t> MessageEncoder::encode(const Message& message) {
   encodeInto(*builder_, message);
   return {builder_->GetBufferPointer(), builder_->GetSize()};
-}
-
-std::vector<uint8_t> encodeRleRgba(std::span<const uint8_t> rgba) {
-  std::vector<uint8_t> out;
-  const size_t pixels = rgba.size() / 4;
-  for (size_t i = 0; i < pixels;) {
-    size_t run = 1;
-    while (run < 256 && i + run < pixels &&
-           std::memcmp(&rgba[4 * i], &rgba[4 * (i + run)], 4) == 0) {
-      ++run;
-    }
-    out.push_back(static_cast<uint8_t>(run - 1));
-    out.insert(out.end(), rgba.begin() + 4 * i, rgba.begin() + 4 * i + 4);
-    i += run;
-  }
-  return out;
-}
-
-std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_count) {
-  if (rle.size() % 5 != 0) return {};
-  std::vector<uint8_t> out;
-  out.reserve(pixel_count * 4);
-  for (size_t i = 0; i < rle.size(); i += 5) {
-    const size_t run = size_t{rle[i]} + 1;
-    if (out.size() / 4 + run > pixel_count) return {};
-    for (size_t k = 0; k < run; ++k)
-      out.insert(out.end(), rle.begin() + i + 1, rle.begin() + i + 5);
-  }
-  if (out.size() != pixel_count * 4) return {};
-  return out;
 }
 
 std::string takeNameError(std::string_view take) {

@@ -1,21 +1,22 @@
 #pragma once
 
-// Messages between camera nodes and the studio as plain structs, and their FlatBuffers wire form
-// (core/net/messages.fbs). The decoder is the one door through which bytes from the network
-// become data: it verifies before it reads, and copies out so that nothing refers to the buffer
-// afterwards. It depends on nothing else in core so that the fuzz target builds from this file
-// and the generated header alone.
+// The FlatBuffers wire form of the messages between camera nodes and the studio
+// (core/net/messages.fbs; the plain structs are core/net/message_types.h's). The decoder is the
+// one door through which bytes from the network become data: it verifies before it reads, and
+// copies out so that nothing refers to the buffer afterwards. Besides the generated header it uses
+// only core/base/names, core/imaging/partial_image_codec and core/refine/refinement_statistics, so
+// that the fuzz target builds from those files alone.
 
 #include <cstddef>
 #include <cstdint>
-#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <string_view>
-#include <variant>
 #include <vector>
+
+#include "core/net/message_types.h"
 
 namespace flatbuffers {
 class FlatBufferBuilder;
@@ -23,186 +24,9 @@ class FlatBufferBuilder;
 
 namespace lumistage {
 
-// Raised whenever a table changes in a way an older peer would misread.
-// 2: compact refinement statistics; 3: compressed refinement statistics (a version 2 studio would
-// count every node's statistics as a bad message); 4: takes recorded on the nodes (a version 3
-// node would refuse the studio's record command); 5: refinement statistics carry the hull's edges
-// and offsets eighths of a step (a version 4 studio would refuse the statistics and misplace every
-// vertex); 6: refinement statistics' values as differences and the cameras' disagreement (a
-// version 5 studio would read wrong colours); 7: refinement statistics end with the vertices'
-// contour bits (a version 6 studio would refuse every node's statistics); 8: a partial image's
-// alpha is the node's share on a log scale (a version 7 studio would blend the nodes' images in
-// wrong proportions).
-inline constexpr uint16_t kProtocolVersion = 8;
-
-struct HelloData {
-  std::string node_name;
-  std::vector<std::string> camera_names;
-  uint16_t protocol_version = kProtocolVersion;
-  std::vector<std::string> capabilities;
-  bool operator==(const HelloData&) const = default;
-};
-
-struct CameraHealthData {
-  std::string camera;
-  int64_t frames = 0;
-  int64_t dropped = 0;
-  float frame_rate = 0;
-  std::string last_error;
-  // How its frames are keyed, in words (kKeyedOnGreen, kKeyedFromMasks); empty from an older node.
-  std::string key = {};
-  bool operator==(const CameraHealthData&) const = default;
-};
-inline constexpr const char* kKeyedOnGreen = "keyed on its green screen";
-inline constexpr const char* kKeyedFromMasks = "keyed from the session's masks";
-
-// Where a node's recording of a take stands (core/pipeline/take_recorder.h).
-struct TakeStatusData {
-  std::string take;  // empty: no take asked for
-  int64_t first_frame = 0, last_frame = 0;
-  int64_t written = 0, dropped = 0, bytes = 0;
-  bool finished = false;
-  std::string error;
-  // Free space on the disk the node writes its takes to (whether or not one is recording);
-  // -1: unknown (a node without a takes folder, or one that does not say).
-  int64_t free_bytes = -1;
-  // The disk's name, the same for nodes that write to one disk (nodes on one PC): their takes
-  // share its free space.
-  std::string disk;
-  bool operator==(const TakeStatusData&) const = default;
-};
-
-struct HeartbeatData {
-  std::vector<CameraHealthData> cameras;
-  int64_t bytes_sent = 0;
-  float cpu = 0;
-  TakeStatusData take;
-  bool operator==(const HeartbeatData&) const = default;
-};
-
-// One bit a pixel, row-major, pixel i in bit (i % 8) of byte i / 8.
-struct SilhouetteMaskData {
-  int camera = 0;
-  int width = 0;
-  int height = 0;
-  std::vector<uint8_t> bits;  // (width * height + 7) / 8 bytes
-  bool operator==(const SilhouetteMaskData&) const = default;
-};
-
-struct SilhouettesData {
-  std::vector<SilhouetteMaskData> masks;
-  bool operator==(const SilhouettesData&) const = default;
-};
-
-struct PoseData {
-  float root[3] = {0, 0, 0};  // metres
-  std::vector<float> angles;  // three a joint, radians
-  float scale = 1;            // of the posed body, about the world origin (posed_body.h)
-  bool operator==(const PoseData&) const = default;
-};
-
-// A node's refinement statistics: `packed` is their wire form, packed or compressed
-// (core/refine/refinement_statistics.h; nodes send it compressed); its header must agree with the
-// counts here.
-struct VertexStatisticsData {
-  uint32_t vertex_count = 0;
-  int offset_count = 0;
-  std::vector<uint8_t> packed;
-  bool operator==(const VertexStatisticsData&) const = default;
-};
-
-struct OffsetsData {
-  int offset_count = 0;
-  std::vector<uint8_t> offsets;  // one a vertex, each < offset_count
-  // Which rig cameras see each vertex (bit c: camera c; VertexVisibility): empty, or one a vertex.
-  std::vector<uint16_t> visibility;
-  bool operator==(const OffsetsData&) const = default;
-};
-
-enum class ImageEncoding : uint8_t { kRawRgba = 0, kRleRgba = 1, kAlphaRuns = 2 };
-
-struct PartialImageData {
-  int view = 0;
-  int width = 0;
-  int height = 0;
-  ImageEncoding encoding = ImageEncoding::kRawRgba;
-  std::vector<uint8_t> data;
-  bool operator==(const PartialImageData&) const = default;
-};
-
-struct StageTimeData {
-  std::string stage;
-  int64_t ns = 0;
-  bool operator==(const StageTimeData&) const = default;
-};
-
-struct FrameTimestampsData {
-  std::vector<StageTimeData> stages;
-  bool operator==(const FrameTimestampsData&) const = default;
-};
-
-// A virtual camera for the nodes' partial renders: pinhole, x_cam = R x_world + t, R row-major.
-struct ViewData {
-  int view = 0;
-  int width = 0, height = 0;
-  float fx = 0, fy = 0, cx = 0, cy = 0;
-  std::vector<float> rotation;     // 9
-  std::vector<float> translation;  // 3
-  std::vector<float> clones;       // 3 a clone: floor offset x, y (m), yaw (rad)
-  bool operator==(const ViewData&) const = default;
-};
-
-// The studio asks the nodes to record a take: their own cameras' frame sets with ids in
-// [first_frame, last_frame], into <takes folder>/<take>/<node>/. An empty take asks for none.
-struct RecordData {
-  std::string take;
-  int64_t first_frame = 0;
-  int64_t last_frame = std::numeric_limits<int64_t>::max();
-  bool operator==(const RecordData&) const = default;
-};
-
-struct FrameIdsData {
-  int64_t offset = 0;  // what the node adds to its frame ids from now on
-  bool operator==(const FrameIdsData&) const = default;
-};
-
 // Why `take` cannot name a take (a folder on every node); empty when it can: a valid name as
 // cameras and nodes have (core/base/names.h).
 std::string takeNameError(std::string_view take);
-
-using MessageBody = std::variant<HelloData, HeartbeatData, SilhouettesData, PoseData,
-                                 VertexStatisticsData, OffsetsData, PartialImageData,
-                                 FrameTimestampsData, ViewData, RecordData, FrameIdsData>;
-
-// The frame ids of a rig's cameras move together, a frame at a time: an id this far or further
-// from the newest is a restart (the cameras, the session) or a message not to trust, for the nodes
-// and the studio alike.
-constexpr int64_t kFrameIdWindow = 300;
-
-struct Message {
-  uint16_t version = kProtocolVersion;
-  std::string sender;
-  int64_t frame_id = -1;
-  int64_t sent_ns = 0;
-  MessageBody body;
-  bool operator==(const Message&) const = default;
-};
-
-// What a receiver accepts. Set the counts from the rig and the mesh in use (a studio with 9
-// cameras has no business receiving 60 silhouettes); the defaults bound memory, not meaning.
-struct MessageLimits {
-  size_t max_bytes = size_t{64} << 20;
-  int max_cameras = 64;  // per message: names, health entries, masks, camera indices
-  uint32_t max_vertices = 200000;
-  int max_offsets = 255;  // offset levels of the refinement, one byte
-  int max_clones = 64;    // per view
-  int max_joints = 128;
-  int max_mask_pixels = 1024 * 1024;
-  int max_image_pixels = 4096 * 4096;
-  int max_view_side = 8192;  // a view's width or height: what every GPU's framebuffer holds
-  int max_stages = 64;
-  size_t max_string_bytes = 1024;
-};
 
 // What a node's messages to the studio are sized by: the rig, the refinement and the views.
 struct NodeMessageSizes {
@@ -248,12 +72,6 @@ class MessageEncoder {
  private:
   std::unique_ptr<flatbuffers::FlatBufferBuilder> builder_;
 };
-
-// The rle_rgba encoding of PartialImage: runs of up to 256 equal pixels as 5 bytes (length-1,
-// R, G, B, A). Mostly transparent partial renders shrink a lot.
-std::vector<uint8_t> encodeRleRgba(std::span<const uint8_t> rgba);
-// Empty when `rle` is not a valid encoding of exactly pixel_count pixels.
-std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_count);
 
 // The name of the body's type, for logs ("heartbeat", "vertex statistics", ...).
 const char* messageTypeName(const MessageBody& body);

@@ -13,12 +13,12 @@
 #include <thread>
 
 #include "core/base/error.h"
+#include "core/imaging/partial_image_codec.h"
+#include "core/net/posed_body.h"
 #include "core/pipeline/pipeline.h"
-#include "core/pipeline/posed_body.h"
 #include "core/refine/mesh_refiner.h"
 #include "core/render/clone_set.h"
 #include "core/render/frame_inputs.h"
-#include "core/render/partial_image_codec.h"
 
 namespace lumistage {
 

@@ -5,8 +5,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 
+#include "core/net/posed_body.h"
 #include "core/pipeline/camera_node.h"
-#include "core/pipeline/posed_body.h"
 #include "core/refine/mesh_refiner.h"
 
 namespace lumistage {

@@ -11,9 +11,9 @@
 #include "core/base/error.h"
 #include "core/body/human_model.h"
 #include "core/geometry/stage_volume.h"
-#include "core/pipeline/posed_body.h"
+#include "core/imaging/partial_image_codec.h"
+#include "core/net/posed_body.h"
 #include "core/render/lumigraph_renderer.h"
-#include "core/render/partial_image_codec.h"
 
 namespace lumistage {
 

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <utility>
 
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 #include "core/pipeline/studio_coordinator.h"
 #include "core/render/lumigraph_renderer.h"
 

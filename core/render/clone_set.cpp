@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/net/message_codec.h"
+#include "core/net/message_types.h"
 
 namespace lumistage {
 

@@ -5,7 +5,7 @@
 
 #include "core/capture/frame_source.h"
 #include "core/imaging/keyer.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/imaging/silhouettes.h"
 #include "core/render/lumigraph_renderer.h"
 
 namespace lumistage {

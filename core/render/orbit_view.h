@@ -4,7 +4,7 @@
 #include <Eigen/Geometry>
 
 #include "core/geometry/camera.h"
-#include "core/net/message_codec.h"
+#include "core/net/message_types.h"
 
 namespace lumistage {
 

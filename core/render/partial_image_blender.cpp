@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "core/render/partial_image_codec.h"
+#include "core/imaging/partial_image_codec.h"
 #include "core/render/silhouette_feather.h"
 
 namespace lumistage {

@@ -31,7 +31,7 @@ class PartialImageBlender {
   void reset(int width, int height);
   // One node's partial image, width*height*4 bytes; another size is ignored (returns false).
   bool add(std::span<const uint8_t> rgba);
-  // The same in the alpha-runs encoding (core/render/partial_image_codec.h), without decoding
+  // The same in the alpha-runs encoding (core/imaging/partial_image_codec.h), without decoding
   // it; false, and nothing added, when `encoded` is not a valid encoding of width*height pixels.
   bool addAlphaRuns(std::span<const uint8_t> encoded);
   // The blended image, width*height*4 bytes; `rgba` is resized when its size differs.

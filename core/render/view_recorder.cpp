@@ -12,7 +12,7 @@
 
 #include "core/base/error.h"
 #include "core/base/output_path.h"
-#include "core/net/message_codec.h"
+#include "core/net/message_types.h"
 #include "core/render/video_file.h"
 
 namespace lumistage {

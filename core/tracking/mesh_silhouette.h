@@ -2,7 +2,7 @@
 
 #include "core/body/skinned_mesh.h"
 #include "core/geometry/camera.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/imaging/silhouettes.h"
 
 namespace lumistage {
 

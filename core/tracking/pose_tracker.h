@@ -8,7 +8,7 @@
 #include "core/body/human_skeleton.h"
 #include "core/body/skinned_mesh.h"
 #include "core/geometry/rig.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/imaging/silhouettes.h"
 
 namespace lumistage {
 

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "core/geometry/rig.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/imaging/silhouettes.h"
 
 namespace lumistage {
 

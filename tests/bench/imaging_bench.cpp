@@ -4,7 +4,7 @@
 #include <random>
 
 #include "core/imaging/keyer.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/imaging/silhouettes.h"
 
 namespace {
 

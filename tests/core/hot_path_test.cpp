@@ -16,15 +16,15 @@
 #include <cstdlib>
 
 #include "core/body/human_skeleton.h"
+#include "core/imaging/partial_image_codec.h"
+#include "core/imaging/silhouettes.h"
 #include "core/live/video_feed.h"
 #include "core/live/vmc_sender.h"
-#include "core/pipeline/posed_body.h"
-#include "core/pipeline/silhouettes.h"
+#include "core/net/posed_body.h"
 #include "core/refine/mesh_refiner.h"
 #include "core/refine/refinement_sampler.h"
 #include "core/refine/refinement_statistics.h"
 #include "core/render/partial_image_blender.h"
-#include "core/render/partial_image_codec.h"
 #include "core/render/phong_subdivision.h"
 #include "core/render/vertex_visibility.h"
 #include "core/tracking/pose_tracker.h"

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <string>
 
+#include "core/imaging/partial_image_codec.h"
 #include "core/net/message_codec.h"
 #include "core/refine/refinement_statistics.h"
 

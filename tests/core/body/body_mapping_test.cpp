@@ -14,7 +14,7 @@
 #include "core/body/human_model.h"
 #include "core/body/mesh_io.h"
 #include "core/body/motion_library.h"
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 #include "core/tracking/mesh_silhouette.h"
 #include "tests/core/tracking/synthetic_stage.h"
 

@@ -6,7 +6,7 @@
 #include <limits>
 #include <random>
 
-#include "core/render/partial_image_codec.h"
+#include "core/imaging/partial_image_codec.h"
 
 namespace lumistage {
 namespace {
@@ -87,16 +87,6 @@ TEST(MessageCodec, EveryMessageSurvivesARoundTrip) {
     const std::span<const uint8_t> again = encoder.encode(m);
     EXPECT_EQ(std::vector<uint8_t>(again.begin(), again.end()), bytes);
   }
-}
-
-TEST(MessageCodec, RleRoundTripAndBadRuns) {
-  std::vector<uint8_t> rgba(300 * 4, 7);
-  rgba[4 * 299] = 1;
-  const std::vector<uint8_t> rle = encodeRleRgba(rgba);
-  EXPECT_EQ(rle.size(), 3u * 5u);  // 256 + 43 equal pixels, then one other
-  EXPECT_EQ(decodeRleRgba(rle, 300), rgba);
-  EXPECT_TRUE(decodeRleRgba(rle, 299).empty());
-  EXPECT_TRUE(decodeRleRgba(std::span(rle).first(7), 300).empty());
 }
 
 TEST(MessageCodec, AlphaRunPartialImagesAreCheckedOnDecoding) {

@@ -7,7 +7,8 @@
 #include "core/body/human_model.h"
 #include "core/body/human_skeleton.h"
 #include "core/geometry/ring_rig.h"
-#include "core/pipeline/posed_body.h"
+#include "core/imaging/partial_image_codec.h"
+#include "core/net/posed_body.h"
 #include "core/refine/refinement_statistics.h"
 #include "core/render/lumigraph_renderer.h"
 

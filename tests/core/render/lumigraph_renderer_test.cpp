@@ -13,9 +13,9 @@
 #include "core/base/error.h"
 #include "core/capture/image.h"
 #include "core/eval/view_metrics.h"
+#include "core/imaging/partial_image_codec.h"
 #include "core/render/egl_context.h"
 #include "core/render/partial_image_blender.h"
-#include "core/render/partial_image_codec.h"
 #include "core/render/silhouette_feather.h"
 #include "core/sim/virtual_studio.h"
 #include "tests/core/refine/refine_test_scene.h"
@@ -799,29 +799,6 @@ TEST_F(LumigraphRendererTest, RimDilationKeepsTheSilhouetteOfACoarseSphere) {
   EXPECT_LT(missed, missed_flat / 3);
   EXPECT_LT(beyond, missed_flat / 2);
   EXPECT_LT(missed + beyond, missed_flat);
-}
-
-TEST(PartialImageCodec, RoundTripsExactly) {
-  std::vector<uint8_t> rgba(64 * 48 * 4, 0), encoded, decoded;
-  uint32_t state = 1;
-  for (int y = 10; y < 30; ++y)
-    for (int x = 5 + y % 7; x < 40; ++x)
-      for (int k = 0; k < 4; ++k) {
-        state = state * 1664525u + 1013904223u;
-        rgba[4 * (y * 64 + x) + k] = uint8_t(state >> 24);  // some pixels all zero by chance
-      }
-  rgba[4 * 1000] = 0, rgba[4 * 1000 + 3] = 7;  // alpha alone
-  for (const std::vector<uint8_t>& image :
-       {rgba, std::vector<uint8_t>(rgba.size(), 0), std::vector<uint8_t>(rgba.size(), 9)}) {
-    encodeAlphaRuns(image, encoded);
-    ASSERT_TRUE(decodeAlphaRuns(encoded, image.size() / 4, decoded));
-    EXPECT_EQ(decoded, image);
-  }
-  encodeAlphaRuns(rgba, encoded);
-  EXPECT_LT(encoded.size(), rgba.size() / 2);
-  EXPECT_FALSE(decodeAlphaRuns(std::span(encoded).first(encoded.size() - 1), 64 * 48, decoded));
-  EXPECT_FALSE(decodeAlphaRuns(encoded, 64 * 48 - 1, decoded));
-  EXPECT_FALSE(decodeAlphaRuns(encoded, 64 * 48 + 1, decoded));
 }
 
 TEST(PartialImageBlender, NormalisesAlphasPerPixel) {

@@ -1,4 +1,4 @@
-#include "core/pipeline/posed_body.h"
+#include "core/net/posed_body.h"
 
 #include "core/body/joint_pose_fit.h"
 

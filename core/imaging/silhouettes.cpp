@@ -1,4 +1,4 @@
-#include "core/pipeline/silhouettes.h"
+#include "core/imaging/silhouettes.h"
 
 #include <algorithm>
 

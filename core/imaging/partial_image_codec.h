@@ -7,6 +7,10 @@
 
 namespace lumistage {
 
+// The two encodings of a partial image on the wire (ImageEncoding in core/net/message_codec.h),
+// plain functions over bytes below both the message codec, which checks them, and the renderer,
+// which blends from them.
+//
 // Compression of the nodes' partial lumigraph images (RGBA8), which are mostly empty: the actor
 // covers a fraction of the view and everything else is (0, 0, 0, 0). The "alpha runs" encoding
 // alternates a run of empty pixels and a run of literal pixels, each length a LEB128 varint,
@@ -30,5 +34,11 @@ bool validAlphaRuns(std::span<const uint8_t> data, size_t pixel_count);
 // a valid encoding of exactly pixel_count pixels.
 bool forEachLiteralRun(std::span<const uint8_t> data, size_t pixel_count,
                        const std::function<void(size_t, const uint8_t*, size_t)>& run);
+
+// The rle_rgba encoding of PartialImage: runs of up to 256 equal pixels as 5 bytes (length-1,
+// R, G, B, A). Mostly transparent partial renders shrink a lot.
+std::vector<uint8_t> encodeRleRgba(std::span<const uint8_t> rgba);
+// Empty when `rle` is not a valid encoding of exactly pixel_count pixels.
+std::vector<uint8_t> decodeRleRgba(std::span<const uint8_t> rle, size_t pixel_count);
 
 }  // namespace lumistage

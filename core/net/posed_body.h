@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "core/body/skinned_mesh.h"
-#include "core/net/message_codec.h"
+#include "core/net/message_types.h"
 
 namespace lumistage {
 
