@@ -4,6 +4,10 @@
 // FFmpeg's libavformat opens the URL (udp://127.0.0.1:PORT binds the port; srt:// with
 // ?mode=listener listens, without it calls), probes the MPEG-TS, decodes its video and keeps the
 // first pictures as RGB. It gives up at its deadline, so that a test never hangs on it.
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 extern "C" {
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
@@ -47,6 +51,19 @@ inline bool udpPortBound(int port) {
     std::fclose(f);
   }
   return false;
+}
+
+// A UDP port on 127.0.0.1 nobody is bound to now (the system's choice, released).
+inline int freeUdpPort() {
+  const int s = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(s, reinterpret_cast<sockaddr*>(&address), sizeof address);
+  socklen_t length = sizeof address;
+  ::getsockname(s, reinterpret_cast<sockaddr*>(&address), &length);
+  ::close(s);
+  return ntohs(address.sin_port);
 }
 
 inline bool waitForUdpPort(int port, std::chrono::seconds within) {

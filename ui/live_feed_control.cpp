@@ -34,16 +34,7 @@ LiveTargetRowSpec viewFeedRow() {
 LiveFeedControl::LiveFeedControl(QWidget* parent) : LiveTargetRow(viewFeedRow(), parent) {}
 
 std::optional<FeedTarget> LiveFeedControl::wantedTarget() {
-  const QString text = checkedTarget();
-  if (text.isEmpty()) return std::nullopt;
-  try {
-    FeedTarget target = parseFeedUrl(text.toStdString());
-    rememberTarget();
-    return target;
-  } catch (const Error& e) {
-    feedFailed(QString::fromStdString(e.what()), tr("expected udp:// or srt://"));
-    return std::nullopt;
-  }
+  return LiveTargetRow::wantedTarget(parseFeedUrl, tr("expected udp:// or srt://"));
 }
 
 void LiveFeedControl::showFeed(const QString& url, int64_t sent, int64_t dropped,
@@ -53,17 +44,13 @@ void LiveFeedControl::showFeed(const QString& url, int64_t sent, int64_t dropped
     return;
   }
   if (!error.isEmpty()) {
-    feedFailed(error, tr("stopped"));
+    failed(error, tr("stopped"));
     return;
   }
   showStatus(tr("%1 sent, %2 dropped").arg(sent).arg(dropped),
              tr("Frames of the view sent to %1, and dropped when the feed could not take them "
                 "(busy, or no receiver yet)")
                  .arg(url));
-}
-
-void LiveFeedControl::feedFailed(const QString& why, const QString& briefly) {
-  failed(why, briefly);
 }
 
 // The pipeline worker's side of it, here beside the control.

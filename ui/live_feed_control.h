@@ -24,8 +24,6 @@ class LiveFeedControl : public LiveTargetRow {
   // What the pipeline's snapshot says of the feed: its URL (empty: none), frames sent and dropped,
   // and why it stopped (empty while it runs).
   void showFeed(const QString& url, int64_t sent, int64_t dropped, const QString& error);
-  // The feed could not start or stopped: unchecked; `briefly` beside the box, `why` on hovering.
-  void feedFailed(const QString& why, const QString& briefly = {});
 };
 
 }  // namespace lumistage

@@ -35,16 +35,7 @@ LiveTargetRowSpec skeletonRow() {
 LiveOutControl::LiveOutControl(QWidget* parent) : LiveTargetRow(skeletonRow(), parent) {}
 
 std::optional<OscTarget> LiveOutControl::wantedTarget() {
-  const QString text = checkedTarget();
-  if (text.isEmpty()) return std::nullopt;
-  try {
-    OscTarget target = parseOscTarget(text.toStdString());
-    rememberTarget();
-    return target;
-  } catch (const Error& e) {
-    streamFailed(QString::fromStdString(e.what()), tr("expected HOST:PORT"));
-    return std::nullopt;
-  }
+  return LiveTargetRow::wantedTarget(parseOscTarget, tr("expected HOST:PORT"));
 }
 
 void LiveOutControl::showStream(const QString& target, int64_t bundles) {
@@ -54,10 +45,6 @@ void LiveOutControl::showStream(const QString& target, int64_t bundles) {
   }
   showStatus(tr("%1 frames sent").arg(bundles),
              tr("VMC bundles sent to %1, one a frame shown").arg(target));
-}
-
-void LiveOutControl::streamFailed(const QString& why, const QString& briefly) {
-  failed(why, briefly);
 }
 
 // The pipeline worker's side of it, here beside the control.

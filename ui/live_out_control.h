@@ -22,9 +22,6 @@ class LiveOutControl : public LiveTargetRow {
   std::optional<OscTarget> wantedTarget();
   // What the pipeline's snapshot says of the stream: its target (empty: none) and bundles sent.
   void showStream(const QString& target, int64_t bundles);
-  // The stream could not start (a receiver that is not HOST:PORT, a host that does not resolve):
-  // unchecked; `briefly` beside the box, `why` on hovering.
-  void streamFailed(const QString& why, const QString& briefly = {});
 };
 
 }  // namespace lumistage

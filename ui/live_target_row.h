@@ -2,6 +2,10 @@
 
 #include <QString>
 #include <QWidget>
+#include <optional>
+#include <string>
+
+#include "core/base/error.h"
 
 class QCheckBox;
 class QLabel;
@@ -27,10 +31,23 @@ class LiveTargetRow : public QWidget {
 
  public:
   LiveTargetRow(const LiveTargetRowSpec& spec, QWidget* parent);
-  // The target's text, trimmed, while the box is checked; empty otherwise.
-  QString checkedTarget() const;
-  // The target's text taken for the next session (once it proved one).
-  void rememberTarget() const;
+  // While the box is checked, its target parsed by `parse` (which throws Error for a text that is
+  // none) and remembered for the next session; none otherwise, or when the text is no target: then
+  // unchecked, `expected` beside the box and the parser's words on hovering.
+  template <typename Parse>
+  auto wantedTarget(Parse parse, const QString& expected)
+      -> std::optional<decltype(parse(std::string()))> {
+    const QString text = checkedTarget();
+    if (text.isEmpty()) return std::nullopt;
+    try {
+      auto target = parse(text.toStdString());
+      rememberTarget();
+      return target;
+    } catch (const Error& e) {
+      failed(QString::fromStdString(e.what()), expected);
+      return std::nullopt;
+    }
+  }
   // The output could not start or stopped: unchecked (without toggled()); `briefly` beside the
   // box, `why` on hovering.
   void failed(const QString& why, const QString& briefly = {});
@@ -42,6 +59,8 @@ class LiveTargetRow : public QWidget {
   void toggled();  // checked or unchecked
 
  private:
+  QString checkedTarget() const;  // trimmed while the box is checked; empty otherwise
+  void rememberTarget() const;
   QString setting_;
   QCheckBox* box_;
   QLineEdit* target_;

@@ -272,9 +272,9 @@ void PipelinePanel::start(LocalRunOptions options) {
   connect(worker_, &PipelineWorker::recordingEnded, this, &PipelinePanel::recordingEnded);
   connect(worker_, &PipelineWorker::takeRefused, this, &PipelinePanel::refuseTake);
   connect(worker_, &PipelineWorker::skeletonStreamFailed, live_out_,
-          [this](const QString& why) { live_out_->streamFailed(why); });
+          [this](const QString& why) { live_out_->failed(why); });
   connect(worker_, &PipelineWorker::viewFeedFailed, live_feed_,
-          [this](const QString& why) { live_feed_->feedFailed(why); });
+          [this](const QString& why) { live_feed_->failed(why); });
   applyLiveOut();   // the live skeleton from the first frame, when its box is checked
   applyLiveFeed();  // the live view too
   start_button_->setEnabled(false);

@@ -228,6 +228,19 @@ void checkRunArgs(const RunArgs& a) {
   }
 }
 
+// Option `option`'s `text` as `parse` reads it (which throws Error for a text it cannot);
+// none when the option was not given. Throws CLI::ValidationError naming the option.
+template <typename Parse>
+auto parsedOption(const char* option, const std::string& text, Parse parse)
+    -> std::optional<decltype(parse(text))> {
+  if (text.empty()) return std::nullopt;
+  try {
+    return parse(text);
+  } catch (const Error& e) {
+    throw CLI::ValidationError(option, e.what());
+  }
+}
+
 // The view's size asked for (--view-size; 0 x 0: the default).
 std::pair<int, int> viewSizeOf(const RunArgs& a) {
   // The view's size, checked before the nodes start: at most what a node's message may carry
@@ -569,22 +582,8 @@ void addRunCommand(CLI::App& app) {
     // Caught from the start: one that comes while the nodes start still stops them in order.
     const std::atomic<bool>& stop = stopOnSignals();
     checkRunArgs(*a);
-    std::optional<OscTarget> osc;
-    if (!a->osc.empty()) {
-      try {
-        osc = parseOscTarget(a->osc);
-      } catch (const Error& e) {
-        throw CLI::ValidationError("--osc", e.what());
-      }
-    }
-    std::optional<FeedTarget> feed;
-    if (!a->feed.empty()) {
-      try {
-        feed = parseFeedUrl(a->feed);
-      } catch (const Error& e) {
-        throw CLI::ValidationError("--feed", e.what());
-      }
-    }
+    const auto osc = parsedOption("--osc", a->osc, parseOscTarget);
+    const auto feed = parsedOption("--feed", a->feed, parseFeedUrl);
     const auto [width, height] = viewSizeOf(*a);
     std::string take;
     LocalPipelineRun pipeline(runOptions(*a, width, height, take));

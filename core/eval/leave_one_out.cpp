@@ -107,8 +107,8 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
         case ScoreMasks::kTruth:
           masks[c] = session.readTruthMask(c, i);
           break;
-        case ScoreMasks::kGiven:
-          masks[c] = session.readMask(c, i);
+        case ScoreMasks::kGiven:  // read with the frame (readFrameWithMasks), given to the renderer
+          masks[c].swap(images[c].mask);
           break;
         case ScoreMasks::kKeyed:
           if (!keyers_learnt) keyers[c].learnScreen(image);

@@ -269,6 +269,8 @@ struct PoseTracker::Impl {
   // around that foot lie, for the body in pose `p`: positive when the pose faces the way the
   // actor's feet point.
   double feetAhead(const Pose& p);
+  // Whether the twin's toes reach clearly further into the hull's feet than the pose's.
+  bool feetFavourTwin();
   Pose twin, twin_previous;
   int twin_frames = 0;  // left to track the twin for; 0: none
   double twin_cost = 0, pose_cost_sum = 0;

@@ -69,7 +69,7 @@ void PoseTracker::Impl::makeTwin(double pose_cost, int iterations) {
   if (!(cost < kTwinRival * pose_cost)) return;
   // As close in cost as the fit cannot tell apart: the one whose toes point into the hull's feet
   // is tracked from now on, the other as its twin (which motion may still bring back).
-  if (cost < pose_cost / kTwinWins && feetAhead(twin) > feetAhead(pose) + kFeetMarginM) {
+  if (cost < pose_cost / kTwinWins && feetFavourTwin()) {
     std::swap(pose, twin);
     std::swap(cost, pose_cost);
     previous = pose;
@@ -108,6 +108,10 @@ double PoseTracker::Impl::feetAhead(const Pose& p) {
   return feet > 0 ? sum / feet : 0.0;
 }
 
+bool PoseTracker::Impl::feetFavourTwin() {
+  return feetAhead(twin) > feetAhead(pose) + kFeetMarginM;
+}
+
 bool PoseTracker::Impl::trackTwin(double pose_cost) {
   if (twin_frames <= 0) return false;
   predictFrom(twin, twin_previous, prior_pose);
@@ -124,8 +128,7 @@ bool PoseTracker::Impl::trackTwin(double pose_cost) {
     return false;
   }
   if (--twin_frames > 0) return false;
-  if (!(twin_cost < kTwinWins * pose_cost_sum) &&
-      !(twin_cost < pose_cost_sum && feetAhead(twin) > feetAhead(pose) + kFeetMarginM))
+  if (!(twin_cost < kTwinWins * pose_cost_sum) && !(twin_cost < pose_cost_sum && feetFavourTwin()))
     return false;
   previous = twin_previous;
   pose = twin;

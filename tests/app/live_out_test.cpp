@@ -1,10 +1,7 @@
 // The live feeds out of `lumistage run`, received as other programs receive them: real processes,
 // a real OSC server and a real FFmpeg video receiver on 127.0.0.1.
 #include <gtest/gtest.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -104,18 +101,7 @@ TEST(LiveOut, RunRefusesAnOscTargetThatIsNotHostAndPortBeforeStartingNodes) {
 TEST(LiveOut, RunFeedsTheViewOverUdpToAReceiverThatDecodesIt) {
   const fs::path folder = testing::testFolder("live_feed");
   ASSERT_TRUE(synthSession(folder));
-  // A port nobody holds now: the system's choice, released.
-  const int port = [] {
-    const int s = socket(AF_INET, SOCK_DGRAM, 0);
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    bind(s, reinterpret_cast<sockaddr*>(&address), sizeof address);
-    socklen_t length = sizeof address;
-    getsockname(s, reinterpret_cast<sockaddr*>(&address), &length);
-    close(s);
-    return int(ntohs(address.sin_port));
-  }();
+  const int port = testing::freeUdpPort();
   const std::string url = "udp://127.0.0.1:" + std::to_string(port);
   // As ffplay udp://127.0.0.1:PORT would: bound before the run starts, it gives up at its
   // deadline should nothing come.

@@ -2,10 +2,6 @@
 // pipeline's figures, and the live skeleton sent out.
 #include "ui/pipeline_panel.h"
 
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <QCheckBox>
 #include <QComboBox>
 #include <QDir>
@@ -406,17 +402,7 @@ void MainWindowTest::theLiveViewBoxFeedsTheViewToAReceiver() {
   QVERIFY(!box->isChecked());
   QVERIFY2(status->text().contains("expected udp:// or srt://"), qPrintable(status->text()));
   QVERIFY2(status->toolTip().contains("not 'rtmp'"), qPrintable(status->toolTip()));
-  const int port = [] {  // a port nobody holds now: the system's choice, released
-    const int s = ::socket(AF_INET, SOCK_DGRAM, 0);
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(s, reinterpret_cast<sockaddr*>(&address), sizeof address);
-    socklen_t length = sizeof address;
-    ::getsockname(s, reinterpret_cast<sockaddr*>(&address), &length);
-    ::close(s);
-    return int(ntohs(address.sin_port));
-  }();
+  const int port = lumistage::testing::freeUdpPort();
   const QString feed = QString("udp://127.0.0.1:%1").arg(port);
   lumistage::testing::FeedReceiver receiver(feed.toStdString(), 3, std::chrono::seconds(120));
   QVERIFY(lumistage::testing::waitForUdpPort(port, std::chrono::seconds(30)));

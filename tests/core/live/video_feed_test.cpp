@@ -3,9 +3,6 @@
 #include "core/live/video_feed.h"
 
 #include <gtest/gtest.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -25,19 +22,7 @@ using Clock = std::chrono::steady_clock;
 using namespace std::chrono_literals;
 using testing::DecodedPicture;
 using testing::FeedReceiver;
-
-// A UDP port nobody is bound to now (the system's choice, released).
-int freeUdpPort() {
-  const int s = socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(s, reinterpret_cast<sockaddr*>(&address), sizeof address);
-  socklen_t length = sizeof address;
-  getsockname(s, reinterpret_cast<sockaddr*>(&address), &length);
-  close(s);
-  return ntohs(address.sin_port);
-}
+using testing::freeUdpPort;
 
 // The picture sent: four flat quadrants of known colours (RGBA).
 constexpr int kWidth = 320, kHeight = 240;
@@ -275,22 +260,13 @@ TEST(VideoFeed, AnSrtCallToAClosedPortFailsCleanlyWithoutWaiting) {
     EXPECT_EQ(feed.error(), "");
   }
   VideoFeed feed(parseFeedUrl(url), kWidth, kHeight, 25);
-  const std::vector<uint8_t> picture = quadrants();
-  double longest_ms = 0;
-  const auto end = Clock::now() + 60s;
-  while (feed.error().empty() && Clock::now() < end) {
-    const auto before = Clock::now();
-    feed.offer(kWidth, kHeight, picture);
-    longest_ms = std::max(longest_ms,
-                          std::chrono::duration<double, std::milli>(Clock::now() - before).count());
-    std::this_thread::sleep_for(40ms);
-  }
+  const double longest_ms = feedUntilStopped(feed);
   const std::string error = feed.error();
   EXPECT_NE(error.find("feed to " + url + " stopped: "), std::string::npos) << error;
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
   EXPECT_EQ(feed.framesSent(), 0);
   EXPECT_GT(feed.framesDropped(), 0);
-  EXPECT_FALSE(feed.offer(kWidth, kHeight, picture));
+  EXPECT_FALSE(feed.offer(kWidth, kHeight, quadrants()));
   EXPECT_LT(longest_ms, 250);
 }
 
