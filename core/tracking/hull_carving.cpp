@@ -182,6 +182,7 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
                                 double* top_z, double* bottom_z) {
   lo = lo.cwiseMax(Eigen::Vector3i::Zero());
   hi = hi.cwiseMin(dims - Eigen::Vector3i::Ones());
+  clearOccupied();
   surface_all.clear();
   hull.clear();
   candidates_valid = false;
@@ -284,10 +285,7 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
       }
     }
   }
-  for (int z = kept_lo.z(); z <= kept_hi.z(); ++z) {
-    for (int y = kept_lo.y(); y <= kept_hi.y(); ++y)
-      std::fill_n(&occupied[z * sz + y * sy + kept_lo.x()], kept_hi.x() - kept_lo.x() + 1, 0);
-  }
+  occupied_lo = kept_lo, occupied_hi = kept_hi;  // cleared by the next carve
   const size_t n = surface_all.size(), m = size_t(opt.max_hull_points);
   if (n <= m) {
     hull = surface_all;
@@ -299,6 +297,16 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
   if (top_z) *top_z = lower.z() + opt.voxel_m * (top + 1.0);
   if (bottom_z) *bottom_z = lower.z() + opt.voxel_m * (count > 0 ? bottom : 0.0);
   return count * std::pow(opt.voxel_m, 3);
+}
+
+void PoseTracker::Impl::clearOccupied() {
+  const size_t sy = size_t(dims.x()), sz = size_t(dims.x()) * dims.y();
+  for (int z = occupied_lo.z(); z <= occupied_hi.z(); ++z) {
+    for (int y = occupied_lo.y(); y <= occupied_hi.y(); ++y)
+      std::fill_n(&occupied[z * sz + y * sy + occupied_lo.x()],
+                  occupied_hi.x() - occupied_lo.x() + 1, 0);
+  }
+  occupied_lo = Eigen::Vector3i::Zero(), occupied_hi = -Eigen::Vector3i::Ones();
 }
 
 template void PoseTracker::Impl::makeBlocks<uint16_t>(const std::vector<uint16_t>& table);

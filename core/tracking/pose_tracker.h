@@ -128,7 +128,9 @@ struct TrackResult {
 // pose; the hypotheses are scored on an eighth of the hull and of the rim, the best six fitted in
 // full, and the best fit wins. No T-pose is needed. Once per actor (again after the stage stood
 // empty for forget_shape_after_empty_frames) the body shape is calibrated: the generic skeleton's
-// bones scaled to the hull's extent less hair_m in the pose found, then the legs' length (the
+// bones scaled to the hull's extent less hair_m in the pose found (as upright as that pose, or as
+// the hull's shortest path from the soles to the crown says where that is less: a boxer's bent
+// knees found in a standing pose), then the legs' length (the
 // extent held), the capsules' girth and the feet's radius (shoes) by a coordinate search that
 // refits the pose for each trial; a heavy actor whose fit that leaves above lost_rms_m gets a
 // second search (the girth further, and the belly). An actor found crouching or bent is measured

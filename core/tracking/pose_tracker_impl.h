@@ -119,7 +119,19 @@ struct PoseTracker::Impl {
   Eigen::Vector3i block_dims;
   std::vector<uint32_t> block_cell;
   std::vector<uint8_t> block_reach;
+  // The last carve's voxels (1 kept), set within the box occupied_lo..occupied_hi (empty when hi <
+  // lo) until the next carve clears it.
   std::vector<uint8_t> occupied;
+  Eigen::Vector3i occupied_lo = Eigen::Vector3i::Zero(), occupied_hi = -Eigen::Vector3i::Ones();
+  void clearOccupied();
+  // The hull's length from the soles to the crown of the body posed in `p`, metres, along the
+  // shortest path inside the last carve's voxels (hull_geodesic.cpp): the body's height whatever
+  // its posture, a crouch's bent knees and hips followed instead of cut short. 0 where the hull
+  // holds no crown near the head's or no sole.
+  double crownToSole(const Pose& p);
+  std::vector<float> geodesic;  // its scratch, over the occupied box and a border
+  std::vector<uint8_t> geodesic_inside;
+  std::vector<std::pair<float, int>> geodesic_heap;
   std::vector<Eigen::Vector3d> surface_all, hull;
   // Silhouette distance transforms (cells), per camera; present[c] when this frame has one. Each
   // is computed over the silhouette's bounding box grown by kDtMargin cells (dt_box: x0, y0, x1,

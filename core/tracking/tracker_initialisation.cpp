@@ -212,6 +212,12 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
     return false;
   }
   if (calibrating) {
+    // A body that stands less straight than its pose says (a boxer's bent knees, found in a
+    // standing pose) is as tall as the hull's length from soles to crown, which follows the bend.
+    // Where the pose is the more bent, the pose holds: a deep crouch's hull fills the space
+    // between the thighs and the body, and the path cuts across it.
+    const double length = crownToSole(best_pose) - opt.hair_m;
+    if (length > 0.5 * extent) best_upright = std::min(best_upright, extent / length);
     calibrateShape(best_pose, extent, best_upright, best, false);
     rms = fitRms(best_pose);
     if (rms > opt.lost_rms_m) {
