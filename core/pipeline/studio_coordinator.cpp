@@ -208,6 +208,37 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
   const auto node_it = nodes_.find(received.node);
   if (node_it == nodes_.end()) return;  // authorised but not in this rig: ignored
   NodeState& node = node_it->second;
+  noteHeard(node, received);
+  if (!received.result.ok()) {
+    ++node.report.bad_messages;
+    return;
+  }
+  const Message& message = *received.result.message;
+  ++node.report.messages;
+  if (counting_) {
+    node.counted_bytes += int64_t(received.bytes);
+    node.counted_to_ns = node.last_ns;
+  }
+  if (const auto* heartbeat = std::get_if<HeartbeatData>(&message.body)) {
+    onHeartbeat(node, *heartbeat);
+    return;
+  }
+  if (std::holds_alternative<SilhouettesData>(message.body) && !noteSilhouettes(node, message))
+    return;
+  timeAnswer(node, message);
+  if (message.frame_id <= newest_done_) return;  // a frame already done or given up
+  if (std::find(refused_.begin(), refused_.end(), message.frame_id) != refused_.end())
+    return;  // dropped at admission
+  if (const auto* silhouettes = std::get_if<SilhouettesData>(&message.body)) {
+    onSilhouettes(node, message.frame_id, message.sent_ns, *silhouettes, received.bytes);
+  } else if (const auto* stats = std::get_if<VertexStatisticsData>(&message.body)) {
+    onStatistics(node, message.frame_id, *stats, received.bytes);
+  } else if (const auto* image = std::get_if<PartialImageData>(&message.body)) {
+    onImage(node, message.frame_id, *image, received.bytes);
+  }
+}
+
+void StudioCoordinator::noteHeard(NodeState& node, const ReceivedMessage& received) {
   node.peer = received.peer;
   node.last_ns = steadyNowNs();
   if (node.heard_ns == 0 || node.report.lost) node.heard_ns = node.last_ns;
@@ -226,60 +257,54 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     spdlog::info("node {} is streaming", node.report.name);
     sendTake(node);  // the take under way, if any: and the node's word that it reached the studio
   }
-  if (!received.result.ok()) {
+}
+
+void StudioCoordinator::onHeartbeat(NodeState& node, const HeartbeatData& heartbeat) {
+  node.report.bytes = heartbeat.bytes_sent;  // what the node says it has sent in all
+  node.report.cameras.clear();
+  // Camera names were checked by the decoder; the free text a node sends (its cameras' errors,
+  // its take's error and disk) reaches the log, `lumistage run`'s report and the health panel
+  // escaped and cut short, so that no node can forge a line or move a terminal's cursor there.
+  for (const CameraHealthData& c : heartbeat.cameras) {
+    node.report.cameras.push_back({c.camera, c.frames, c.dropped, c.frame_rate,
+                                   printableInput(c.last_error), printableInput(c.key, 64)});
+  }
+  node.report.take = heartbeat.take;
+  node.report.take.error = printableInput(heartbeat.take.error);
+  node.report.take.disk = printableInput(heartbeat.take.disk, 64);
+  // A node that missed the take's command (or its stop), or came back during it: told again.
+  // One still recording a take this studio never asked for (the studio restarted mid-take):
+  // told to stop, rather than fill its disk unattended.
+  const TakeStatusData& t = heartbeat.take;
+  const bool stale = take_.take.empty()
+                         ? !t.take.empty() && !t.finished
+                         : t.take != take_.take || t.first_frame != take_.first_frame ||
+                               t.last_frame != take_.last_frame;
+  // While a take records, every heartbeat is answered: the node's word that the studio is
+  // still there (it closes a take after --unattended-take-limit of silence).
+  if (stale || recordingTake()) sendTake(node);
+}
+
+bool StudioCoordinator::noteSilhouettes(NodeState& node, const Message& message) {
+  if (!acceptFrameId(node, message.frame_id)) {
     ++node.report.bad_messages;
-    return;
+    return false;
   }
-  const Message& message = *received.result.message;
-  ++node.report.messages;
-  if (counting_) {
-    node.counted_bytes += int64_t(received.bytes);
-    node.counted_to_ns = node.last_ns;
+  newest_seen_ = std::max(newest_seen_, message.frame_id);  // where the cameras are (takes)
+  node.silhouettes_ns = node.last_ns;
+  // Silhouettes flowing again after none for lost_after (the start, cameras back): every node is
+  // given lost_after from here.
+  if (node.last_ns - newest_silhouettes_ns_ > std::chrono::nanoseconds(options_.lost_after).count())
+    silhouettes_began_ns_ = node.last_ns;
+  newest_silhouettes_ns_ = node.last_ns;
+  if (node.told_no_frames) {
+    node.told_no_frames = false;
+    spdlog::info("node {}: its silhouettes are used again", node.report.name);
   }
-  if (const auto* heartbeat = std::get_if<HeartbeatData>(&message.body)) {
-    node.report.bytes = heartbeat->bytes_sent;  // what the node says it has sent in all
-    node.report.cameras.clear();
-    // Camera names were checked by the decoder; the free text a node sends (its cameras' errors,
-    // its take's error and disk) reaches the log, `lumistage run`'s report and the health panel
-    // escaped and cut short, so that no node can forge a line or move a terminal's cursor there.
-    for (const CameraHealthData& c : heartbeat->cameras) {
-      node.report.cameras.push_back({c.camera, c.frames, c.dropped, c.frame_rate,
-                                     printableInput(c.last_error), printableInput(c.key, 64)});
-    }
-    node.report.take = heartbeat->take;
-    node.report.take.error = printableInput(heartbeat->take.error);
-    node.report.take.disk = printableInput(heartbeat->take.disk, 64);
-    // A node that missed the take's command (or its stop), or came back during it: told again.
-    // One still recording a take this studio never asked for (the studio restarted mid-take):
-    // told to stop, rather than fill its disk unattended.
-    const TakeStatusData& t = heartbeat->take;
-    const bool stale = take_.take.empty()
-                           ? !t.take.empty() && !t.finished
-                           : t.take != take_.take || t.first_frame != take_.first_frame ||
-                                 t.last_frame != take_.last_frame;
-    // While a take records, every heartbeat is answered: the node's word that the studio is
-    // still there (it closes a take after --unattended-take-limit of silence).
-    if (stale || recordingTake()) sendTake(node);
-    return;
-  }
-  if (std::holds_alternative<SilhouettesData>(message.body)) {
-    if (!acceptFrameId(node, message.frame_id)) {
-      ++node.report.bad_messages;
-      return;
-    }
-    newest_seen_ = std::max(newest_seen_, message.frame_id);  // where the cameras are (takes)
-    node.silhouettes_ns = node.last_ns;
-    // Silhouettes flowing again after none for lost_after (the start, cameras back): every node is
-    // given lost_after from here.
-    if (node.last_ns - newest_silhouettes_ns_ >
-        std::chrono::nanoseconds(options_.lost_after).count())
-      silhouettes_began_ns_ = node.last_ns;
-    newest_silhouettes_ns_ = node.last_ns;
-    if (node.told_no_frames) {
-      node.told_no_frames = false;
-      spdlog::info("node {}: its silhouettes are used again", node.report.name);
-    }
-  }
+  return true;
+}
+
+void StudioCoordinator::timeAnswer(NodeState& node, const Message& message) {
   // Every answer is timed, in time or late, for the deadlines (updateDeadlines).
   if (const SentAt& sent = sentAt(message.frame_id); sent.frame_id == message.frame_id) {
     if (std::holds_alternative<VertexStatisticsData>(message.body) && sent.pose_ns > 0)
@@ -288,130 +313,132 @@ void StudioCoordinator::onMessage(const ReceivedMessage& received) {
     if (image && sent.offsets_ns > 0 && !views_.empty() && image->view == views_.front().view)
       node.image_answers.add(double(node.last_ns - sent.offsets_ns) / 1e6);
   }
-  if (message.frame_id <= newest_done_) return;  // a frame already done or given up
-  if (std::find(refused_.begin(), refused_.end(), message.frame_id) != refused_.end())
-    return;  // dropped at admission
-  if (const auto* silhouettes = std::get_if<SilhouettesData>(&message.body)) {
-    FrameState& frame = frameState(message.frame_id);
-    if (frame.first_ns == 0) {
-      frame.first_ns = node.last_ns;
-      frame.captured_ns = message.sent_ns;
-    }
-    frame.captured_ns = std::min(frame.captured_ns, message.sent_ns);
-    frame.addBytes(node.index, received.bytes);
-    for (const SilhouetteMaskData& mask : silhouettes->masks) {
-      // Only the node's own cameras, once a frame: a node with another rig file (other cameras at
-      // its places) would otherwise carve the hull with masks of the wrong cameras, the last one
-      // to arrive winning.
-      const bool own = mask.camera >= 0 && mask.camera < rig_.cameraCount() &&
-                       rig_.nodes()[rig_.nodeOfCamera(mask.camera)].name == node.report.name;
-      if (!own || std::any_of(frame.silhouettes.begin(), frame.silhouettes.end(),
-                              [&](const LowResSilhouette& s) { return s.camera == mask.camera; })) {
-        ++node.report.bad_messages;
-        continue;
-      }
-      // The tracker indexes cells by the camera's size: a mask of another size (a node of an
-      // older version, at another step) is not used, and said once.
-      const Camera& camera = rig_.camera(mask.camera);
-      if (mask.width != camera.width() / options_.silhouette_step ||
-          mask.height != camera.height() / options_.silhouette_step) {
-        refuseSayingOnce(
-            node, node.told_silhouette_size,
-            "node {}: camera {}: silhouette of {}x{} cells, the studio tracks from {}x{} (cells of "
-            "{} pixels): not used; is the node of another version?",
-            node.report.name, camera.name(), mask.width, mask.height,
-            camera.width() / options_.silhouette_step, camera.height() / options_.silhouette_step,
-            options_.silhouette_step);
-        continue;
-      }
-      LowResSilhouette s;
-      s.camera = mask.camera;
-      s.step = options_.silhouette_step;
-      s.width = mask.width;
-      s.height = mask.height;
-      s.bits = mask.bits;  // the same packing on the wire and in memory
-      frame.silhouettes.push_back(std::move(s));
-    }
-    frame.silhouette_nodes.insert(node.report.name);
-    int live = 0;
-    for (const auto& [name, n] : nodes_) live += awaited(n);
-    if (!frame.mocap_begun && static_cast<int>(frame.silhouette_nodes.size()) >= live)
-      beginMocap(message.frame_id, frame);
-  } else if (const auto* stats = std::get_if<VertexStatisticsData>(&message.body)) {
-    const auto it = frames_.find(message.frame_id);
-    if (it == frames_.end() || it->second.pose_sent_ns == 0 || it->second.offsets_sent_ns > 0)
-      return;
-    FrameState& frame = it->second;
-    if (frame.statistics_nodes.count(node.report.name)) return;
-    frame.addBytes(node.index, received.bytes);
-    const int colour_bits = stats->packed.size() >= 8 ? stats->packed[5] : 0;
-    if (stats->offset_count != options_.refine.offset_count || colour_bits < 1 || colour_bits > 8) {
-      refuseSayingOnce(
-          node, node.told_statistics,
-          "node {}: frame {}: refinement statistics at {} offsets and {} colour bits, the studio "
-          "refines at {} offsets: not used; is the node's refine: configuration another?",
-          node.report.name, message.frame_id, stats->offset_count, colour_bits,
-          options_.refine.offset_count);
-      return;
-    }
-    // Of the body's vertices (alone, or with their window points), where the studio knows the
-    // body: otherwise the first node to answer, with another mesh, set the sum's sizes and every
-    // node with the right one was refused.
-    if (options_.body && !bodyFits(refinedVertices(int(stats->vertex_count)))) {
-      refuseSayingOnce(
-          node, node.told_statistics,
-          "node {}: frame {}: refinement statistics of {} points, not of the body's {} vertices: "
-          "not used; does the node pose another body?",
-          node.report.name, message.frame_id, stats->vertex_count,
-          options_.body->rest.vertexCount());
-      return;
-    }
-    if (frame.refine_sum.vertex_count == 0)
-      frame.refine_sum.reset(int(stats->vertex_count), stats->offset_count, colour_bits);
-    // Integer sums of every node's cameras add up exactly, in any order.
-    std::string error;
-    if (!statistics_codec_.add(stats->packed, frame.refine_sum, &error)) {
-      spdlog::warn("node {}: frame {}: {}", node.report.name, message.frame_id, error);
-      ++node.report.bad_messages;
-      // The first node's statistics set the sum's sizes: when they were refused, the next node's
-      // set them again, rather than be refused for differing from them.
-      if (frame.statistics_nodes.empty()) frame.refine_sum.vertex_count = 0;
-      return;
-    }
-    frame.statistics_nodes.insert(node.report.name);
-    node.statistics_ms.add((steadyNowNs() - frame.pose_sent_ns) / 1e6);
-    maybeFinish(message.frame_id, frame);
-  } else if (const auto* image = std::get_if<PartialImageData>(&message.body)) {
-    const auto it = frames_.find(message.frame_id);
-    if (it == frames_.end() || it->second.pose_sent_ns == 0) return;
-    FrameState& frame = it->second;
-    const std::array<int, 3> asked{image->view, image->width, image->height};
-    if (std::find(frame.views.begin(), frame.views.end(), asked) == frame.views.end())
-      return;  // not a view (of that size) sent with the frame's pose
-    // Once a node and view: a repeated image would be blended twice.
-    if (frame.image_nodes[image->view].count(node.report.name)) return;
-    frame.addBytes(node.index, received.bytes);
-    const size_t pixels = size_t(image->width) * image->height;
-    PartialImageBlender& blender = frame.blends[image->view];
-    if (blender.width() != image->width || blender.height() != image->height)
-      blender.reset(image->width, image->height);
-    // The paper's blend: colours add weighted by the nodes' alphas, normalised at the end. An
-    // image that arrives in alpha runs is added from them: only the actor's pixels are touched.
-    bool added = false;
-    if (image->encoding == ImageEncoding::kAlphaRuns) {
-      added = blender.addAlphaRuns(image->data);
-    } else if (image->encoding == ImageEncoding::kRleRgba) {
-      decoded_ = decodeRleRgba(image->data, pixels);
-      added = blender.add(decoded_);
-    } else {
-      added = blender.add(image->data);
-    }
-    if (!added) return;
-    if (frame.offsets_out_ns > 0 && image->view == views_.front().view)
-      node.image_ms.add((steadyNowNs() - frame.offsets_out_ns) / 1e6);
-    frame.image_nodes[image->view].insert(node.report.name);
-    maybeFinish(message.frame_id, frame);
+}
+
+void StudioCoordinator::onSilhouettes(NodeState& node, int64_t frame_id, int64_t sent_ns,
+                                      const SilhouettesData& silhouettes, size_t bytes) {
+  FrameState& frame = frameState(frame_id);
+  if (frame.first_ns == 0) {
+    frame.first_ns = node.last_ns;
+    frame.captured_ns = sent_ns;
   }
+  frame.captured_ns = std::min(frame.captured_ns, sent_ns);
+  frame.addBytes(node.index, bytes);
+  for (const SilhouetteMaskData& mask : silhouettes.masks) {
+    // Only the node's own cameras, once a frame: a node with another rig file (other cameras at
+    // its places) would otherwise carve the hull with masks of the wrong cameras, the last one
+    // to arrive winning.
+    const bool own = mask.camera >= 0 && mask.camera < rig_.cameraCount() &&
+                     rig_.nodes()[rig_.nodeOfCamera(mask.camera)].name == node.report.name;
+    if (!own || std::any_of(frame.silhouettes.begin(), frame.silhouettes.end(),
+                            [&](const LowResSilhouette& s) { return s.camera == mask.camera; })) {
+      ++node.report.bad_messages;
+      continue;
+    }
+    // The tracker indexes cells by the camera's size: a mask of another size (a node of an
+    // older version, at another step) is not used, and said once.
+    const Camera& camera = rig_.camera(mask.camera);
+    if (mask.width != camera.width() / options_.silhouette_step ||
+        mask.height != camera.height() / options_.silhouette_step) {
+      refuseSayingOnce(
+          node, node.told_silhouette_size,
+          "node {}: camera {}: silhouette of {}x{} cells, the studio tracks from {}x{} (cells of "
+          "{} pixels): not used; is the node of another version?",
+          node.report.name, camera.name(), mask.width, mask.height,
+          camera.width() / options_.silhouette_step, camera.height() / options_.silhouette_step,
+          options_.silhouette_step);
+      continue;
+    }
+    LowResSilhouette s;
+    s.camera = mask.camera;
+    s.step = options_.silhouette_step;
+    s.width = mask.width;
+    s.height = mask.height;
+    s.bits = mask.bits;  // the same packing on the wire and in memory
+    frame.silhouettes.push_back(std::move(s));
+  }
+  frame.silhouette_nodes.insert(node.report.name);
+  int live = 0;
+  for (const auto& [name, n] : nodes_) live += awaited(n);
+  if (!frame.mocap_begun && static_cast<int>(frame.silhouette_nodes.size()) >= live)
+    beginMocap(frame_id, frame);
+}
+
+void StudioCoordinator::onStatistics(NodeState& node, int64_t frame_id,
+                                     const VertexStatisticsData& stats, size_t bytes) {
+  const auto it = frames_.find(frame_id);
+  if (it == frames_.end() || it->second.pose_sent_ns == 0 || it->second.offsets_sent_ns > 0) return;
+  FrameState& frame = it->second;
+  if (frame.statistics_nodes.count(node.report.name)) return;
+  frame.addBytes(node.index, bytes);
+  const int colour_bits = stats.packed.size() >= 8 ? stats.packed[5] : 0;
+  if (stats.offset_count != options_.refine.offset_count || colour_bits < 1 || colour_bits > 8) {
+    refuseSayingOnce(
+        node, node.told_statistics,
+        "node {}: frame {}: refinement statistics at {} offsets and {} colour bits, the studio "
+        "refines at {} offsets: not used; is the node's refine: configuration another?",
+        node.report.name, frame_id, stats.offset_count, colour_bits, options_.refine.offset_count);
+    return;
+  }
+  // Of the body's vertices (alone, or with their window points), where the studio knows the
+  // body: otherwise the first node to answer, with another mesh, set the sum's sizes and every
+  // node with the right one was refused.
+  if (options_.body && !bodyFits(refinedVertices(int(stats.vertex_count)))) {
+    refuseSayingOnce(
+        node, node.told_statistics,
+        "node {}: frame {}: refinement statistics of {} points, not of the body's {} vertices: "
+        "not used; does the node pose another body?",
+        node.report.name, frame_id, stats.vertex_count, options_.body->rest.vertexCount());
+    return;
+  }
+  if (frame.refine_sum.vertex_count == 0)
+    frame.refine_sum.reset(int(stats.vertex_count), stats.offset_count, colour_bits);
+  // Integer sums of every node's cameras add up exactly, in any order.
+  std::string error;
+  if (!statistics_codec_.add(stats.packed, frame.refine_sum, &error)) {
+    spdlog::warn("node {}: frame {}: {}", node.report.name, frame_id, error);
+    ++node.report.bad_messages;
+    // The first node's statistics set the sum's sizes: when they were refused, the next node's
+    // set them again, rather than be refused for differing from them.
+    if (frame.statistics_nodes.empty()) frame.refine_sum.vertex_count = 0;
+    return;
+  }
+  frame.statistics_nodes.insert(node.report.name);
+  node.statistics_ms.add((steadyNowNs() - frame.pose_sent_ns) / 1e6);
+  maybeFinish(frame_id, frame);
+}
+
+void StudioCoordinator::onImage(NodeState& node, int64_t frame_id, const PartialImageData& image,
+                                size_t bytes) {
+  const auto it = frames_.find(frame_id);
+  if (it == frames_.end() || it->second.pose_sent_ns == 0) return;
+  FrameState& frame = it->second;
+  const std::array<int, 3> asked{image.view, image.width, image.height};
+  if (std::find(frame.views.begin(), frame.views.end(), asked) == frame.views.end())
+    return;  // not a view (of that size) sent with the frame's pose
+  // Once a node and view: a repeated image would be blended twice.
+  if (frame.image_nodes[image.view].count(node.report.name)) return;
+  frame.addBytes(node.index, bytes);
+  const size_t pixels = size_t(image.width) * image.height;
+  PartialImageBlender& blender = frame.blends[image.view];
+  if (blender.width() != image.width || blender.height() != image.height)
+    blender.reset(image.width, image.height);
+  // The paper's blend: colours add weighted by the nodes' alphas, normalised at the end. An
+  // image that arrives in alpha runs is added from them: only the actor's pixels are touched.
+  bool added = false;
+  if (image.encoding == ImageEncoding::kAlphaRuns) {
+    added = blender.addAlphaRuns(image.data);
+  } else if (image.encoding == ImageEncoding::kRleRgba) {
+    decoded_ = decodeRleRgba(image.data, pixels);
+    added = blender.add(decoded_);
+  } else {
+    added = blender.add(image.data);
+  }
+  if (!added) return;
+  if (frame.offsets_out_ns > 0 && image.view == views_.front().view)
+    node.image_ms.add((steadyNowNs() - frame.offsets_out_ns) / 1e6);
+  frame.image_nodes[image.view].insert(node.report.name);
+  maybeFinish(frame_id, frame);
 }
 
 bool StudioCoordinator::awaited(const NodeState& node) const {

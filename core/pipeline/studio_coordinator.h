@@ -353,6 +353,20 @@ class StudioCoordinator {
     int64_t start_ns = 0;  // when it began (steady clock)
   };
   void onMessage(const ReceivedMessage& received);
+  // onMessage's parts: the node heard from (lost no longer, the traffic's count begun); its
+  // heartbeat (its cameras' health, its take told again when it missed it); silhouettes' frame
+  // accepted (false: refused) and the cameras' pace noted; an answer timed against the deadlines;
+  // and each message of a frame: silhouettes (motion capture begins once every node's are in),
+  // the refinement's statistics and a partial image (the frame finishes once every node's are).
+  void noteHeard(NodeState& node, const ReceivedMessage& received);
+  void onHeartbeat(NodeState& node, const HeartbeatData& heartbeat);
+  bool noteSilhouettes(NodeState& node, const Message& message);
+  void timeAnswer(NodeState& node, const Message& message);
+  void onSilhouettes(NodeState& node, int64_t frame_id, int64_t sent_ns,
+                     const SilhouettesData& silhouettes, size_t bytes);
+  void onStatistics(NodeState& node, int64_t frame_id, const VertexStatisticsData& stats,
+                    size_t bytes);
+  void onImage(NodeState& node, int64_t frame_id, const PartialImageData& image, size_t bytes);
   // Admits the frame (max_frames_in_flight) and hands its silhouettes to the motion capture
   // thread.
   void beginMocap(int64_t frame_id, FrameState& frame);
