@@ -48,22 +48,21 @@ std::vector<std::string> cameraNames(const Rig& rig) {
   return names;
 }
 
-}  // namespace
+using Readers = std::vector<std::unique_ptr<SessionReader>>;
 
-TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& out,
-                          const std::optional<Rig>& rig, std::optional<ImageFiles> files,
-                          const std::function<void(int, int)>& progress) {
-  if (parts.empty()) throw Error("take: no parts to merge");
-  std::vector<std::unique_ptr<SessionReader>> readers;
-  for (const fs::path& part : parts) readers.push_back(std::make_unique<SessionReader>(part));
-  const SessionReader& first = *readers.front();
-
-  // Parts of the same cameras (a node's part and its continuations after a restart) form a
-  // group; every camera is in one group, at its place in the merged rig: (group, camera).
+// The parts grouped by their cameras (a node's part and its continuations after a restart form a
+// group; every camera is in one group), each camera's place in the merged rig (group, camera in
+// it), and the rig the groups make together (their cameras and nodes in path order).
+struct PartGroups {
   std::vector<std::vector<size_t>> groups;  // parts, in path order
   std::map<std::string, std::pair<size_t, int>> owner;
   std::vector<Camera> cameras;
   std::vector<RigNode> nodes;
+};
+
+PartGroups groupParts(const Readers& readers, const std::vector<fs::path>& parts) {
+  const SessionReader& first = *readers.front();
+  PartGroups out;
   for (size_t p = 0; p < readers.size(); ++p) {
     const SessionReader& r = *readers[p];
     if (r.pixelFormat() != first.pixelFormat() || r.fps() != first.fps() ||
@@ -76,59 +75,76 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
     }
     const std::vector<std::string> names = cameraNames(r.rig());
     size_t g = 0;
-    while (g < groups.size() && cameraNames(readers[groups[g].front()]->rig()) != names) ++g;
-    if (g < groups.size()) {
-      groups[g].push_back(p);
+    while (g < out.groups.size() && cameraNames(readers[out.groups[g].front()]->rig()) != names)
+      ++g;
+    if (g < out.groups.size()) {
+      out.groups[g].push_back(p);
       continue;
     }
     for (size_t k = 0; k < names.size(); ++k) {
-      if (const auto it = owner.find(names[k]); it != owner.end()) {
+      if (const auto it = out.owner.find(names[k]); it != out.owner.end()) {
         throw Error("take: camera " + names[k] + " is in both " +
-                    parts[groups[it->second.first].front()].string() + " and " + parts[p].string() +
-                    " with other cameras");
+                    parts[out.groups[it->second.first].front()].string() + " and " +
+                    parts[p].string() + " with other cameras");
       }
-      owner[names[k]] = {groups.size(), static_cast<int>(k)};
+      out.owner[names[k]] = {out.groups.size(), static_cast<int>(k)};
     }
-    groups.push_back({p});
+    out.groups.push_back({p});
     for (RigNode node : r.rig().nodes()) {
-      for (int& c : node.cameras) c += static_cast<int>(cameras.size());
-      nodes.push_back(std::move(node));
+      for (int& c : node.cameras) c += static_cast<int>(out.cameras.size());
+      out.nodes.push_back(std::move(node));
     }
-    for (const Camera& camera : r.rig().cameras()) cameras.push_back(camera);
+    for (const Camera& camera : r.rig().cameras()) out.cameras.push_back(camera);
   }
-  Rig merged_rig;
-  if (rig) {
-    std::set<std::string> names;
-    for (const Camera& camera : rig->cameras()) {
-      if (!owner.count(camera.name()))
-        throw Error("take: the rig's camera " + camera.name() + " is in none of the parts");
-      // The parts' images are what they are: a rig of another size would make a session no
-      // reader opens.
-      const auto [group, k] = owner.at(camera.name());
-      const Camera& filmed = readers[groups[group].front()]->rig().camera(k);
-      if (filmed.width() != camera.width() || filmed.height() != camera.height()) {
-        throw Error(fmt::format("take: the rig's camera {} is {}x{}, its part filmed {}x{}",
-                                camera.name(), camera.width(), camera.height(), filmed.width(),
-                                filmed.height()));
-      }
-      names.insert(camera.name());
-    }
-    for (const auto& [name, where] : owner) {
-      if (!names.count(name))
-        throw Error("take: camera " + name + " of " + parts[groups[where.first].front()].string() +
-                    " is not in the rig");
-    }
-    merged_rig = *rig;
-  } else {
-    merged_rig = Rig(std::move(cameras), std::move(nodes));
-    merged_rig.setStage(first.rig().stage());  // every node records the rig's stage
-  }
+  return out;
+}
 
-  // Per group, every frame its parts hold: frame id -> (part, frame in the part). A part's
-  // timestamps count from its own start: a continuation's are moved to follow the part before
-  // it at the session's rate across the frames between them.
-  std::vector<std::map<int64_t, std::pair<size_t, int>>> index(groups.size());
-  std::vector<int64_t> offset_ns(readers.size(), 0);
+// The merged session's rig: `rig` where given (it must hold exactly the parts' cameras, at the
+// sizes they filmed), else the parts' own cameras and nodes.
+Rig mergedRig(const Readers& readers, const std::vector<fs::path>& parts, PartGroups& grouped,
+              const std::optional<Rig>& rig) {
+  if (!rig) {
+    Rig merged(std::move(grouped.cameras), std::move(grouped.nodes));
+    merged.setStage(readers.front()->rig().stage());  // every node records the rig's stage
+    return merged;
+  }
+  std::set<std::string> names;
+  for (const Camera& camera : rig->cameras()) {
+    if (!grouped.owner.count(camera.name()))
+      throw Error("take: the rig's camera " + camera.name() + " is in none of the parts");
+    // The parts' images are what they are: a rig of another size would make a session no
+    // reader opens.
+    const auto [group, k] = grouped.owner.at(camera.name());
+    const Camera& filmed = readers[grouped.groups[group].front()]->rig().camera(k);
+    if (filmed.width() != camera.width() || filmed.height() != camera.height()) {
+      throw Error(fmt::format("take: the rig's camera {} is {}x{}, its part filmed {}x{}",
+                              camera.name(), camera.width(), camera.height(), filmed.width(),
+                              filmed.height()));
+    }
+    names.insert(camera.name());
+  }
+  for (const auto& [name, where] : grouped.owner) {
+    if (!names.count(name))
+      throw Error("take: camera " + name + " of " +
+                  parts[grouped.groups[where.first].front()].string() + " is not in the rig");
+  }
+  return *rig;
+}
+
+// Per group, every frame its parts hold: frame id -> (part, frame in the part); and each part's
+// timestamp offset. A part's timestamps count from its own start: a continuation's are moved to
+// follow the part before it at the session's rate across the frames between them. Empty parts
+// leave their groups.
+struct FrameIndex {
+  std::vector<std::map<int64_t, std::pair<size_t, int>>> frames;
+  std::vector<int64_t> offset_ns;
+};
+
+FrameIndex indexFrames(const Readers& readers, std::vector<std::vector<size_t>>& groups) {
+  const double fps = readers.front()->fps();
+  FrameIndex out;
+  out.frames.resize(groups.size());
+  out.offset_ns.assign(readers.size(), 0);
   for (size_t g = 0; g < groups.size(); ++g) {
     std::vector<size_t>& group = groups[g];
     std::erase_if(group, [&](size_t p) { return readers[p]->frameCount() == 0; });
@@ -139,35 +155,61 @@ TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& ou
       const SessionReader& before = *readers[group[k - 1]];
       const SessionReader& part = *readers[group[k]];
       const int last = before.frameCount() - 1;
-      offset_ns[group[k]] =
-          offset_ns[group[k - 1]] + before.timestampNs(last) - part.timestampNs(0) +
-          std::llround(double(part.frameId(0) - before.frameId(last)) * 1e9 / first.fps());
+      out.offset_ns[group[k]] =
+          out.offset_ns[group[k - 1]] + before.timestampNs(last) - part.timestampNs(0) +
+          std::llround(double(part.frameId(0) - before.frameId(last)) * 1e9 / fps);
     }
     for (const size_t p : group) {
       for (int i = 0; i < readers[p]->frameCount(); ++i)
-        index[g].emplace(readers[p]->frameId(i), std::make_pair(p, i));  // the earlier part's
+        out.frames[g].emplace(readers[p]->frameId(i), std::make_pair(p, i));  // the earlier part's
     }
   }
-  // The frames every group holds.
+  return out;
+}
+
+// The frames every group holds; a note for each group's frames left out.
+std::vector<int64_t> commonFrames(const FrameIndex& index,
+                                  const std::vector<std::vector<size_t>>& groups,
+                                  const std::vector<fs::path>& parts, TakeMergeReport& report) {
   std::vector<int64_t> common;
-  for (const auto& [id, where] : index[0]) {
+  for (const auto& [id, where] : index.frames[0]) {
     bool everywhere = true;
-    for (size_t g = 1; g < groups.size(); ++g) everywhere = everywhere && index[g].count(id);
+    for (size_t g = 1; g < groups.size(); ++g) everywhere = everywhere && index.frames[g].count(id);
     if (everywhere) common.push_back(id);
   }
   if (common.empty()) {
     throw Error(fmt::format("take: the {} parts have no frame in common (first part: {})",
                             parts.size(), parts[0].string()));
   }
-  TakeMergeReport report;
   for (size_t g = 0; g < groups.size(); ++g) {
-    const size_t extra = index[g].size() - common.size();
+    const size_t extra = index.frames[g].size() - common.size();
     if (extra > 0) {
       report.notes.push_back(fmt::format("{}: {} of its {} frames are not in every part, left out",
                                          parts[groups[g].front()].string(), extra,
-                                         index[g].size()));
+                                         index.frames[g].size()));
     }
   }
+  return common;
+}
+
+}  // namespace
+
+TakeMergeReport mergeTake(const std::vector<fs::path>& parts, const fs::path& out,
+                          const std::optional<Rig>& rig, std::optional<ImageFiles> files,
+                          const std::function<void(int, int)>& progress) {
+  if (parts.empty()) throw Error("take: no parts to merge");
+  Readers readers;
+  for (const fs::path& part : parts) readers.push_back(std::make_unique<SessionReader>(part));
+  const SessionReader& first = *readers.front();
+  PartGroups grouped = groupParts(readers, parts);
+  const Rig merged_rig = mergedRig(readers, parts, grouped, rig);
+  std::vector<std::vector<size_t>>& groups = grouped.groups;
+  const auto& owner = grouped.owner;
+  const FrameIndex frame_index = indexFrames(readers, groups);
+  const auto& index = frame_index.frames;
+  const auto& offset_ns = frame_index.offset_ns;
+  TakeMergeReport report;
+  const std::vector<int64_t> common = commonFrames(frame_index, groups, parts, report);
 
   const ImageFiles out_files = files.value_or(first.imageFiles());
   const bool copy = out_files == first.imageFiles();
