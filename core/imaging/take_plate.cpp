@@ -240,7 +240,8 @@ cv::Mat TakePlate::key(const cv::Mat& blurred) const {
 
 cv::Mat TakePlate::clean(const cv::Mat& keyed, const cv::Mat& given) const {
   cv::Mat mask = (keyed & known_) | (given & ~known_), near;
-  cv::dilate(given, near, ellipse(options_.margin));
+  // Near the actor: his mask, or where he stands most of the take (the plate unknown there).
+  cv::dilate(given | ~known_, near, ellipse(options_.margin));
   mask = keepTouching(mask, near);
   return fillHoles(mask, int(options_.hole * double(work_.area())));
 }

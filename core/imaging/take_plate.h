@@ -63,12 +63,13 @@ struct PlateRepair {
 // median of its colour (5x5 blurred) over the frames whose given mask, grown by `margin`, leaves it
 // free, and the spread of those colours. A frame is then keyed by its distance from the plate
 // where the plate is known, and takes the given mask where it is not (pixels the actor covers in
-// nearly every frame: feet on a treadmill belt). Of the keyed pixels only the regions that touch
-// the given mask (grown by `margin`) are kept, so that a bystander, or flicker far from the actor,
-// is dropped; small holes are filled.
+// most frames: feet on a treadmill belt). Of the keyed pixels only the regions that touch the given
+// mask or the plate's unknown part (where the actor stands most of the take), grown by `margin`,
+// are kept, so that a bystander, or flicker far from the actor, is dropped, and an arm is kept
+// that the given mask misses along with the torso it hangs from; small holes are filled.
 //
 // What it holds: while learning, each frame added blurred (3 bytes a pixel) and where it is free
-// (1 byte), at the working size (at most max_pixels): for 32 frames of a 1088x1920 camera, 268 MB,
+// (1 byte), at the working size (at most max_pixels): for 32 frames of a 1088x1920 camera, 267 MB,
 // released by learn(); after it, the plate, its per-pixel threshold and where it is known: 5 bytes
 // a pixel (10 MB).
 class TakePlate {
@@ -109,8 +110,8 @@ class TakePlate {
   cv::Mat prepareMask(const ImageView& given) const;
   // Where the frame `blurred` differs from the plate beyond its threshold and is no shadow.
   cv::Mat key(const cv::Mat& blurred) const;
-  // The keyed regions touching the given mask, the given mask where the plate is unknown, holes
-  // filled.
+  // The keyed regions touching the given mask or the plate's unknown part, the given mask where
+  // the plate is unknown, holes filled.
   cv::Mat clean(const cv::Mat& keyed, const cv::Mat& given) const;
 
   std::string camera_;

@@ -22,6 +22,7 @@ struct SyntheticTakeSpec {
   std::vector<int> torso_missing = {8, 9, 10, 11};  // the given masks lack the torso
   std::vector<int> blob_frames = {3, 4, 5, 6};      // they take in a patch of background
   std::vector<int> planted_missing = {14, 15};      // they lack the planted foot
+  std::vector<int> empty;                           // they are empty (the segmenter found nobody)
   uint32_t seed = 7;
 };
 
@@ -96,6 +97,7 @@ inline SyntheticTake makeSyntheticTake(const SyntheticTakeSpec& spec = {}) {
     if (listed(spec.torso_missing, f)) given.setTo(0, torso & ~(truth - torso));
     if (listed(spec.blob_frames, f)) given(take.blob).setTo(255);
     if (listed(spec.planted_missing, f)) cv::circle(given, take.planted, 14, 0, cv::FILLED);
+    if (listed(spec.empty, f)) given.setTo(0);
     take.images.push_back(image);
     take.truth.push_back(truth);
     take.given.push_back(given);
