@@ -10,6 +10,7 @@
 #include "app/cli/progress.h"
 #include "core/base/error.h"
 #include "core/capture/footage_import.h"
+#include "core/capture/mask_repair.h"
 #include "core/capture/take_merge.h"
 #include "core/eval/footage_sync.h"
 #include "core/geometry/rig_file.h"
@@ -80,12 +81,23 @@ Rig calibrationRig(const std::string& path) {
   return std::move(calibration.rig);
 }
 
+// Repairs the session's masks from a clean plate of each camera (mask_repair.h) and prints how.
+void repairMasks(const fs::path& session, const MaskRepairOptions& options) {
+  const MaskRepairReport report = repairSessionMasks(
+      session, options, [](int done, int total) { printProgress("repairing masks", done, total); });
+  for (const std::string& note : report.notes) fmt::print("{}\n", note);
+  fmt::print("{}", describeMaskRepair(report));
+  fmt::print("repaired the masks of {} frames of {} cameras{}: {} (given: {})\n", report.frames,
+             report.cameras.size(), report.again ? " again, from the given ones" : "",
+             (session / "masks").string(), (session / "masks-given").string());
+}
+
 void addImportCommand(CLI::App& session) {
   struct Args {
     std::string rig, footage, out;
     std::vector<std::string> cameras, offsets;
     FootageImportOptions options;
-    bool sync = false;
+    bool sync = false, repair_masks = false;
     int sync_range = 10;
   };
   auto a = std::make_shared<Args>();
@@ -127,6 +139,9 @@ void addImportCommand(CLI::App& session) {
   import->add_option("--sync-range", a->sync_range, "frames searched each way by --sync")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
+  import->add_flag("--repair-masks", a->repair_masks,
+                   "repair the masks from a clean plate of each camera learnt from the take (as "
+                   "`session masks`; needs --masks): the given ones kept in masks-given/");
   import->add_option("-o,--out", a->out, "the session's folder (new or empty)")->required();
   import->callback([a] {
     const Rig rig = calibrationRig(a->rig);
@@ -155,6 +170,8 @@ void addImportCommand(CLI::App& session) {
   if (!paths.empty())
     throw Error(fmt::format("--camera {}=...: {} has no camera '{}'", paths.begin()->first, a->rig,
                             paths.begin()->first));
+  if (a->repair_masks && a->options.masks.empty())
+    throw Error("--repair-masks: needs the actor's masks (--masks DIR) to repair");
   if (a->sync) {
     if (a->options.masks.empty())
       throw Error("--sync: needs the actor's masks (--masks DIR) to compare the cameras");
@@ -170,6 +187,7 @@ void addImportCommand(CLI::App& session) {
     shifts += fmt::format("{}{} {:+d}", shifts.empty() ? "" : ", ", s.camera, s.offset);
   fmt::print("imported {} frames of {} cameras (offsets: {}) into {}\n", report.frames,
              sources.size(), shifts, a->out);
+  if (a->repair_masks) repairMasks(a->out, {});
 });
 }  // namespace
 
@@ -206,6 +224,27 @@ void addSessionCommands(CLI::App& app) {
       if (c.offset != 0) line += fmt::format(" --offset {}={}", c.camera, c.offset);
     fmt::print("session import options:{}\n", line.empty() ? " (none: in step)" : line);
   });
+
+  struct MasksArgs {
+    std::string session;
+    MaskRepairOptions options;
+  };
+  auto k = std::make_shared<MasksArgs>();
+  CLI::App* masks = session->add_subcommand(
+      "masks",
+      "Repair a session's masks (another tool's: a limb missed, furniture taken in) from a clean "
+      "plate of each camera learnt from the take itself: each frame keyed against it where it is "
+      "known; the given masks kept in masks-given/, the repaired ones in masks/");
+  masks->add_option("--session", k->session, "the session's folder (with masks/)")->required();
+  masks->add_option("--pictures", k->options.pictures,
+                    "write pictures of the repairs here to look at (CAMERA-FFFFFF.png: green both "
+                    "masks, red the repair's only, blue the given one's only, purple stripes where "
+                    "the plate is unknown)");
+  masks
+      ->add_option("--picture-every", k->options.picture_every, "with --pictures: every N-th frame")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  masks->callback([k] { repairMasks(k->session, k->options); });
 
   struct MergeArgs {
     std::vector<std::string> parts;

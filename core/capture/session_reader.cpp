@@ -471,6 +471,20 @@ std::vector<uint8_t> SessionReader::readMask(int camera, int i) const {
   return readMaskFile(maskPath(camera, i), rig_.camera(camera), "actor's mask");
 }
 
+bool SessionReader::hasRepairedMasks() const {
+  std::error_code ec;
+  return fs::is_directory(folder_ / "masks-given", ec);
+}
+
+fs::path SessionReader::givenMaskPath(int camera, int i) const {
+  return folder_ / (hasRepairedMasks() ? "masks-given" : "masks") / rig_.camera(camera).name() /
+         fmt::format("{:06}.png", frameId(i));
+}
+
+std::vector<uint8_t> SessionReader::readGivenMask(int camera, int i) const {
+  return readMaskFile(givenMaskPath(camera, i), rig_.camera(camera), "given mask");
+}
+
 void SessionReader::readMasks(int i, std::vector<CameraFrame>& out,
                               std::vector<std::string>& errors,
                               const std::vector<int>& cameras) const {

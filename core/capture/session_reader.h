@@ -63,6 +63,13 @@ class SessionReader {
   std::filesystem::path maskPath(int camera, int i) const;
   // Throws Error naming the file when it is missing, unreadable or of another size.
   std::vector<uint8_t> readMask(int camera, int i) const;
+  // The masks as the other tool made them, where `lumistage session masks` repaired masks/ from a
+  // clean plate of the take (docs/session-format.md): masks-given/<camera>/<frame id>.png, kept as
+  // they came. Without masks-given/ (never repaired), masks/ holds them. Nothing else reads them.
+  bool hasRepairedMasks() const;
+  std::filesystem::path givenMaskPath(int camera, int i) const;
+  // Throws Error naming the file when it is missing, unreadable or of another size.
+  std::vector<uint8_t> readGivenMask(int camera, int i) const;
   // Frame i's masks into `out[c].mask` (indexed by rig camera, as readFrame; only `cameras`, or
   // all), reusing their buffers. A camera whose mask is missing, unreadable or of another size gets
   // an empty mask and, in `errors[c]`, why, naming the file; the others' are read.

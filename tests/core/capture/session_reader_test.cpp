@@ -385,6 +385,48 @@ TEST(SessionReader, TimesGoingBackOrAbsurdAreTheFrameBeforesAndSaid) {
   fs::remove_all(folder);
 }
 
+// A session whose masks were repaired (lumistage session masks) keeps the given ones in
+// masks-given/: the reader opens it as before, serves the repaired masks as the session's and the
+// given ones on asking.
+TEST(SessionReader, ServesTheGivenMasksBesideTheRepairedOnes) {
+  const Rig rig = smallRig();
+  const fs::path folder = freshFolder("given_masks");
+  {
+    SessionWriter writer(folder, rig, PixelFormat::kMono8, 30.0, "import");
+    for (int f = 0; f < 2; ++f)
+      writer.writeFrame(f, timestampOf(f), views(frameImages(rig, PixelFormat::kMono8, f)));
+  }
+  const cv::Mat given(48, 64, CV_8U, cv::Scalar(255)), repaired(48, 64, CV_8U, cv::Scalar(0));
+  fs::create_directories(folder / "masks" / "cam02");
+  cv::imwrite((folder / "masks" / "cam02" / "000001.png").string(), given);
+  {
+    const SessionReader reader(folder);
+    EXPECT_TRUE(reader.hasMasks());
+    EXPECT_FALSE(reader.hasRepairedMasks());
+    EXPECT_EQ(reader.givenMaskPath(1, 1), folder / "masks" / "cam02" / "000001.png");
+    EXPECT_EQ(reader.readGivenMask(1, 1), std::vector<uint8_t>(64 * 48, 255));
+  }
+  fs::rename(folder / "masks", folder / "masks-given");
+  fs::create_directories(folder / "masks" / "cam02");
+  cv::imwrite((folder / "masks" / "cam02" / "000001.png").string(), repaired);
+  const SessionReader reader(folder);
+  EXPECT_TRUE(reader.warnings().empty()) << allWarnings(reader);
+  EXPECT_EQ(reader.frameCount(), 2);
+  EXPECT_TRUE(reader.hasRepairedMasks());
+  EXPECT_EQ(reader.readMask(1, 1), std::vector<uint8_t>(64 * 48, 0));
+  EXPECT_EQ(reader.givenMaskPath(1, 1), folder / "masks-given" / "cam02" / "000001.png");
+  EXPECT_EQ(reader.readGivenMask(1, 1), std::vector<uint8_t>(64 * 48, 255));
+  try {
+    reader.readGivenMask(0, 1);
+    ADD_FAILURE() << "a missing given mask was read";
+  } catch (const Error& e) {
+    EXPECT_TRUE(contains(e.what(), (folder / "masks-given" / "cam01" / "000001.png").string() +
+                                       ": cannot read the given mask (64x48 PNG, camera cam01)"))
+        << e.what();
+  }
+  fs::remove_all(folder);
+}
+
 TEST(SessionReader, ReadsGroundTruthJointsAndMaskPaths) {
   const Rig rig = smallRig();
   const fs::path folder = freshFolder("truth");
