@@ -9,7 +9,7 @@ cat >&2 <<MESSAGE
 lumistage_${folder}_links: a file of core/${folder}/ uses code (each undefined reference above)
 that lumistage_${folder} does not link. Find where that code is defined:
 - in a folder of core/ below ${folder} that ${folder}'s line in core/layers.txt does not name:
-  add that folder to the line;
+  add that folder to the line (check it with: cmake -P core/check_layers.cmake);
 - in a folder above ${folder}: move the code down into core/${folder}/ or a folder below it;
   never reorder core/layers.txt to make room;
 - in a third-party library: link it in core/${folder}/CMakeLists.txt.

@@ -5,7 +5,7 @@
 #   LUMISTAGE_LAYER_LINE_<folder>  the number of that line.
 # It fails, naming the line and what to do, on a line it cannot read, a folder on two lines, or a
 # line naming a folder that is not on a line above it. Used by core/CMakeLists.txt (the link
-# lists) and by anything else that reads the table, so that the table is read one way.
+# lists) and core/check_layers.cmake (the include check), so that the table is read one way.
 function(lumistage_read_layers table)
   get_filename_component(name "${table}" NAME)
   set(name "core/${name}")  # for the messages: the table is core/'s
