@@ -10,11 +10,11 @@
 #include "app/cli/progress.h"
 #include "core/base/error.h"
 #include "core/capture/footage_import.h"
-#include "core/capture/mask_repair.h"
 #include "core/capture/take_merge.h"
 #include "core/eval/footage_sync.h"
 #include "core/geometry/rig_file.h"
 #include "core/geometry/rig_import.h"
+#include "core/imaging/mask_repair.h"
 
 namespace lumistage {
 

@@ -1,4 +1,4 @@
-#include "core/capture/mask_repair.h"
+#include "core/imaging/mask_repair.h"
 
 #include <fmt/format.h>
 
