@@ -27,15 +27,19 @@ double number(const std::string& json, const std::string& key) {
   return at == std::string::npos ? std::nan("") : std::stod(json.substr(at + key.size() + 4));
 }
 
+// The demo imported in one command: the videos, the Qualisys calibration as it is, the masks of
+// the even frames, and `options`.
+Result importDemo(const std::string& options, const fs::path& out) {
+  return run(kCli + " session import --rig " + (kDemo / "calibration" / "Calib.qca.txt").string() +
+             " --footage " + (kDemo / "videos").string() + " --masks " +
+             (kDemo / "masks").string() + " " + options + " --out " + out.string());
+}
+
 TEST(RealFootage, ThePose2SimDemoImportsRunsAndIsEvaluated) {
   if (!fs::exists(kDemo / "videos" / "cam01.mp4")) GTEST_SKIP() << kDemo << " is not here";
   const fs::path folder = tempPath("pose2sim");
   fs::remove_all(folder);
-  // One command: the videos, the Qualisys calibration as it is, the masks of the even frames.
-  Result r =
-      run(kCli + " session import --rig " + (kDemo / "calibration" / "Calib.qca.txt").string() +
-          " --footage " + (kDemo / "videos").string() + " --masks " + (kDemo / "masks").string() +
-          " --frames 8 --out " + (folder / "walk").string());
+  Result r = importDemo("--frames 8", folder / "walk");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("imported 4 frames of 4 cameras"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("camera 'cam02': footage 1080x1920, calibrated 1088x1920"),
@@ -68,10 +72,7 @@ TEST(RealFootage, ThePose2SimDemosMasksAreRepairedAndTheGivenOnesKept) {
   if (!fs::exists(kDemo / "videos" / "cam01.mp4")) GTEST_SKIP() << kDemo << " is not here";
   const fs::path folder = tempPath("pose2sim_masks");
   fs::remove_all(folder);
-  Result r =
-      run(kCli + " session import --rig " + (kDemo / "calibration" / "Calib.qca.txt").string() +
-          " --footage " + (kDemo / "videos").string() + " --masks " + (kDemo / "masks").string() +
-          " --every 6 --frames 10 --repair-masks --out " + (folder / "walk").string());
+  Result r = importDemo("--every 6 --frames 10 --repair-masks", folder / "walk");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("repaired the masks of 10 frames of 4 cameras"), std::string::npos)
       << r.output;

@@ -40,12 +40,12 @@ std::vector<uint8_t> quadrants() {
   return rgba;
 }
 
-// Offers the picture at 25 a second until the receiver has its pictures or gave up; the longest
-// offer() took, ms.
-double feedUntilReceived(VideoFeed& feed, FeedReceiver& receiver) {
+// Offers the picture at 25 a second while `more()` holds; the longest offer() took, ms.
+template <typename More>
+double feedWhile(VideoFeed& feed, More more) {
   const std::vector<uint8_t> picture = quadrants();
   double longest_ms = 0;
-  while (!receiver.finished()) {
+  while (more()) {
     const auto before = Clock::now();
     feed.offer(kWidth, kHeight, picture);
     longest_ms = std::max(longest_ms,
@@ -53,6 +53,11 @@ double feedUntilReceived(VideoFeed& feed, FeedReceiver& receiver) {
     std::this_thread::sleep_for(40ms);
   }
   return longest_ms;
+}
+
+// Until the receiver has its pictures or gave up.
+double feedUntilReceived(VideoFeed& feed, FeedReceiver& receiver) {
+  return feedWhile(feed, [&] { return !receiver.finished(); });
 }
 
 // Each decoded picture is the one sent: its size, and each quadrant's colour at its middle (the
@@ -157,19 +162,10 @@ TEST(VideoFeed, ScalesAPictureOfAnotherSizeToTheFeeds) {
   }
 }
 
-// Offers the picture until the feed stops or a minute passes; the longest offer() took, ms.
+// Until the feed stops or a minute passes.
 double feedUntilStopped(VideoFeed& feed) {
-  const std::vector<uint8_t> picture = quadrants();
-  double longest_ms = 0;
   const auto end = Clock::now() + 60s;
-  while (feed.error().empty() && Clock::now() < end) {
-    const auto before = Clock::now();
-    feed.offer(kWidth, kHeight, picture);
-    longest_ms = std::max(longest_ms,
-                          std::chrono::duration<double, std::milli>(Clock::now() - before).count());
-    std::this_thread::sleep_for(40ms);
-  }
-  return longest_ms;
+  return feedWhile(feed, [&] { return feed.error().empty() && Clock::now() < end; });
 }
 
 // The feed calls a receiver that listens (ffplay srt://...?mode=listener); when the receiver goes
