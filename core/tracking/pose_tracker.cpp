@@ -259,7 +259,42 @@ void PoseTracker::Impl::buildModel(const SkinnedMesh& mesh) {
   cap_a.resize(capsules.size());
   cap_b.resize(capsules.size());
   setShape(BodyShape{});
+  makeApartPairs();
+  setShape(BodyShape{});
   makeLibrary();
+}
+
+void PoseTracker::Impl::makeApartPairs() {
+  // Which part each capsule is: 0 the torso and head, 1 / 2 the right / left arm (from the
+  // shoulder), 3 / 4 the right / left leg (from the knee: the thighs meet at the crotch), -1 none
+  // kept apart (the clavicles and the thighs).
+  const auto part = [](int joint) {
+    if (joint >= kRightShoulder && joint <= kRightHand) return 1;
+    if (joint >= kLeftShoulder && joint <= kLeftHand) return 2;
+    if (joint >= kRightKnee && joint <= kRightFoot) return 3;
+    if (joint >= kLeftKnee && joint <= kLeftFoot) return 4;
+    if (joint <= kHead) return 0;
+    return -1;
+  };
+  std::vector<Eigen::Isometry3d> rest_global;
+  skeleton.forwardKinematics(rest_pose, rest_global);
+  apart.clear();
+  for (int i = 0; i < int(capsules.size()); ++i) {
+    for (int j = i + 1; j < int(capsules.size()); ++j) {
+      const int pi = part(capsules[i].joint), pj = part(capsules[j].joint);
+      if (pi < 0 || pj < 0 || pi == pj) continue;
+      const bool arm_body = (pi == 0) != (pj == 0) && std::max(pi, pj) <= 2;
+      const bool legs = std::min(pi, pj) == 3 && std::max(pi, pj) == 4;
+      if (!arm_body && !legs) continue;
+      Eigen::Vector3d on_a, on_b;
+      const Eigen::Isometry3d &gi = rest_global[capsules[i].joint],
+                              &gj = rest_global[capsules[j].joint];
+      const double d = segmentSegmentDistance(gi * capsules[i].a, gi * capsules[i].b,
+                                              gj * capsules[j].a, gj * capsules[j].b, on_a, on_b);
+      // Touching at rest (an upper arm at the shoulder): no pair.
+      if (d > capsules[i].radius_m + capsules[j].radius_m) apart.push_back({i, j, 0.0});
+    }
+  }
 }
 
 void PoseTracker::Impl::setShape(const BodyShape& s) {
@@ -300,6 +335,9 @@ void PoseTracker::Impl::setShape(const BodyShape& s) {
     c.b = b_t * u + lateral;
     for (double t : {0.0, 0.5, 1.0}) samples.push_back({c.joint, c.a + t * (c.b - c.a)});
   }
+  for (Apart& pair : apart)
+    pair.min_distance =
+        opt.apart_fraction * (capsules[pair.a].radius_m + capsules[pair.b].radius_m);
   double bottom, top;
   modelExtent(rest_pose, bottom, top);
   rest_extent_m = top - bottom;

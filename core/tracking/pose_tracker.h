@@ -60,6 +60,14 @@ struct PoseTrackerOptions {
   int min_rim_rays_per_camera = 40;
   double rim_huber_m = 0.02;
   double rim_outlier_m = 0.25;
+  // Parts of the body that cannot pass through each other (an arm and the torso or the head, the
+  // shins and feet of the two legs): the weight of their capsules' overlap beyond apart_fraction of
+  // their radii's sum, per m² (0: off). Silhouettes cannot tell an arm inside the torso's outline
+  // from one in front of it; without it, a CMU actor's forearms sank into his chest (wrists 125 mm
+  // off). 100 against 0 on the development corpus: MPJPE 26.1 -> 25.0 mm; 30: 27.9 and 1000: 30.0
+  // on twelve of its stages (against 29.3 without); a fraction of 0.6 changed nothing.
+  double apart_weight = 100;
+  double apart_fraction = 0.8;
   double huber_m = 0.02;        // robust loss of hull samples outside the model (4x inside)
   double min_volume_m3 = 0.02;  // less hull than this: nobody on stage
   // More hull than this is not a person (a keyer that takes the screen for the actor, the lights

@@ -80,6 +80,40 @@ inline double raySegmentDistance(const Eigen::Vector3d& o, const Eigen::Vector3d
   return (on_ray - on_segment).norm();
 }
 
+// The distance between segments a0-a1 and b0-b1, with the closest points on each (Ericson,
+// Real-Time Collision Detection, 5.1.9).
+inline double segmentSegmentDistance(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1,
+                                     const Eigen::Vector3d& b0, const Eigen::Vector3d& b1,
+                                     Eigen::Vector3d& on_a, Eigen::Vector3d& on_b) {
+  const Eigen::Vector3d d1 = a1 - a0, d2 = b1 - b0, r = a0 - b0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  double s = 0, t = 0;
+  if (a <= 1e-12 && e <= 1e-12) {
+    s = t = 0;
+  } else if (a <= 1e-12) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= 1e-12) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2), denom = a * e - b * b;
+      s = denom > 1e-12 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0) {
+        t = 0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1) {
+        t = 1;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  on_a = a0 + s * d1;
+  on_b = b0 + t * d2;
+  return (on_a - on_b).norm();
+}
+
 inline double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                               const Eigen::Vector3d& b, Eigen::Vector3d& closest) {
   const Eigen::Vector3d ab = b - a;
@@ -157,6 +191,16 @@ struct PoseTracker::Impl {
   double generic_head_z = 1, generic_top_z = 1, generic_bottom_z = 0;
   std::vector<Capsule> capsules;
   std::vector<Sample> samples;
+  // Pairs of capsules that a body keeps apart (an arm and the torso or the head, the two legs'
+  // shins and feet), of those apart in the rest pose (makeApartPairs): each no closer than
+  // apart_fraction of its radii's sum (flesh and clothes give), `min_distance` for the current
+  // shape (setShape).
+  struct Apart {
+    int a, b;
+    double min_distance;
+  };
+  std::vector<Apart> apart;
+  void makeApartPairs();
   std::vector<Dof> dofs;
   std::vector<std::vector<int>> chain;  // dofs moving each joint, ascending
   // Per evaluation.

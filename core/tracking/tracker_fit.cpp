@@ -156,6 +156,22 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
       accumulate(s.joint, q, cam.rotation().transpose() * dr_dx, r, ws);
     }
   }
+  // Parts of the body kept apart.
+  if (opt.apart_weight > 0) {
+    const double w = opt.apart_weight;
+    Eigen::Vector3d on_a, on_b;
+    for (const Apart& pair : apart) {
+      const double d = segmentSegmentDistance(cap_a[pair.a], cap_b[pair.a], cap_a[pair.b],
+                                              cap_b[pair.b], on_a, on_b);
+      const double r = pair.min_distance - d;
+      if (r <= 0) continue;
+      cost += 0.5 * w * r * r;
+      if (!jacobian || d < 1e-9) continue;
+      const Eigen::Vector3d n = (on_a - on_b) / d;
+      accumulate(capsules[pair.a].joint, on_a, -n, r, w);
+      accumulate(capsules[pair.b].joint, on_b, n, r, w);
+    }
+  }
   // The joints' sums into the degrees of freedom: S^T M S and S^T g over each joint's chain.
   if (jacobian) {
     for (size_t j = 0; j < joint_m.size(); ++j) {
