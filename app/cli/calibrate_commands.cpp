@@ -151,20 +151,48 @@ void addMaxRmsOption(CLI::App* command, double& max_rms_px) {
       ->capture_default_str();
 }
 
-}  // namespace
+struct WandArgs {
+  std::string points, session, out, report, initial_rig, truth, save_points;
+  double wand_length_m = 0, hfov_deg = 60, max_rms_px = kDefaultMaxRmsPx;
+  int cameras_per_node = 3, threshold = 160;
+  bool refine_principal_point = false;
+};
 
-void addCalibrateCommands(CLI::App& app) {
-  CLI::App* calibrate = app.add_subcommand(
-      "calibrate", "Calibrate the rig: wand self-calibration, checkerboards, simulated sessions");
-  calibrate->require_subcommand(1);
-
-  // ---- wand ----
-  struct WandArgs {
-    std::string points, session, out, report, initial_rig, truth, save_points;
-    double wand_length_m = 0, hfov_deg = 60, max_rms_px = kDefaultMaxRmsPx;
-    int cameras_per_node = 3, threshold = 160;
-    bool refine_principal_point = false;
+void runWand(const WandArgs& w) {
+  if (w.points.empty() && w.session.empty()) throw Error("give --points FILE or --session DIR");
+  // The rig may replace --initial-rig (a recalibration); it must not replace what it is solved
+  // from.
+  for (const auto& [option, path] : {std::pair<const char*, const std::string&>{"--out", w.out},
+                                     {"--report", w.report},
+                                     {"--save-points", w.save_points}})
+    refuseOutputOverInputs(option, path, {{"--points", w.points}, {"--session", w.session}});
+  WandSession data;
+  if (!w.points.empty()) {
+    data = loadWandSession(w.points);
+  } else {
+    WandDetectorOptions detector;
+    detector.threshold = w.threshold;
+    data = detectWandSession(w.session, detector);
+    if (!w.save_points.empty()) {
+      saveWandSession(data, w.save_points);
+      fmt::print("wrote {}\n", w.save_points);
+    }
+  }
+  WandCalibrationOptions options;
+  if (!w.initial_rig.empty()) options.initial_rig = loadRig(w.initial_rig);
+  options.nominal_hfov_deg = w.hfov_deg;
+  options.cameras_per_node = w.cameras_per_node;
+  options.wand_length_m = w.wand_length_m;
+  options.refine_principal_point = w.refine_principal_point;
+  options.progress = [](const std::string& stage, int done, int total) {
+    printProgress(stage.c_str(), done, total);
   };
+  fmt::print(stderr, "{} cameras, {} samples\n", data.cameraCount(), data.sampleCount());
+  const WandCalibrationResult result = calibrateWand(data, options);
+  writeOutputs(result.rig, result.report, w.out, w.report, w.truth, w.max_rms_px);
+}
+
+void addWandCommand(CLI::App* calibrate) {
   auto w = std::make_shared<WandArgs>();
   CLI::App* wand = calibrate->add_subcommand(
       "wand",
@@ -203,45 +231,52 @@ void addCalibrateCommands(CLI::App& app) {
                  "refine the principal points too (weakly determined: needs thousands of samples); "
                  "by default they stay where they start (image centre or --initial-rig)");
   wand->add_option("--truth", w->truth, "rig file of the truth (simulations): print the errors");
-  wand->callback([w] {
-    if (w->points.empty() && w->session.empty()) throw Error("give --points FILE or --session DIR");
-    // The rig may replace --initial-rig (a recalibration); it must not replace what it is solved
-    // from.
-    for (const auto& [option, path] : {std::pair<const char*, const std::string&>{"--out", w->out},
-                                       {"--report", w->report},
-                                       {"--save-points", w->save_points}})
-      refuseOutputOverInputs(option, path, {{"--points", w->points}, {"--session", w->session}});
-    WandSession data;
-    if (!w->points.empty()) {
-      data = loadWandSession(w->points);
-    } else {
-      WandDetectorOptions detector;
-      detector.threshold = w->threshold;
-      data = detectWandSession(w->session, detector);
-      if (!w->save_points.empty()) {
-        saveWandSession(data, w->save_points);
-        fmt::print("wrote {}\n", w->save_points);
-      }
-    }
-    WandCalibrationOptions options;
-    if (!w->initial_rig.empty()) options.initial_rig = loadRig(w->initial_rig);
-    options.nominal_hfov_deg = w->hfov_deg;
-    options.cameras_per_node = w->cameras_per_node;
-    options.wand_length_m = w->wand_length_m;
-    options.refine_principal_point = w->refine_principal_point;
-    options.progress = [](const std::string& stage, int done, int total) {
-      printProgress(stage.c_str(), done, total);
-    };
-    fmt::print(stderr, "{} cameras, {} samples\n", data.cameraCount(), data.sampleCount());
-    const WandCalibrationResult result = calibrateWand(data, options);
-    writeOutputs(result.rig, result.report, w->out, w->report, w->truth, w->max_rms_px);
-  });
+  wand->callback([w] { runWand(*w); });
+}
 
-  // ---- synth-wand ----
-  struct SynthWandArgs {
-    std::string rig, out, multicamselfcal, session;
-    WandSimulationOptions sim;
-  };
+struct SynthWandArgs {
+  std::string rig, out, multicamselfcal, session;
+  WandSimulationOptions sim;
+};
+
+// The simulated wand filmed through the rig: a recorded session of the dark stage, a frame a
+// sample.
+void filmWandSession(const Rig& rig, const SimulatedWandSession& sim, const std::string& folder) {
+  SessionWriter writer(folder, rig, PixelFormat::kMono8, 30.0, "lumistage calibrate synth-wand");
+  std::vector<Image> images(rig.cameraCount());
+  std::vector<ImageView> views(rig.cameraCount());
+  const int frames = static_cast<int>(sim.points_m.size());
+  for (int f = 0; f < frames; ++f) {
+    for (int c = 0; c < rig.cameraCount(); ++c) {
+      std::vector<Eigen::Vector2d> spots;
+      const std::optional<Eigen::Vector2d> p = rig.camera(c).project(sim.points_m[f]);
+      if (p && rig.camera(c).inImage(*p)) spots.push_back(*p);
+      renderWandFrame(rig.camera(c), spots, images[c]);
+      views[c] = images[c].view();
+    }
+    writer.writeFrame(f, static_cast<int64_t>(f) * 33'333'333, views);
+    printProgress("film", f + 1, frames);
+  }
+  fmt::print("wrote the session {} ({} frames)\n", folder, frames);
+}
+
+void runSynthWand(const SynthWandArgs& sw) {
+  const Rig rig = rigOrReference(sw.rig);
+  const SimulatedWandSession sim = simulateWandSession(rig, sw.sim);
+  saveWandSession(sim.session, sw.out);
+  int observations = 0;
+  for (int c = 0; c < sim.session.cameraCount(); ++c)
+    observations += sim.session.observationCount(c);
+  fmt::print("wrote {}: {} samples, {} observations by {} cameras\n", sw.out,
+             sim.session.sampleCount(), observations, sim.session.cameraCount());
+  if (!sw.session.empty()) filmWandSession(rig, sim, sw.session);
+  if (!sw.multicamselfcal.empty()) {
+    writeMultiCamSelfCalInput(sim.session, sw.multicamselfcal);
+    fmt::print("wrote MultiCamSelfCal input to {}\n", sw.multicamselfcal);
+  }
+}
+
+void addSynthWandCommand(CLI::App* calibrate) {
   auto sw = std::make_shared<SynthWandArgs>();
   CLI::App* synth_wand = calibrate->add_subcommand(
       "synth-wand", "Simulate a wand session through a known rig (the truth) and write its points");
@@ -271,48 +306,39 @@ void addCalibrateCommands(CLI::App& app) {
   synth_wand->add_option(
       "--multicamselfcal", sw->multicamselfcal,
       "also write MultiCamSelfCal's input (points.dat, IdMat.dat, Res.dat) here");
-  synth_wand->callback([sw] {
-    const Rig rig = rigOrReference(sw->rig);
-    const SimulatedWandSession sim = simulateWandSession(rig, sw->sim);
-    saveWandSession(sim.session, sw->out);
-    int observations = 0;
-    for (int c = 0; c < sim.session.cameraCount(); ++c)
-      observations += sim.session.observationCount(c);
-    fmt::print("wrote {}: {} samples, {} observations by {} cameras\n", sw->out,
-               sim.session.sampleCount(), observations, sim.session.cameraCount());
-    if (!sw->session.empty()) {
-      SessionWriter writer(sw->session, rig, PixelFormat::kMono8, 30.0,
-                           "lumistage calibrate synth-wand");
-      std::vector<Image> images(rig.cameraCount());
-      std::vector<ImageView> views(rig.cameraCount());
-      const int frames = static_cast<int>(sim.points_m.size());
-      for (int f = 0; f < frames; ++f) {
-        for (int c = 0; c < rig.cameraCount(); ++c) {
-          std::vector<Eigen::Vector2d> spots;
-          const std::optional<Eigen::Vector2d> p = rig.camera(c).project(sim.points_m[f]);
-          if (p && rig.camera(c).inImage(*p)) spots.push_back(*p);
-          renderWandFrame(rig.camera(c), spots, images[c]);
-          views[c] = images[c].view();
-        }
-        writer.writeFrame(f, static_cast<int64_t>(f) * 33'333'333, views);
-        printProgress("film", f + 1, frames);
-      }
-      fmt::print("wrote the session {} ({} frames)\n", sw->session, frames);
-    }
-    if (!sw->multicamselfcal.empty()) {
-      writeMultiCamSelfCalInput(sim.session, sw->multicamselfcal);
-      fmt::print("wrote MultiCamSelfCal input to {}\n", sw->multicamselfcal);
-    }
-  });
+  synth_wand->callback([sw] { runSynthWand(*sw); });
+}
 
-  // ---- board ----
-  struct BoardArgs {
-    std::string images, out, report, truth, synth_rig;
-    BoardSpec board;
-    int floor_frame = -1, cameras_per_node = 3, synth_frames = 0;
-    double max_rms_px = kDefaultMaxRmsPx;
-    uint32_t seed = 1;
-  };
+struct BoardArgs {
+  std::string images, out, report, truth, synth_rig;
+  BoardSpec board;
+  int floor_frame = -1, cameras_per_node = 3, synth_frames = 0;
+  double max_rms_px = kDefaultMaxRmsPx;
+  uint32_t seed = 1;
+};
+
+void runBoard(const BoardArgs& b) {
+  b.board.check();
+  refuseOutputOverInputs("--out", b.out, {{"--images", b.images}});
+  refuseOutputOverInputs("--report", b.report, {{"--images", b.images}});
+  BoardSession data;
+  if (b.synth_frames > 0) {
+    const Rig rig = rigOrReference(b.synth_rig);
+    data = simulateBoardSession(rig, b.board, b.synth_frames, b.seed).session;
+    fmt::print(stderr, "simulated {} frames: {} board views\n", b.synth_frames, data.views.size());
+  } else if (!b.images.empty()) {
+    data = detectBoardSession(b.images, b.board);
+  } else {
+    throw Error("give --images DIR or --synth-frames N");
+  }
+  BoardCalibrationOptions options;
+  options.floor_frame = b.floor_frame;
+  options.cameras_per_node = b.cameras_per_node;
+  const BoardCalibrationResult result = calibrateBoards(data, options);
+  writeOutputs(result.rig, result.report, b.out, b.report, b.truth, b.max_rms_px);
+}
+
+void addBoardCommand(CLI::App* calibrate) {
   auto b = std::make_shared<BoardArgs>();
   CLI::App* board = calibrate->add_subcommand(
       "board", "Calibrate the rig from checkerboard views (intrinsics, then joint extrinsics)");
@@ -338,27 +364,18 @@ void addCalibrateCommands(CLI::App& app) {
                     "calibration report to write (YAML; default: beside the rig, "
                     "RIG.calibration.yaml, where the studio finds it)");
   board->add_option("--truth", b->truth, "rig file of the truth: print the errors");
-  board->callback([b] {
-    b->board.check();
-    refuseOutputOverInputs("--out", b->out, {{"--images", b->images}});
-    refuseOutputOverInputs("--report", b->report, {{"--images", b->images}});
-    BoardSession data;
-    if (b->synth_frames > 0) {
-      const Rig rig = rigOrReference(b->synth_rig);
-      data = simulateBoardSession(rig, b->board, b->synth_frames, b->seed).session;
-      fmt::print(stderr, "simulated {} frames: {} board views\n", b->synth_frames,
-                 data.views.size());
-    } else if (!b->images.empty()) {
-      data = detectBoardSession(b->images, b->board);
-    } else {
-      throw Error("give --images DIR or --synth-frames N");
-    }
-    BoardCalibrationOptions options;
-    options.floor_frame = b->floor_frame;
-    options.cameras_per_node = b->cameras_per_node;
-    const BoardCalibrationResult result = calibrateBoards(data, options);
-    writeOutputs(result.rig, result.report, b->out, b->report, b->truth, b->max_rms_px);
-  });
+  board->callback([b] { runBoard(*b); });
+}
+
+}  // namespace
+
+void addCalibrateCommands(CLI::App& app) {
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate", "Calibrate the rig: wand self-calibration, checkerboards, simulated sessions");
+  calibrate->require_subcommand(1);
+  addWandCommand(calibrate);
+  addSynthWandCommand(calibrate);
+  addBoardCommand(calibrate);
 }
 
 }  // namespace lumistage

@@ -161,6 +161,300 @@ InfluenceCount countInfluences(const aiScene& scene, const std::vector<unsigned>
   return out;
 }
 
+// The file read by Assimp (through `importer`, which owns the scene), with a scene graph.
+const aiScene* readScene(Assimp::Importer& importer, const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec))
+    fail(path, "no such file (or not a regular file), expected a mesh file");
+  // Assimp recurses per level of a glTF's JSON and nodes: too deep a file is refused before it.
+  checkGltfNesting(path);
+  // FBX pivots would otherwise become helper nodes ("Hips_$AssimpFbx$_Rotation") between bones,
+  // and so joints of ours.
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
+  // For aiProcess_LimitBoneWeights, applied later once the skeleton is known.
+  importer.SetPropertyInteger(AI_CONFIG_PP_LBW_MAX_WEIGHTS, kMaxInfluences);
+  const aiScene* scene =
+      importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_Triangulate |
+                                           aiProcess_GenSmoothNormals | aiProcess_SortByPType);
+  if (scene == nullptr) {
+    // Assimp's reason may quote the rest of the file: shown shortened and escaped.
+    fail(path, std::string("cannot read it as a mesh (unreadable or unsupported format): ") +
+                   printableInput(importer.GetErrorString(), 300));
+  }
+  if (scene->mRootNode == nullptr) fail(path, "no scene graph, expected a rigged mesh");
+  return scene;
+}
+
+// The steps after reading walk the scene graph recursively: its depth is checked first, without
+// recursion (formats other than glTF are not checked before Assimp).
+void checkNodeDepth(const aiScene& scene, const fs::path& path) {
+  constexpr int kMaxDepth = GltfNestingLimits{}.node_depth;
+  std::vector<std::pair<const aiNode*, int>> stack{{scene.mRootNode, 1}};
+  while (!stack.empty()) {
+    const auto [node, depth] = stack.back();
+    stack.pop_back();
+    if (depth > kMaxDepth)
+      fail(path, fmt::format("its nodes nest deeper than {} levels (node {})", kMaxDepth,
+                             quotedInput(node->mName.C_Str(), 64)));
+    for (unsigned k = 0; k < node->mNumChildren; ++k)
+      stack.emplace_back(node->mChildren[k], depth + 1);
+  }
+}
+
+// The triangle meshes (SortByPType moved points and lines into meshes of their own).
+std::vector<unsigned> triangleMeshes(const aiScene& scene, const fs::path& path) {
+  std::vector<unsigned> meshes;
+  for (unsigned i = 0; i < scene.mNumMeshes; ++i) {
+    if (scene.mMeshes[i]->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) meshes.push_back(i);
+  }
+  if (meshes.empty()) fail(path, "no mesh, expected a triangle mesh bound to a skeleton");
+  return meshes;
+}
+
+// The skeleton: bone nodes and their ancestors up to the lowest common one.
+struct SceneSkeleton {
+  const aiNode* root = nullptr;
+  std::set<const aiNode*> nodes;
+};
+
+SceneSkeleton findSkeleton(const aiScene& scene, const std::vector<unsigned>& meshes,
+                           const fs::path& path) {
+  SceneSkeleton out;
+  std::vector<const aiNode*> mesh_roots(scene.mNumMeshes, nullptr);
+  std::set<const aiNode*> bone_nodes;
+  for (unsigned i : meshes) {
+    const aiMesh* m = scene.mMeshes[i];
+    for (unsigned b = 0; b < m->mNumBones; ++b) {
+      const aiNode* node = scene.mRootNode->FindNode(m->mBones[b]->mName);
+      if (node == nullptr) {
+        fail(path, fmt::format("bone '{}' of mesh '{}' has no node in the scene graph",
+                               m->mBones[b]->mName.C_Str(), m->mName.C_Str()));
+      }
+      bone_nodes.insert(node);
+      mesh_roots[i] = mesh_roots[i] ? commonAncestor(mesh_roots[i], node) : node;
+    }
+    if (mesh_roots[i] == nullptr) continue;
+    for (unsigned k : meshes) {
+      if (k >= i || mesh_roots[k] == nullptr) continue;
+      if (!isAncestorOrSelf(mesh_roots[k], mesh_roots[i]) &&
+          !isAncestorOrSelf(mesh_roots[i], mesh_roots[k])) {
+        fail(path, fmt::format("meshes '{}' and '{}' are bound to different skeletons (rooted at "
+                               "'{}' and '{}'), expected one skeleton",
+                               scene.mMeshes[k]->mName.C_Str(), m->mName.C_Str(),
+                               mesh_roots[k]->mName.C_Str(), mesh_roots[i]->mName.C_Str()));
+      }
+    }
+    out.root = out.root ? commonAncestor(out.root, mesh_roots[i]) : mesh_roots[i];
+  }
+  if (out.root == nullptr) {
+    fail(path, "no skeleton: the mesh has no bones, expected a mesh rigged to a skeleton");
+  }
+  for (const aiNode* node : bone_nodes) {
+    for (; node != out.root; node = node->mParent) out.nodes.insert(node);
+  }
+  out.nodes.insert(out.root);
+  return out;
+}
+
+// World bind positions: a bone's from its offset matrix (in its mesh's space, then through the
+// mesh node), another joint's from its node. Rotated bind frames keep only their positions:
+// our rest frames are world aligned.
+std::map<const aiNode*, Eigen::Vector3f> bindPositions(const aiScene& scene,
+                                                       const std::vector<unsigned>& meshes) {
+  std::map<const aiNode*, Eigen::Vector3f> bind_position;
+  for (unsigned i : meshes) {
+    const aiMesh* m = scene.mMeshes[i];
+    const aiNode* mesh_node = nodeOfMesh(scene.mRootNode, i);
+    const Eigen::Affine3f mesh_global =
+        mesh_node ? globalTransform(mesh_node) : Eigen::Affine3f::Identity();
+    for (unsigned b = 0; b < m->mNumBones; ++b) {
+      const aiNode* node = scene.mRootNode->FindNode(m->mBones[b]->mName);
+      if (bind_position.count(node)) continue;
+      const Eigen::Affine3f offset = toEigen(m->mBones[b]->mOffsetMatrix);
+      bind_position[node] = mesh_global * offset.inverse().translation();
+    }
+  }
+  return bind_position;
+}
+
+// The skeleton's joints in our coordinates, each node's joint, and the map from the scene's
+// coordinates to ours.
+struct ImportedJoints {
+  std::vector<Joint> joints;
+  std::map<const aiNode*, int> joint_of;
+  Eigen::Matrix3f c;
+};
+
+// The joints in the scene's coordinates, parents first; then the file's axes and units (and,
+// where its format cannot tell, its skeleton) decide the map to ours.
+ImportedJoints importJoints(const aiScene& scene, const std::vector<unsigned>& meshes,
+                            const SceneSkeleton& skeleton, const fs::path& path) {
+  const std::map<const aiNode*, Eigen::Vector3f> bind_position = bindPositions(scene, meshes);
+  ImportedJoints out;
+  std::vector<std::string> names;
+  std::vector<int> parents;
+  std::vector<Eigen::Vector3f> scene_positions;
+  auto addJoints = [&](auto&& self, const aiNode* node, int parent) -> void {
+    if (!skeleton.nodes.count(node)) return;
+    const auto it = bind_position.find(node);
+    const int index = static_cast<int>(names.size());
+    out.joint_of[node] = index;
+    names.emplace_back(node->mName.C_Str());
+    parents.push_back(parent);
+    scene_positions.push_back(it != bind_position.end() ? it->second
+                                                        : globalTransform(node).translation());
+    for (unsigned k = 0; k < node->mNumChildren; ++k) self(self, node->mChildren[k], index);
+  };
+  addJoints(addJoints, skeleton.root, -1);
+  out.c = sceneToOurs(scene, path, skeletonAxes(names, scene_positions));
+  const Skeleton human = makeHumanSkeleton();
+  for (size_t j = 0; j < names.size(); ++j) {
+    const Eigen::Vector3f p = out.c * scene_positions[j];
+    const Eigen::Vector3f offset =
+        parents[j] < 0 ? p : Eigen::Vector3f(p - out.c * scene_positions[parents[j]]);
+    out.joints.push_back(
+        {names[j], parents[j], offset.cast<double>(), importedLimits(names[j], human)});
+  }
+  return out;
+}
+
+// Mesh m's per-vertex materials into out.materials from `base` on, when its material says it
+// carries them (kMaterialsName); whether it does.
+bool readMaterials(const aiScene& scene, const aiMesh& m, size_t base, size_t total,
+                   const fs::path& path, SkinnedMesh& out) {
+  aiString material_name;
+  const bool has_materials =
+      m.mMaterialIndex < scene.mNumMaterials &&
+      scene.mMaterials[m.mMaterialIndex]->Get(AI_MATKEY_NAME, material_name) == AI_SUCCESS &&
+      std::string(material_name.C_Str()) == kMaterialsName;
+  if (!has_materials) return false;
+  if (m.mTextureCoords[0] == nullptr) {
+    fail(path, fmt::format("mesh '{}' has material '{}' but no texture coordinates, expected "
+                           "material indices in set 0",
+                           m.mName.C_Str(), kMaterialsName));
+  }
+  out.materials.resize(total);
+  for (unsigned v = 0; v < m.mNumVertices; ++v) {
+    const float u = m.mTextureCoords[0][v].x;
+    if (!(u >= 0 && u <= 255 && u == std::round(u))) {
+      fail(path, fmt::format("mesh '{}' vertex {}: material index {} is not a whole number "
+                             "from 0 to 255",
+                             m.mName.C_Str(), v, u));
+    }
+    out.materials[base + v] = static_cast<uint8_t>(u);
+  }
+  return true;
+}
+
+// Each vertex's bone influences: (joint, weight) pairs.
+using Influences = std::vector<std::vector<std::pair<int, float>>>;
+
+// Vertices, triangles and weights of every mesh, merged: the rest surface and the materials into
+// `out`, the vertices' influences returned.
+Influences readGeometry(const aiScene& scene, const std::vector<unsigned>& meshes,
+                        const ImportedJoints& imported, const fs::path& path, SkinnedMesh& out) {
+  const Eigen::Matrix3f& c = imported.c;
+  const bool mirrored = c.determinant() < 0;
+  size_t total = 0;
+  for (unsigned i : meshes) total += scene.mMeshes[i]->mNumVertices;
+  if (total == 0) fail(path, "its meshes have no vertices, expected a triangle mesh");
+  out.rest.positions.resize(3, static_cast<Eigen::Index>(total));
+  out.rest.normals.resize(3, static_cast<Eigen::Index>(total));
+  Influences influences(total);
+  int material_meshes = 0;
+  size_t base = 0;
+  for (unsigned i : meshes) {
+    const aiMesh* m = scene.mMeshes[i];
+    const aiNode* mesh_node = nodeOfMesh(scene.mRootNode, i);
+    const Eigen::Affine3f mesh_global =
+        mesh_node ? globalTransform(mesh_node) : Eigen::Affine3f::Identity();
+    const Eigen::Matrix3f normal_matrix = mesh_global.linear().inverse().transpose();
+    if (m->mNormals == nullptr)
+      fail(path, "mesh '" + std::string(m->mName.C_Str()) + "' has no normals");
+    for (unsigned v = 0; v < m->mNumVertices; ++v) {
+      const Eigen::Vector3f p(m->mVertices[v].x, m->mVertices[v].y, m->mVertices[v].z);
+      const Eigen::Vector3f n(m->mNormals[v].x, m->mNormals[v].y, m->mNormals[v].z);
+      out.rest.positions.col(base + v) = c * (mesh_global * p);
+      out.rest.normals.col(base + v) = (c * (normal_matrix * n)).normalized();
+    }
+    for (unsigned f = 0; f < m->mNumFaces; ++f) {
+      const aiFace& face = m->mFaces[f];
+      if (face.mNumIndices != 3) continue;  // points and lines of a mixed mesh
+      // A mirror (a left-handed file) turns the winding: swap two corners back.
+      const int b = mirrored ? 2 : 1;
+      out.rest.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[b],
+                                      base + face.mIndices[3 - b]);
+    }
+    for (unsigned b = 0; b < m->mNumBones; ++b) {
+      const aiBone* bone = m->mBones[b];
+      const int joint = imported.joint_of.at(scene.mRootNode->FindNode(bone->mName));
+      for (unsigned w = 0; w < bone->mNumWeights; ++w) {
+        const aiVertexWeight& vw = bone->mWeights[w];  // indices checked by countInfluences
+        if (vw.mWeight > 0) influences[base + vw.mVertexId].emplace_back(joint, vw.mWeight);
+      }
+    }
+    if (readMaterials(scene, *m, base, total, path, out)) ++material_meshes;
+    base += m->mNumVertices;
+  }
+  if (material_meshes != 0 && material_meshes != static_cast<int>(meshes.size())) {
+    fail(path, fmt::format("{} of {} meshes carry per-vertex materials, expected all or none",
+                           material_meshes, meshes.size()));
+  }
+  return influences;
+}
+
+// Weights: each vertex weighted, at most four (the largest) kept, normalised to sum 1.
+void setWeights(Influences& influences, const InfluenceCount& crowding, const fs::path& path,
+                SkinnedMesh& out) {
+  const size_t total = influences.size();
+  const int unweighted = static_cast<int>(
+      std::count_if(influences.begin(), influences.end(), [](const auto& l) { return l.empty(); }));
+  if (unweighted > 0) {
+    fail(path, fmt::format("{} of {} vertices have no bone weights, expected every vertex bound to "
+                           "the skeleton",
+                           unweighted, total));
+  }
+  if (crowding.crowded > 0) {
+    spdlog::warn(
+        "{}: {} of {} vertices have more than {} bone influences (up to {}): keeping the "
+        "{} largest of each, renormalised",
+        path.string(), crowding.crowded, total, kMaxInfluences, crowding.most, kMaxInfluences);
+  }
+  out.skin.joints.assign(total, {0, 0, 0, 0});
+  out.skin.weights.assign(total, {0, 0, 0, 0});
+  for (size_t v = 0; v < total; ++v) {
+    auto& list = influences[v];
+    if (list.size() > kMaxInfluences) {  // Assimp's step has done this; here it is certain
+      std::partial_sort(list.begin(), list.begin() + kMaxInfluences, list.end(),
+                        [](const auto& a, const auto& b) { return a.second > b.second; });
+      list.resize(kMaxInfluences);
+    }
+    float sum = 0;
+    for (const auto& [joint, weight] : list) sum += weight;
+    for (size_t k = 0; k < list.size(); ++k) {
+      out.skin.joints[v][k] = static_cast<uint16_t>(list[k].first);
+      out.skin.weights[v][k] = list[k].second / sum;
+    }
+  }
+}
+
+// The mesh validated, and its height checked.
+void checkMesh(const SkinnedMesh& out, const fs::path& path) {
+  try {
+    out.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(path, std::string("unusable mesh: ") + e.what());
+  }
+  // A human's height tells whether the units were right where the file gave none (or wrong ones).
+  const float height = out.rest.positions.row(2).maxCoeff() - out.rest.positions.row(2).minCoeff();
+  if (!(height >= 0.2f && height <= 3.0f)) {
+    spdlog::warn(
+        "{}: the body stands {:.3g} m tall as read, expected 0.2 to 3 m: are its units "
+        "(or the file's unit scale) right?",
+        path.string(), height);
+  }
+}
+
 }  // namespace
 
 void saveSkinnedMeshGltf(const SkinnedMesh& mesh, const fs::path& path) {
@@ -230,131 +524,12 @@ void saveSkinnedMeshGltf(const SkinnedMesh& mesh, const fs::path& path) {
 }
 
 SkinnedMesh loadSkinnedMesh(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec))
-    fail(path, "no such file (or not a regular file), expected a mesh file");
-  // Assimp recurses per level of a glTF's JSON and nodes: too deep a file is refused before it.
-  checkGltfNesting(path);
   Assimp::Importer importer;
-  // FBX pivots would otherwise become helper nodes ("Hips_$AssimpFbx$_Rotation") between bones,
-  // and so joints of ours.
-  importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
-  // For aiProcess_LimitBoneWeights, applied below once the skeleton is known.
-  importer.SetPropertyInteger(AI_CONFIG_PP_LBW_MAX_WEIGHTS, kMaxInfluences);
-  const aiScene* scene =
-      importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_Triangulate |
-                                           aiProcess_GenSmoothNormals | aiProcess_SortByPType);
-  if (scene == nullptr) {
-    // Assimp's reason may quote the rest of the file: shown shortened and escaped.
-    fail(path, std::string("cannot read it as a mesh (unreadable or unsupported format): ") +
-                   printableInput(importer.GetErrorString(), 300));
-  }
-  if (scene->mRootNode == nullptr) fail(path, "no scene graph, expected a rigged mesh");
-  // What follows walks the scene graph recursively: its depth is checked first, without recursion
-  // (formats other than glTF are not checked before Assimp).
-  {
-    constexpr int kMaxDepth = GltfNestingLimits{}.node_depth;
-    std::vector<std::pair<const aiNode*, int>> stack{{scene->mRootNode, 1}};
-    while (!stack.empty()) {
-      const auto [node, depth] = stack.back();
-      stack.pop_back();
-      if (depth > kMaxDepth)
-        fail(path, fmt::format("its nodes nest deeper than {} levels (node {})", kMaxDepth,
-                               quotedInput(node->mName.C_Str(), 64)));
-      for (unsigned k = 0; k < node->mNumChildren; ++k)
-        stack.emplace_back(node->mChildren[k], depth + 1);
-    }
-  }
-
-  // The triangle meshes (SortByPType moved points and lines into meshes of their own).
-  std::vector<unsigned> meshes;
-  for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
-    if (scene->mMeshes[i]->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) meshes.push_back(i);
-  }
-  if (meshes.empty()) fail(path, "no mesh, expected a triangle mesh bound to a skeleton");
-
-  // The skeleton: bone nodes and their ancestors up to the lowest common one.
-  const aiNode* skeleton_root = nullptr;
-  std::vector<const aiNode*> mesh_roots(scene->mNumMeshes, nullptr);
-  std::set<const aiNode*> bone_nodes;
-  for (unsigned i : meshes) {
-    const aiMesh* m = scene->mMeshes[i];
-    for (unsigned b = 0; b < m->mNumBones; ++b) {
-      const aiNode* node = scene->mRootNode->FindNode(m->mBones[b]->mName);
-      if (node == nullptr) {
-        fail(path, fmt::format("bone '{}' of mesh '{}' has no node in the scene graph",
-                               m->mBones[b]->mName.C_Str(), m->mName.C_Str()));
-      }
-      bone_nodes.insert(node);
-      mesh_roots[i] = mesh_roots[i] ? commonAncestor(mesh_roots[i], node) : node;
-    }
-    if (mesh_roots[i] == nullptr) continue;
-    for (unsigned k : meshes) {
-      if (k >= i || mesh_roots[k] == nullptr) continue;
-      if (!isAncestorOrSelf(mesh_roots[k], mesh_roots[i]) &&
-          !isAncestorOrSelf(mesh_roots[i], mesh_roots[k])) {
-        fail(path, fmt::format("meshes '{}' and '{}' are bound to different skeletons (rooted at "
-                               "'{}' and '{}'), expected one skeleton",
-                               scene->mMeshes[k]->mName.C_Str(), m->mName.C_Str(),
-                               mesh_roots[k]->mName.C_Str(), mesh_roots[i]->mName.C_Str()));
-      }
-    }
-    skeleton_root = skeleton_root ? commonAncestor(skeleton_root, mesh_roots[i]) : mesh_roots[i];
-  }
-  if (skeleton_root == nullptr) {
-    fail(path, "no skeleton: the mesh has no bones, expected a mesh rigged to a skeleton");
-  }
-  std::set<const aiNode*> in_skeleton;
-  for (const aiNode* node : bone_nodes) {
-    for (; node != skeleton_root; node = node->mParent) in_skeleton.insert(node);
-  }
-  in_skeleton.insert(skeleton_root);
-
-  // World bind positions: a bone's from its offset matrix (in its mesh's space, then through the
-  // mesh node), another joint's from its node. Rotated bind frames keep only their positions:
-  // our rest frames are world aligned.
-  std::map<const aiNode*, Eigen::Vector3f> bind_position;
-  for (unsigned i : meshes) {
-    const aiMesh* m = scene->mMeshes[i];
-    const aiNode* mesh_node = nodeOfMesh(scene->mRootNode, i);
-    const Eigen::Affine3f mesh_global =
-        mesh_node ? globalTransform(mesh_node) : Eigen::Affine3f::Identity();
-    for (unsigned b = 0; b < m->mNumBones; ++b) {
-      const aiNode* node = scene->mRootNode->FindNode(m->mBones[b]->mName);
-      if (bind_position.count(node)) continue;
-      const Eigen::Affine3f offset = toEigen(m->mBones[b]->mOffsetMatrix);
-      bind_position[node] = mesh_global * offset.inverse().translation();
-    }
-  }
-  // The joints in the scene's coordinates, parents first; then the file's axes and units (and,
-  // where its format cannot tell, its skeleton) decide the map to ours.
-  std::vector<std::string> names;
-  std::vector<int> parents;
-  std::vector<Eigen::Vector3f> scene_positions;
-  std::map<const aiNode*, int> joint_of;
-  auto addJoints = [&](auto&& self, const aiNode* node, int parent) -> void {
-    if (!in_skeleton.count(node)) return;
-    const auto it = bind_position.find(node);
-    const int index = static_cast<int>(names.size());
-    joint_of[node] = index;
-    names.emplace_back(node->mName.C_Str());
-    parents.push_back(parent);
-    scene_positions.push_back(it != bind_position.end() ? it->second
-                                                        : globalTransform(node).translation());
-    for (unsigned k = 0; k < node->mNumChildren; ++k) self(self, node->mChildren[k], index);
-  };
-  addJoints(addJoints, skeleton_root, -1);
-  const Eigen::Matrix3f c = sceneToOurs(*scene, path, skeletonAxes(names, scene_positions));
-  const bool mirrored = c.determinant() < 0;
-  const Skeleton human = makeHumanSkeleton();
-  std::vector<Joint> joints;
-  for (size_t j = 0; j < names.size(); ++j) {
-    const Eigen::Vector3f p = c * scene_positions[j];
-    const Eigen::Vector3f offset =
-        parents[j] < 0 ? p : Eigen::Vector3f(p - c * scene_positions[parents[j]]);
-    joints.push_back(
-        {names[j], parents[j], offset.cast<double>(), importedLimits(names[j], human)});
-  }
+  const aiScene* scene = readScene(importer, path);
+  checkNodeDepth(*scene, path);
+  const std::vector<unsigned> meshes = triangleMeshes(*scene, path);
+  const SceneSkeleton skeleton = findSkeleton(*scene, meshes, path);
+  ImportedJoints imported = importJoints(*scene, meshes, skeleton, path);
 
   // More than four influences on a vertex: Assimp keeps the four largest and renormalises them.
   // Counted (and vertex indices checked) before, as the step drops what it does not keep, bones
@@ -370,123 +545,13 @@ SkinnedMesh loadSkinnedMesh(const fs::path& path) {
 
   SkinnedMesh out;
   try {
-    out.skeleton = Skeleton(std::move(joints));
+    out.skeleton = Skeleton(std::move(imported.joints));
   } catch (const std::invalid_argument& e) {
     fail(path, std::string("unusable skeleton: ") + e.what());
   }
-
-  // Vertices, triangles and weights of every mesh, merged.
-  size_t total = 0;
-  for (unsigned i : meshes) total += scene->mMeshes[i]->mNumVertices;
-  if (total == 0) fail(path, "its meshes have no vertices, expected a triangle mesh");
-  out.rest.positions.resize(3, static_cast<Eigen::Index>(total));
-  out.rest.normals.resize(3, static_cast<Eigen::Index>(total));
-  std::vector<std::vector<std::pair<int, float>>> influences(total);
-  int material_meshes = 0;
-  size_t base = 0;
-  for (unsigned i : meshes) {
-    const aiMesh* m = scene->mMeshes[i];
-    const aiNode* mesh_node = nodeOfMesh(scene->mRootNode, i);
-    const Eigen::Affine3f mesh_global =
-        mesh_node ? globalTransform(mesh_node) : Eigen::Affine3f::Identity();
-    const Eigen::Matrix3f normal_matrix = mesh_global.linear().inverse().transpose();
-    if (m->mNormals == nullptr)
-      fail(path, "mesh '" + std::string(m->mName.C_Str()) + "' has no normals");
-    for (unsigned v = 0; v < m->mNumVertices; ++v) {
-      const Eigen::Vector3f p(m->mVertices[v].x, m->mVertices[v].y, m->mVertices[v].z);
-      const Eigen::Vector3f n(m->mNormals[v].x, m->mNormals[v].y, m->mNormals[v].z);
-      out.rest.positions.col(base + v) = c * (mesh_global * p);
-      out.rest.normals.col(base + v) = (c * (normal_matrix * n)).normalized();
-    }
-    for (unsigned f = 0; f < m->mNumFaces; ++f) {
-      const aiFace& face = m->mFaces[f];
-      if (face.mNumIndices != 3) continue;  // points and lines of a mixed mesh
-      // A mirror (a left-handed file) turns the winding: swap two corners back.
-      const int b = mirrored ? 2 : 1;
-      out.rest.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[b],
-                                      base + face.mIndices[3 - b]);
-    }
-    for (unsigned b = 0; b < m->mNumBones; ++b) {
-      const aiBone* bone = m->mBones[b];
-      const int joint = joint_of.at(scene->mRootNode->FindNode(bone->mName));
-      for (unsigned w = 0; w < bone->mNumWeights; ++w) {
-        const aiVertexWeight& vw = bone->mWeights[w];  // indices checked by countInfluences
-        if (vw.mWeight > 0) influences[base + vw.mVertexId].emplace_back(joint, vw.mWeight);
-      }
-    }
-    aiString material_name;
-    const bool has_materials =
-        m->mMaterialIndex < scene->mNumMaterials &&
-        scene->mMaterials[m->mMaterialIndex]->Get(AI_MATKEY_NAME, material_name) == AI_SUCCESS &&
-        std::string(material_name.C_Str()) == kMaterialsName;
-    if (has_materials) {
-      if (m->mTextureCoords[0] == nullptr) {
-        fail(path, fmt::format("mesh '{}' has material '{}' but no texture coordinates, expected "
-                               "material indices in set 0",
-                               m->mName.C_Str(), kMaterialsName));
-      }
-      out.materials.resize(total);
-      for (unsigned v = 0; v < m->mNumVertices; ++v) {
-        const float u = m->mTextureCoords[0][v].x;
-        if (!(u >= 0 && u <= 255 && u == std::round(u))) {
-          fail(path, fmt::format("mesh '{}' vertex {}: material index {} is not a whole number "
-                                 "from 0 to 255",
-                                 m->mName.C_Str(), v, u));
-        }
-        out.materials[base + v] = static_cast<uint8_t>(u);
-      }
-      ++material_meshes;
-    }
-    base += m->mNumVertices;
-  }
-  if (material_meshes != 0 && material_meshes != static_cast<int>(meshes.size())) {
-    fail(path, fmt::format("{} of {} meshes carry per-vertex materials, expected all or none",
-                           material_meshes, meshes.size()));
-  }
-
-  // Weights: each vertex weighted, at most four (the largest) kept, normalised to sum 1.
-  const int unweighted = static_cast<int>(
-      std::count_if(influences.begin(), influences.end(), [](const auto& l) { return l.empty(); }));
-  if (unweighted > 0) {
-    fail(path, fmt::format("{} of {} vertices have no bone weights, expected every vertex bound to "
-                           "the skeleton",
-                           unweighted, total));
-  }
-  if (crowding.crowded > 0) {
-    spdlog::warn(
-        "{}: {} of {} vertices have more than {} bone influences (up to {}): keeping the "
-        "{} largest of each, renormalised",
-        path.string(), crowding.crowded, total, kMaxInfluences, crowding.most, kMaxInfluences);
-  }
-  out.skin.joints.assign(total, {0, 0, 0, 0});
-  out.skin.weights.assign(total, {0, 0, 0, 0});
-  for (size_t v = 0; v < total; ++v) {
-    auto& list = influences[v];
-    if (list.size() > kMaxInfluences) {  // Assimp's step has done this; here it is certain
-      std::partial_sort(list.begin(), list.begin() + kMaxInfluences, list.end(),
-                        [](const auto& a, const auto& b) { return a.second > b.second; });
-      list.resize(kMaxInfluences);
-    }
-    float sum = 0;
-    for (const auto& [joint, weight] : list) sum += weight;
-    for (size_t k = 0; k < list.size(); ++k) {
-      out.skin.joints[v][k] = static_cast<uint16_t>(list[k].first);
-      out.skin.weights[v][k] = list[k].second / sum;
-    }
-  }
-  try {
-    out.validate();
-  } catch (const std::invalid_argument& e) {
-    fail(path, std::string("unusable mesh: ") + e.what());
-  }
-  // A human's height tells whether the units were right where the file gave none (or wrong ones).
-  const float height = out.rest.positions.row(2).maxCoeff() - out.rest.positions.row(2).minCoeff();
-  if (!(height >= 0.2f && height <= 3.0f)) {
-    spdlog::warn(
-        "{}: the body stands {:.3g} m tall as read, expected 0.2 to 3 m: are its units "
-        "(or the file's unit scale) right?",
-        path.string(), height);
-  }
+  Influences influences = readGeometry(*scene, meshes, imported, path, out);
+  setWeights(influences, crowding, path, out);
+  checkMesh(out, path);
   return out;
 }
 

@@ -209,38 +209,52 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
   return messages;
 }
 
-void CameraNode::captureLoop(const std::atomic<bool>& stop) {
-  // Frames arrive camera by camera; a set goes out when every own camera that delivers is in. A
-  // camera that has delivered none of the node's last kSilentFrames sets (unplugged, its cable
-  // pulled, its port dead, or only late) no longer holds its node's sets back: they go out with
-  // the cameras there are, and the node says so. (Waiting for it lost the node's other cameras
-  // too: every set was incomplete and dropped.)
-  // A camera not heard from yet is waited for during the first kStartFrames frame ids.
-  // (kSilentFrames: the 4 sets the node waited on before.)
-  constexpr int64_t kSilentFrames = 4, kStartFrames = 60;
-  std::map<int64_t, std::shared_ptr<Set>> assembling;
-  std::vector<int64_t> last_id(cameras_.size(), -1);
-  std::vector<uint8_t> told_silent(cameras_.size(), 0), live(cameras_.size(), 0);
+// Frames arrive camera by camera; a set goes out when every own camera that delivers is in. A
+// camera that has delivered none of the node's last kSilentFrames sets (unplugged, its cable
+// pulled, its port dead, or only late) no longer holds its node's sets back: they go out with
+// the cameras there are, and the node says so. (Waiting for it lost the node's other cameras
+// too: every set was incomplete and dropped.)
+// A camera not heard from yet is waited for during the first kStartFrames frame ids.
+// (kSilentFrames: the 4 sets the node waited on before.)
+struct CameraNode::Capture {
+  static constexpr int64_t kSilentFrames = 4, kStartFrames = 60;
   // A camera whose frames come more than kSilentFrames late (a loaded PC) rather than not at all:
   // the sets went out without it, and the take waits for its frames (TakeBacklog). It is said to
   // deliver nothing only after kTellSilentAfter without a frame; lateness is said at most every
   // kTellLateEvery.
-  constexpr auto kTellSilentAfter = std::chrono::seconds(1),
-                 kTellLateEvery = std::chrono::seconds(10);
-  TakeBacklog for_take(takes_, *frame_pool_, cameras_.size());
-  std::vector<std::chrono::steady_clock::time_point> delivered(cameras_.size());
-  std::vector<int64_t> sets_without(cameras_.size(), 0);
-  auto told_late_at = std::chrono::steady_clock::now();  // counted since
+  static constexpr auto kTellSilentAfter = std::chrono::seconds(1),
+                        kTellLateEvery = std::chrono::seconds(10);
+  // Every camera silent (no set goes out, so the per-camera warning never comes): said once
+  // after kAllSilent, and again when frames come back.
+  static constexpr auto kAllSilent = std::chrono::seconds(2);
+
+  Capture(TakeRecorder& takes, FramePool& pool, size_t cameras)
+      : last_id(cameras, -1),
+        told_silent(cameras, 0),
+        live(cameras, 0),
+        for_take(takes, pool, cameras),
+        delivered(cameras),
+        sets_without(cameras, 0) {}
+
+  std::map<int64_t, std::shared_ptr<Set>> assembling;
+  std::vector<int64_t> last_id;
+  std::vector<uint8_t> told_silent, live;
+  TakeBacklog for_take;
+  std::vector<std::chrono::steady_clock::time_point> delivered;
+  std::vector<int64_t> sets_without;
+  std::chrono::steady_clock::time_point told_late_at =
+      std::chrono::steady_clock::now();  // counted since
   int64_t newest = -1, first = -1, applied_offset = 0;
   // The newest kSilentFrames + 1 ids seen, a ring (recent_count of them in all).
   std::array<int64_t, kSilentFrames + 1> recent_ids{};
   int64_t recent_count = 0;
   CameraFrame frame;
-  // Every camera silent (no set goes out, so the per-camera warning below never comes): said once
-  // after kAllSilent, and again when frames come back.
-  constexpr auto kAllSilent = std::chrono::seconds(2);
-  auto last_frame_at = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point last_frame_at = std::chrono::steady_clock::now();
   bool told_all_silent = false;
+};
+
+void CameraNode::captureLoop(const std::atomic<bool>& stop) {
+  Capture capture(takes_, *frame_pool_, cameras_.size());
   while (!stop) {
     bool got = false;
     {
@@ -248,146 +262,181 @@ void CameraNode::captureLoop(const std::atomic<bool>& stop) {
       while (source_waiters_.load(std::memory_order_acquire) > 0) std::this_thread::yield();
       std::lock_guard lock(source_mutex_);
       if (source_->finished()) break;
-      got = source_->next(frame, std::chrono::milliseconds(5));
+      got = source_->next(capture.frame, std::chrono::milliseconds(5));
     }
     const auto now = std::chrono::steady_clock::now();
-    if (!got) {
-      if (!told_all_silent && now - last_frame_at > kAllSilent) {
-        told_all_silent = true;
-        spdlog::warn(
-            "node {}: none of its {} cameras has delivered a frame for {} s (powered? "
-            "cabled? acquisition stopped?)",
-            name_, cameras_.size(),
-            std::chrono::duration_cast<std::chrono::seconds>(now - last_frame_at).count());
-      }
-      continue;
-    }
-    last_frame_at = now;
-    if (told_all_silent) {
-      told_all_silent = false;
-      spdlog::info("node {}: frames again", name_);
-    }
-    const auto k = std::find(cameras_.begin(), cameras_.end(), frame.camera) - cameras_.begin();
+    tellAllSilent(capture, got, now);
+    if (!got) continue;
+    const auto k =
+        std::find(cameras_.begin(), cameras_.end(), capture.frame.camera) - cameras_.begin();
     if (k >= static_cast<long>(cameras_.size())) continue;
-    // The studio's shift, when its cameras count other ids than the other nodes' (followFrameIds):
-    // from the frame it is first seen on, sets begin afresh, as after a restart.
-    newest_raw_id_ = frame.frame_id;
-    if (applied_offset != 0 && frame.frame_id + applied_offset < 0) {
-      // Its cameras counted from near 0 again under a shift back: the shift no longer holds
-      // (the studio tells it another if need be).
-      spdlog::warn("node {}: its cameras restarted their count: its ids no longer moved by {}",
-                   name_, applied_offset);
-      int64_t expected = applied_offset;
-      id_offset_.compare_exchange_strong(expected, 0);
+    followIds(capture);
+    if (!addFrame(capture, size_t(k), now)) continue;
+    sendWaitedSets(capture, now);
+    // A camera fell behind.
+    while (capture.assembling.size() > 4) capture.assembling.erase(capture.assembling.begin());
+    capture.for_take.release(capture.newest, false);  // those that waited long enough
+  }
+  capture.for_take.release(capture.newest, true);
+  source_finished_ = true;
+}
+
+void CameraNode::tellAllSilent(Capture& capture, bool got,
+                               std::chrono::steady_clock::time_point now) {
+  if (!got) {
+    if (!capture.told_all_silent && now - capture.last_frame_at > Capture::kAllSilent) {
+      capture.told_all_silent = true;
+      spdlog::warn(
+          "node {}: none of its {} cameras has delivered a frame for {} s (powered? "
+          "cabled? acquisition stopped?)",
+          name_, cameras_.size(),
+          std::chrono::duration_cast<std::chrono::seconds>(now - capture.last_frame_at).count());
     }
-    if (const int64_t shift = id_offset_; shift != applied_offset) {
-      applied_offset = shift;
-      first = -1;
+    return;
+  }
+  capture.last_frame_at = now;
+  if (capture.told_all_silent) {
+    capture.told_all_silent = false;
+    spdlog::info("node {}: frames again", name_);
+  }
+}
+
+void CameraNode::followIds(Capture& capture) {
+  CameraFrame& frame = capture.frame;
+  // The studio's shift, when its cameras count other ids than the other nodes' (followFrameIds):
+  // from the frame it is first seen on, sets begin afresh, as after a restart.
+  newest_raw_id_ = frame.frame_id;
+  if (capture.applied_offset != 0 && frame.frame_id + capture.applied_offset < 0) {
+    // Its cameras counted from near 0 again under a shift back: the shift no longer holds
+    // (the studio tells it another if need be).
+    spdlog::warn("node {}: its cameras restarted their count: its ids no longer moved by {}", name_,
+                 capture.applied_offset);
+    int64_t expected = capture.applied_offset;
+    id_offset_.compare_exchange_strong(expected, 0);
+  }
+  if (const int64_t shift = id_offset_; shift != capture.applied_offset) {
+    capture.applied_offset = shift;
+    capture.first = -1;
+  }
+  frame.frame_id += capture.applied_offset;
+  // First, or cameras restarted.
+  if (capture.first < 0 || frame.frame_id < capture.newest - kFrameIdWindow) {
+    capture.first = capture.newest = frame.frame_id;
+    capture.recent_count = 0;
+    capture.recent_ids[capture.recent_count++] = capture.newest;
+    std::fill(capture.last_id.begin(), capture.last_id.end(), -1);
+    capture.assembling.clear();  // the old ids' sets would outlast every new one (lowest go first)
+    capture.for_take.release(capture.newest, true);
+  }
+}
+
+bool CameraNode::addFrame(Capture& capture, size_t k, std::chrono::steady_clock::time_point now) {
+  CameraFrame& frame = capture.frame;
+  capture.delivered[k] = now;
+  // The late frame of a set that went out without it: for the take. Late, not gone: counted as
+  // delivered, so that a camera that is always last (a slower link) is awaited again once it
+  // keeps up.
+  if (const int64_t id = frame.frame_id; capture.for_take.catchLate(frame, k)) {
+    capture.last_id[k] = std::max(capture.last_id[k], id);
+    capture.for_take.release(capture.newest, false);
+    return false;
+  }
+  std::shared_ptr<Set>& set = capture.assembling[frame.frame_id];
+  if (!set) {
+    set = newSet();
+    set->frame_id = frame.frame_id;
+    set->frames.resize(cameras_.size());
+  }
+  std::swap(set->frames[k], frame);
+  frame_pool_->take(frame);  // buffers of a set let go, for the next frame
+  capture.last_id[k] = std::max(capture.last_id[k], set->frame_id);
+  if (set->frame_id > capture.newest) {
+    capture.newest = set->frame_id;
+    capture.recent_ids[capture.recent_count++ % capture.recent_ids.size()] = capture.newest;
+  }
+  return true;
+}
+
+void CameraNode::sendWaitedSets(Capture& capture, std::chrono::steady_clock::time_point now) {
+  // Which cameras a set waits for: those that deliver (or are not heard from yet, at first).
+  // Counted in the sets the node saw, not in ids: a loaded node that skips frames (a replay's
+  // ticks, a camera queue that drops its oldest) sees ids jump by more than kSilentFrames, and
+  // took its cameras after the first for silent at every jump: the sets went out with one
+  // camera in three (the demo, with the studio's window on the same 2 cores).
+  const int64_t oldest_recent =
+      capture.recent_count >= int64_t(capture.recent_ids.size())
+          ? capture.recent_ids[capture.recent_count % capture.recent_ids.size()]
+          : std::numeric_limits<int64_t>::min();
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    capture.live[c] = capture.last_id[c] >= 0
+                          ? capture.last_id[c] >= oldest_recent
+                          : capture.newest - capture.first < Capture::kStartFrames;
+  }
+  for (auto it = capture.assembling.begin(); it != capture.assembling.end();) {
+    Set& s = *it->second;
+    size_t present = 0;
+    bool waiting = false;
+    for (size_t c = 0; c < cameras_.size(); ++c) {
+      present += s.has(c);
+      waiting = waiting || (!s.has(c) && capture.live[c]);
     }
-    frame.frame_id += applied_offset;
-    if (first < 0 || frame.frame_id < newest - kFrameIdWindow) {  // first, or cameras restarted
-      first = newest = frame.frame_id;
-      recent_count = 0;
-      recent_ids[recent_count++] = newest;
-      std::fill(last_id.begin(), last_id.end(), -1);
-      assembling.clear();  // the old ids' sets would outlast every new one (lowest go first)
-      for_take.release(newest, true);
-    }
-    delivered[k] = now;
-    // The late frame of a set that went out without it: for the take. Late, not gone: counted as
-    // delivered, so that a camera that is always last (a slower link) is awaited again once it
-    // keeps up.
-    if (const int64_t id = frame.frame_id; for_take.catchLate(frame, size_t(k))) {
-      last_id[k] = std::max(last_id[k], id);
-      for_take.release(newest, false);
+    if (waiting) {
+      ++it;
       continue;
     }
-    std::shared_ptr<Set>& set = assembling[frame.frame_id];
-    if (!set) {
-      set = newSet();
-      set->frame_id = frame.frame_id;
-      set->frames.resize(cameras_.size());
-    }
-    std::swap(set->frames[k], frame);
-    frame_pool_->take(frame);  // buffers of a set let go, for the next frame
-    last_id[k] = std::max(last_id[k], set->frame_id);
-    if (set->frame_id > newest) {
-      newest = set->frame_id;
-      recent_ids[recent_count++ % recent_ids.size()] = newest;
-    }
-    // Which cameras a set waits for: those that deliver (or are not heard from yet, at first).
-    // Counted in the sets the node saw, not in ids: a loaded node that skips frames (a replay's
-    // ticks, a camera queue that drops its oldest) sees ids jump by more than kSilentFrames, and
-    // took its cameras after the first for silent at every jump: the sets went out with one
-    // camera in three (the demo, with the studio's window on the same 2 cores).
-    const int64_t oldest_recent = recent_count >= int64_t(recent_ids.size())
-                                      ? recent_ids[recent_count % recent_ids.size()]
-                                      : std::numeric_limits<int64_t>::min();
-    for (size_t c = 0; c < cameras_.size(); ++c)
-      live[c] = last_id[c] >= 0 ? last_id[c] >= oldest_recent : newest - first < kStartFrames;
-    for (auto it = assembling.begin(); it != assembling.end();) {
-      Set& s = *it->second;
-      size_t present = 0;
-      bool waiting = false;
-      for (size_t c = 0; c < cameras_.size(); ++c) {
-        present += s.has(c);
-        waiting = waiting || (!s.has(c) && live[c]);
-      }
-      if (waiting) {
-        ++it;
-        continue;
-      }
-      // Without a camera: one that delivers nothing, or one whose frames come late.
-      bool late_only = true;
-      for (size_t c = 0; c < cameras_.size(); ++c) {
-        if (s.has(c)) {
-          if (told_silent[c]) {
-            told_silent[c] = 0;
-            spdlog::info("node {}: camera {} delivers again", name_,
-                         rig_.camera(cameras_[c]).name());
-          }
-          continue;
-        }
-        const bool silent = last_id[c] < 0 || now - delivered[c] > kTellSilentAfter;
-        late_only = late_only && !silent;
-        if (!silent) {
-          ++sets_without[c];
-        } else if (!told_silent[c]) {
-          told_silent[c] = 1;
-          sets_without[c] = 0;  // gone, not late
-          spdlog::warn("node {}: camera {} delivers no frames: its node's sets go out without it",
-                       name_, rig_.camera(cameras_[c]).name());
-        }
-      }
-      if (now - told_late_at > kTellLateEvery &&
-          std::any_of(sets_without.begin(), sets_without.end(), [](int64_t n) { return n > 0; })) {
-        told_late_at = now;
-        for (size_t c = 0; c < cameras_.size(); ++c) {
-          if (sets_without[c] == 0) continue;
-          spdlog::warn(
-              "node {}: camera {}: {} set{} went out without its frames, which came after {} newer "
-              "sets (a take being recorded still gets them); is the node's PC overloaded?",
-              name_, rig_.camera(cameras_[c]).name(), sets_without[c],
-              sets_without[c] == 1 ? "" : "s", kSilentFrames);
-          sets_without[c] = 0;
-        }
-      }
-      s.captured_ns = wallNowNs();  // the studio's latency counts from it, maybe on another PC
-      const bool whole = present == cameras_.size();
-      if (whole && screen_sets_learnt_ < kScreenWarmupSets)  // screens are learnt from whole sets
-        learnScreens(s);
-      else if (whole && s.frame_id % kScreenRetrySets == 0)
-        checkScreens(s);
-      s.keyers = published_keyers_;
-      for_take.add(it->second, whole, late_only);
-      sets_.push(it->second);
-      it = assembling.erase(it);
-    }
-    while (assembling.size() > 4) assembling.erase(assembling.begin());  // a camera fell behind
-    for_take.release(newest, false);  // those that waited long enough
+    const bool late_only = tellMissingCameras(capture, s, now);
+    s.captured_ns = wallNowNs();  // the studio's latency counts from it, maybe on another PC
+    const bool whole = present == cameras_.size();
+    if (whole && screen_sets_learnt_ < kScreenWarmupSets)  // screens are learnt from whole sets
+      learnScreens(s);
+    else if (whole && s.frame_id % kScreenRetrySets == 0)
+      checkScreens(s);
+    s.keyers = published_keyers_;
+    capture.for_take.add(it->second, whole, late_only);
+    sets_.push(it->second);
+    it = capture.assembling.erase(it);
   }
-  for_take.release(newest, true);
-  source_finished_ = true;
+}
+
+bool CameraNode::tellMissingCameras(Capture& capture, const Set& s,
+                                    std::chrono::steady_clock::time_point now) {
+  // Without a camera: one that delivers nothing, or one whose frames come late.
+  bool late_only = true;
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    if (s.has(c)) {
+      if (capture.told_silent[c]) {
+        capture.told_silent[c] = 0;
+        spdlog::info("node {}: camera {} delivers again", name_, rig_.camera(cameras_[c]).name());
+      }
+      continue;
+    }
+    const bool silent =
+        capture.last_id[c] < 0 || now - capture.delivered[c] > Capture::kTellSilentAfter;
+    late_only = late_only && !silent;
+    if (!silent) {
+      ++capture.sets_without[c];
+    } else if (!capture.told_silent[c]) {
+      capture.told_silent[c] = 1;
+      capture.sets_without[c] = 0;  // gone, not late
+      spdlog::warn("node {}: camera {} delivers no frames: its node's sets go out without it",
+                   name_, rig_.camera(cameras_[c]).name());
+    }
+  }
+  std::vector<int64_t>& sets_without = capture.sets_without;
+  if (now - capture.told_late_at > Capture::kTellLateEvery &&
+      std::any_of(sets_without.begin(), sets_without.end(), [](int64_t n) { return n > 0; })) {
+    capture.told_late_at = now;
+    for (size_t c = 0; c < cameras_.size(); ++c) {
+      if (sets_without[c] == 0) continue;
+      spdlog::warn(
+          "node {}: camera {}: {} set{} went out without its frames, which came after {} newer "
+          "sets (a take being recorded still gets them); is the node's PC overloaded?",
+          name_, rig_.camera(cameras_[c]).name(), sets_without[c], sets_without[c] == 1 ? "" : "s",
+          Capture::kSilentFrames);
+      sets_without[c] = 0;
+    }
+  }
+  return late_only;
 }
 
 std::unique_lock<std::mutex> CameraNode::lockSource() {

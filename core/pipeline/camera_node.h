@@ -151,6 +151,22 @@ class CameraNode {
   };
 
   void captureLoop(const std::atomic<bool>& stop);
+  // The capture thread's state from frame to frame (captureLoop's), and its steps.
+  struct Capture;
+  // The log lines when every camera has gone silent (no frame in `got`), and when frames come back.
+  void tellAllSilent(Capture& capture, bool got, std::chrono::steady_clock::time_point now);
+  // The studio's shift applied to capture.frame's id; the sets begin afresh on a new shift or when
+  // the cameras restarted their count.
+  void followIds(Capture& capture);
+  // capture.frame, of own camera k, into its set; false when it was a late frame, kept for the
+  // take.
+  bool addFrame(Capture& capture, size_t k, std::chrono::steady_clock::time_point now);
+  // The sets no longer waiting for a camera, sent out (and to the take).
+  void sendWaitedSets(Capture& capture, std::chrono::steady_clock::time_point now);
+  // The log lines for the cameras set `s` goes out without, and at most every kTellLateEvery the
+  // late ones' tally; whether the cameras it goes out without are all late only.
+  bool tellMissingCameras(Capture& capture, const Set& s,
+                          std::chrono::steady_clock::time_point now);
   void silhouetteLoop(const std::atomic<bool>& stop);
   void statisticsLoop(const std::atomic<bool>& stop);
   Message silhouettesOf(const Set& set) const;
