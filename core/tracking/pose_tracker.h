@@ -62,10 +62,13 @@ struct PoseTrackerOptions {
   double rim_outlier_m = 0.25;
   // Parts of the body that cannot pass through each other (an arm and the torso or the head, the
   // shins and feet of the two legs): the weight of their capsules' overlap beyond apart_fraction of
-  // their radii's sum, per m² (0: off). Silhouettes cannot tell an arm inside the torso's outline
-  // from one in front of it; without it, a CMU actor's forearms sank into his chest (wrists 125 mm
-  // off). 100 against 0 on the development corpus: MPJPE 26.1 -> 25.0 mm; 30: 27.9 and 1000: 30.0
-  // on twelve of its stages (against 29.3 without); a fraction of 0.6 changed nothing.
+  // their radii's sum, per m² (0: off). Silhouettes cannot tell a forearm inside the torso's
+  // outline from one in front of it: a short clothed actor's forearms sank into his chest (wrists
+  // 117 mm off; 43 with it). A limb found on the wrong side of the body is held there too. 100
+  // against 0: the development corpus 26.1 -> 25.0 mm, the held-out one unchanged (28.9 mm; with
+  // 4-6 cameras 34.8 -> 33.7), the boxing development stages 38.3 -> 46.4 mm (two of eleven lose
+  // an arm: 46 -> 93 and 57 -> 103 mm). 30: 27.9 and 1000: 30.0 on twelve development stages
+  // (29.3 without); a fraction of 0.6 never acts (docs/figures-history.md).
   double apart_weight = 100;
   double apart_fraction = 0.8;
   double huber_m = 0.02;        // robust loss of hull samples outside the model (4x inside)
