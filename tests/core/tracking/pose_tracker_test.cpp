@@ -53,6 +53,26 @@ ClipErrors trackClip(SyntheticStage& stage, PoseTracker& tracker, const MotionCl
   return e;
 }
 
+// A real capture of ../shared/realdata/motions (beside the repository, not in it: the tests that
+// use one skip without it).
+std::filesystem::path realMotion(const std::string& name) {
+  return std::filesystem::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" / "realdata" /
+         "motions" / name;
+}
+
+// The capture on `skeleton`, `frames` frames at 30 fps from `start_s`, centred on the stage and
+// turned to `heading_deg`.
+MotionClip placedMotion(const std::filesystem::path& bvh, const Skeleton& skeleton, double start_s,
+                        double heading_deg, int frames) {
+  MotionClip clip = loadBvh(bvh, skeleton);
+  MotionPlacement placement;
+  placement.start_s = start_s;
+  placement.centre = true;
+  placement.heading_deg = heading_deg;
+  placeMotion(clip, skeleton, placement, frames, 30);
+  return clip;
+}
+
 TEST(PoseTracker, TracksAWalkFromTheTPose) {
   SyntheticStage stage(kStudio);
   PoseTracker tracker(stage.config.rig, generic());
@@ -262,19 +282,12 @@ TEST(PoseTracker, FindsAnActorWhoEntersCrouchingAndMeasuresHimStanding) {
 // hull's length from his soles to his crown, which follows the bend, gives his height within
 // 4 cm (its path cuts the knees' bend short).
 TEST(PoseTracker, ABoxerWhoNeverStandsStraightIsMeasuredToHisHeight) {
-  const std::filesystem::path bvh = std::filesystem::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." /
-                                    ".." / "shared" / "realdata" / "motions" /
-                                    "boxing-biovision.bvh";
+  const std::filesystem::path bvh = realMotion("boxing-biovision.bvh");
   if (!std::filesystem::exists(bvh)) GTEST_SKIP() << bvh << " is not here";
   SyntheticStage stage(kStudio);
   PoseTracker tracker(stage.config.rig, generic());
-  MotionClip clip = loadBvh(bvh, stage.actor.skeleton);
-  MotionPlacement placement;
-  placement.start_s = 12.9;
-  placement.centre = true;
-  placement.heading_deg = 46;
-  placeMotion(clip, stage.actor.skeleton, placement, 20, 30);
-  const int first = int(std::lround(placement.start_s * 30));
+  const MotionClip clip = placedMotion(bvh, stage.actor.skeleton, 12.9, 46, 20);
+  const int first = int(std::lround(12.9 * 30));
   const ClipErrors e = trackClip(stage, tracker, clip, first, first + 20);
   EXPECT_EQ(e.tracked, e.frames);
   EXPECT_NEAR(statureOf(tracker.shape()), statureOf(stage.config.actor.shape), 0.05);
@@ -286,8 +299,7 @@ TEST(PoseTracker, ABoxerWhoNeverStandsStraightIsMeasuredToHisHeight) {
 // from one in front of it, and the fit sank them into his chest (wrists 117 mm off) until arms
 // and torso were kept apart.
 TEST(PoseTracker, AShortActorsForearmsDoNotSinkIntoHisChest) {
-  const std::filesystem::path bvh = std::filesystem::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." /
-                                    ".." / "shared" / "realdata" / "motions" / "cmu-01_03.bvh";
+  const std::filesystem::path bvh = realMotion("cmu-01_03.bvh");
   if (!std::filesystem::exists(bvh)) GTEST_SKIP() << bvh << " is not here";
   SyntheticStage stage(kStudio);
   BodyShape& shape = stage.config.actor.shape;
@@ -301,13 +313,8 @@ TEST(PoseTracker, AShortActorsForearmsDoNotSinkIntoHisChest) {
   stage.config.actor.clothing = true;
   stage.actor = makeHumanModel(stage.config.actor);
   PoseTracker tracker(stage.config.rig, generic());
-  MotionClip clip = loadBvh(bvh, stage.actor.skeleton);
-  MotionPlacement placement;
-  placement.start_s = 22.8;
-  placement.centre = true;
-  placement.heading_deg = 301;
-  placeMotion(clip, stage.actor.skeleton, placement, 30, 30);
-  const int first = int(std::lround(placement.start_s * 30));
+  const MotionClip clip = placedMotion(bvh, stage.actor.skeleton, 22.8, 301, 30);
+  const int first = int(std::lround(22.8 * 30));
   double wrist_m = 0;
   int tracked = 0;
   for (int f = first; f < first + 30; ++f) {
