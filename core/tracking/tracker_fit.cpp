@@ -156,7 +156,9 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
       accumulate(s.joint, q, cam.rotation().transpose() * dr_dx, r, ws);
     }
   }
-  // Parts of the body kept apart.
+  // Parts of the body kept apart. Each overlap moves with two joints: its slope goes to both, and
+  // the normal equations leave out the products between their chains (Levenberg-Marquardt takes
+  // a step only where the cost falls, so an approximate J^T J does).
   if (opt.apart_weight > 0) {
     const double w = opt.apart_weight;
     Eigen::Vector3d on_a, on_b;
