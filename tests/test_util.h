@@ -45,6 +45,14 @@ inline std::filesystem::path testFolder(const std::string& prefix) {
   return folder;
 }
 
+#ifdef LUMISTAGE_TEST_RESOURCE_DIR
+// ../shared/realdata beside the repository: real files made by others (its README says what each
+// is), not in a clone; a test that reads one skips without it.
+inline std::filesystem::path realData() {
+  return std::filesystem::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" / "realdata";
+}
+#endif
+
 // The message of the lumistage::Error that `call` throws; a test failure if it throws none.
 template <typename Call>
 std::string errorOf(Call&& call) {

@@ -14,6 +14,7 @@
 #include "core/body/bvh.h"
 #include "core/body/human_model.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -66,8 +67,7 @@ TEST(Cli, BodyShowSaysSoWhenTheImportCrashesOrIsRefused) {
 // its joints map onto ours; eval tracks with it; run starts nodes that pose the same file (a node
 // posing another body would say its offsets are "not used").
 TEST(Cli, TheActorsOwnBodyFromAFileIsShownEvaluatedAndRun) {
-  const fs::path cesium = fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" /
-                          "realdata" / "bodies" / "CesiumMan.glb";
+  const fs::path cesium = testing::realData() / "bodies" / "CesiumMan.glb";
   if (!fs::exists(cesium)) GTEST_SKIP() << "no " << cesium.string();
   const Result shown = run(kCli + " body show " + cesium.string());
   ASSERT_EQ(shown.exit_code, 0) << shown.output;

@@ -14,6 +14,7 @@
 #include "core/body/human_skeleton.h"
 #include "core/geometry/rig_file.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -197,8 +198,7 @@ TEST(Cli, ImportedFootageWithMasksIsTrackedAndEvaluatedWithoutTruth) {
 // Where the two fit as well, the feet decide: from the first frame he is tracked facing the way his
 // toes point (before: 386 mm in every frame, every joint of his left on his right).
 TEST(Cli, AStillActorSeenByFewCamerasIsTrackedFacingTheWayHisFeetPoint) {
-  const fs::path motions =
-      fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" / "realdata" / "motions";
+  const fs::path motions = testing::realData() / "motions";
   if (!fs::exists(motions)) GTEST_SKIP() << motions << " is not here (the seed draws from it)";
   const fs::path folder = tempPath("still");
   fs::remove_all(folder);

@@ -12,6 +12,7 @@
 
 #include "core/base/atomic_file.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -19,8 +20,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace testing;
 
-const fs::path kDemo =
-    fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" / "realdata" / "pose2sim-walk";
+const fs::path kDemo = testing::realData() / "pose2sim-walk";
 
 double number(const std::string& json, const std::string& key) {
   const size_t at = json.find("\"" + key + "\": ");

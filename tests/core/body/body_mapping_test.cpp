@@ -17,6 +17,7 @@
 #include "core/net/posed_body.h"
 #include "core/tracking/mesh_silhouette.h"
 #include "tests/core/tracking/synthetic_stage.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -24,8 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 using Eigen::Vector3d;
 
-const fs::path kCesiumMan = fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" /
-                            "realdata" / "bodies" / "CesiumMan.glb";
+const fs::path kCesiumMan = testing::realData() / "bodies" / "CesiumMan.glb";
 
 // A body on the human skeleton's bones whose joints are called `names` (ours when empty), with
 // its arms hanging `arms_down_rad` below the T-pose, a root joint on the floor above the pelvis

@@ -233,8 +233,7 @@ TEST(Bvh, ARestPoseThatIsNotOursKeepsTheBonesWhereTheFileHasThem) {
 // his legs apart, not crossed (its rest pose splays the legs); the Biovision boxer's elbows bend
 // (its Shoulder is the upper arm, its Collar the clavicle).
 TEST(Bvh, RealCmuAndBiovisionFilesComeInAsTheActorMoved) {
-  const fs::path motions =
-      fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" / "realdata" / "motions";
+  const fs::path motions = testing::realData() / "motions";
   if (!fs::exists(motions / "cmu-01_03.bvh") || !fs::exists(motions / "boxing-biovision.bvh"))
     GTEST_SKIP() << "no " << motions.string();
   const Skeleton s = makeHumanSkeleton();

@@ -632,8 +632,7 @@ TEST(MeshImport, SkeletonAxesFromJointNames) {
 // The real CesiumMan (../shared/realdata/bodies, where present) loads as it always has: glTF's
 // axes, no warning.
 TEST(MeshImport, CesiumManStandsAsBefore) {
-  const fs::path file = fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" /
-                        "realdata" / "bodies" / "CesiumMan.glb";
+  const fs::path file = testing::realData() / "bodies" / "CesiumMan.glb";
   if (!fs::exists(file)) GTEST_SKIP() << file << " is not here";
   LogCapture log;
   const SkinnedMesh mesh = loadSkinnedMesh(file);

@@ -139,8 +139,7 @@ TEST(FootageImport, FootageSizesAgainstTheCalibration) {
 
 // The Pose2Sim demo's four videos, a few frames: two of them 8 pixels narrower than calibrated.
 TEST(FootageImport, ImportsThePose2SimDemosVideos) {
-  const fs::path demo =
-      fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" / "realdata" / "pose2sim-walk";
+  const fs::path demo = testing::realData() / "pose2sim-walk";
   if (!fs::exists(demo / "videos" / "cam01.mp4")) GTEST_SKIP() << demo << " is not here";
   const fs::path folder = testFolder();
   const RigImport calibration = importQualisysRig(demo / "calibration" / "Calib.qca.txt", {});

@@ -125,8 +125,7 @@ TEST(QualisysImport, MalformedFilesNameFileLineAndAttribute) {
 // The Pose2Sim demo's calibration: four portrait cameras around the treadmill, about 1.9 m high,
 // each seeing the origin.
 TEST(QualisysImport, ReadsThePose2SimDemosCalibration) {
-  const fs::path file = fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" /
-                        "realdata" / "pose2sim-walk" / "calibration" / "Calib.qca.txt";
+  const fs::path file = testing::realData() / "pose2sim-walk" / "calibration" / "Calib.qca.txt";
   if (!fs::exists(file)) GTEST_SKIP() << file << " is not here";
   const RigImport imported = importQualisysRig(file, {});
   ASSERT_EQ(imported.rig.cameraCount(), 4);

@@ -1,24 +1,19 @@
 #pragma once
 
-// A folder of files for the rig importers' tests, removed at the end of the test.
-
-#include <unistd.h>
+// A folder of files for the rig importers' tests: testing::testFolder()'s (the test's own, kept
+// for a look when a test failed), one more for each made in the same test.
 
 #include <filesystem>
 #include <fstream>
 #include <string>
 
+#include "tests/test_util.h"
+
 namespace lumistage::testing {
 
 class TempFolder {
  public:
-  TempFolder() {
-    path_ = std::filesystem::temp_directory_path() /
-            ("lumistage_import_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempFolder() { std::filesystem::remove_all(path_); }
+  TempFolder() : path_(testFolder("import_" + std::to_string(counter_++))) {}
   const std::filesystem::path& path() const { return path_; }
   void write(const std::string& name, const std::string& text) const {
     std::ofstream(path_ / name) << text;

@@ -12,14 +12,14 @@
 #include "core/body/human_skeleton.h"
 #include "core/body/motion_library.h"
 #include "core/geometry/rig_file.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kMotions =
-    fs::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" / "realdata" / "motions";
+const fs::path kMotions = testing::realData() / "motions";
 
 TEST(StageDraw, TheSameSeedDrawsTheSameStageAndOthersDiffer) {
   const std::string a = formatStudioConfig(drawStage(7), "rig.yaml");

@@ -16,6 +16,7 @@
 #include "core/geometry/stage_volume.h"
 #include "core/sim/motion_placement.h"
 #include "tests/core/tracking/synthetic_stage.h"
+#include "tests/test_util.h"
 
 namespace lumistage {
 namespace {
@@ -53,15 +54,8 @@ ClipErrors trackClip(SyntheticStage& stage, PoseTracker& tracker, const MotionCl
   return e;
 }
 
-// A real capture of ../shared/realdata/motions (beside the repository, not in it: the tests that
-// use one skip without it).
-std::filesystem::path realMotion(const std::string& name) {
-  return std::filesystem::path(LUMISTAGE_TEST_RESOURCE_DIR) / ".." / ".." / "shared" / "realdata" /
-         "motions" / name;
-}
-
-// The capture on `skeleton`, `frames` frames at 30 fps from `start_s`, centred on the stage and
-// turned to `heading_deg`.
+// A real capture (testing::realData()) on `skeleton`, `frames` frames at 30 fps from `start_s`,
+// centred on the stage and turned to `heading_deg`.
 MotionClip placedMotion(const std::filesystem::path& bvh, const Skeleton& skeleton, double start_s,
                         double heading_deg, int frames) {
   MotionClip clip = loadBvh(bvh, skeleton);
@@ -282,7 +276,7 @@ TEST(PoseTracker, FindsAnActorWhoEntersCrouchingAndMeasuresHimStanding) {
 // hull's length from his soles to his crown, which follows the bend, gives his height within
 // 4 cm (its path cuts the knees' bend short).
 TEST(PoseTracker, ABoxerWhoNeverStandsStraightIsMeasuredToHisHeight) {
-  const std::filesystem::path bvh = realMotion("boxing-biovision.bvh");
+  const std::filesystem::path bvh = testing::realData() / "motions" / "boxing-biovision.bvh";
   if (!std::filesystem::exists(bvh)) GTEST_SKIP() << bvh << " is not here";
   SyntheticStage stage(kStudio);
   PoseTracker tracker(stage.config.rig, generic());
@@ -299,7 +293,7 @@ TEST(PoseTracker, ABoxerWhoNeverStandsStraightIsMeasuredToHisHeight) {
 // from one in front of it, and the fit sank them into his chest (wrists 117 mm off) until arms
 // and torso were kept apart.
 TEST(PoseTracker, AShortActorsForearmsDoNotSinkIntoHisChest) {
-  const std::filesystem::path bvh = realMotion("cmu-01_03.bvh");
+  const std::filesystem::path bvh = testing::realData() / "motions" / "cmu-01_03.bvh";
   if (!std::filesystem::exists(bvh)) GTEST_SKIP() << bvh << " is not here";
   SyntheticStage stage(kStudio);
   BodyShape& shape = stage.config.actor.shape;
