@@ -260,7 +260,6 @@ void PoseTracker::Impl::buildModel(const SkinnedMesh& mesh) {
   cap_b.resize(capsules.size());
   setShape(BodyShape{});
   makeApartPairs();
-  setShape(BodyShape{});
   makeLibrary();
 }
 
@@ -292,7 +291,7 @@ void PoseTracker::Impl::makeApartPairs() {
       const double d = segmentSegmentDistance(gi * capsules[i].a, gi * capsules[i].b,
                                               gj * capsules[j].a, gj * capsules[j].b, on_a, on_b);
       // Touching at rest (an upper arm at the shoulder): no pair.
-      if (d > capsules[i].radius_m + capsules[j].radius_m) apart.push_back({i, j, 0.0});
+      if (d > capsules[i].radius_m + capsules[j].radius_m) apart.emplace_back(i, j);
     }
   }
 }
@@ -335,9 +334,6 @@ void PoseTracker::Impl::setShape(const BodyShape& s) {
     c.b = b_t * u + lateral;
     for (double t : {0.0, 0.5, 1.0}) samples.push_back({c.joint, c.a + t * (c.b - c.a)});
   }
-  for (Apart& pair : apart)
-    pair.min_distance =
-        opt.apart_fraction * (capsules[pair.a].radius_m + capsules[pair.b].radius_m);
   double bottom, top;
   modelExtent(rest_pose, bottom, top);
   rest_extent_m = top - bottom;

@@ -193,13 +193,8 @@ struct PoseTracker::Impl {
   std::vector<Sample> samples;
   // Pairs of capsules that a body keeps apart (an arm and the torso or the head, the two legs'
   // shins and feet), of those apart in the rest pose (makeApartPairs): each no closer than
-  // apart_fraction of its radii's sum (flesh and clothes give), `min_distance` for the current
-  // shape (setShape).
-  struct Apart {
-    int a, b;
-    double min_distance;
-  };
-  std::vector<Apart> apart;
+  // apart_fraction of its radii's sum (flesh and clothes give).
+  std::vector<std::pair<int, int>> apart;
   void makeApartPairs();
   std::vector<Dof> dofs;
   std::vector<std::vector<int>> chain;  // dofs moving each joint, ascending

@@ -162,16 +162,15 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
   if (opt.apart_weight > 0) {
     const double w = opt.apart_weight;
     Eigen::Vector3d on_a, on_b;
-    for (const Apart& pair : apart) {
-      const double d = segmentSegmentDistance(cap_a[pair.a], cap_b[pair.a], cap_a[pair.b],
-                                              cap_b[pair.b], on_a, on_b);
-      const double r = pair.min_distance - d;
+    for (const auto& [a, b] : apart) {
+      const double d = segmentSegmentDistance(cap_a[a], cap_b[a], cap_a[b], cap_b[b], on_a, on_b);
+      const double r = opt.apart_fraction * (capsules[a].radius_m + capsules[b].radius_m) - d;
       if (r <= 0) continue;
       cost += 0.5 * w * r * r;
       if (!jacobian || d < 1e-9) continue;
       const Eigen::Vector3d n = (on_a - on_b) / d;
-      accumulate(capsules[pair.a].joint, on_a, -n, r, w);
-      accumulate(capsules[pair.b].joint, on_b, n, r, w);
+      accumulate(capsules[a].joint, on_a, -n, r, w);
+      accumulate(capsules[b].joint, on_b, n, r, w);
     }
   }
   // The joints' sums into the degrees of freedom: S^T M S and S^T g over each joint's chain.
