@@ -155,7 +155,7 @@ struct WandArgs {
   std::string points, session, out, report, initial_rig, truth, save_points;
   double wand_length_m = 0, hfov_deg = 60, max_rms_px = kDefaultMaxRmsPx;
   int cameras_per_node = 3, threshold = 160;
-  bool refine_principal_point = false;
+  std::string principal_point = "auto";
 };
 
 void runWand(const WandArgs& w) {
@@ -183,7 +183,10 @@ void runWand(const WandArgs& w) {
   options.nominal_hfov_deg = w.hfov_deg;
   options.cameras_per_node = w.cameras_per_node;
   options.wand_length_m = w.wand_length_m;
-  options.refine_principal_point = w.refine_principal_point;
+  using PrincipalPoint = WandCalibrationOptions::PrincipalPoint;
+  options.principal_point = w.principal_point == "fixed"    ? PrincipalPoint::kFixed
+                            : w.principal_point == "refine" ? PrincipalPoint::kRefined
+                                                            : PrincipalPoint::kAuto;
   options.progress = [](const std::string& stage, int done, int total) {
     printProgress(stage.c_str(), done, total);
   };
@@ -227,9 +230,18 @@ void addWandCommand(CLI::App* calibrate) {
                    "detector: intensity above which a pixel is the wand")
       ->check(within(1, 254))
       ->capture_default_str();
-  wand->add_flag("--refine-principal-point", w->refine_principal_point,
-                 "refine the principal points too (weakly determined: needs thousands of samples); "
-                 "by default they stay where they start (image centre or --initial-rig)");
+  wand->add_option("--principal-point", w->principal_point,
+                   "the principal points: held where they start (image centre or --initial-rig: "
+                   "fixed), refined (refine: weakly determined, needs thousands of samples), or "
+                   "refined where that fits the samples 3% better or more (auto; the report says "
+                   "which)")
+      ->check(CLI::IsMember({"auto", "fixed", "refine"}))
+      ->capture_default_str();
+  // The older spelling of --principal-point refine.
+  wand->add_flag_callback(
+          "--refine-principal-point", [w] { w->principal_point = "refine"; },
+          "the same as --principal-point refine")
+      ->excludes("--principal-point");
   wand->add_option("--truth", w->truth, "rig file of the truth (simulations): print the errors");
   wand->callback([w] { runWand(*w); });
 }

@@ -80,6 +80,10 @@ class WandSolver {
   std::vector<std::vector<uint8_t>> agree_;  // [sample][camera]
   int fixed_ = 0, scale_ = 1;
   std::vector<std::string> notes_;
+  bool refine_principal_point_ = false;
+  // kAuto: after the solve with the principal points held, the same solve's last round with them
+  // freed, kept if it fits the observations better by WandCalibrationOptions::kPrincipalPointGain.
+  void decidePrincipalPoints();
 };
 
 void WandSolver::checkSession() const {
@@ -290,12 +294,43 @@ BundleResult WandSolver::bundle(bool refine_intrinsics, bool refine_distortion, 
   BundleOptions options;
   options.refine_intrinsics = refine_intrinsics;
   options.refine_distortion = refine_distortion;
-  options.refine_principal_point = o_.refine_principal_point;
+  options.refine_principal_point = refine_principal_point_;
   options.huber_px = huber_px;
   options.max_iterations = iterations;
   options.fixed_camera = fixed_;
   options.scale_camera = scale_;
   return adjustBundle(cams_, points_, observations(), options);
+}
+
+void WandSolver::decidePrincipalPoints() {
+  const std::vector<BundleCamera> held_cams = cams_;
+  const std::vector<Eigen::Vector3d> held_points = points_;
+  refine_principal_point_ = true;
+  const BundleResult freed = bundle(true, o_.refine_distortion, 0, 100);
+  const double gain = 1 - freed.final_rms_px / freed.initial_rms_px;
+  const bool keep = gain >= WandCalibrationOptions::kPrincipalPointGain;
+  if (keep) {
+    // Freed, the outliers judged again against the better cameras.
+    rejectOutliers();
+    bundle(true, o_.refine_distortion, 0, 100);
+    double most = 0;
+    for (size_t c = 0; c < cams_.size(); ++c)
+      most =
+          std::max(most, std::hypot(cams_[c].cx - held_cams[c].cx, cams_[c].cy - held_cams[c].cy));
+    notes_.push_back(fmt::format(
+        "principal points refined: freed, they fit the samples {:.1f}% better ({:.3f} -> {:.3f} px "
+        "RMS) and moved up to {:.1f} px",
+        100 * gain, freed.initial_rms_px, freed.final_rms_px, most));
+  } else {
+    cams_ = held_cams;
+    points_ = held_points;
+    refine_principal_point_ = false;
+    notes_.push_back(fmt::format(
+        "principal points held where they started: freed, they fit the samples only {:.1f}% "
+        "better ({:.3f} -> {:.3f} px RMS; {:.0f}% or more refines them)",
+        100 * std::max(0.0, gain), freed.initial_rms_px, freed.final_rms_px,
+        100 * WandCalibrationOptions::kPrincipalPointGain));
+  }
 }
 
 double WandSolver::rejectOutliers() {
@@ -511,11 +546,14 @@ WandCalibrationResult WandSolver::solve() {
   rejectOutliers();
   bundle(true, o_.refine_distortion, 1.0, 100);
   report("bundle", 1, rounds + 1);
+  using PrincipalPoint = WandCalibrationOptions::PrincipalPoint;
+  refine_principal_point_ = o_.principal_point == PrincipalPoint::kRefined;
   for (int round = 0; round < rounds; ++round) {
     rejectOutliers();
     bundle(true, o_.refine_distortion, 0, 100);
     report("bundle", round + 2, rounds + 1);
   }
+  if (o_.principal_point == PrincipalPoint::kAuto) decidePrincipalPoints();
 
   WandCalibrationResult result;
   std::vector<std::string> rig_notes;

@@ -64,6 +64,66 @@ TEST(WandCalibration, MeetsTheTargetsOnTheReferenceRigWithNoiseAndOutliers) {
   EXPECT_LT(raw.max_rotation_deg, 0.1);
 }
 
+// The reference rig with each camera's principal point moved by up to `most_px` either way, as
+// real lenses' sit.
+Rig offCentreRig(double most_px, unsigned seed) {
+  const Rig ring = referenceRig();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> off(-most_px, most_px);
+  std::vector<Camera> cameras;
+  for (const Camera& c : ring.cameras()) {
+    Intrinsics k = c.intrinsics();
+    k.cx += off(rng);
+    k.cy += off(rng);
+    cameras.emplace_back(c.name(), c.width(), c.height(), k, c.distortion(), c.rotation(),
+                         c.translation());
+  }
+  return Rig(cameras, ring.nodes());
+}
+
+bool noteSays(const CalibrationReport& report, const std::string& text) {
+  for (const std::string& note : report.notes)
+    if (note.find(text) != std::string::npos) return true;
+  return false;
+}
+
+// Principal points up to 12 px off centre: held at the centre they bend the whole rig (the
+// rotations absorb them); the samples fit far better freed, so the solve frees them by itself,
+// and says so.
+TEST(WandCalibration, FreesThePrincipalPointsWhereTheSamplesShowThemOffCentre) {
+  const Rig truth = offCentreRig(12, 5);
+  WandSimulationOptions sim;
+  sim.samples = 1000;
+  sim.seed = 9;
+  const SimulatedWandSession s = simulateWandSession(truth, sim);
+  WandCalibrationOptions held;
+  held.principal_point = WandCalibrationOptions::PrincipalPoint::kFixed;
+  const RigComparison held_cmp = compareRigs(calibrateWand(s.session, held).rig, truth);
+  const WandCalibrationResult result = calibrateWand(s.session, WandCalibrationOptions{});
+  EXPECT_TRUE(noteSays(result.report, "principal points refined")) << result.report.notes.front();
+  const RigComparison cmp = compareRigs(result.rig, truth);
+  EXPECT_LT(cmp.max_rotation_deg, 0.5 * held_cmp.max_rotation_deg);
+  EXPECT_LT(cmp.max_rotation_deg, 0.6);
+  EXPECT_LT(result.report.rms_px, 0.45);
+}
+
+// Principal points where the solve starts (the image centre): freed, they would only fit the noise
+// and trade against the rotations; they are held, and the report says why.
+TEST(WandCalibration, HoldsThePrincipalPointsWhereFreeingThemFitsOnlyTheNoise) {
+  const Rig truth = referenceRig();
+  WandSimulationOptions sim;
+  sim.samples = 500;
+  sim.seed = 9;
+  const SimulatedWandSession s = simulateWandSession(truth, sim);
+  const WandCalibrationResult result = calibrateWand(s.session, WandCalibrationOptions{});
+  EXPECT_TRUE(noteSays(result.report, "principal points held")) << result.report.notes.front();
+  for (const Camera& c : result.rig.cameras()) {
+    EXPECT_EQ(c.intrinsics().cx, 511.5) << c.name();
+    EXPECT_EQ(c.intrinsics().cy, 383.5) << c.name();
+  }
+  EXPECT_LT(compareRigs(result.rig, truth).max_rotation_deg, 0.05);
+}
+
 TEST(WandCalibration, RejectsTheOutliers) {
   const Rig truth = referenceRig();
   WandSimulationOptions sim;
