@@ -28,7 +28,8 @@ namespace lumistage::testing {
 
 struct DecodedPicture {
   int width = 0, height = 0;
-  std::vector<uint8_t> rgb;  // packed RGB24
+  std::vector<uint8_t> rgb;                          // packed RGB24
+  std::chrono::steady_clock::time_point decoded_at;  // when the decoder gave it
   const uint8_t* at(int x, int y) const { return &rgb[(size_t(y) * width + x) * 3]; }
 };
 
@@ -77,11 +78,15 @@ inline bool waitForUdpPort(int port, std::chrono::seconds within) {
 
 class FeedReceiver {
  public:
+  // `low_delay`: as ffplay's `-fflags nobuffer -flags low_delay` (a receiver set for latency):
+  // packets not held back for the analysis of the stream once it is open, and each picture out of
+  // the decoder as soon as its packet is in.
   FeedReceiver(std::string url, size_t pictures,
-               std::chrono::seconds give_up = std::chrono::seconds(90))
+               std::chrono::seconds give_up = std::chrono::seconds(90), bool low_delay = false)
       : url_(std::move(url)),
         wanted_(pictures),
-        deadline_(std::chrono::steady_clock::now() + give_up) {
+        deadline_(std::chrono::steady_clock::now() + give_up),
+        low_delay_(low_delay) {
     thread_ = std::thread([this] { run(); });
   }
   ~FeedReceiver() {
@@ -130,6 +135,7 @@ class FeedReceiver {
     AVDictionary* options = nullptr;
     av_dict_set(&options, "fpsprobesize", "2", 0);
     av_dict_set(&options, "analyzeduration", "500000", 0);
+    if (low_delay_) av_dict_set(&options, "fflags", "nobuffer", 0);
     int code = avformat_open_input(&format, url_.c_str(), nullptr, &options);
     av_dict_free(&options);
     if (code < 0) {
@@ -148,6 +154,7 @@ class FeedReceiver {
       const AVCodec* codec = avcodec_find_decoder(parameters->codec_id);
       decoder = avcodec_alloc_context3(codec);
       avcodec_parameters_to_context(decoder, parameters);
+      if (low_delay_) decoder->flags |= AV_CODEC_FLAG_LOW_DELAY;
       if (!codec || avcodec_open2(decoder, codec, nullptr) < 0) error = "no decoder";
     }
     while (error.empty() && pictures_.size() < wanted_) {
@@ -160,6 +167,7 @@ class FeedReceiver {
       av_packet_unref(packet);
       while (pictures_.size() < wanted_ && avcodec_receive_frame(decoder, frame) >= 0) {
         DecodedPicture picture;
+        picture.decoded_at = std::chrono::steady_clock::now();
         picture.width = frame->width;
         picture.height = frame->height;
         picture.rgb.resize(size_t(frame->width) * frame->height * 3);
@@ -184,6 +192,7 @@ class FeedReceiver {
   std::string url_;
   size_t wanted_;
   std::chrono::steady_clock::time_point deadline_;
+  bool low_delay_ = false;
   std::atomic<bool> stop_{false};
   std::mutex mutex_;
   std::condition_variable done_;

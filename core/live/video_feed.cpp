@@ -279,7 +279,14 @@ std::string VideoFeed::Impl::session(bool& opened) {
     return "cannot open the connection (" + ffmpegError(code) + ")";
   }
   format->flags |= AVFMT_FLAG_FLUSH_PACKETS;  // each picture to the network when muxed
-  code = avformat_write_header(format, nullptr);
+  // Each video packet's PES header gives its length (where it fits: under 64 KB): a receiver's
+  // demultiplexer then hands the picture on when its last byte is in, instead of when the next
+  // picture begins. A receiver on this PC: 70 -> 37 ms from offer() to the picture decoded, the
+  // rest its H.264 parser's wait for the next picture (live_bench's videoFeedLatency).
+  AVDictionary* muxing = nullptr;
+  av_dict_set(&muxing, "omit_video_pes_length", "0", 0);
+  code = avformat_write_header(format, &muxing);
+  av_dict_free(&muxing);
   if (code < 0) return "cannot send the stream's header (" + ffmpegError(code) + ")";
   opened = true;
   connected = true;
