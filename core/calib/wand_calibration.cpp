@@ -43,7 +43,12 @@ Eigen::Vector3d angleAxisOf(const Eigen::Matrix3d& R) {
 class WandSolver {
  public:
   WandSolver(const WandSession& session, const WandCalibrationOptions& options)
-      : s_(session), o_(options), n_(session.cameraCount()), m_(session.sampleCount()) {}
+      : s_(session),
+        o_(options),
+        n_(session.cameraCount()),
+        m_(session.sampleCount()),
+        refine_principal_point_(options.principal_point ==
+                                WandCalibrationOptions::PrincipalPoint::kRefined) {}
 
   WandCalibrationResult solve();
 
@@ -80,7 +85,9 @@ class WandSolver {
   std::vector<std::vector<uint8_t>> agree_;  // [sample][camera]
   int fixed_ = 0, scale_ = 1;
   std::vector<std::string> notes_;
-  bool refine_principal_point_ = false;
+  // Whether the bundle adjustments free the principal points: from the start for kRefined; for
+  // kAuto, decidePrincipalPoints() tries them freed at the end.
+  bool refine_principal_point_;
   // kAuto: after the solve with the principal points held, the same solve's last round with them
   // freed, kept if it fits the observations better by WandCalibrationOptions::kPrincipalPointGain.
   void decidePrincipalPoints();
@@ -546,14 +553,12 @@ WandCalibrationResult WandSolver::solve() {
   rejectOutliers();
   bundle(true, o_.refine_distortion, 1.0, 100);
   report("bundle", 1, rounds + 1);
-  using PrincipalPoint = WandCalibrationOptions::PrincipalPoint;
-  refine_principal_point_ = o_.principal_point == PrincipalPoint::kRefined;
   for (int round = 0; round < rounds; ++round) {
     rejectOutliers();
     bundle(true, o_.refine_distortion, 0, 100);
     report("bundle", round + 2, rounds + 1);
   }
-  if (o_.principal_point == PrincipalPoint::kAuto) decidePrincipalPoints();
+  if (o_.principal_point == WandCalibrationOptions::PrincipalPoint::kAuto) decidePrincipalPoints();
 
   WandCalibrationResult result;
   std::vector<std::string> rig_notes;
