@@ -51,9 +51,9 @@ void PipelineWorker::finishRecording(LocalPipelineRun& run) {
   const bool failed_before = run.viewRecordingFailed();
   const std::unique_ptr<ViewRecorder> recorder = run.stopRecordingView();
   if (!recorder) return;
-  if (!recorder->error().empty()) {
+  if (const Status recorded = recorder->status(); !recorded.ok()) {
     emit message(
-        tr("Recording of the view failed: %1").arg(QString::fromStdString(recorder->error())));
+        tr("Recording of the view failed: %1").arg(QString::fromStdString(recorded.error())));
   } else if (recorder->framesWritten() > 0 || !failed_before) {
     emit message(tr("Recorded %1 frames of the view to %2%3")
                      .arg(recorder->framesWritten())
@@ -161,7 +161,7 @@ void PipelineWorker::run() {
         s.feed_url = QString::fromStdString(feed->target().url);
         s.feed_sent = feed->framesSent();
         s.feed_dropped = feed->framesDropped();
-        s.feed_error = QString::fromStdString(feed->error());
+        s.feed_error = QString::fromStdString(feed->status().error());
       }
       emit snapshot(s);
     }

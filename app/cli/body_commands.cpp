@@ -22,12 +22,13 @@ namespace {
 // Prints a rigged mesh's surface and skeleton, and how its joints map onto ours (body show).
 void showBody(const std::string& file) {
   const SkinnedMesh mesh = loadSkinnedMesh(file);
-  const std::string manifold = checkClosedManifold(mesh.rest);
+  const Status manifold = checkClosedManifold(mesh.rest);
   const Eigen::Vector3f lo = mesh.rest.positions.rowwise().minCoeff();
   const Eigen::Vector3f hi = mesh.rest.positions.rowwise().maxCoeff();
-  fmt::print("{}: {} vertices, {} triangles, {}\n", file, mesh.rest.vertexCount(),
-             mesh.rest.triangles.size(),
-             manifold.empty() ? "closed and manifold" : "NOT closed and manifold: " + manifold);
+  fmt::print(
+      "{}: {} vertices, {} triangles, {}\n", file, mesh.rest.vertexCount(),
+      mesh.rest.triangles.size(),
+      manifold.ok() ? "closed and manifold" : "NOT closed and manifold: " + manifold.error());
   fmt::print("extent: x {:.3f}..{:.3f}, y {:.3f}..{:.3f}, z {:.3f}..{:.3f} m\n", lo.x(), hi.x(),
              lo.y(), hi.y(), lo.z(), hi.z());
   fmt::print("{} joints:\n", mesh.skeleton.jointCount());

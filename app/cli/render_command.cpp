@@ -154,9 +154,9 @@ void addRenderCommand(CLI::App& app) {
       printProgress("render", i + 1, frames, ms);
     }
     video.close();
-    if (const std::string error = finishPartialVideo(partial, out, frames); !error.empty()) {
+    if (const Status finished = finishPartialVideo(partial, out, frames); !finished.ok()) {
       throw Error(
-          error + "; " +
+          finished.error() + "; " +
           (std::filesystem::exists(out) ? "the old file is left as it was" : "nothing written"));
     }
     remove_partial.keep = true;

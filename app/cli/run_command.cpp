@@ -65,7 +65,7 @@ std::string feedJson(const VideoFeed* feed) {
       "{{\"url\": \"{}\", \"frames_sent\": {}, \"frames_dropped\": {}, \"send_ms\": {:.3f}, "
       "\"connections\": {}, \"error\": \"{}\"}}",
       jsonSafe(feed->target().url), feed->framesSent(), feed->framesDropped(), feed->sendMs(),
-      feed->connections(), jsonSafe(feed->error()));
+      feed->connections(), jsonSafe(feed->status().error()));
 }
 
 std::string reportJson(const RunReport& r, const CpuUse& cpu, const std::string& machine,
@@ -396,8 +396,8 @@ RunUse runPipeline(LocalPipelineRun& pipeline, const RunArgs& a, const std::stri
 bool stopOutputs(LocalPipelineRun& pipeline, std::unique_ptr<VideoFeed>& view_feed) {
   bool recording_failed = pipeline.viewRecordingFailed();  // stopped by a failure (a full disk)
   if (std::unique_ptr<ViewRecorder> recorder = pipeline.stopRecordingView()) {
-    if (!recorder->error().empty()) {
-      fmt::print(stderr, "lumistage run: recording of the view failed: {}\n", recorder->error());
+    if (const Status recorded = recorder->status(); !recorded.ok()) {
+      fmt::print(stderr, "lumistage run: recording of the view failed: {}\n", recorded.error());
       recording_failed = true;
     } else {
       fmt::print("recorded the view to {}: {} frames of {}x{} at {:g} fps\n",
@@ -407,10 +407,11 @@ bool stopOutputs(LocalPipelineRun& pipeline, std::unique_ptr<VideoFeed>& view_fe
   }
   view_feed = pipeline.stopFeedingView();
   if (view_feed) {
+    const Status fed = view_feed->status();
     fmt::print(
         "view fed to {}: {} frames sent, {} dropped, {:.1f} ms a frame to encode and send{}\n",
         view_feed->target().url, view_feed->framesSent(), view_feed->framesDropped(),
-        view_feed->sendMs(), view_feed->error().empty() ? "" : "; " + view_feed->error());
+        view_feed->sendMs(), fed.ok() ? "" : "; " + fed.error());
   }
   return recording_failed;
 }

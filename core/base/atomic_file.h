@@ -6,6 +6,8 @@
 #include <string>
 #include <string_view>
 
+#include "core/base/status.h"
+
 namespace lumistage {
 
 // Reads a whole file; throws Error naming the file and the reason.
@@ -46,7 +48,7 @@ class AppendOnlyFile {
   bool append(std::string_view record);
   bool failed() const { return failed_; }
   const std::filesystem::path& path() const { return path_; }
-  const std::string& error() const { return error_; }  // the reason of the failure, in words
+  Status status() const { return failed_ ? Status::failure(error_) : Status(); }
 
  private:
   std::filesystem::path path_;

@@ -562,11 +562,11 @@ SkinnedMesh fitToHumanSkeleton(const SkinnedMesh& file_body, const BodyMapping& 
   if (without > 0)
     spdlog::warn("{}: {} vertices are in no triangle: their normals point away from their joint",
                  source, without);
-  if (const std::string open = checkClosedManifold(out.rest); !open.empty())
+  if (const Status closed = checkClosedManifold(out.rest); !closed.ok())
     spdlog::warn(
         "{}: the mesh is not closed and manifold ({}): refinement and rendering see "
         "through its holes",
-        source, open);
+        source, closed.error());
   out.validate();
   return out;
 }

@@ -96,7 +96,7 @@ void skinMesh(const SkinnedMesh& mesh, const std::vector<Eigen::Affine3f>& trans
   }
 }
 
-std::string checkClosedManifold(const TriangleMesh& mesh) {
+Status checkClosedManifold(const TriangleMesh& mesh) {
   std::unordered_map<uint64_t, int> directed;  // (a, b) -> count
   auto key = [](uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; };
   for (const Eigen::Vector3i& t : mesh.triangles) {
@@ -116,8 +116,8 @@ std::string checkClosedManifold(const TriangleMesh& mesh) {
       }
     }
   }
-  if (count > 0) problems += std::to_string(count) + " bad edge(s) in all";
-  return problems;
+  if (count == 0) return {};
+  return Status::failure(problems + std::to_string(count) + " bad edge(s) in all");
 }
 
 }  // namespace lumistage

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/base/status.h"
 #include "core/body/skeleton.h"
 
 namespace lumistage {
@@ -53,7 +54,7 @@ void skinMesh(const SkinnedMesh& mesh, const std::vector<Eigen::Affine3f>& trans
               Eigen::Matrix3Xf& positions, Eigen::Matrix3Xf& normals);
 
 // Checks that a mesh is closed and manifold: every edge is used by exactly two triangles, once in
-// each direction. Returns an empty string when it is, else what is wrong (first few edges).
-std::string checkClosedManifold(const TriangleMesh& mesh);
+// each direction. Fails saying what is wrong (the first few edges) when it is not.
+Status checkClosedManifold(const TriangleMesh& mesh);
 
 }  // namespace lumistage

@@ -252,15 +252,15 @@ void AravisSource::startCamera(Device& d) {
   throwIfFailed(error, d.name, "start of acquisition");
 }
 
-std::optional<std::string> AravisSource::tryStep(Device& d, void (AravisSource::*step)(Device&)) {
+Status AravisSource::tryStep(Device& d, void (AravisSource::*step)(Device&)) {
   try {
     (this->*step)(d);
-    return std::nullopt;
+    return {};
   } catch (const Error& e) {
     closeCamera(d);
     std::lock_guard lock(mutex_);
     d.stats.last_error = std::string(e.what()) + " (trying again)";
-    return std::string(e.what());
+    return Status::failure(e.what());
   }
 }
 
@@ -298,7 +298,7 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
   // every kRetryOpen by its thread, its error in its stats meanwhile. None opened: an error.
   std::vector<std::string> failures;
   const auto attempt = [&](Device& d, void (AravisSource::*step)(Device&)) {
-    if (std::optional<std::string> error = tryStep(d, step)) failures.push_back(std::move(*error));
+    if (const Status done = tryStep(d, step); !done.ok()) failures.push_back(done.error());
   };
   {
     // Opened side by side: a camera that is not there costs its discovery's 0.5 s once, not once
@@ -308,9 +308,9 @@ AravisSource::AravisSource(Rig rig, std::vector<AravisCameraConfig> cameras)
     for (auto& d : devices_) {
       if (d->config.device.empty()) continue;  // another node's
       opening.emplace_back([&, device = d.get()] {
-        if (std::optional<std::string> error = tryStep(*device, &AravisSource::openCamera)) {
+        if (const Status opened = tryStep(*device, &AravisSource::openCamera); !opened.ok()) {
           std::lock_guard lock(failed);
-          failures.push_back(std::move(*error));
+          failures.push_back(opened.error());
         }
       });
     }
@@ -375,10 +375,10 @@ void AravisSource::receive(int camera) {
         continue;
       }
       next_open = now + kRetryOpen;
-      if (tryStep(d, &AravisSource::openCamera)) continue;
+      if (!tryStep(d, &AravisSource::openCamera).ok()) continue;
       // As at the start: the stream filters by address before it has buffers to fill.
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
-      if (tryStep(d, &AravisSource::startCamera)) continue;
+      if (!tryStep(d, &AravisSource::startCamera).ok()) continue;
       spdlog::info("camera {}: open, streaming", d.name);
       std::lock_guard lock(mutex_);
       d.stats.last_error.clear();

@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/base/status.h"
 #include "core/capture/frame_source.h"
 
 namespace lumistage {
@@ -129,7 +130,7 @@ class AravisSource : public FrameSource {
   void startCamera(Device& d);  // buffers given, acquisition started
   void closeCamera(Device& d);
   // One of the steps above; on an Error the camera is closed, the error (returned) in its stats.
-  std::optional<std::string> tryStep(Device& d, void (AravisSource::*step)(Device&));
+  Status tryStep(Device& d, void (AravisSource::*step)(Device&));
 
   Rig rig_;
   std::vector<std::unique_ptr<Device>> devices_;

@@ -21,6 +21,7 @@
 
 #include "core/base/atomic_file.h"
 #include "core/base/error.h"
+#include "core/base/status.h"
 #include "core/base/yaml_reader.h"
 #include "core/geometry/rig_file.h"
 
@@ -69,24 +70,23 @@ Lines splitLines(std::string_view text) {
 }
 
 // Opens a camera image for reading, only if it is a regular file: a FIFO in a camera's folder
-// blocked fopen for ever, a device would be read without end. Null, with what is wrong in
-// `problem`, otherwise.
-std::FILE* openImage(const fs::path& path, std::string& problem) {
+// blocked fopen for ever, a device would be read without end. `file` is null when it fails.
+Status openImage(const fs::path& path, std::FILE*& file) {
+  file = nullptr;
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) {
-    problem =
-        errno == ENOENT ? "is missing" : fmt::format("cannot be opened: {}", std::strerror(errno));
-    return nullptr;
+    return Status::failure(
+        errno == ENOENT ? "is missing" : fmt::format("cannot be opened: {}", std::strerror(errno)));
   }
   struct stat st {};
-  std::FILE* file = nullptr;
+  Status opened;
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    problem = "is not a regular file (a FIFO, a folder or a device?)";
+    opened = Status::failure("is not a regular file (a FIFO, a folder or a device?)");
   } else if ((file = ::fdopen(fd, "rb")) == nullptr) {
-    problem = fmt::format("cannot be opened: {}", std::strerror(errno));
+    opened = Status::failure(fmt::format("cannot be opened: {}", std::strerror(errno)));
   }
   if (file == nullptr) ::close(fd);
-  return file;
+  return opened;
 }
 
 // Whether `path` names something other than a regular file (what openImage refuses), for a
@@ -102,12 +102,11 @@ uint32_t bigEndian32(const unsigned char* p) {
 }
 
 // Cheap check of a frame's PNG without decoding it: the header says size and channels, and the
-// file ends with the IEND chunk (a file cut short by a crash or a full disk does not). Returns
-// what is wrong, or an empty string.
-std::string checkPng(const fs::path& path, int width, int height, int channels) {
-  std::string problem;
-  std::FILE* file = openImage(path, problem);
-  if (!file) return problem;
+// file ends with the IEND chunk (a file cut short by a crash or a full disk does not). Fails
+// saying what is wrong.
+Status checkPng(const fs::path& path, int width, int height, int channels) {
+  std::FILE* file = nullptr;
+  if (Status opened = openImage(path, file); !opened.ok()) return opened;
   std::array<unsigned char, 26> header{};
   std::array<unsigned char, 12> tail{};
   const bool header_read = std::fread(header.data(), 1, header.size(), file) == header.size();
@@ -117,110 +116,110 @@ std::string checkPng(const fs::path& path, int width, int height, int channels) 
   static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   static constexpr unsigned char kIend[12] = {0,   0,   0,    0,    'I',  'E',
                                               'N', 'D', 0xae, 0x42, 0x60, 0x82};
-  if (!header_read) return "is truncated (shorter than a PNG header)";
+  if (!header_read) return Status::failure("is truncated (shorter than a PNG header)");
   if (std::memcmp(header.data(), kSignature, 8) != 0 || std::memcmp(header.data() + 12, "IHDR", 4))
-    return "is not a PNG file";
+    return Status::failure("is not a PNG file");
   const int w = int(bigEndian32(header.data() + 16)), h = int(bigEndian32(header.data() + 20));
   if (w != width || h != height)
-    return fmt::format("is a {}x{} image, expected {}x{}", w, h, width, height);
+    return Status::failure(fmt::format("is a {}x{} image, expected {}x{}", w, h, width, height));
   const int depth = header[24], colour = header[25];
   const int expected_colour = channels == 3 ? 2 : 0;  // PNG colour types: 0 grey, 2 RGB
   if (depth != 8 || colour != expected_colour) {
-    return fmt::format("has bit depth {} and PNG colour type {}, expected 8-bit {}", depth, colour,
-                       channels == 3 ? "RGB (type 2)" : "grey (type 0)");
+    return Status::failure(fmt::format("has bit depth {} and PNG colour type {}, expected 8-bit {}",
+                                       depth, colour,
+                                       channels == 3 ? "RGB (type 2)" : "grey (type 0)"));
   }
   if (!tail_read || std::memcmp(tail.data(), kIend, sizeof kIend) != 0)
-    return "is truncated (it does not end with the PNG end chunk)";
+    return Status::failure("is truncated (it does not end with the PNG end chunk)");
   return {};
 }
 
 // A PNM camera image's header ("P5" or "P6", width, height, 255, each followed by one whitespace
-// character; no comments, as the writer writes it): its length, or 0 when it is not such a header
-// of the expected size and channels, with what is wrong in `problem`.
-size_t parsePnmHeader(std::string_view data, int width, int height, int channels,
-                      std::string& problem) {
+// character; no comments, as the writer writes it) of the expected size and channels: its length
+// into `length`.
+Status parsePnmHeader(std::string_view data, int width, int height, int channels, size_t& length) {
   const std::string_view magic = channels == 3 ? "P6" : "P5";
   if (data.size() < 3 || (data.substr(0, 2) != "P5" && data.substr(0, 2) != "P6") ||
       !std::isspace(static_cast<unsigned char>(data[2]))) {
-    problem = data.size() < 3 ? "is truncated (shorter than a PNM header)" : "is not a PNM file";
-    return 0;
+    return Status::failure(data.size() < 3 ? "is truncated (shorter than a PNM header)"
+                                           : "is not a PNM file");
   }
   if (data.substr(0, 2) != magic) {
-    problem = fmt::format("is a {} file, expected {} ({})", data.substr(0, 2), magic,
-                          channels == 3 ? "RGB" : "grey");
-    return 0;
+    return Status::failure(fmt::format("is a {} file, expected {} ({})", data.substr(0, 2), magic,
+                                       channels == 3 ? "RGB" : "grey"));
   }
   size_t at = 3;
   int fields[3] = {0, 0, 0};
   for (int& field : fields) {
     const size_t end = data.find_first_of(" \t\r\n", at);
     if (end == std::string_view::npos || !parseNumber(data.substr(at, end - at), field)) {
-      problem = "has a malformed PNM header";
-      return 0;
+      return Status::failure("has a malformed PNM header");
     }
     at = end + 1;
   }
   if (fields[0] != width || fields[1] != height) {
-    problem = fmt::format("is a {}x{} image, expected {}x{}", fields[0], fields[1], width, height);
-    return 0;
+    return Status::failure(
+        fmt::format("is a {}x{} image, expected {}x{}", fields[0], fields[1], width, height));
   }
   if (fields[2] != 255) {
-    problem = fmt::format("has PNM maxval {}, expected 255 (8-bit)", fields[2]);
-    return 0;
+    return Status::failure(fmt::format("has PNM maxval {}, expected 255 (8-bit)", fields[2]));
   }
-  return at;
+  length = at;
+  return {};
 }
 
 // Reads an open PNM file's header (parsePnmHeader) and leaves the file just after it.
-size_t readPnmHeader(std::FILE* file, int width, int height, int channels, std::string& problem) {
+Status readPnmHeader(std::FILE* file, int width, int height, int channels, size_t& length) {
   std::array<char, 64> header{};
   const size_t read = std::fread(header.data(), 1, header.size(), file);
-  const size_t length =
-      parsePnmHeader(std::string_view(header.data(), read), width, height, channels, problem);
-  if (length == 0) return 0;
-  if (std::fseek(file, long(length), SEEK_SET) == 0) return length;
-  problem = fmt::format("cannot be read past its header: {}", std::strerror(errno));
-  return 0;
+  Status parsed =
+      parsePnmHeader(std::string_view(header.data(), read), width, height, channels, length);
+  if (!parsed.ok()) return parsed;
+  if (std::fseek(file, long(length), SEEK_SET) == 0) return {};
+  return Status::failure(fmt::format("cannot be read past its header: {}", std::strerror(errno)));
 }
 
 // Cheap check of a frame's PNM: its header, and a file as long as the header and every pixel (a
 // file cut short by a crash or a full disk is not).
-std::string checkPnm(const fs::path& path, int width, int height, int channels) {
-  std::string problem;
-  std::FILE* file = openImage(path, problem);
-  if (!file) return problem;
-  const size_t length = readPnmHeader(file, width, height, channels, problem);
+Status checkPnm(const fs::path& path, int width, int height, int channels) {
+  std::FILE* file = nullptr;
+  if (Status opened = openImage(path, file); !opened.ok()) return opened;
+  size_t length = 0;
+  Status header = readPnmHeader(file, width, height, channels, length);
   const long size = std::fseek(file, 0, SEEK_END) == 0 ? std::ftell(file) : -1;
   std::fclose(file);
-  if (length == 0) return problem;
+  if (!header.ok()) return header;
   const long expected = long(length) + long(width) * height * channels;
   if (size != expected)
-    return fmt::format("is {} bytes, expected {} (its header and {}x{} pixels){}", size, expected,
-                       width, height, size < expected ? ": truncated" : "");
+    return Status::failure(fmt::format("is {} bytes, expected {} (its header and {}x{} pixels){}",
+                                       size, expected, width, height,
+                                       size < expected ? ": truncated" : ""));
   return {};
 }
 
-// Reads a PNM camera image into `image` (the pixels straight into its buffer): empty, or what is
-// wrong, naming the file.
-std::string readPnm(const fs::path& path, int64_t frame_id, const Camera& camera,
-                    PixelFormat format, Image& image) {
+// Reads a PNM camera image into `image` (the pixels straight into its buffer); fails saying what
+// is wrong, naming the file.
+Status readPnm(const fs::path& path, int64_t frame_id, const Camera& camera, PixelFormat format,
+               Image& image) {
   const int channels = bytesPerPixel(format);
-  std::string problem;
-  std::FILE* file = openImage(path, problem);
-  if (!file) return fmt::format("{}: frame {}: {}", path.string(), frame_id, problem);
-  const size_t length = readPnmHeader(file, camera.width(), camera.height(), channels, problem);
+  std::FILE* file = nullptr;
+  if (Status opened = openImage(path, file); !opened.ok())
+    return Status::failure(
+        fmt::format("{}: frame {}: {}", path.string(), frame_id, opened.error()));
+  size_t length = 0;
+  const Status header = readPnmHeader(file, camera.width(), camera.height(), channels, length);
   image.resize(format, camera.width(), camera.height());
   const bool whole =
-      length > 0 &&
+      header.ok() &&
       std::fread(image.pixels.data(), 1, image.pixels.size(), file) == image.pixels.size() &&
       std::fgetc(file) == EOF;
   std::fclose(file);
   if (whole) return {};
-  return fmt::format(
+  return Status::failure(fmt::format(
       "{}: frame {}: {} (damaged since the session was opened?)", path.string(), frame_id,
-      length == 0 ? problem
-                  : fmt::format("is not a {}x{} {} image's header and pixels", camera.width(),
-                                camera.height(), pixelFormatName(format)));
+      !header.ok() ? header.error()
+                   : fmt::format("is not a {}x{} {} image's header and pixels", camera.width(),
+                                 camera.height(), pixelFormatName(format))));
 }
 
 }  // namespace
@@ -384,12 +383,12 @@ void SessionReader::checkImages() {
     for (int c = 0; c < rig_.cameraCount() && problems[i].empty(); ++c) {
       const Camera& camera = rig_.camera(c);
       const fs::path path = imagePath(c, int(i));
-      const std::string problem = files_ == ImageFiles::kPnm
-                                      ? checkPnm(path, camera.width(), camera.height(), channels)
-                                      : checkPng(path, camera.width(), camera.height(), channels);
-      if (!problem.empty())
+      const Status whole = files_ == ImageFiles::kPnm
+                               ? checkPnm(path, camera.width(), camera.height(), channels)
+                               : checkPng(path, camera.width(), camera.height(), channels);
+      if (!whole.ok())
         problems[i] = path.string() + ": frame " + std::to_string(frames_[i].id) +
-                      " is listed in index.csv but its image " + problem;
+                      " is listed in index.csv but its image " + whole.error();
     }
     if (problems[i].empty()) whole_end = i + 1;
   }
@@ -522,7 +521,7 @@ void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
   const int64_t id = frameId(i), timestamp = timestampNs(i);
   out.resize(rig_.cameraCount());
   const int count = cameras.empty() ? rig_.cameraCount() : static_cast<int>(cameras.size());
-  std::vector<std::string> errors(count);
+  std::vector<Status> errors(count);
   // PNG decoding dominates: cameras in parallel, errors carried out.
   cv::parallel_for_(cv::Range(0, count), [&](const cv::Range& range) {
     for (int k = range.start; k < range.end; ++k) {
@@ -539,25 +538,24 @@ void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
       }
       cv::Mat decoded;
       if (existsButIsNotARegularFile(path)) {
-        errors[k] = fmt::format(
-            "{}: frame {}: is not a regular file (a FIFO, a folder or a "
-            "device?)",
-            path.string(), id);
+        errors[k] = Status::failure(
+            fmt::format("{}: frame {}: is not a regular file (a FIFO, a folder or a device?)",
+                        path.string(), id));
         continue;
       }
       try {
         decoded = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
       } catch (const cv::Exception& e) {
-        errors[k] = path.string() + ": cannot decode: " + e.err;
+        errors[k] = Status::failure(path.string() + ": cannot decode: " + e.err);
         continue;
       }
       const int type = format_ == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1;
       if (decoded.empty() || decoded.type() != type || decoded.cols != camera.width() ||
           decoded.rows != camera.height()) {
-        errors[k] = fmt::format(
+        errors[k] = Status::failure(fmt::format(
             "{}: frame {}: cannot decode a {}x{} {} image from it (damaged since the session "
             "was opened?)",
-            path.string(), id, camera.width(), camera.height(), pixelFormatName(format_));
+            path.string(), id, camera.width(), camera.height(), pixelFormatName(format_)));
         continue;
       }
       frame.image.resize(format_, camera.width(), camera.height());
@@ -568,8 +566,8 @@ void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
         decoded.copyTo(target);
     }
   });
-  for (const std::string& error : errors) {
-    if (!error.empty()) throw Error(error);
+  for (const Status& read : errors) {
+    if (!read.ok()) throw Error(read.error());
   }
 }
 

@@ -95,13 +95,13 @@ SessionWriter::SessionWriter(const fs::path& folder, const Rig& rig, PixelFormat
                   truth ? "true" : "false"));
   index_.create(folder_ / "index.csv");
   if (!index_.append("frame,timestamp_ns\n"))
-    throw Error(index_.path().string() + ": cannot write: " + index_.error());
+    throw Error(index_.path().string() + ": cannot write: " + index_.status().error());
   if (truth) {
     joints_.create(folder_ / "truth" / "joints.csv");
     std::string header = "frame";
     for (const std::string& name : joint_names_) header += fmt::format(",{0}_x,{0}_y,{0}_z", name);
     if (!joints_.append(header + "\n"))
-      throw Error(joints_.path().string() + ": cannot write: " + joints_.error());
+      throw Error(joints_.path().string() + ": cannot write: " + joints_.status().error());
   }
 }
 
@@ -175,7 +175,7 @@ void SessionWriter::writeTruth(int64_t frame_id, const FrameTruth& truth, bool m
   line += "\n";
   if (!joints_.append(line))
     throw Error(fmt::format("{}: cannot append frame {}: {}; the session ends before it",
-                            joints_.path().string(), frame_id, joints_.error()));
+                            joints_.path().string(), frame_id, joints_.status().error()));
 }
 
 void SessionWriter::copyFrame(int64_t frame_id, int64_t timestamp_ns,
@@ -200,7 +200,7 @@ void SessionWriter::appendIndex(int64_t frame_id, int64_t timestamp_ns, int64_t 
   const auto end = fmt::format_to_n(line, sizeof line, "{},{}\n", frame_id, timestamp_ns).out;
   if (!index_.append(std::string_view(line, size_t(end - line))))
     throw Error(fmt::format("{}: cannot append frame {}: {}; the session ends before it",
-                            index_.path().string(), frame_id, index_.error()));
+                            index_.path().string(), frame_id, index_.status().error()));
   ++frames_;
   bytes_ += bytes;
 }

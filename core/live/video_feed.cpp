@@ -357,9 +357,9 @@ bool VideoFeed::connected() const {
 int VideoFeed::connections() const {
   return impl_->connections;
 }
-std::string VideoFeed::error() const {
+Status VideoFeed::status() const {
   std::lock_guard lock(impl_->mutex);
-  return impl_->error;
+  return impl_->error.empty() ? Status() : Status::failure(impl_->error);
 }
 double VideoFeed::sendMs() const {
   const int64_t sent = impl_->sent;

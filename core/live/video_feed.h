@@ -5,6 +5,7 @@
 #include <span>
 #include <string>
 
+#include "core/base/status.h"
 #include "core/render/video_file.h"
 
 namespace lumistage {
@@ -73,9 +74,9 @@ class VideoFeed {
   int64_t framesDropped() const;  // offered while the thread was busy or connecting
   bool connected() const;   // open and sending (UDP: once open; SRT: a receiver has connected)
   int connections() const;  // receivers connected so far (UDP: 1 once open)
-  // Why the feed stopped, one line naming the URL; empty while it runs, and when close() stopped
-  // it.
-  std::string error() const;
+  // Failed once the feed stopped on its own, saying why in one line naming the URL; ok while it
+  // runs, and when close() stopped it.
+  Status status() const;
   // The thread's time a sent picture took, encoding and sending, ms (mean; 0 before any).
   double sendMs() const;
   // Encoder's name ("libx264"; "mpeg4" where this FFmpeg has no libx264), once open.

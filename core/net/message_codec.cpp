@@ -505,7 +505,7 @@ Check decodeBody(const Table* table, const char* name, const MessageLimits& limi
 
 DecodeResult failure(std::string reason) {
   DecodeResult r;
-  r.error = std::move(reason);
+  r.status = Status::failure(std::move(reason));
   return r;
 }
 

@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/base/status.h"
 #include "core/net/message_types.h"
 
 namespace flatbuffers {
@@ -47,8 +48,9 @@ size_t largestNodeMessage(const NodeMessageSizes& sizes, const MessageLimits& li
 // Either a message or why the bytes were refused.
 struct DecodeResult {
   std::optional<Message> message;
-  std::string error;
+  Status status;  // ok with a message; else why there is none
   bool ok() const { return message.has_value(); }
+  const std::string& error() const { return status.error(); }
 };
 
 // Verifies and copies out one buffer. Never throws on bad input (only std::bad_alloc, which

@@ -306,14 +306,14 @@ std::optional<ReceivedMessage> StudioEndpoint::receive(std::chrono::milliseconds
       // In plain mode a peer's name is whatever it calls itself: one that is no node name (a line
       // break and a forged log line in it, terminal escapes) is refused, and logged quoted.
       received.node = quotedInput(received.node, 64);
-      received.result.error = "its name is not a valid node name";
+      received.result.status = Status::failure("its name is not a valid node name");
     } else if (frames.size() != 2) {
-      received.result.error =
-          fmt::format("expected one frame a message, got {}", frames.size() - 1);
+      received.result.status =
+          Status::failure(fmt::format("expected one frame a message, got {}", frames.size() - 1));
     } else {
       received.result = decodeMessage(frames[1].data<uint8_t>(), frames[1].size(), s.config.limits);
     }
-    if (!received.result.ok()) s.countBad(received.node, received.result.error);
+    if (!received.result.ok()) s.countBad(received.node, received.result.error());
     return received;
   } catch (const zmq::error_t& e) {
     // A signal (the process being told to stop) interrupts the wait: not a failure.
@@ -428,7 +428,8 @@ std::optional<DecodeResult> NodeEndpoint::receive(std::chrono::milliseconds time
     }
     DecodeResult result;
     if (frames.size() != 1) {
-      result.error = fmt::format("expected one frame a message, got {}", frames.size());
+      result.status =
+          Status::failure(fmt::format("expected one frame a message, got {}", frames.size()));
     } else {
       result = decodeMessage(frames[0].data<uint8_t>(), frames[0].size(), s.config.limits);
     }
@@ -436,7 +437,7 @@ std::optional<DecodeResult> NodeEndpoint::receive(std::chrono::milliseconds time
       const int64_t count = ++s.bad_messages;
       if (worthLogging(count)) {
         spdlog::warn("node {}: dropped a message from the studio ({} so far): {}", s.config.name,
-                     count, result.error);
+                     count, result.error());
       }
     }
     return result;

@@ -228,9 +228,9 @@ void LocalPipelineRun::feedImage(const BlendedImage& image) {
   if (!view_feed_ || view_feed_told_) return;
   // Premultiplied RGBA: the empty pixels are black, as in the recording.
   view_feed_->offer(image.width, image.height, image.rgba, PixelOrder::kRgba);
-  if (std::string error = view_feed_->error(); !error.empty()) {
+  if (const Status feeding = view_feed_->status(); !feeding.ok()) {
     view_feed_told_ = true;
-    if (view_feed_stopped_) view_feed_stopped_(error);
+    if (view_feed_stopped_) view_feed_stopped_(feeding.error());
   }
 }
 

@@ -394,9 +394,8 @@ void StudioCoordinator::onStatistics(NodeState& node, int64_t frame_id,
   if (frame.refine_sum.vertex_count == 0)
     frame.refine_sum.reset(int(stats.vertex_count), stats.offset_count, colour_bits);
   // Integer sums of every node's cameras add up exactly, in any order.
-  std::string error;
-  if (!statistics_codec_.add(stats.packed, frame.refine_sum, &error)) {
-    spdlog::warn("node {}: frame {}: {}", node.report.name, frame_id, error);
+  if (const Status added = statistics_codec_.add(stats.packed, frame.refine_sum); !added.ok()) {
+    spdlog::warn("node {}: frame {}: {}", node.report.name, frame_id, added.error());
     ++node.report.bad_messages;
     // The first node's statistics set the sum's sizes: when they were refused, the next node's
     // set them again, rather than be refused for differing from them.

@@ -45,9 +45,8 @@ void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::M
     sampler_.sample(inputs_, positions, normals, triangles_, node_stats_, offsets_);
     codec_.encode(node_stats_, wire_);
     wire_bytes_ += wire_.size();
-    std::string error;
-    if (!codec_.add(wire_, combined_, &error))
-      throw Error("refinement: node " + node.name + ": " + error);
+    if (const Status added = codec_.add(wire_, combined_); !added.ok())
+      throw Error("refinement: node " + node.name + ": " + added.error());
   }
   combined_.dropOutside();
   refiner_.refine(combined_, offsets_);

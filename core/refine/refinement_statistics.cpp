@@ -241,10 +241,9 @@ void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<u
 
 namespace {
 
-// Says why a buffer is refused, when asked; false.
-bool refuse(std::string* error, const char* why) {
-  if (error) *error = std::string("refinement statistics: ") + why;
-  return false;
+// Why a buffer is refused.
+Status refuse(std::string_view why) {
+  return Status::failure("refinement statistics: " + std::string(why));
 }
 
 bool validWidths(int sum_bytes, int square_bytes) {
@@ -276,9 +275,8 @@ const char* checkBody(std::span<const uint8_t> data, size_t vertices, size_t n, 
   return nullptr;
 }
 
-bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std::string* error,
-                  int max_samples) {
-  auto fail = [&](const char* why) { return refuse(error, why); };
+Status decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, int max_samples) {
+  const auto fail = refuse;
   if (data.size() < kHeaderBytes) return fail("shorter than its header");
   const uint32_t vertices = get(data.data(), 4);
   const int offsets = data[4], bits = data[5], sum_bytes = data[6], square_bytes = data[7];
@@ -305,11 +303,11 @@ bool decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, std:
   const uint8_t* p = values.end();
   forEachLeaving(counts, kPackedOutside, n, offsets, [&](size_t s) { out.edges[s] = *p++; });
   for (size_t v = 0; v < vertices; ++v) out.contour[v] = (p[v / 8] >> (v % 8)) & 1;
-  return true;
+  return {};
 }
 
-bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::string* error) {
-  auto fail = [&](const char* why) { return refuse(error, why); };
+Status addPacked(std::span<const uint8_t> data, RefinementStatistics& sum) {
+  const auto fail = refuse;
   if (data.size() < kHeaderBytes) return fail("shorter than its header");
   const uint32_t vertices = get(data.data(), 4);
   const int offsets = data[4], bits = data[5], sum_bytes = data[6], square_bytes = data[7];
@@ -338,7 +336,7 @@ bool addPacked(std::span<const uint8_t> data, RefinementStatistics& sum, std::st
     sum.edges[s] = RefinementStatistics::innerEdge(sum.edges[s], *p++);
   });
   for (size_t v = 0; v < vertices; ++v) sum.contour[v] |= (p[v / 8] >> (v % 8)) & 1;
-  return true;
+  return {};
 }
 
 RefinementStatisticsCodec& threadCodec() {
@@ -354,17 +352,15 @@ static_assert(maxCompressedStatisticsBytes(1 << 20) ==
               kCompressedStatisticsHeaderBytes +
                   ZSTD_COMPRESSBOUND(maxPackedStatisticsBytes(1 << 20)));
 
-bool decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& out,
-                                std::string* error, int max_samples) {
-  if (isCompressedRefinementStatistics(data))
-    return threadCodec().decode(data, out, error, max_samples);
-  return decodePacked(data, out, error, max_samples);
+Status decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& out,
+                                  int max_samples) {
+  if (isCompressedRefinementStatistics(data)) return threadCodec().decode(data, out, max_samples);
+  return decodePacked(data, out, max_samples);
 }
 
-bool addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& sum,
-                                    std::string* error) {
-  if (isCompressedRefinementStatistics(data)) return threadCodec().add(data, sum, error);
-  return addPacked(data, sum, error);
+Status addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& sum) {
+  if (isCompressedRefinementStatistics(data)) return threadCodec().add(data, sum);
+  return addPacked(data, sum);
 }
 
 void RefinementStatisticsCodec::ZstdFree::operator()(ZSTD_CCtx_s* c) const {
@@ -411,15 +407,12 @@ void RefinementStatisticsCodec::encode(const RefinementStatistics& stats,
   put(out, at, uint32_t(packed_.size()), 4);
 }
 
-bool RefinementStatisticsCodec::unpack(std::span<const uint8_t> data, int max_samples,
-                                       std::span<const uint8_t>& packed, std::string* error) {
-  auto fail = [&](std::string_view why) {
-    if (error) *error = "refinement statistics: " + std::string(why);
-    return false;
-  };
+Status RefinementStatisticsCodec::unpack(std::span<const uint8_t> data, int max_samples,
+                                         std::span<const uint8_t>& packed) {
+  const auto fail = refuse;
   if (!isCompressedRefinementStatistics(data)) {
     packed = data;
-    return true;
+    return {};
   }
   constexpr size_t h = kCompressedStatisticsHeaderBytes;
   if (data.size() < h) return fail("shorter than its compressed header");
@@ -462,25 +455,24 @@ bool RefinementStatisticsCodec::unpack(std::span<const uint8_t> data, int max_sa
   if (!std::equal(data.begin(), data.begin() + 6, packed_.begin()))
     return fail("the packed header differs from the compressed one");
   packed = packed_;
-  return true;
+  return {};
 }
 
-bool RefinementStatisticsCodec::decode(std::span<const uint8_t> data, RefinementStatistics& out,
-                                       std::string* error, int max_samples) {
+Status RefinementStatisticsCodec::decode(std::span<const uint8_t> data, RefinementStatistics& out,
+                                         int max_samples) {
   std::span<const uint8_t> packed;
-  return unpack(data, max_samples, packed, error) && decodePacked(packed, out, error, max_samples);
+  Status unpacked = unpack(data, max_samples, packed);
+  return unpacked.ok() ? decodePacked(packed, out, max_samples) : unpacked;
 }
 
-bool RefinementStatisticsCodec::add(std::span<const uint8_t> data, RefinementStatistics& sum,
-                                    std::string* error) {
+Status RefinementStatisticsCodec::add(std::span<const uint8_t> data, RefinementStatistics& sum) {
   // Both forms start with the sizes: another mesh's statistics are refused before decompressing.
   if (data.size() >= kHeaderBytes && (int(get(data.data(), 4)) != sum.vertex_count ||
-                                      data[4] != sum.offset_count || data[5] != sum.colour_bits)) {
-    if (error) *error = "refinement statistics: sizes differ from the mesh's";
-    return false;
-  }
+                                      data[4] != sum.offset_count || data[5] != sum.colour_bits))
+    return refuse("sizes differ from the mesh's");
   std::span<const uint8_t> packed;
-  return unpack(data, sum.sampleCount(), packed, error) && addPacked(packed, sum, error);
+  Status unpacked = unpack(data, sum.sampleCount(), packed);
+  return unpacked.ok() ? addPacked(packed, sum) : unpacked;
 }
 
 }  // namespace lumistage

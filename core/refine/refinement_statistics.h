@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "core/base/status.h"
+
 struct ZSTD_CCtx_s;
 struct ZSTD_DCtx_s;
 
@@ -108,17 +110,16 @@ inline bool isCompressedRefinementStatistics(std::span<const uint8_t> data) {
 
 // The packed form. `out` is reused.
 void encodeRefinementStatistics(const RefinementStatistics& stats, std::vector<uint8_t>& out);
-// False (with `error` set when given) for a malformed, truncated or corrupt buffer of either form,
-// or sizes above max_samples. `out` is reused. The compressed form goes through this thread's
+// Fails for a malformed, truncated or corrupt buffer of either form, or sizes above max_samples,
+// saying why. `out` is reused. The compressed form goes through this thread's
 // own codec (made on first use, kept until the thread ends); hot paths hold a codec instead.
-bool decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& out,
-                                std::string* error = nullptr, int max_samples = 1 << 22);
+Status decodeRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& out,
+                                  int max_samples = 1 << 22);
 // The module's fast path: adds a node's wire form (either kind) to `sum` (of the same sizes)
 // without unpacking it into statistics first; call sum.dropOutside() after the last node.
-// The result is what decoding and add() give. False (`sum` unchanged) for a malformed buffer or
+// The result is what decoding and add() give. Fails (`sum` unchanged) for a malformed buffer or
 // other sizes.
-bool addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& sum,
-                                    std::string* error = nullptr);
+Status addEncodedRefinementStatistics(std::span<const uint8_t> data, RefinementStatistics& sum);
 
 // The compressed wire form with reusable state: zstd contexts (made on first use: a node only
 // compresses, the module only decompresses) and the packed form in between. Once warmed up by a
@@ -144,16 +145,15 @@ class RefinementStatisticsCodec {
   // memory), `out` is the packed form, which every reader takes too.
   void encode(const RefinementStatistics& stats, std::vector<uint8_t>& out);
   // As decodeRefinementStatistics and addEncodedRefinementStatistics, with this codec's state.
-  bool decode(std::span<const uint8_t> data, RefinementStatistics& out,
-              std::string* error = nullptr, int max_samples = 1 << 22);
-  bool add(std::span<const uint8_t> data, RefinementStatistics& sum, std::string* error = nullptr);
+  Status decode(std::span<const uint8_t> data, RefinementStatistics& out,
+                int max_samples = 1 << 22);
+  Status add(std::span<const uint8_t> data, RefinementStatistics& sum);
 
  private:
   // The packed form of `data`: itself when packed, else decompressed into packed_ once the
-  // compressed header and the frame's declared size agree and fit max_samples. False with
-  // `error` for anything malformed.
-  bool unpack(std::span<const uint8_t> data, int max_samples, std::span<const uint8_t>& packed,
-              std::string* error);
+  // compressed header and the frame's declared size agree and fit max_samples. Fails for anything
+  // malformed.
+  Status unpack(std::span<const uint8_t> data, int max_samples, std::span<const uint8_t>& packed);
 
   struct ZstdFree {
     void operator()(ZSTD_CCtx_s* c) const;

@@ -52,8 +52,8 @@ bool wasRecovered(const std::filesystem::path& partial) {
   }
 }
 
-std::string finishPartialVideo(const std::filesystem::path& partial,
-                               const std::filesystem::path& file, int64_t frames) {
+Status finishPartialVideo(const std::filesystem::path& partial, const std::filesystem::path& file,
+                          int64_t frames) {
   int64_t read_back = 0;
   try {
     read_back = probeVideoFile(partial).frames;
@@ -61,12 +61,15 @@ std::string finishPartialVideo(const std::filesystem::path& partial,
     // Not even a header: no frame reads back.
   }
   if (read_back != frames) {
-    return file.string() + ": the video reads back " + std::to_string(read_back) + " of its " +
-           std::to_string(frames) + " frames (disk full?)";
+    return Status::failure(file.string() + ": the video reads back " + std::to_string(read_back) +
+                           " of its " + std::to_string(frames) + " frames (disk full?)");
   }
   std::error_code error;
   std::filesystem::rename(partial, file, error);
-  if (error) return file.string() + ": cannot put the video in its place (" + error.message() + ")";
+  if (error) {
+    return Status::failure(file.string() + ": cannot put the video in its place (" +
+                           error.message() + ")");
+  }
   return {};
 }
 
@@ -382,7 +385,7 @@ bool ViewRecorder::close() {
   } else {
     r.writer.release();
   }
-  if (r.error.empty()) r.error = finishPartialVideo(r.partial, r.file, r.written);
+  if (r.error.empty()) r.error = finishPartialVideo(r.partial, r.file, r.written).error();
   if (!r.error.empty()) {
     r.error += "; what was written is kept as " + r.partial.string() +
                " (lumistage video recover makes a video of its whole frames)";
@@ -390,8 +393,8 @@ bool ViewRecorder::close() {
   return r.error.empty();
 }
 
-const std::string& ViewRecorder::error() const {
-  return impl_->error;
+Status ViewRecorder::status() const {
+  return impl_->error.empty() ? Status() : Status::failure(impl_->error);
 }
 
 const std::filesystem::path& ViewRecorder::file() const {

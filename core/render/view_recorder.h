@@ -6,6 +6,8 @@
 #include <span>
 #include <string>
 
+#include "core/base/status.h"
+
 namespace lumistage {
 
 // Where a video is made until it is whole: NAME.partial.EXT beside NAME.EXT.
@@ -36,9 +38,9 @@ std::filesystem::path recoveredVideoPath(const std::filesystem::path& partial);
 bool wasRecovered(const std::filesystem::path& partial);
 // Puts the closed video `partial` in `file`'s place if it reads back `frames` frames (every packet
 // of its video stream read through libavformat, probeVideoFile); otherwise leaves both as they
-// are. Empty when done, else why, naming `file` (the caller says what became of the partial file).
-std::string finishPartialVideo(const std::filesystem::path& partial,
-                               const std::filesystem::path& file, int64_t frames);
+// are. Fails saying why, naming `file` (the caller says what became of the partial file).
+Status finishPartialVideo(const std::filesystem::path& partial, const std::filesystem::path& file,
+                          int64_t frames);
 
 // Records a stream of the studio's blended images (one virtual camera) to a video as they are
 // made: every frame the pipeline finishes, not the few a second a window shows. By the file's
@@ -72,9 +74,9 @@ class ViewRecorder {
   // an MP4, a write fails: the recording should stop there, what it holds is kept by close().
   bool add(int64_t frame_id, int width, int height, std::span<const uint8_t> rgba);
   // Writes the index, closes the file and puts it in its place if it reads back whole; later
-  // add() calls write nothing. False (error() says why) when it does not.
+  // add() calls write nothing. False (status() says why) when it does not.
   bool close();
-  const std::string& error() const;  // empty while all is well
+  Status status() const;  // of close()
 
   static constexpr int64_t kMinFreeBytes = 64 << 20;
   static constexpr int kFreeCheckFrames = 30;

@@ -115,7 +115,7 @@ void refineModuleSide(benchmark::State& state) {
   for (auto _ : state) {
     combined.reset(points * s.generic.rest.vertexCount(), s.config.refine.offset_count,
                    s.config.refine.colour_bits);
-    for (const auto& w : s.wire[points]) codec.add(w, combined);
+    for (const auto& w : s.wire[points]) benchmark::DoNotOptimize(codec.add(w, combined));
     combined.dropOutside();
     refiner.refine(combined, offsets);
     benchmark::DoNotOptimize(offsets.data());
@@ -136,7 +136,7 @@ void refineModuleChooseOnly(benchmark::State& state) {
   combined.reset(points * s.generic.rest.vertexCount(), s.config.refine.offset_count,
                  s.config.refine.colour_bits);
   for (const auto& w : s.wire[points]) {
-    decodeRefinementStatistics(w, decoded);
+    benchmark::DoNotOptimize(decodeRefinementStatistics(w, decoded));
     combined.add(decoded);
   }
   std::vector<uint8_t> offsets;

@@ -285,7 +285,7 @@ void recordView(benchmark::State& state) {
   state.counters["process_cpu_ms"] = (processCpuMs() - cpu) / double(state.iterations());
   // The video takes its name once closed and read back whole (until then NAME.partial.avi).
   if (!recorder.close()) {
-    state.SkipWithError(recorder.error().c_str());
+    state.SkipWithError(recorder.status().error().c_str());
     return;
   }
   state.counters["bytes_per_frame"] =

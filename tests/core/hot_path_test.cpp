@@ -245,8 +245,7 @@ TEST(HotPaths, TheStudiosFrameAllocatesNothingAfterTheFirst) {
   const auto studioFrame = [&] {
     combined.reset(refine.pointsPerVertex() * f.generic.rest.vertexCount(), refine.offset_count,
                    refine.colour_bits);
-    std::string error;
-    for (const auto& w : wire) ok = codec.add(w, combined, &error) && ok;
+    for (const auto& w : wire) ok = codec.add(w, combined).ok() && ok;
     combined.dropOutside();
     ok = refiner.refine(combined, offsets) && ok;
     posedBodyMesh(f.generic, message, pose, transforms, positions, normals);

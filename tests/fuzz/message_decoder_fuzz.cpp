@@ -75,21 +75,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   limits.max_cameras = 9;  // small limits reach the count checks with small inputs
   limits.max_vertices = 5000;
   const lumistage::DecodeResult result = lumistage::decodeMessage(data, size, limits);
-  if (result.ok() == !result.error.empty()) std::abort();  // exactly one of the two
+  if (result.ok() == !result.error().empty()) std::abort();  // exactly one of the two
   const auto* stats =
       result.ok() ? std::get_if<lumistage::VertexStatisticsData>(&result.message->body) : nullptr;
   if (stats) {
     // As the studio: decode (checked against the message's counts) and add.
     static lumistage::RefinementStatisticsCodec codec;
     static lumistage::RefinementStatistics decoded, sum;
-    std::string error;
-    const bool ok = codec.decode(stats->packed, decoded, &error,
-                                 int(stats->vertex_count) * stats->offset_count);
-    if (ok == !error.empty()) std::abort();
+    const lumistage::Status decoded_status =
+        codec.decode(stats->packed, decoded, int(stats->vertex_count) * stats->offset_count);
+    const bool ok = decoded_status.ok();
+    if (ok == !decoded_status.error().empty()) std::abort();
     sum.reset(int(stats->vertex_count), stats->offset_count, ok ? decoded.colour_bits : 6);
-    error.clear();
-    const bool added = codec.add(stats->packed, sum, &error);
-    if (added == !error.empty() || (ok && !added)) std::abort();
+    const lumistage::Status added = codec.add(stats->packed, sum);
+    if (added.ok() == !added.error().empty() || (ok && !added.ok())) std::abort();
   }
   return 0;
 }

@@ -1,4 +1,5 @@
 #include "core/base/error.h"
+#include "core/base/status.h"
 
 #include <gtest/gtest.h>
 
@@ -32,6 +33,19 @@ TEST(QuotedInput, TruncatesLongTextAndSaysHowLongItWas) {
   EXPECT_EQ(quotedInput("abcdef", 3), "'abc'... (6 bytes in all)");
   // A character the limit would cut is left out whole.
   EXPECT_EQ(quotedInput("ab\xc3\xa4", 3), "'ab'... (4 bytes in all)");
+}
+
+TEST(Status, OkHoldsNoReasonAndAFailureAlwaysOne) {
+  const Status ok;
+  EXPECT_TRUE(ok.ok());
+  EXPECT_EQ(ok.error(), "");
+  const Status failed = Status::failure("cam01/000003.png: is truncated");
+  EXPECT_FALSE(failed.ok());
+  EXPECT_EQ(failed.error(), "cam01/000003.png: is truncated");
+  // A failure without words is still a failure, and says so.
+  const Status silent = Status::failure("");
+  EXPECT_FALSE(silent.ok());
+  EXPECT_NE(silent.error(), "");
 }
 
 TEST(PrintableInput, KeepsPlainTextAndQuotesTheRest) {

@@ -17,7 +17,7 @@ TEST(HumanModel, GenericHumanIsClosedManifoldWithAbout2000Vertices) {
   const SkinnedMesh human = makeHumanModel();
   EXPECT_GT(human.rest.vertexCount(), 1800);
   EXPECT_LT(human.rest.vertexCount(), 2300);
-  EXPECT_EQ(checkClosedManifold(human.rest), "");
+  EXPECT_EQ(checkClosedManifold(human.rest).error(), "");
   // Closed and outward: the signed volume is positive and near a person's (~65 litres).
   double volume = 0;
   for (const Eigen::Vector3i& t : human.rest.triangles) {
@@ -79,7 +79,7 @@ TEST(HumanModel, ActorDiffersFromTheGenericHuman) {
   actor.clothing = true;
   actor.target_vertices = 6000;
   const SkinnedMesh m = makeHumanModel(actor);
-  EXPECT_EQ(checkClosedManifold(m.rest), "");
+  EXPECT_EQ(checkClosedManifold(m.rest).error(), "");
   EXPECT_NEAR(m.rest.positions.row(2).maxCoeff(), 1.82 + 0.01, 0.05);
   int counts[5] = {};
   for (uint8_t material : m.materials) ++counts[material];
@@ -103,7 +103,7 @@ TEST_P(ShippedGenericHuman, IsTheGeneratedOne) {
   const SkinnedMesh generated = makeHumanModel(spec);
   ASSERT_EQ(shipped.rest.vertexCount(), generated.rest.vertexCount());
   ASSERT_EQ(shipped.skeleton.jointCount(), generated.skeleton.jointCount());
-  EXPECT_EQ(checkClosedManifold(shipped.rest), "");
+  EXPECT_EQ(checkClosedManifold(shipped.rest).error(), "");
   for (int j = 0; j < generated.skeleton.jointCount(); ++j) {
     EXPECT_EQ(shipped.skeleton.joint(j).name, generated.skeleton.joint(j).name);
     EXPECT_LT((shipped.skeleton.restPositions()[j] - generated.skeleton.restPositions()[j]).norm(),

@@ -130,7 +130,7 @@ TEST(VideoFeed, SendsThePictureOverUdpToAReceiverThatDecodesIt) {
   const std::vector<DecodedPicture> pictures = receiver.wait();
   ASSERT_EQ(pictures.size(), 5u) << receiver.error();
   expectTheQuadrants(pictures);
-  EXPECT_EQ(feed.error(), "");
+  EXPECT_EQ(feed.status().error(), "");
   EXPECT_TRUE(feed.connected());
   EXPECT_GE(feed.framesSent(), 5);
   EXPECT_EQ(feed.encoderName(), "libx264");
@@ -165,7 +165,7 @@ TEST(VideoFeed, ScalesAPictureOfAnotherSizeToTheFeeds) {
 // Until the feed stops or a minute passes.
 double feedUntilStopped(VideoFeed& feed) {
   const auto end = Clock::now() + 60s;
-  return feedWhile(feed, [&] { return feed.error().empty() && Clock::now() < end; });
+  return feedWhile(feed, [&] { return feed.status().error().empty() && Clock::now() < end; });
 }
 
 // The feed calls a receiver that listens (ffplay srt://...?mode=listener); when the receiver goes
@@ -179,12 +179,12 @@ TEST(VideoFeed, CallsAnSrtReceiverThatListensAndStopsWhenItLeaves) {
   VideoFeed feed(parseFeedUrl(url), kWidth, kHeight, 25);
   double longest_ms = feedUntilReceived(feed, *receiver);
   const std::vector<DecodedPicture> pictures = receiver->wait();
-  ASSERT_EQ(pictures.size(), 5u) << receiver->error() << "; " << feed.error();
+  ASSERT_EQ(pictures.size(), 5u) << receiver->error() << "; " << feed.status().error();
   expectTheQuadrants(pictures);
   EXPECT_EQ(feed.connections(), 1);
   receiver.reset();  // it hangs up
   longest_ms = std::max(longest_ms, feedUntilStopped(feed));
-  const std::string error = feed.error();
+  const std::string error = feed.status().error();
   EXPECT_NE(error.find("feed to " + url + " stopped: "), std::string::npos) << error;
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
   EXPECT_FALSE(feed.offer(kWidth, kHeight, quadrants()));
@@ -212,7 +212,7 @@ TEST(VideoFeed, ListensForAnSrtReceiverThatCallsAndForTheNextWhenItLeaves) {
       feedUntilReceived(feed, receiver);
       pictures = receiver.wait();
     }
-    ASSERT_EQ(pictures.size(), 5u) << "receiver " << receivers << "; " << feed.error();
+    ASSERT_EQ(pictures.size(), 5u) << "receiver " << receivers << "; " << feed.status().error();
     expectTheQuadrants(pictures);
     EXPECT_EQ(feed.connections(), receivers);
     const auto end = Clock::now() + 60s;
@@ -220,7 +220,7 @@ TEST(VideoFeed, ListensForAnSrtReceiverThatCallsAndForTheNextWhenItLeaves) {
       feed.offer(kWidth, kHeight, picture);
       std::this_thread::sleep_for(40ms);
     }
-    EXPECT_EQ(feed.error(), "");
+    EXPECT_EQ(feed.status().error(), "");
   }
 }
 
@@ -235,7 +235,7 @@ TEST(VideoFeed, SendsOverUdpToAPortNobodyListensOnWithoutWaiting) {
     std::this_thread::sleep_for(20ms);
   }
   EXPECT_GE(feed.framesSent(), 10);
-  EXPECT_EQ(feed.error(), "");
+  EXPECT_EQ(feed.status().error(), "");
   const auto before = Clock::now();
   feed.close();
   EXPECT_LT(Clock::now() - before, 2s);
@@ -253,11 +253,11 @@ TEST(VideoFeed, AnSrtCallToAClosedPortFailsCleanlyWithoutWaiting) {
     const auto before = Clock::now();
     feed.close();
     EXPECT_LT(Clock::now() - before, 2s) << "closing waited on the call";
-    EXPECT_EQ(feed.error(), "");
+    EXPECT_EQ(feed.status().error(), "");
   }
   VideoFeed feed(parseFeedUrl(url), kWidth, kHeight, 25);
   const double longest_ms = feedUntilStopped(feed);
-  const std::string error = feed.error();
+  const std::string error = feed.status().error();
   EXPECT_NE(error.find("feed to " + url + " stopped: "), std::string::npos) << error;
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
   EXPECT_EQ(feed.framesSent(), 0);

@@ -59,7 +59,7 @@ TEST(Transport, AuthorizedNodeExchangesMessagesBothWaysUnderCurve) {
   ASSERT_TRUE(node.send(hello("node1"), kPatience));
   const std::optional<ReceivedMessage> in = studio.receive(kPatience);
   ASSERT_TRUE(in.has_value());
-  ASSERT_TRUE(in->result.ok()) << in->result.error;
+  ASSERT_TRUE(in->result.ok()) << in->result.error();
   EXPECT_EQ(in->node, "node1");  // from the key the handshake proved
   EXPECT_EQ(in->peer, "node1");
   EXPECT_EQ(*in->result.message, hello("node1"));
@@ -71,7 +71,7 @@ TEST(Transport, AuthorizedNodeExchangesMessagesBothWaysUnderCurve) {
   ASSERT_TRUE(studio.send(in->peer, pose, kPatience));
   const std::optional<DecodeResult> back = node.receive(kPatience);
   ASSERT_TRUE(back.has_value());
-  ASSERT_TRUE(back->ok()) << back->error;
+  ASSERT_TRUE(back->ok()) << back->error();
   EXPECT_EQ(*back->message, pose);
 
   EXPECT_FALSE(studio.send("nobody", pose, milliseconds(100)));
@@ -117,14 +117,14 @@ TEST(Transport, MalformedMessageIsDroppedAndCountedAgainstItsSender) {
   ASSERT_TRUE(in.has_value());
   EXPECT_FALSE(in->result.ok());
   EXPECT_EQ(in->node, "node1");
-  EXPECT_NE(in->result.error.find("malformed"), std::string::npos) << in->result.error;
+  EXPECT_NE(in->result.error().find("malformed"), std::string::npos) << in->result.error();
   EXPECT_EQ(studio.badMessages(), (std::map<std::string, int64_t>{{"node1", 1}}));
 
   // The connection survives: the next good message arrives.
   ASSERT_TRUE(node.send(hello("node1"), kPatience));
   in = studio.receive(kPatience);
   ASSERT_TRUE(in.has_value());
-  EXPECT_TRUE(in->result.ok()) << in->result.error;
+  EXPECT_TRUE(in->result.ok()) << in->result.error();
 }
 
 // A TCP relay for one connection to a port on 127.0.0.1 that can go silent without closing
@@ -330,7 +330,7 @@ TEST(Transport, APlainPeerWhoseNameIsNoNodeNameIsRefusedAndNamedQuoted) {
   const std::optional<ReceivedMessage> in = studio.receive(std::chrono::seconds(5));
   ASSERT_TRUE(in.has_value());
   EXPECT_FALSE(in->result.ok());
-  EXPECT_EQ(in->result.error, "its name is not a valid node name");
+  EXPECT_EQ(in->result.error(), "its name is not a valid node name");
   EXPECT_EQ(in->node.find('\n'), std::string::npos) << in->node;
   EXPECT_EQ(in->node.find('\x1b'), std::string::npos) << in->node;
   EXPECT_EQ(in->node.rfind("'node1\\x1b[2J\\n[2024-01-01", 0), 0u) << in->node;
@@ -406,7 +406,7 @@ TEST(Transport, AHandshakeAnnouncingAMessageOverTheLimitIsClosedBeforeItsBody) {
   ASSERT_TRUE(node.send(hello("node1"), kPatience));
   const std::optional<ReceivedMessage> in = studio.receive(kPatience);
   ASSERT_TRUE(in.has_value());
-  EXPECT_TRUE(in->result.ok()) << in->result.error;
+  EXPECT_TRUE(in->result.ok()) << in->result.error();
   EXPECT_EQ(in->node, "node1");
 }
 

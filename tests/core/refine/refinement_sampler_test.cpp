@@ -528,15 +528,15 @@ TEST_F(EllipsoidScene, DistributedCombinationEqualsOneProcess) {
     RefinementStatistics combined, decoded;
     combined.reset(single.vertex_count, config.offset_count, config.colour_bits);
     for (int n : order) {
-      std::string error;
-      ASSERT_TRUE(decodeRefinementStatistics(wire[n], decoded, &error)) << error;
+      const Status decoded_status = decodeRefinementStatistics(wire[n], decoded);
+      ASSERT_TRUE(decoded_status.ok()) << decoded_status.error();
       ASSERT_TRUE(combined.add(decoded));
     }
     EXPECT_TRUE(combined == single);
     // The module's fast path, straight from the wire.
     RefinementStatistics fast;
     fast.reset(single.vertex_count, config.offset_count, config.colour_bits);
-    for (int n : order) ASSERT_TRUE(module_codec.add(wire[n], fast));
+    for (int n : order) ASSERT_TRUE(module_codec.add(wire[n], fast).ok());
     fast.dropOutside();
     EXPECT_TRUE(fast == single);
     MeshRefiner a(config, sphere.vertexCount(), sphere.triangles),

@@ -46,8 +46,7 @@ TEST(RefinementStatistics, WireFormRoundTripsExactly) {
     std::vector<uint8_t> wire;
     encodeRefinementStatistics(s, wire);
     RefinementStatistics back;
-    std::string error;
-    ASSERT_TRUE(decodeRefinementStatistics(wire, back, &error)) << error;
+    ASSERT_EQ(decodeRefinementStatistics(wire, back).error(), "");
     EXPECT_TRUE(back == s) << cameras << " cameras";
     // Compact: well under the 18 bytes a sample of plain 16-bit sums and 32-bit squares.
     EXPECT_LT(wire.size(), size_t(s.sampleCount()) * (cameras <= 3 ? 5 : 7));
@@ -84,8 +83,7 @@ TEST(RefinementStatistics, PackedValuesAreDifferencesAndDisagreement) {
   const size_t zeros = size_t(std::count(packed.end() - values, packed.end(), uint8_t(0)));
   EXPECT_GE(zeros, values - 3 * kVertices);  // each vertex's first sums may differ
   RefinementStatistics back;
-  std::string error;
-  ASSERT_TRUE(decodeRefinementStatistics(packed, back, &error)) << error;
+  ASSERT_EQ(decodeRefinementStatistics(packed, back).error(), "");
   EXPECT_TRUE(back == s);
   // One camera's red one level higher at one sample: its residual is no longer zero (and the red
   // differences there and after it), and the values still round-trip.
@@ -96,7 +94,7 @@ TEST(RefinementStatistics, PackedValuesAreDifferencesAndDisagreement) {
   EXPECT_NE(packed[residual], 0);
   EXPECT_EQ(packed[residual - 1], 0);
   EXPECT_EQ(size_t(std::count(packed.end() - values, packed.end(), uint8_t(0))), zeros - 3);
-  ASSERT_TRUE(decodeRefinementStatistics(packed, back, &error)) << error;
+  ASSERT_EQ(decodeRefinementStatistics(packed, back).error(), "");
   EXPECT_TRUE(back == s);
 }
 
@@ -108,24 +106,25 @@ TEST(RefinementStatistics, MalformedWireIsRefused) {
   RefinementStatistics back;
   std::string error;
   for (size_t cut : {size_t(0), size_t(5), wire.size() / 2, wire.size() - 1}) {
-    EXPECT_FALSE(decodeRefinementStatistics(std::span(wire.data(), cut), back, &error)) << cut;
+    error = decodeRefinementStatistics(std::span(wire.data(), cut), back).error();
     EXPECT_FALSE(error.empty());
   }
   std::vector<uint8_t> bad = wire;
   bad[5] = 9;  // colour bits
-  EXPECT_FALSE(decodeRefinementStatistics(bad, back));
+  EXPECT_FALSE(decodeRefinementStatistics(bad, back).ok());
   bad = wire;
   bad[0] = 0xff, bad[1] = 0xff, bad[2] = 0xff;  // absurd vertex count
-  EXPECT_FALSE(decodeRefinementStatistics(bad, back));
+  EXPECT_FALSE(decodeRefinementStatistics(bad, back).ok());
   // 50 points: the contour's last byte holds 2 of them; a bit beyond is no point's.
   bad = wire;
   bad.back() |= 0x80;
-  EXPECT_FALSE(decodeRefinementStatistics(bad, back, &error));
+  error = decodeRefinementStatistics(bad, back).error();
   EXPECT_EQ(error, "refinement statistics: contour bits past its points");
   RefinementStatistics sum;
   sum.reset(50, 21, 6);
-  EXPECT_FALSE(addEncodedRefinementStatistics(bad, sum, &error));
-  EXPECT_TRUE(decodeRefinementStatistics(wire, back, &error)) << error;
+  EXPECT_EQ(addEncodedRefinementStatistics(bad, sum).error(),
+            "refinement statistics: contour bits past its points");
+  EXPECT_EQ(decodeRefinementStatistics(wire, back).error(), "");
 }
 
 TEST(RefinementStatistics, CompressedWireRoundTripsExactly) {
@@ -142,13 +141,12 @@ TEST(RefinementStatistics, CompressedWireRoundTripsExactly) {
     // The sizes stay readable in place for the studio; the rest is one zstd frame.
     EXPECT_TRUE(std::equal(packed.begin(), packed.begin() + 6, wire.begin()));
     RefinementStatistics back, back_free;
-    std::string error;
-    ASSERT_TRUE(other_codec.decode(wire, back, &error)) << error;
+    ASSERT_EQ(other_codec.decode(wire, back).error(), "");
     EXPECT_TRUE(back == s) << cameras << " cameras";
-    ASSERT_TRUE(decodeRefinementStatistics(wire, back_free, &error)) << error;
+    ASSERT_EQ(decodeRefinementStatistics(wire, back_free).error(), "");
     EXPECT_TRUE(back_free == s);
     // The codec reads the packed form too, and a reused codec writes the same bytes.
-    ASSERT_TRUE(other_codec.decode(packed, back, &error)) << error;
+    ASSERT_EQ(other_codec.decode(packed, back).error(), "");
     EXPECT_TRUE(back == s);
     codec.encode(s, again);
     EXPECT_EQ(again, wire);
@@ -162,14 +160,13 @@ TEST(RefinementStatistics, CompressedAddEqualsPackedAdd) {
   for (RefinementStatistics* sum : {&from_packed, &from_compressed, &from_free, &from_structs})
     sum->reset(120, 21, 6);
   std::vector<uint8_t> packed, wire;
-  std::string error;
   for (int n = 0; n < 4; ++n) {
     const RefinementStatistics s = randomStatistics(rng, 120, 21, 3);
     encodeRefinementStatistics(s, packed);
     codec.encode(s, wire);
-    ASSERT_TRUE(addEncodedRefinementStatistics(packed, from_packed, &error)) << error;
-    ASSERT_TRUE(codec.add(wire, from_compressed, &error)) << error;
-    ASSERT_TRUE(addEncodedRefinementStatistics(wire, from_free, &error)) << error;
+    ASSERT_EQ(addEncodedRefinementStatistics(packed, from_packed).error(), "");
+    ASSERT_EQ(codec.add(wire, from_compressed).error(), "");
+    ASSERT_EQ(addEncodedRefinementStatistics(wire, from_free).error(), "");
     ASSERT_TRUE(from_structs.add(s));
   }
   EXPECT_TRUE(from_compressed == from_packed);
@@ -194,9 +191,8 @@ TEST(RefinementStatistics, HostileCompressedWireIsRefused) {
   const RefinementStatistics untouched = sum;
   auto refusal = [&](const std::vector<uint8_t>& bad) {
     RefinementStatistics back;
-    std::string decode_error, add_error;
-    EXPECT_FALSE(codec.decode(bad, back, &decode_error));
-    EXPECT_FALSE(codec.add(bad, sum, &add_error));
+    const std::string decode_error = codec.decode(bad, back).error();
+    const std::string add_error = codec.add(bad, sum).error();
     EXPECT_TRUE(sum == untouched);
     EXPECT_EQ(add_error, decode_error);
     return decode_error;
@@ -246,17 +242,17 @@ TEST(RefinementStatistics, HostileCompressedWireIsRefused) {
   bad[5] = 5;  // colour bits
   RefinementStatistics back;
   std::string error;
-  EXPECT_FALSE(codec.decode(bad, back, &error));
+  error = codec.decode(bad, back).error();
   EXPECT_EQ(error, why + "the packed header differs from the compressed one");
   // Too many samples for the reader, or another mesh's sizes: refused before decompressing.
-  EXPECT_FALSE(codec.decode(wire, back, &error, 1000));
+  error = codec.decode(wire, back, 1000).error();
   EXPECT_EQ(error, why + "too many samples");
   RefinementStatistics other;
   other.reset(51, 21, 6);
-  EXPECT_FALSE(codec.add(wire, other, &error));
+  error = codec.add(wire, other).error();
   EXPECT_EQ(error, why + "sizes differ from the mesh's");
   // And the codec still works after all that.
-  ASSERT_TRUE(codec.decode(wire, back, &error)) << error;
+  ASSERT_EQ(codec.decode(wire, back).error(), "");
   EXPECT_TRUE(back == s);
 }
 

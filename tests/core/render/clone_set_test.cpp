@@ -56,7 +56,7 @@ TEST(CloneSet, StaysWithinWhatTheNodesTake) {
   message.body = view;
   const std::vector<uint8_t> bytes = encodeMessage(message);
   const DecodeResult decoded = decodeMessage(bytes.data(), bytes.size());
-  EXPECT_TRUE(decoded.ok()) << decoded.error;
+  EXPECT_TRUE(decoded.ok()) << decoded.error();
 }
 
 TEST(CloneSet, TurnsAboutThePivot) {

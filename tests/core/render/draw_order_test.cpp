@@ -68,7 +68,7 @@ TEST(DrawOrder, DrawsEveryTriangleOnceWoundAsBeforeInCompactPatches) {
   for (int i = 0; i < n; ++i) reordered.positions.col(i) = sphere.positions.col(order.order()[i]);
   reordered.triangles = order.triangles();
   reordered.computeNormals();
-  EXPECT_EQ(checkClosedManifold(reordered), "");
+  EXPECT_EQ(checkClosedManifold(reordered).error(), "");
 
   // A run of 64 triangles of a compact patch uses about 57 vertices; scattered, about 187.
   const double scattered = verticesPerWindow(sphere.triangles, 64);

@@ -23,7 +23,7 @@ TEST(PhongSubdivision, LiftsTheEdgesOfACoarseSphereOntoIt) {
   ASSERT_EQ(phong.triangles().size(), 4 * sphere.triangles.size());
   EXPECT_TRUE(phong.positions().leftCols(n).isApprox(sphere.positions));
   TriangleMesh fine{phong.positions(), phong.normals(), phong.triangles()};
-  EXPECT_EQ(checkClosedManifold(fine), "");
+  EXPECT_EQ(checkClosedManifold(fine).error(), "");
   // Wound as the coarse mesh: the recomputed normals point the way the given ones do.
   fine.computeNormals();
   double worst_flat = 0, worst_curved = 0;

@@ -37,7 +37,7 @@ TEST(ViewRecorderMp4, WritesEveryFrameAtTheCamerasRateAsH264) {
     EXPECT_FALSE(recorder.add(13, 64, 48, red));  // older than the last: left out
     EXPECT_TRUE(recorder.add(30, 32, 24, solid(32, 24, 220, 20, 20)));  // a gap of 15: not filled
     EXPECT_EQ(recorder.framesWritten(), 6);
-    EXPECT_TRUE(recorder.close()) << recorder.error();
+    EXPECT_TRUE(recorder.close()) << recorder.status().error();
   }
   const VideoFileInfo info = probeVideoFile(file);
   EXPECT_EQ(info.codec, "h264");
@@ -87,7 +87,7 @@ TEST(ViewRecorderMp4, AFullDiskLeavesTheOlderVideoAndSaysSo) {
                  : 4;
     }
     if (recorder.close()) return 2;
-    return recorder.error().find(file.string()) == 0 ? 0 : 3;
+    return recorder.status().error().find(file.string()) == 0 ? 0 : 3;
   });
   EXPECT_EQ(result, 0) << "2: a torn video taken for whole, 3, 4: not said by name, 100: threw";
   EXPECT_EQ(readFile(file), before);
@@ -132,7 +132,7 @@ TEST(ViewRecorderMp4, ARecordingThatNeverClosedIsRecovered) {
     ViewRecorder again(file, 25);
     EXPECT_EQ(again.leftover(), partial);
     EXPECT_TRUE(again.add(0, 64, 48, solid(64, 48, 220, 20, 20)));
-    EXPECT_TRUE(again.close()) << again.error();
+    EXPECT_TRUE(again.close()) << again.status().error();
   }
   EXPECT_EQ(probeVideoFile(file).frames, 1);
   EXPECT_EQ(readFile(partial), left);

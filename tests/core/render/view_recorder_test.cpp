@@ -79,7 +79,7 @@ TEST(ViewRecorder, ReplacesAnOlderVideoOnlyWhenWhole) {
   cv::Size size;
   EXPECT_EQ(readBack(file, &size).size(), 3u);  // the older video, untouched while recording
   EXPECT_TRUE(recorder.close());
-  EXPECT_EQ(recorder.error(), "");
+  EXPECT_EQ(recorder.status().error(), "");
   EXPECT_EQ(readBack(file, &size).size(), 5u);
   EXPECT_FALSE(std::filesystem::exists(dir / "take.partial.avi"));
 }
@@ -106,7 +106,7 @@ TEST(ViewRecorder, AFullDiskLeavesTheOlderVideoAndSaysSo) {
       recorder.add(f, 640, 480, noise);
     }
     if (recorder.close()) return 2;
-    return recorder.error().find("the video reads back") == std::string::npos ? 3 : 0;
+    return recorder.status().error().find("the video reads back") == std::string::npos ? 3 : 0;
   });
   EXPECT_EQ(result, 0) << "2: a torn video taken for whole, 3: not said, 100: threw";
   EXPECT_EQ(readFile(file), before);
@@ -201,7 +201,7 @@ TEST(ViewRecorder, ARecordingThatNeverClosedIsRecoveredAndNeverWrittenOver) {
     EXPECT_EQ(again.leftover(), partial);
     EXPECT_TRUE(again.add(0, 64, 48, solid(64, 48, 220, 20, 20)));
     EXPECT_TRUE(std::filesystem::exists(dir / "take.partial-2.avi"));
-    EXPECT_TRUE(again.close()) << again.error();
+    EXPECT_TRUE(again.close()) << again.status().error();
   }
   cv::Size size;
   EXPECT_EQ(readBack(file, &size).size(), 1u);
