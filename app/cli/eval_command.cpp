@@ -223,16 +223,86 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   }
 }
 
+struct EvalArgs {
+  std::string session, json, config, loo_pictures, fit_pictures;
+  BodyChoice body;
+  int cameras = 0, frames = 0, loo_frames = 3, fit_every = 1;
+  bool quiet = false, mocap_only = false;
+};
+
+// A session without the truth (a real take), or motion capture only: motion capture's frames
+// tracked and the posed body against every silhouette, and unless asked for motion capture only,
+// every camera left out and rendered from the others over the actor's mask. Against truth/ where
+// it is.
+void evaluateTake(const EvalArgs& args, const SessionReader& session, EvalReport& report) {
+  MocapEvalOptions mocap;
+  mocap.camera_count = args.cameras;
+  mocap.max_frames = args.frames;
+  mocap.pictures = args.fit_pictures;
+  mocap.picture_every = args.fit_every;
+  const SkinnedMesh body = loadBody(args.body);
+  const MocapEvalResult tracked = evaluateMocap(session, body, mocap, report);
+  if (!args.mocap_only && args.loo_frames > 0) {
+    RefineConfig refine;
+    if (!args.config.empty()) refine = loadStudioConfig(args.config).refine;
+    addLeaveOneOut(session, body, tracked, refine, args.loo_frames, args.loo_pictures, report);
+  }
+}
+
+// A session with the truth (the virtual studio's): every stage against it, each adding its section
+// in pipeline order.
+void evaluateAgainstTruth(const EvalArgs& args, const SessionReader& session, EvalReport& report) {
+  // A later stage may use an earlier one's result. Segmentation: each camera's keyer, as the nodes
+  // learn it, against the truth masks of four frames spread over the session.
+  const int last =
+      args.frames > 0 ? std::min(args.frames, session.frameCount()) : session.frameCount();
+  const SegmentationScore key = evaluateSegmentation(session, spreadFrames(last, 4));
+  report.set("segment", "key_frames", key.frames);
+  report.set("segment", "key_missed_pct", key.missed_pct);
+  report.set("segment", "key_extra_pct", key.extra_pct);
+  report.set("segment", "key_threshold", key.threshold);
+  report.set("segment", "key_screen_excess_min", key.dimmest_screen);
+
+  MocapEvalOptions mocap;
+  if (args.cameras > session.rig().cameraCount())
+    throw Error(fmt::format("--cameras {}: the session's rig has {} cameras", args.cameras,
+                            session.rig().cameraCount()));
+  mocap.camera_count = args.cameras;
+  mocap.max_frames = args.frames;
+  mocap.pictures = args.fit_pictures;
+  mocap.picture_every = args.fit_every;
+  const SkinnedMesh generic = loadBody(args.body);
+  report.set("mocap", "body_vertices", double(generic.rest.vertexCount()));
+  const MocapEvalResult tracked = evaluateMocap(session, generic, mocap, report);
+  SurfaceEvaluationOptions surface;
+  if (!args.config.empty()) surface.refine = loadStudioConfig(args.config).refine;
+  if (args.loo_frames > 0)
+    addLeaveOneOut(session, generic, tracked, surface.refine, args.loo_frames, args.loo_pictures,
+                   report);
+
+  // Refinement: the generic human posed by a fit to the true joints, refined from the images,
+  // both measured against the true surface.
+  surface.max_frames = args.frames;
+  const SurfaceEvaluation e = evaluateSurface(args.session, generic, surface);
+  report.set("refine", "surface_frames", e.frames);
+  report.set("refine", "surface_mm_unrefined", e.unrefined.mean_mm);
+  report.set("refine", "surface_mm_unrefined_p95", e.unrefined.p95_mm);
+  report.set("refine", "surface_mm_refined", e.refined.mean_mm);
+  report.set("refine", "surface_mm_refined_p95", e.refined.p95_mm);
+  report.set("refine", "joint_fit_rms_mm", e.joint_fit_rms_mm);
+  report.set("refine", "refine_offset_change_mm", e.offset_change_mm);
+  report.set("refine", "refine_bytes_per_node_per_frame", e.statistics_bytes_per_node);
+  for (size_t i = 0; i < e.refined_per_frame.size(); ++i) {
+    const int64_t frame = surface.first_frame + int64_t(i) * surface.frame_step;
+    report.setFrame(frame, "surface_mm_unrefined", e.unrefined_per_frame[i].mean_mm);
+    report.setFrame(frame, "surface_mm_refined", e.refined_per_frame[i].mean_mm);
+  }
+}
+
 }  // namespace
 
 void addEvalCommand(CLI::App& app) {
-  struct Args {
-    std::string session, json, config, loo_pictures, fit_pictures;
-    BodyChoice body;
-    int cameras = 0, frames = 0, loo_frames = 3, fit_every = 1;
-    bool quiet = false, mocap_only = false;
-  };
-  auto args = std::make_shared<Args>();
+  auto args = std::make_shared<EvalArgs>();
   CLI::App* eval = app.add_subcommand(
       "eval",
       "measure the studio's stages against a session's ground truth (truth/); on a session "
@@ -284,84 +354,23 @@ void addEvalCommand(CLI::App& app) {
     EvalReport report;
     report.setText("session", "session", args->session);
     if (!session.hasTruth() || args->mocap_only) {
-      // Without the truth (a real take): motion capture's frames tracked and the posed body
-      // against every silhouette, and unless asked for motion capture only, every camera left out
-      // and rendered from the others over the actor's mask. Against truth/ where it is.
-      MocapEvalOptions mocap;
-      mocap.camera_count = args->cameras;
-      mocap.max_frames = args->frames;
-      mocap.pictures = args->fit_pictures;
-      mocap.picture_every = args->fit_every;
-      const SkinnedMesh body = loadBody(args->body);
-      const MocapEvalResult tracked = evaluateMocap(session, body, mocap, report);
-      const bool render = !args->mocap_only && args->loo_frames > 0;
-      if (render) {
-        RefineConfig refine;
-        if (!args->config.empty()) refine = loadStudioConfig(args->config).refine;
-        addLeaveOneOut(session, body, tracked, refine, args->loo_frames, args->loo_pictures,
-                       report);
-      }
-      if (!args->json.empty()) writeFileAtomically(args->json, report.toJson());
-      if (!args->quiet) fmt::print("{}", report.toText());
-      if (session.hasTruth()) return;
+      evaluateTake(*args, session, report);
+    } else {
+      evaluateAgainstTruth(*args, session, report);
+    }
+    if (!args->json.empty()) writeFileAtomically(args->json, report.toJson());
+    if (!args->quiet) fmt::print("{}", report.toText());
+    if (!session.hasTruth()) {
+      const bool rendered = !args->mocap_only && args->loo_frames > 0;
       fmt::print(stderr,
                  "eval: {} has no ground truth (truth/): motion capture's frames and "
                  "silhouettes{}\n",
                  args->session,
-                 render ? fmt::format(", and every camera's view rendered from the others over "
-                                      "its {} masks",
-                                      scoreMasksName(scoreMasksOf(session)))
-                        : std::string(" only"));
-      return;
+                 rendered ? fmt::format(", and every camera's view rendered from the others over "
+                                        "its {} masks",
+                                        scoreMasksName(scoreMasksOf(session)))
+                          : std::string(" only"));
     }
-    // Stages add their sections in pipeline order; a later stage may use an earlier one's result.
-    // Segmentation: each camera's keyer, as the nodes learn it, against the truth masks of four
-    // frames spread over the session.
-    const int last =
-        args->frames > 0 ? std::min(args->frames, session.frameCount()) : session.frameCount();
-    const SegmentationScore key = evaluateSegmentation(session, spreadFrames(last, 4));
-    report.set("segment", "key_frames", key.frames);
-    report.set("segment", "key_missed_pct", key.missed_pct);
-    report.set("segment", "key_extra_pct", key.extra_pct);
-    report.set("segment", "key_threshold", key.threshold);
-    report.set("segment", "key_screen_excess_min", key.dimmest_screen);
-
-    MocapEvalOptions mocap;
-    if (args->cameras > session.rig().cameraCount())
-      throw Error(fmt::format("--cameras {}: the session's rig has {} cameras", args->cameras,
-                              session.rig().cameraCount()));
-    mocap.camera_count = args->cameras;
-    mocap.max_frames = args->frames;
-    mocap.pictures = args->fit_pictures;
-    mocap.picture_every = args->fit_every;
-    const SkinnedMesh generic = loadBody(args->body);
-    report.set("mocap", "body_vertices", double(generic.rest.vertexCount()));
-    const MocapEvalResult tracked = evaluateMocap(session, generic, mocap, report);
-    SurfaceEvaluationOptions surface;
-    if (!args->config.empty()) surface.refine = loadStudioConfig(args->config).refine;
-    if (args->loo_frames > 0)
-      addLeaveOneOut(session, generic, tracked, surface.refine, args->loo_frames,
-                     args->loo_pictures, report);
-
-    // Refinement: the generic human posed by a fit to the true joints, refined from the images,
-    // both measured against the true surface.
-    surface.max_frames = args->frames;
-    const SurfaceEvaluation e = evaluateSurface(args->session, generic, surface);
-    report.set("refine", "surface_frames", e.frames);
-    report.set("refine", "surface_mm_unrefined", e.unrefined.mean_mm);
-    report.set("refine", "surface_mm_unrefined_p95", e.unrefined.p95_mm);
-    report.set("refine", "surface_mm_refined", e.refined.mean_mm);
-    report.set("refine", "surface_mm_refined_p95", e.refined.p95_mm);
-    report.set("refine", "joint_fit_rms_mm", e.joint_fit_rms_mm);
-    report.set("refine", "refine_offset_change_mm", e.offset_change_mm);
-    report.set("refine", "refine_bytes_per_node_per_frame", e.statistics_bytes_per_node);
-    for (size_t i = 0; i < e.refined_per_frame.size(); ++i) {
-      const int64_t frame = surface.first_frame + int64_t(i) * surface.frame_step;
-      report.setFrame(frame, "surface_mm_unrefined", e.unrefined_per_frame[i].mean_mm);
-      report.setFrame(frame, "surface_mm_refined", e.refined_per_frame[i].mean_mm);
-    }
-    if (!args->json.empty()) writeFileAtomically(args->json, report.toJson());
-    if (!args->quiet) fmt::print("{}", report.toText());
   });
 }
 

@@ -365,15 +365,13 @@ std::optional<std::string> humanJointNameFor(std::string_view name, JointNaming 
   return std::nullopt;
 }
 
-MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
-  const std::string file = path.string();
-  const std::string text = readFile(path);
-  const BvhFile bvh = Parser(file, text).parse();
-  const int source_count = static_cast<int>(bvh.joints.size());
+namespace {
 
-  // Rest positions in the file's frame (the root at its OFFSET), for the root height.
-  std::vector<Eigen::Vector3d> rest(source_count);
-  for (int j = 0; j < source_count; ++j) {
+// The joints' rest positions in the file's frame (the root at its OFFSET); a skeleton beyond
+// kMaxCoordinate is refused.
+std::vector<Eigen::Vector3d> restPositionsOf(const BvhFile& bvh, const std::string& file) {
+  std::vector<Eigen::Vector3d> rest(bvh.joints.size());
+  for (size_t j = 0; j < bvh.joints.size(); ++j) {
     const BvhJoint& joint = bvh.joints[j];
     rest[j] = joint.parent < 0 ? joint.offset : rest[joint.parent] + joint.offset;
     if (!rest[j].allFinite() || rest[j].cwiseAbs().maxCoeff() > kMaxCoordinate) {
@@ -383,12 +381,13 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
                                      quotedInput(joint.name), rest[j].norm(), kMaxCoordinate)));
     }
   }
-  std::vector<Eigen::Vector3d> rest_with_ends = rest;
-  for (const auto& [joint, offset] : bvh.end_sites) {
-    rest_with_ends.push_back(rest[joint] + offset);
-  }
+  return rest;
+}
 
-  // Map: target joint -> source joint (the first one in file order naming it).
+// Per target joint, the file's joint that moves it (the first one in file order naming it), or
+// -1; a file none of whose joints maps is refused.
+std::vector<int> mapJointsOnto(const BvhFile& bvh, const Skeleton& target,
+                               const std::string& file) {
   const auto has = [&](std::string_view suffix) {
     return std::any_of(bvh.joints.begin(), bvh.joints.end(), [&](const BvhJoint& j) {
       return j.name.size() >= suffix.size() &&
@@ -401,7 +400,7 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
                                               : JointNaming::kGeneric;
   std::vector<int> source_of(target.jointCount(), -1);
   int mapped = 0;
-  for (int j = 0; j < source_count; ++j) {
+  for (int j = 0; j < int(bvh.joints.size()); ++j) {
     std::optional<int> t = target.findJoint(bvh.joints[j].name);
     if (!t) {
       if (auto ours = humanJointNameFor(bvh.joints[j].name, naming)) t = target.findJoint(*ours);
@@ -418,22 +417,17 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
                                    "own joint names",
                                    quotedInput(bvh.joints[0].name), target.joint(0).name)));
   }
+  return source_of;
+}
 
-  const double source_height = rootHeight(rest_with_ends, 1);
-  const double target_height = rootHeight(target.restPositions(), 2);
-  if (source_height <= 0 || target_height <= 0) {
-    throw Error(locate(file, bvh.joints[0].line, "",
-                       "cannot scale the root motion: the rest skeleton has no joint below its "
-                       "root, expected a body standing on its legs"));
-  }
-  const double scale = target_height / source_height;
-  const Eigen::Vector3d rest_root(bvh.joints[0].offset.x(), source_height,
-                                  bvh.joints[0].offset.z());
-  const Eigen::Matrix3d c = yUpToOurs();
-  // The file's rest pose need not be ours (a CMU skeleton's legs splay 20 degrees, a Biovision
-  // one's arms may hang down): each joint's rotation is taken relative to the turn that brings
-  // our bone (to its first mapped child) onto the file's at rest. Without it a CMU actor standing
-  // straight came in with his thighs turned 20 degrees inward, his legs crossed.
+// The file's rest pose need not be ours (a CMU skeleton's legs splay 20 degrees, a Biovision
+// one's arms may hang down): each joint's rotation is taken relative to the turn that brings our
+// bone (to its first mapped child) onto the file's at rest (`rest`, turned into our axes by `c`).
+// Without it a CMU actor standing straight came in with his thighs turned 20 degrees inward, his
+// legs crossed.
+std::vector<Eigen::Matrix3d> restTurns(const Skeleton& target, const std::vector<int>& source_of,
+                                       const std::vector<Eigen::Vector3d>& rest,
+                                       const Eigen::Matrix3d& c) {
   std::vector<Eigen::Matrix3d> rest_turn(target.jointCount(), Eigen::Matrix3d::Identity());
   for (int t = 0; t < target.jointCount(); ++t) {
     if (source_of[t] < 0) continue;
@@ -446,6 +440,35 @@ MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
       break;
     }
   }
+  return rest_turn;
+}
+
+}  // namespace
+
+MotionClip loadBvh(const std::filesystem::path& path, const Skeleton& target) {
+  const std::string file = path.string();
+  const std::string text = readFile(path);
+  const BvhFile bvh = Parser(file, text).parse();
+  const int source_count = static_cast<int>(bvh.joints.size());
+  const std::vector<Eigen::Vector3d> rest = restPositionsOf(bvh, file);
+  std::vector<Eigen::Vector3d> rest_with_ends = rest;
+  for (const auto& [joint, offset] : bvh.end_sites) {
+    rest_with_ends.push_back(rest[joint] + offset);
+  }
+  const std::vector<int> source_of = mapJointsOnto(bvh, target, file);
+
+  const double source_height = rootHeight(rest_with_ends, 1);
+  const double target_height = rootHeight(target.restPositions(), 2);
+  if (source_height <= 0 || target_height <= 0) {
+    throw Error(locate(file, bvh.joints[0].line, "",
+                       "cannot scale the root motion: the rest skeleton has no joint below its "
+                       "root, expected a body standing on its legs"));
+  }
+  const double scale = target_height / source_height;
+  const Eigen::Vector3d rest_root(bvh.joints[0].offset.x(), source_height,
+                                  bvh.joints[0].offset.z());
+  const Eigen::Matrix3d c = yUpToOurs();
+  const std::vector<Eigen::Matrix3d> rest_turn = restTurns(target, source_of, rest, c);
 
   MotionClip clip;
   clip.name = path.stem().string();

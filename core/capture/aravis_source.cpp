@@ -360,6 +360,72 @@ AravisSource::~AravisSource() {
   for (auto& d : devices_) closeCamera(*d);  // any a thread never ran for
 }
 
+int64_t AravisSource::placedFrameId(Device& d, int64_t frame_id, int64_t arrived_ns) {
+  if (d.realign) {
+    // Opened again, the camera counts from the start: its ids are put where the freshest
+    // frame any camera of the node delivered (its own before it was lost among them) leads
+    // on to this frame's arrival at the rate that camera's ids counted at, so that its
+    // frames group with the others' again (within a frame: arrival times jitter, and a rate
+    // measured over seconds is off by a fraction of a percent). Counted on from that frame's
+    // id alone, a node whose cameras were all gone for seconds came back seconds behind the
+    // other nodes' count, pairing other instants' images.
+    d.realign = false;
+    const Device* freshest = nullptr;
+    for (const auto& other : devices_) {
+      if (other->last_id >= 0 && (!freshest || other->last_ns > freshest->last_ns))
+        freshest = other.get();
+    }
+    if (freshest) {
+      const double rate = freshest->rate_hz > 0 ? freshest->rate_hz
+                          : d.rate_hz > 0       ? d.rate_hz
+                                                : d.config.frame_rate_hz;
+      const int64_t since = std::llround((arrived_ns - freshest->last_ns) / 1e9 * rate);
+      d.id_offset = freshest->last_id + std::max<int64_t>(0, since) - frame_id;
+    } else {
+      d.id_offset = 0;
+    }
+    d.span_id = -1;
+  }
+  frame_id += d.id_offset;
+  if (d.span_id < 0) {
+    d.span_id = frame_id, d.span_ns = arrived_ns;
+  } else if (arrived_ns - d.span_ns > 1'000'000'000 && frame_id > d.span_id) {
+    d.rate_hz = double(frame_id - d.span_id) / ((arrived_ns - d.span_ns) / 1e9);
+  }
+  return frame_id;
+}
+
+void AravisSource::queueFrame(Device& d, int camera, int64_t frame_id, int64_t timestamp_ns,
+                              const void* data, size_t bytes,
+                              std::chrono::steady_clock::time_point now) {
+  d.stats.dropped += d.drops.whole(frame_id);  // a jump: frames that never arrived
+  if (queue_.size() >= capacity_) {            // the consumer fell behind: drop the oldest frame
+    ++devices_[queue_.front().camera]->stats.dropped;
+    spare_.push_back(std::move(queue_.front().image));
+    queue_.pop_front();
+  }
+  CameraFrame frame;
+  if (!spare_.empty()) {
+    frame.image = std::move(spare_.back());
+    spare_.pop_back();
+  }
+  frame.camera = camera;
+  frame.frame_id = frame_id;
+  frame.timestamp_ns = timestamp_ns;
+  frame.image.resize(d.config.pixel_format, d.width, d.height);
+  std::memcpy(frame.image.pixels.data(), data, bytes);
+  queue_.push_back(std::move(frame));
+  ++d.stats.frames;
+  d.recent.push_back(now);
+  while (d.recent.size() > 1 && now - d.recent.front() > std::chrono::seconds(2))
+    d.recent.pop_front();
+  if (d.recent.size() > 1) {
+    d.stats.frame_rate_hz =
+        (d.recent.size() - 1) /
+        std::chrono::duration<double>(d.recent.back() - d.recent.front()).count();
+  }
+}
+
 void AravisSource::receive(int camera) {
   Device& d = *devices_[camera];
   const size_t bytes = size_t(d.width) * d.height * bytesPerPixel(d.config.pixel_format);
@@ -423,64 +489,10 @@ void AravisSource::receive(int camera) {
         arrived_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
                          std::chrono::system_clock::now().time_since_epoch())
                          .count();
-      if (d.realign) {
-        // Opened again, the camera counts from the start: its ids are put where the freshest
-        // frame any camera of the node delivered (its own before it was lost among them) leads
-        // on to this frame's arrival at the rate that camera's ids counted at, so that its
-        // frames group with the others' again (within a frame: arrival times jitter, and a rate
-        // measured over seconds is off by a fraction of a percent). Counted on from that frame's
-        // id alone, a node whose cameras were all gone for seconds came back seconds behind the
-        // other nodes' count, pairing other instants' images.
-        d.realign = false;
-        const Device* freshest = nullptr;
-        for (const auto& other : devices_) {
-          if (other->last_id >= 0 && (!freshest || other->last_ns > freshest->last_ns))
-            freshest = other.get();
-        }
-        if (freshest) {
-          const double rate = freshest->rate_hz > 0 ? freshest->rate_hz
-                              : d.rate_hz > 0       ? d.rate_hz
-                                                    : d.config.frame_rate_hz;
-          const int64_t since = std::llround((arrived_ns - freshest->last_ns) / 1e9 * rate);
-          d.id_offset = freshest->last_id + std::max<int64_t>(0, since) - frame_id;
-        } else {
-          d.id_offset = 0;
-        }
-        d.span_id = -1;
-      }
-      frame_id += d.id_offset;
-      if (d.span_id < 0) {
-        d.span_id = frame_id, d.span_ns = arrived_ns;
-      } else if (arrived_ns - d.span_ns > 1'000'000'000 && frame_id > d.span_id) {
-        d.rate_hz = double(frame_id - d.span_id) / ((arrived_ns - d.span_ns) / 1e9);
-      }
+      frame_id = placedFrameId(d, frame_id, arrived_ns);
       d.last_id = frame_id, d.last_ns = arrived_ns;
-      d.stats.dropped += d.drops.whole(frame_id);  // a jump: frames that never arrived
-      if (queue_.size() >= capacity_) {  // the consumer fell behind: drop the oldest frame
-        ++devices_[queue_.front().camera]->stats.dropped;
-        spare_.push_back(std::move(queue_.front().image));
-        queue_.pop_front();
-      }
-      CameraFrame frame;
-      if (!spare_.empty()) {
-        frame.image = std::move(spare_.back());
-        spare_.pop_back();
-      }
-      frame.camera = camera;
-      frame.frame_id = frame_id;
-      frame.timestamp_ns = static_cast<int64_t>(arv_buffer_get_timestamp(buffer));
-      frame.image.resize(d.config.pixel_format, d.width, d.height);
-      std::memcpy(frame.image.pixels.data(), data, bytes);
-      queue_.push_back(std::move(frame));
-      ++d.stats.frames;
-      d.recent.push_back(now);
-      while (d.recent.size() > 1 && now - d.recent.front() > std::chrono::seconds(2))
-        d.recent.pop_front();
-      if (d.recent.size() > 1) {
-        d.stats.frame_rate_hz =
-            (d.recent.size() - 1) /
-            std::chrono::duration<double>(d.recent.back() - d.recent.front()).count();
-      }
+      queueFrame(d, camera, frame_id, static_cast<int64_t>(arv_buffer_get_timestamp(buffer)), data,
+                 bytes, now);
       ready_.notify_one();
     }
     lock.unlock();

@@ -126,6 +126,13 @@ class AravisSource : public FrameSource {
   // A free-running camera that sends nothing for this long is taken for lost.
   static constexpr std::chrono::seconds kLostAfter{5};
   void receive(int camera);
+  // Under mutex_, for a frame of camera d that arrived whole: its id on the node's count (a camera
+  // opened again realigned onto the freshest camera's), and its measured id rate updated.
+  int64_t placedFrameId(Device& d, int64_t frame_id, int64_t arrived_ns);
+  // Under mutex_: the frame queued (the oldest dropped when the consumer fell behind, a spare
+  // image reused), its camera's counts and frame rate updated.
+  void queueFrame(Device& d, int camera, int64_t frame_id, int64_t timestamp_ns, const void* data,
+                  size_t bytes, std::chrono::steady_clock::time_point now);
   void openCamera(Device& d);   // camera configured and its stream made, no buffers yet
   void startCamera(Device& d);  // buffers given, acquisition started
   void closeCamera(Device& d);

@@ -266,7 +266,35 @@ struct PoseTracker::Impl {
   static Eigen::Vector3i blocksOf(const Eigen::Vector3i& voxels) {
     return (voxels.array() + kBlock - 1) / kBlock;
   }
+  // The fit's cost of pose `p`, and with `jacobian` its normal equations (h = J^T J, grad =
+  // J^T r, over the degrees of freedom).
   double evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h, Eigen::VectorXd& grad);
+  // evaluate's parts (tracker_fit.cpp). Each degree of freedom's axis and spatial terms for `p`,
+  // the joints' sums cleared.
+  void prepareJacobian(const Pose& p);
+  // Each term's cost added to `cost`, with `jacobian` its residuals' normal equations to the
+  // joints' sums (accumulate): the hull's samples on the model's surface, the rays through the
+  // silhouettes' edges touching it, the bones' axes inside every silhouette, the parts of the body
+  // kept apart.
+  void addHullCost(bool jacobian, double& cost);
+  void addRimCost(bool jacobian, double& cost);
+  void addSilhouetteCost(bool jacobian, double& cost);
+  void addApartCost(bool jacobian, double& cost);
+  // The joints' sums into the degrees of freedom: S^T M S and S^T g over each joint's chain.
+  void sumIntoDofs(Eigen::MatrixXd& h, Eigen::VectorXd& grad) const;
+  // The temporal prior toward prior_pose.
+  void addPriorCost(const Pose& p, bool jacobian, Eigen::MatrixXd& h, Eigen::VectorXd& grad,
+                    double& cost) const;
+  // Adds w * J^T J and w * J^T r for a residual whose Jacobian is dr/dp . dp/dtheta, p a point
+  // moving with `joint` (in the joint's spatial terms, joint_m and joint_g).
+  void accumulate(int joint, const Eigen::Vector3d& point, const Eigen::Vector3d& dr_dp, double r,
+                  double w) {
+    Vector6d spatial;
+    spatial << dr_dp, point.cross(dr_dp);
+    joint_m[joint].noalias() += w * spatial * spatial.transpose();
+    joint_g[joint] += (w * r) * spatial;
+    joint_used[joint] = 1;
+  }
   // Places the capsules for the pose in `global` (cap_a, cap_b) and remakes the hull samples'
   // candidate capsules when they no longer hold.
   void placeCapsules();

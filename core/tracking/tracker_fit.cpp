@@ -14,57 +14,64 @@ using namespace tracker_detail;
 
 double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h,
                                    Eigen::VectorXd& grad) {
+  // The cost's terms in turn: the hull's samples, the rim's rays, the bones' axes inside every
+  // silhouette, the parts kept apart (each adding its residuals' normal equations per joint, when
+  // `jacobian`), the joints' sums into the degrees of freedom, then the temporal prior.
   skeleton.forwardKinematics(p, global);
-  const int n = int(dofs.size());
   if (jacobian) {
     h.setZero();
     grad.setZero();
-    for (int d = 0; d < n; ++d) {
-      const Dof& dof = dofs[d];
-      if (dof.kind == Dof::kTranslation) {
-        dof_axis[d] = Eigen::Vector3d::Unit(dof.axis);
-      } else if (dof.kind == Dof::kRootRotation) {
-        dof_axis[d] = Eigen::Vector3d::Unit(dof.axis);
-        dof_centre[d] = global[0].translation();
-      } else {
-        const Eigen::Matrix3d rp = global[skeleton.joint(dof.joint).parent].linear();
-        const Eigen::Vector3d& a = p.angles_rad[dof.joint];
-        if (dof.axis == 0) {
-          dof_axis[d] = rp.col(0);
-        } else if (dof.axis == 1) {
-          dof_axis[d] =
-              rp * Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()) * Eigen::Vector3d::UnitY();
-        } else {
-          dof_axis[d] = rp * Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()) *
-                        Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
-                        Eigen::Vector3d::UnitZ();
-        }
-        dof_centre[d] = global[dof.joint].translation();
-      }
-      if (dof.kind == Dof::kTranslation) {
-        dof_spatial[d] << dof_axis[d], Eigen::Vector3d::Zero();
-      } else {
-        dof_spatial[d] << dof_centre[d].cross(dof_axis[d]), dof_axis[d];
-      }
-    }
-    for (size_t j = 0; j < joint_m.size(); ++j) {
-      joint_m[j].setZero();
-      joint_g[j].setZero();
-      joint_used[j] = 0;
-    }
+    prepareJacobian(p);
   }
-  // Accumulates w * J^T J and w * J^T r for a residual whose Jacobian is dr/dp . dp/dtheta, p a
-  // point moving with `joint` (in the joint's spatial terms, joint_m and joint_g).
-  auto accumulate = [&](int joint, const Eigen::Vector3d& point, const Eigen::Vector3d& dr_dp,
-                        double r, double w) {
-    Vector6d spatial;
-    spatial << dr_dp, point.cross(dr_dp);
-    joint_m[joint].noalias() += w * spatial * spatial.transpose();
-    joint_g[joint] += (w * r) * spatial;
-    joint_used[joint] = 1;
-  };
   placeCapsules();
   double cost = 0;
+  addHullCost(jacobian, cost);
+  addRimCost(jacobian, cost);
+  addSilhouetteCost(jacobian, cost);
+  addApartCost(jacobian, cost);
+  if (jacobian) sumIntoDofs(h, grad);
+  if (use_prior) addPriorCost(p, jacobian, h, grad, cost);
+  if (jacobian) h.triangularView<Eigen::StrictlyLower>() = h.transpose();
+  return cost;
+}
+
+void PoseTracker::Impl::prepareJacobian(const Pose& p) {
+  const int n = int(dofs.size());
+  for (int d = 0; d < n; ++d) {
+    const Dof& dof = dofs[d];
+    if (dof.kind == Dof::kTranslation) {
+      dof_axis[d] = Eigen::Vector3d::Unit(dof.axis);
+    } else if (dof.kind == Dof::kRootRotation) {
+      dof_axis[d] = Eigen::Vector3d::Unit(dof.axis);
+      dof_centre[d] = global[0].translation();
+    } else {
+      const Eigen::Matrix3d rp = global[skeleton.joint(dof.joint).parent].linear();
+      const Eigen::Vector3d& a = p.angles_rad[dof.joint];
+      if (dof.axis == 0) {
+        dof_axis[d] = rp.col(0);
+      } else if (dof.axis == 1) {
+        dof_axis[d] =
+            rp * Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()) * Eigen::Vector3d::UnitY();
+      } else {
+        dof_axis[d] = rp * Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()) *
+                      Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) * Eigen::Vector3d::UnitZ();
+      }
+      dof_centre[d] = global[dof.joint].translation();
+    }
+    if (dof.kind == Dof::kTranslation) {
+      dof_spatial[d] << dof_axis[d], Eigen::Vector3d::Zero();
+    } else {
+      dof_spatial[d] << dof_centre[d].cross(dof_axis[d]), dof_axis[d];
+    }
+  }
+  for (size_t j = 0; j < joint_m.size(); ++j) {
+    joint_m[j].setZero();
+    joint_g[j].setZero();
+    joint_used[j] = 0;
+  }
+}
+
+void PoseTracker::Impl::addHullCost(bool jacobian, double& cost) {
   // Hull surface samples on the model's surface.
   const double delta_out = opt.huber_m, delta_in = 4 * opt.huber_m;
   for (size_t i = 0; i < hull.size(); ++i) {
@@ -85,6 +92,9 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
       accumulate(capsules[best_c].joint, best_closest, -diff / len, r, w);
     }
   }
+}
+
+void PoseTracker::Impl::addRimCost(bool jacobian, double& cost) {
   // Rays through the silhouettes' edges touching the body's surface.
   if (opt.rim_weight > 0) {
     const double delta = opt.rim_huber_m, wr = opt.rim_weight;
@@ -105,6 +115,9 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
                  wr * (ar <= delta ? 1.0 : delta / ar));
     }
   }
+}
+
+void PoseTracker::Impl::addSilhouetteCost(bool jacobian, double& cost) {
   // Axis samples inside every silhouette.
   const double ws = opt.silhouette_weight;
   const int step = opt.silhouette_step;
@@ -156,6 +169,9 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
       accumulate(s.joint, q, cam.rotation().transpose() * dr_dx, r, ws);
     }
   }
+}
+
+void PoseTracker::Impl::addApartCost(bool jacobian, double& cost) {
   // Parts of the body kept apart. Each overlap moves with two joints: its slope goes to both, and
   // the normal equations leave out the products between their chains (Levenberg-Marquardt takes
   // a step only where the cost falls, so an approximate J^T J does).
@@ -173,46 +189,46 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
       accumulate(capsules[b].joint, on_b, n, r, w);
     }
   }
-  // The joints' sums into the degrees of freedom: S^T M S and S^T g over each joint's chain.
-  if (jacobian) {
-    for (size_t j = 0; j < joint_m.size(); ++j) {
-      if (!joint_used[j]) continue;
-      const std::vector<int>& ch = chain[j];
-      for (size_t b = 0; b < ch.size(); ++b) {
-        const Vector6d moved = joint_m[j] * dof_spatial[ch[b]];
-        for (size_t a = 0; a <= b; ++a) h(ch[a], ch[b]) += dof_spatial[ch[a]].dot(moved);
-        grad(ch[b]) += dof_spatial[ch[b]].dot(joint_g[j]);
-      }
+}
+
+void PoseTracker::Impl::sumIntoDofs(Eigen::MatrixXd& h, Eigen::VectorXd& grad) const {
+  for (size_t j = 0; j < joint_m.size(); ++j) {
+    if (!joint_used[j]) continue;
+    const std::vector<int>& ch = chain[j];
+    for (size_t b = 0; b < ch.size(); ++b) {
+      const Vector6d moved = joint_m[j] * dof_spatial[ch[b]];
+      for (size_t a = 0; a <= b; ++a) h(ch[a], ch[b]) += dof_spatial[ch[a]].dot(moved);
+      grad(ch[b]) += dof_spatial[ch[b]].dot(joint_g[j]);
     }
   }
-  // Temporal prior.
-  if (use_prior) {
-    const double w = prior_weight;
-    Eigen::Vector3d e = p.root_translation_m - prior_pose.root_translation_m;
-    const Eigen::Matrix3d r_now = global[0].linear();
-    const Eigen::Matrix3d r_prior = rotationFromVector(prior_pose.angles_rad[0]);
-    const Eigen::AngleAxisd rot(r_now * r_prior.transpose());
-    const Eigen::Vector3d er = rot.angle() * rot.axis();
-    cost += 0.5 * w * (e.squaredNorm() + er.squaredNorm());
-    for (int d = 0; d < n; ++d) {
-      const Dof& dof = dofs[d];
-      double err;
-      if (dof.kind == Dof::kTranslation) {
-        err = e[dof.axis];
-      } else if (dof.kind == Dof::kRootRotation) {
-        err = er[dof.axis];
-      } else {
-        err = p.angles_rad[dof.joint][dof.axis] - prior_pose.angles_rad[dof.joint][dof.axis];
-        cost += 0.5 * w * err * err;
-      }
-      if (jacobian) {
-        h(d, d) += w;
-        grad(d) += w * err;
-      }
+}
+
+void PoseTracker::Impl::addPriorCost(const Pose& p, bool jacobian, Eigen::MatrixXd& h,
+                                     Eigen::VectorXd& grad, double& cost) const {
+  const int n = int(dofs.size());
+  const double w = prior_weight;
+  Eigen::Vector3d e = p.root_translation_m - prior_pose.root_translation_m;
+  const Eigen::Matrix3d r_now = global[0].linear();
+  const Eigen::Matrix3d r_prior = rotationFromVector(prior_pose.angles_rad[0]);
+  const Eigen::AngleAxisd rot(r_now * r_prior.transpose());
+  const Eigen::Vector3d er = rot.angle() * rot.axis();
+  cost += 0.5 * w * (e.squaredNorm() + er.squaredNorm());
+  for (int d = 0; d < n; ++d) {
+    const Dof& dof = dofs[d];
+    double err;
+    if (dof.kind == Dof::kTranslation) {
+      err = e[dof.axis];
+    } else if (dof.kind == Dof::kRootRotation) {
+      err = er[dof.axis];
+    } else {
+      err = p.angles_rad[dof.joint][dof.axis] - prior_pose.angles_rad[dof.joint][dof.axis];
+      cost += 0.5 * w * err * err;
+    }
+    if (jacobian) {
+      h(d, d) += w;
+      grad(d) += w * err;
     }
   }
-  if (jacobian) h.triangularView<Eigen::StrictlyLower>() = h.transpose();
-  return cost;
 }
 
 void PoseTracker::Impl::apply(Pose& p, const Eigen::VectorXd& delta) const {
