@@ -67,6 +67,52 @@ void addOffsetErrors(std::vector<double>& error_mm, EvalReport& report) {
     report.set("render", key, nearestRankPercentile(error_mm, fraction));
 }
 
+// The leave-one-out scores of each variant of the mesh (the best offsets' and the true surface's
+// only where the session has the truth), overall, per frame and per camera.
+struct LeaveOneOutVariants {
+  const LeaveOneOutSummary &refined, &unrefined, &strict, &best_offsets, &truth;
+};
+void reportLeaveOneOut(const SessionReader& session, const std::vector<int>& frames,
+                       const LeaveOneOutVariants& v, EvalReport& report) {
+  const bool has_truth = session.hasTruth();
+  const LeaveOneOutSummary &refined = v.refined, &unrefined = v.unrefined, &strict = v.strict,
+                           &best_offsets = v.best_offsets, &truth = v.truth;
+  const std::pair<const char*, const ViewScore*> variants[] = {
+      {"", &refined.mean},
+      {"_unrefined", &unrefined.mean},
+      {"_strict", &strict.mean},
+      {"_best_offsets", &best_offsets.mean},
+      {"_truth_surface", &truth.mean}};
+  for (const auto& [suffix, mean] : variants) {
+    if (!has_truth && (mean == &best_offsets.mean || mean == &truth.mean)) continue;
+    const std::string s = suffix;
+    report.set("render", "loo_psnr_db" + s, mean->psnr_db);
+    report.set("render", "loo_ssim" + s, mean->ssim);
+    report.set("render", "loo_matte_psnr_db" + s, mean->matte_psnr_db);
+    report.set("render", "loo_missed_pct" + s, mean->missed_pct);
+    report.set("render", "loo_beyond_pct" + s, mean->beyond_pct);
+    report.set("render", "loo_missed_error_pct" + s, mean->missed_error_pct);
+  }
+  for (size_t k = 0; k < frames.size(); ++k) {
+    report.setFrame(session.frameId(frames[k]), "loo_psnr_db", refined.per_frame[k].psnr_db);
+    report.setFrame(session.frameId(frames[k]), "loo_ssim", refined.per_frame[k].ssim);
+  }
+  for (size_t c = 0; c < refined.per_camera.size(); ++c) {
+    const std::string name = session.rig().camera(int(c)).name();
+    report.set("render", "loo_psnr_db_" + name, refined.per_camera[c].psnr_db);
+    report.set("render", "loo_ssim_" + name, refined.per_camera[c].ssim);
+    report.set("render", "loo_psnr_db_unrefined_" + name, unrefined.per_camera[c].psnr_db);
+    report.set("render", "loo_ssim_unrefined_" + name, unrefined.per_camera[c].ssim);
+    report.set("render", "loo_psnr_db_strict_" + name, strict.per_camera[c].psnr_db);
+    report.set("render", "loo_ssim_strict_" + name, strict.per_camera[c].ssim);
+    report.set("render", "loo_missed_pct_" + name, refined.per_camera[c].missed_pct);
+    report.set("render", "loo_beyond_pct_" + name, refined.per_camera[c].beyond_pct);
+    if (!has_truth) continue;
+    report.set("render", "loo_psnr_db_truth_surface_" + name, truth.per_camera[c].psnr_db);
+    report.set("render", "loo_ssim_truth_surface_" + name, truth.per_camera[c].ssim);
+  }
+}
+
 // Section "render": every camera's view rendered from the others with the unstructured
 // lumigraph, compared with its image over the truth mask (docs/lumigraph.md), on the pipeline's
 // own geometry — the generic human where the tracker sees the actor, refined from the images
@@ -187,40 +233,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
       evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerLeftOutCamera);
   report.set("render", "loo_frames", double(frames.size()));
   if (has_truth) addOffsetErrors(offset_error_mm, report);
-  const std::pair<const char*, const ViewScore*> variants[] = {
-      {"", &refined.mean},
-      {"_unrefined", &unrefined.mean},
-      {"_strict", &strict.mean},
-      {"_best_offsets", &best_offsets.mean},
-      {"_truth_surface", &truth.mean}};
-  for (const auto& [suffix, mean] : variants) {
-    if (!has_truth && (mean == &best_offsets.mean || mean == &truth.mean)) continue;
-    const std::string s = suffix;
-    report.set("render", "loo_psnr_db" + s, mean->psnr_db);
-    report.set("render", "loo_ssim" + s, mean->ssim);
-    report.set("render", "loo_matte_psnr_db" + s, mean->matte_psnr_db);
-    report.set("render", "loo_missed_pct" + s, mean->missed_pct);
-    report.set("render", "loo_beyond_pct" + s, mean->beyond_pct);
-    report.set("render", "loo_missed_error_pct" + s, mean->missed_error_pct);
-  }
-  for (size_t k = 0; k < frames.size(); ++k) {
-    report.setFrame(session.frameId(frames[k]), "loo_psnr_db", refined.per_frame[k].psnr_db);
-    report.setFrame(session.frameId(frames[k]), "loo_ssim", refined.per_frame[k].ssim);
-  }
-  for (size_t c = 0; c < refined.per_camera.size(); ++c) {
-    const std::string name = session.rig().camera(int(c)).name();
-    report.set("render", "loo_psnr_db_" + name, refined.per_camera[c].psnr_db);
-    report.set("render", "loo_ssim_" + name, refined.per_camera[c].ssim);
-    report.set("render", "loo_psnr_db_unrefined_" + name, unrefined.per_camera[c].psnr_db);
-    report.set("render", "loo_ssim_unrefined_" + name, unrefined.per_camera[c].ssim);
-    report.set("render", "loo_psnr_db_strict_" + name, strict.per_camera[c].psnr_db);
-    report.set("render", "loo_ssim_strict_" + name, strict.per_camera[c].ssim);
-    report.set("render", "loo_missed_pct_" + name, refined.per_camera[c].missed_pct);
-    report.set("render", "loo_beyond_pct_" + name, refined.per_camera[c].beyond_pct);
-    if (!has_truth) continue;
-    report.set("render", "loo_psnr_db_truth_surface_" + name, truth.per_camera[c].psnr_db);
-    report.set("render", "loo_ssim_truth_surface_" + name, truth.per_camera[c].ssim);
-  }
+  reportLeaveOneOut(session, frames, {refined, unrefined, strict, best_offsets, truth}, report);
 }
 
 struct EvalArgs {

@@ -64,10 +64,8 @@ void silhouetteImage(const SilhouetteMaskData& mask, std::vector<uint8_t>& rgb) 
   }
 }
 
-}  // namespace
-
-void runNodeMonitor(CameraNode& node, const Rig& rig, const std::string& node_name,
-                    const std::atomic<bool>& stop, const std::string& screenshot_png) {
+// The monitor's window, with ImGui on it, made current. Throws Error without a display.
+GLFWwindow* openWindow(const std::string& node_name, int cameras) {
   if (!glfwInit()) {
     throw Error(
         "--monitor: cannot open a window (no display? set DISPLAY, or run without "
@@ -75,7 +73,6 @@ void runNodeMonitor(CameraNode& node, const Rig& rig, const std::string& node_na
   }
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
-  const int cameras = static_cast<int>(node.cameras().size());
   GLFWwindow* window =
       glfwCreateWindow(std::max(560, 2 * 276 + 40), 90 + cameras * 230,
                        fmt::format("Lumistage node {}", node_name).c_str(), nullptr, nullptr);
@@ -91,7 +88,68 @@ void runNodeMonitor(CameraNode& node, const Rig& rig, const std::string& node_na
   ImGui::StyleColorsDark();
   ImGui_ImplGlfw_InitForOpenGL(window, true);
   ImGui_ImplOpenGL3_Init("#version 130");
+  return window;
+}
 
+// The panel: the node's frame and traffic, its take, and each camera's figures, picture and
+// silhouette.
+void drawPanel(CameraNode& node, const Rig& rig, const std::string& node_name,
+               const CameraNode::MonitorState& state, const std::vector<Texture>& pictures,
+               const std::vector<Texture>& silhouettes) {
+  const int cameras = static_cast<int>(pictures.size());
+  ImGui::SetNextWindowPos(ImVec2(0, 0));
+  ImGui::SetNextWindowSize(ImGui::GetIO().DisplaySize);
+  ImGui::Begin(
+      "node", nullptr,
+      ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings);
+  ImGui::Text("node %s: frame %lld, %lld sets sent, %.1f MB", node_name.c_str(),
+              static_cast<long long>(state.frame_id), static_cast<long long>(state.sets_sent),
+              state.bytes_sent / 1e6);
+  if (const TakeStatusData& t = state.take; !t.take.empty()) {
+    const ImVec4 colour = !t.error.empty() ? ImVec4(0.95f, 0.3f, 0.3f, 1)
+                          : t.finished     ? ImVec4(0.8f, 0.8f, 0.8f, 1)
+                                           : ImVec4(0.95f, 0.45f, 0.35f, 1);
+    ImGui::TextColored(colour, "take %s: %s, %lld sets written, %lld dropped, %.1f MB %s",
+                       t.take.c_str(), t.finished ? "closed" : "recording",
+                       static_cast<long long>(t.written), static_cast<long long>(t.dropped),
+                       t.bytes / 1e6, t.error.c_str());
+  }
+  if (state.take.free_bytes >= 0) {
+    ImGui::Text("takes' disk: %s free", bytesInWords(state.take.free_bytes).c_str());
+  }
+  for (int k = 0; k < cameras; ++k) {
+    const Camera& camera = rig.camera(node.cameras()[k]);
+    ImGui::Separator();
+    if (k < static_cast<int>(state.stats.size())) {
+      const CameraStats& s = state.stats[k];
+      const bool ok = s.last_error.empty() && s.frame_rate_hz > 0;
+      ImGui::TextColored(ok ? ImVec4(0.3f, 0.85f, 0.3f, 1) : ImVec4(0.95f, 0.3f, 0.3f, 1),
+                         "%s  %.1f fps  %lld frames  %lld dropped  %s", camera.name().c_str(),
+                         s.frame_rate_hz, static_cast<long long>(s.frames),
+                         static_cast<long long>(s.dropped), s.last_error.c_str());
+    }
+    const float w = 256, h = 192;
+    if (pictures[k].id) {
+      ImGui::Image(pictures[k].imgui(), ImVec2(w, h));
+    } else {
+      ImGui::Dummy(ImVec2(w, h));
+    }
+    ImGui::SameLine();
+    if (silhouettes[k].id) {
+      ImGui::Image(silhouettes[k].imgui(), ImVec2(w, h));
+    } else {
+      ImGui::Dummy(ImVec2(w, h));
+    }
+  }
+  ImGui::End();
+}
+
+}  // namespace
+
+void runNodeMonitor(CameraNode& node, const Rig& rig, const std::string& node_name,
+                    const std::atomic<bool>& stop, const std::string& screenshot_png) {
+  const int cameras = static_cast<int>(node.cameras().size());
+  GLFWwindow* window = openWindow(node_name, cameras);
   std::vector<Texture> pictures(cameras), silhouettes(cameras);
   std::vector<uint8_t> rgb;
   auto last_upload = std::chrono::steady_clock::now() - std::chrono::seconds(1);
@@ -123,51 +181,7 @@ void runNodeMonitor(CameraNode& node, const Rig& rig, const std::string& node_na
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
-    ImGui::SetNextWindowPos(ImVec2(0, 0));
-    ImGui::SetNextWindowSize(ImGui::GetIO().DisplaySize);
-    ImGui::Begin(
-        "node", nullptr,
-        ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings);
-    ImGui::Text("node %s: frame %lld, %lld sets sent, %.1f MB", node_name.c_str(),
-                static_cast<long long>(state.frame_id), static_cast<long long>(state.sets_sent),
-                state.bytes_sent / 1e6);
-    if (const TakeStatusData& t = state.take; !t.take.empty()) {
-      const ImVec4 colour = !t.error.empty() ? ImVec4(0.95f, 0.3f, 0.3f, 1)
-                            : t.finished     ? ImVec4(0.8f, 0.8f, 0.8f, 1)
-                                             : ImVec4(0.95f, 0.45f, 0.35f, 1);
-      ImGui::TextColored(colour, "take %s: %s, %lld sets written, %lld dropped, %.1f MB %s",
-                         t.take.c_str(), t.finished ? "closed" : "recording",
-                         static_cast<long long>(t.written), static_cast<long long>(t.dropped),
-                         t.bytes / 1e6, t.error.c_str());
-    }
-    if (state.take.free_bytes >= 0) {
-      ImGui::Text("takes' disk: %s free", bytesInWords(state.take.free_bytes).c_str());
-    }
-    for (int k = 0; k < cameras; ++k) {
-      const Camera& camera = rig.camera(node.cameras()[k]);
-      ImGui::Separator();
-      if (k < static_cast<int>(state.stats.size())) {
-        const CameraStats& s = state.stats[k];
-        const bool ok = s.last_error.empty() && s.frame_rate_hz > 0;
-        ImGui::TextColored(ok ? ImVec4(0.3f, 0.85f, 0.3f, 1) : ImVec4(0.95f, 0.3f, 0.3f, 1),
-                           "%s  %.1f fps  %lld frames  %lld dropped  %s", camera.name().c_str(),
-                           s.frame_rate_hz, static_cast<long long>(s.frames),
-                           static_cast<long long>(s.dropped), s.last_error.c_str());
-      }
-      const float w = 256, h = 192;
-      if (pictures[k].id) {
-        ImGui::Image(pictures[k].imgui(), ImVec2(w, h));
-      } else {
-        ImGui::Dummy(ImVec2(w, h));
-      }
-      ImGui::SameLine();
-      if (silhouettes[k].id) {
-        ImGui::Image(silhouettes[k].imgui(), ImVec2(w, h));
-      } else {
-        ImGui::Dummy(ImVec2(w, h));
-      }
-    }
-    ImGui::End();
+    drawPanel(node, rig, node_name, state, pictures, silhouettes);
     ImGui::Render();
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window, &fw, &fh);

@@ -72,6 +72,85 @@ struct BoardCornerError {
   }
 };
 
+// Each camera calibrated on its own from its views of the board (views_of): its intrinsics
+// (fx, fy, cx, cy, k1, k2) into k, the board's pose in each of its views into view_pose.
+void calibrateEachCamera(const BoardSession& session, const std::vector<std::vector<int>>& views_of,
+                         const BoardCalibrationOptions& options,
+                         std::vector<std::array<double, 6>>& k, std::vector<Pose>& view_pose) {
+  const int n = static_cast<int>(session.camera_names.size());
+  std::vector<cv::Point3f> object;
+  for (int i = 0; i < session.board.corners(); ++i) {
+    const Eigen::Vector3d c = session.board.corner(i);
+    object.emplace_back(float(c.x()), float(c.y()), float(c.z()));
+  }
+  for (int c = 0; c < n; ++c) {
+    if (static_cast<int>(views_of[c].size()) < options.min_views_per_camera) {
+      throw Error(
+          fmt::format("camera {} saw the whole board in {} views; it needs at least {} "
+                      "(show it the board at several angles)",
+                      session.camera_names[c], views_of[c].size(), options.min_views_per_camera));
+    }
+    std::vector<std::vector<cv::Point3f>> objects;
+    std::vector<std::vector<cv::Point2f>> images;
+    for (int v : views_of[c]) {
+      objects.push_back(object);
+      std::vector<cv::Point2f> img;
+      for (const Eigen::Vector2d& p : session.views[v].corners)
+        img.emplace_back(float(p.x()), float(p.y()));
+      images.push_back(img);
+    }
+    cv::Mat K, dist;
+    std::vector<cv::Mat> rvecs, tvecs;
+    const cv::Size size(session.image_sizes[c].x(), session.image_sizes[c].y());
+    cv::calibrateCamera(objects, images, size, K, dist, rvecs, tvecs,
+                        cv::CALIB_FIX_K3 | cv::CALIB_ZERO_TANGENT_DIST);
+    k[c] = {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2),
+            K.at<double>(1, 2), dist.at<double>(0), dist.at<double>(1)};
+    for (size_t i = 0; i < views_of[c].size(); ++i) {
+      const Eigen::Vector3d r(rvecs[i].at<double>(0), rvecs[i].at<double>(1),
+                              rvecs[i].at<double>(2));
+      view_pose[views_of[c][i]] = {
+          rotationOf(r), {tvecs[i].at<double>(0), tvecs[i].at<double>(1), tvecs[i].at<double>(2)}};
+    }
+  }
+}
+
+// Each camera's pose (world to camera, the world camera 0's frame), chained from camera 0 through
+// frames where a camera already placed and one not yet placed both saw the board; a camera never
+// linked so is refused.
+std::vector<std::optional<Pose>> chainCameras(const BoardSession& session,
+                                              const std::map<int, std::vector<int>>& views_in_frame,
+                                              const std::vector<Pose>& view_pose) {
+  const int n = static_cast<int>(session.camera_names.size());
+  std::vector<std::optional<Pose>> camera_pose(n);  // world to camera
+  camera_pose[0] = Pose{};
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (const auto& [frame, views] : views_in_frame) {
+      for (int a : views) {
+        const int ca = session.views[a].camera;
+        if (!camera_pose[ca]) continue;
+        const Pose board_to_world = camera_pose[ca]->inverse() * view_pose[a];
+        for (int b : views) {
+          const int cb = session.views[b].camera;
+          if (camera_pose[cb]) continue;
+          camera_pose[cb] = view_pose[b] * board_to_world.inverse();
+          grew = true;
+        }
+      }
+    }
+  }
+  for (int c = 0; c < n; ++c) {
+    if (!camera_pose[c]) {
+      throw Error(
+          fmt::format("camera {} never saw the board at the same time as a camera linked "
+                      "to {}: show the board to it and a neighbour together",
+                      session.camera_names[c], session.camera_names[0]));
+    }
+  }
+  return camera_pose;
+}
+
 }  // namespace
 
 void BoardSpec::check() const {
@@ -129,75 +208,17 @@ BoardCalibrationResult calibrateBoards(const BoardSession& session,
                               view.corners.size()));
     views_of[view.camera].push_back(static_cast<int>(v));
   }
-  std::vector<cv::Point3f> object;
-  for (int i = 0; i < board.corners(); ++i) {
-    const Eigen::Vector3d c = board.corner(i);
-    object.emplace_back(float(c.x()), float(c.y()), float(c.z()));
-  }
   // 1. Intrinsics of each camera on its own, and the board's pose in each view.
   std::vector<std::array<double, 6>> k(n);
   std::vector<Pose> view_pose(session.views.size());  // board to camera
-  for (int c = 0; c < n; ++c) {
-    if (static_cast<int>(views_of[c].size()) < options.min_views_per_camera) {
-      throw Error(
-          fmt::format("camera {} saw the whole board in {} views; it needs at least {} "
-                      "(show it the board at several angles)",
-                      session.camera_names[c], views_of[c].size(), options.min_views_per_camera));
-    }
-    std::vector<std::vector<cv::Point3f>> objects;
-    std::vector<std::vector<cv::Point2f>> images;
-    for (int v : views_of[c]) {
-      objects.push_back(object);
-      std::vector<cv::Point2f> img;
-      for (const Eigen::Vector2d& p : session.views[v].corners)
-        img.emplace_back(float(p.x()), float(p.y()));
-      images.push_back(img);
-    }
-    cv::Mat K, dist;
-    std::vector<cv::Mat> rvecs, tvecs;
-    const cv::Size size(session.image_sizes[c].x(), session.image_sizes[c].y());
-    cv::calibrateCamera(objects, images, size, K, dist, rvecs, tvecs,
-                        cv::CALIB_FIX_K3 | cv::CALIB_ZERO_TANGENT_DIST);
-    k[c] = {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2),
-            K.at<double>(1, 2), dist.at<double>(0), dist.at<double>(1)};
-    for (size_t i = 0; i < views_of[c].size(); ++i) {
-      const Eigen::Vector3d r(rvecs[i].at<double>(0), rvecs[i].at<double>(1),
-                              rvecs[i].at<double>(2));
-      view_pose[views_of[c][i]] = {
-          rotationOf(r), {tvecs[i].at<double>(0), tvecs[i].at<double>(1), tvecs[i].at<double>(2)}};
-    }
-  }
+  calibrateEachCamera(session, views_of, options, k, view_pose);
   // 2. Extrinsics: chained from camera 0 through frames where a known and an unknown camera both
   // saw the board.
   std::map<int, std::vector<int>> views_in_frame;
   for (size_t v = 0; v < session.views.size(); ++v)
     views_in_frame[session.views[v].frame].push_back(int(v));
-  std::vector<std::optional<Pose>> camera_pose(n);  // world to camera
-  camera_pose[0] = Pose{};
-  for (bool grew = true; grew;) {
-    grew = false;
-    for (const auto& [frame, views] : views_in_frame) {
-      for (int a : views) {
-        const int ca = session.views[a].camera;
-        if (!camera_pose[ca]) continue;
-        const Pose board_to_world = camera_pose[ca]->inverse() * view_pose[a];
-        for (int b : views) {
-          const int cb = session.views[b].camera;
-          if (camera_pose[cb]) continue;
-          camera_pose[cb] = view_pose[b] * board_to_world.inverse();
-          grew = true;
-        }
-      }
-    }
-  }
-  for (int c = 0; c < n; ++c) {
-    if (!camera_pose[c]) {
-      throw Error(
-          fmt::format("camera {} never saw the board at the same time as a camera linked "
-                      "to {}: show the board to it and a neighbour together",
-                      session.camera_names[c], session.camera_names[0]));
-    }
-  }
+  const std::vector<std::optional<Pose>> camera_pose =
+      chainCameras(session, views_in_frame, view_pose);
   // 3. Joint refinement.
   std::map<int, std::pair<Eigen::Vector3d, Eigen::Vector3d>> board_params;  // frame -> r, t
   for (const auto& [frame, views] : views_in_frame) {

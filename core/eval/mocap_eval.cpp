@@ -29,6 +29,90 @@ double threadCpuMs() {
   return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
 }
 
+// The truth's joints by the skeleton's joint order (same names).
+std::vector<int> truthJointIndex(const SessionReader& session, const Skeleton& skeleton,
+                                 const std::vector<std::string>& names) {
+  std::vector<int> index;
+  for (int j = 0; j < skeleton.jointCount(); ++j) {
+    const auto it = std::find(names.begin(), names.end(), skeleton.joint(j).name);
+    if (it == names.end())
+      throw Error(session.folder().string() + "/truth/joints.csv: no joint '" +
+                  skeleton.joint(j).name + "'");
+    index.push_back(int(it - names.begin()));
+  }
+  return index;
+}
+
+double silhouetteIou(const LowResSilhouette& a, const LowResSilhouette& b) {
+  int both = 0, either = 0;
+  for (size_t k = 0; k < a.bits.size(); ++k) {
+    both += std::popcount(unsigned(a.bits[k] & b.bits[k]));
+    either += std::popcount(unsigned(a.bits[k] | b.bits[k]));
+  }
+  return either > 0 ? double(both) / either : 0.0;
+}
+
+double meanOf(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return v.empty() ? std::nan("") : s / v.size();
+}
+
+double maxOf(const std::vector<double>& v) {
+  return v.empty() ? std::nan("") : *std::max_element(v.begin(), v.end());
+}
+
+// What the frames add up to.
+struct MocapTally {
+  std::vector<double> errors_mm, times_ms, search_ms, wall_times_ms;
+  // Per joint over the frames that errors_mm counts: the error's length and its height (tracked
+  // less true z), summed, metres.
+  std::vector<double> joint_error_m, joint_height_m;
+  // The posed body's silhouette against each camera's, summed over the tracked frames.
+  std::vector<double> iou_sum;
+  int tracked = 0;
+};
+
+// The session's figures into the report's "mocap" section.
+void reportTally(const MocapTally& t, const Rig& rig, const std::vector<int>& cameras,
+                 const PoseTracker& tracker, bool has_truth, int frames, EvalReport& report) {
+  const std::string section = "mocap";
+  report.set(section, "frames", frames);
+  report.set(section, "frames_tracked", t.tracked);
+  report.set(section, "cameras", int(cameras.size()));
+  if (has_truth) {
+    report.set(section, "mpjpe_mm", meanOf(t.errors_mm));
+    report.set(section, "mpjpe_mm_max", maxOf(t.errors_mm));
+    // The nearest-rank percentile, as the surface's.
+    std::vector<double> errors_mm = t.errors_mm;  // nearestRankPercentile orders it
+    report.set(section, "mpjpe_mm_p95", nearestRankPercentile(errors_mm, 0.95));
+    // Each joint's share: where the error is a bias (the shape calibration's, docs/eval-report.md)
+    // the height shows it, whichever way the actor faces.
+    // mm a frame counted; NaN when none was.
+    const double per_frame = t.errors_mm.empty() ? std::nan("") : 1e3 / double(t.errors_mm.size());
+    for (size_t j = 0; j < t.joint_error_m.size(); ++j) {
+      const std::string& name = tracker.skeleton().joint(int(j)).name;
+      report.set(section, "joint_error_mm_" + name, t.joint_error_m[j] * per_frame);
+      report.set(section, "joint_height_error_mm_" + name, t.joint_height_m[j] * per_frame);
+    }
+  }
+  double iou = 0;
+  for (int c : cameras) {
+    const double camera_iou = t.tracked > 0 ? t.iou_sum[size_t(c)] / t.tracked : std::nan("");
+    report.set(section, "silhouette_iou_" + rig.camera(c).name(), camera_iou);
+    iou += camera_iou / double(cameras.size());
+  }
+  report.set(section, "silhouette_iou", iou);
+  report.set(section, "pose_ms", meanOf(t.times_ms));
+  report.set(section, "pose_ms_max", maxOf(t.times_ms));
+  report.set(section, "pose_wall_ms", meanOf(t.wall_times_ms));
+  report.set(section, "init_ms", maxOf(t.search_ms));
+  // The calibrated height; the default shape is no measure when nobody was tracked.
+  report.set(section, "actor_height_m", t.tracked > 0 ? tracker.shape().height_m : std::nan(""));
+  // How tall it stands (statureOf), which the truth's is measured against.
+  report.set(section, "actor_stature_m", t.tracked > 0 ? statureOf(tracker.shape()) : std::nan(""));
+}
+
 }  // namespace
 
 MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& generic,
@@ -45,17 +129,8 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   std::vector<std::vector<Eigen::Vector3d>> truth;
   std::vector<std::string> names;
   if (session.hasTruth()) truth = session.readTruthJoints(&names);
-  // The truth's joints by the tracker's joint order (same names).
   std::vector<int> truth_index;
-  if (!truth.empty()) {
-    for (int j = 0; j < tracker.skeleton().jointCount(); ++j) {
-      const auto it = std::find(names.begin(), names.end(), tracker.skeleton().joint(j).name);
-      if (it == names.end())
-        throw Error(session.folder().string() + "/truth/joints.csv: no joint '" +
-                    tracker.skeleton().joint(j).name + "'");
-      truth_index.push_back(int(it - names.begin()));
-    }
-  }
+  if (!truth.empty()) truth_index = truthJointIndex(session, tracker.skeleton(), names);
 
   const int frames = options.max_frames > 0 ? std::min(options.max_frames, session.frameCount())
                                             : session.frameCount();
@@ -64,17 +139,13 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   std::vector<LowResSilhouette> silhouettes(all);
   std::vector<const LowResSilhouette*> pointers;
   const GreenScreenKeyer keyer;
-  std::vector<double> errors_mm, times_ms, search_ms, wall_times_ms;
-  // Per joint over the frames that errors_mm counts: the error's length and its height (tracked
-  // less true z), summed, metres.
-  std::vector<double> joint_error_m(truth_index.size(), 0.0),
-      joint_height_m(truth_index.size(), 0.0);
-  int tracked = 0;
+  MocapTally t;
+  t.joint_error_m.assign(truth_index.size(), 0.0);
+  t.joint_height_m.assign(truth_index.size(), 0.0);
+  t.iou_sum.assign(size_t(all), 0.0);
   bool initialised = false;
   // The session's own masks (another tool's) stand for the key where it has them.
   const bool masks = session.hasMasks();
-  // The posed body's silhouette against each camera's, summed over the tracked frames.
-  std::vector<double> iou_sum(size_t(all), 0.0);
   std::vector<LowResSilhouette> bodies(cameras.size());
   std::vector<ImageView> views;
   Pose body_pose;
@@ -102,9 +173,9 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
     const double wall_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     // Frames that initialise (or search for the actor) are timed apart from tracked frames.
-    (r.state == TrackState::kTracking || r.state == TrackState::kLost ? times_ms : search_ms)
+    (r.state == TrackState::kTracking || r.state == TrackState::kLost ? t.times_ms : t.search_ms)
         .push_back(ms);
-    wall_times_ms.push_back(wall_ms);
+    t.wall_times_ms.push_back(wall_ms);
     report.setFrame(f, "pose_ms", ms);
     report.setFrame(f, "tracked", r.valid() ? 1 : 0);
     result.valid.push_back(r.valid());
@@ -121,7 +192,7 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
       writePicture();
       continue;
     }
-    ++tracked;
+    ++t.tracked;
     report.setFrame(f, "fit_rms_mm", r.fit_rms_m * 1e3);
     report.setFrame(f, "rim_rms_mm", r.rim_rms_m * 1e3);
     report.setFrame(f, "left_out_camera", r.left_out_camera);
@@ -135,13 +206,8 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
       LowResSilhouette& body = bodies[k];
       rasterizeSilhouette(positions, generic.rest.triangles, rig.camera(c), c,
                           options.silhouette_step, body);
-      int both = 0, either = 0;
-      for (size_t b = 0; b < body.bits.size(); ++b) {
-        both += std::popcount(unsigned(body.bits[b] & silhouettes[c].bits[b]));
-        either += std::popcount(unsigned(body.bits[b] | silhouettes[c].bits[b]));
-      }
-      const double iou = either > 0 ? double(both) / either : 0.0;
-      iou_sum[size_t(c)] += iou;
+      const double iou = silhouetteIou(body, silhouettes[c]);
+      t.iou_sum[size_t(c)] += iou;
       frame_iou += iou / double(cameras.size());
     }
     report.setFrame(f, "silhouette_iou", frame_iou);
@@ -153,60 +219,16 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
       for (size_t j = 0; j < truth_index.size(); ++j) {
         const Eigen::Vector3d d = r.joints[j] - truth[f][truth_index[j]];
         sum += d.norm();
-        if (counted) joint_error_m[j] += d.norm(), joint_height_m[j] += d.z();
+        if (counted) t.joint_error_m[j] += d.norm(), t.joint_height_m[j] += d.z();
       }
       const double mm = 1e3 * sum / truth_index.size();
       report.setFrame(f, "mpjpe_mm", mm);
-      if (counted) errors_mm.push_back(mm);
+      if (counted) t.errors_mm.push_back(mm);
       initialised = true;
     }
   }
   result.skeleton = tracker.skeleton();
-
-  const std::string section = "mocap";
-  report.set(section, "frames", frames);
-  report.set(section, "frames_tracked", tracked);
-  report.set(section, "cameras", count);
-  auto mean = [](const std::vector<double>& v) {
-    double s = 0;
-    for (double x : v) s += x;
-    return v.empty() ? std::nan("") : s / v.size();
-  };
-  if (!truth.empty()) {
-    report.set(section, "mpjpe_mm", mean(errors_mm));
-    report.set(
-        section, "mpjpe_mm_max",
-        errors_mm.empty() ? std::nan("") : *std::max_element(errors_mm.begin(), errors_mm.end()));
-    // The nearest-rank percentile, as the surface's.
-    report.set(section, "mpjpe_mm_p95", nearestRankPercentile(errors_mm, 0.95));
-    // Each joint's share: where the error is a bias (the shape calibration's, docs/eval-report.md)
-    // the height shows it, whichever way the actor faces.
-    // mm a frame counted; NaN when none was.
-    const double per_frame = errors_mm.empty() ? std::nan("") : 1e3 / double(errors_mm.size());
-    for (size_t j = 0; j < truth_index.size(); ++j) {
-      const std::string& name = tracker.skeleton().joint(int(j)).name;
-      report.set(section, "joint_error_mm_" + name, joint_error_m[j] * per_frame);
-      report.set(section, "joint_height_error_mm_" + name, joint_height_m[j] * per_frame);
-    }
-  }
-  double iou = 0;
-  for (int c : cameras) {
-    const double camera_iou = tracked > 0 ? iou_sum[size_t(c)] / tracked : std::nan("");
-    report.set(section, "silhouette_iou_" + rig.camera(c).name(), camera_iou);
-    iou += camera_iou / double(cameras.size());
-  }
-  report.set(section, "silhouette_iou", iou);
-  report.set(section, "pose_ms", mean(times_ms));
-  report.set(section, "pose_ms_max",
-             times_ms.empty() ? std::nan("") : *std::max_element(times_ms.begin(), times_ms.end()));
-  report.set(section, "pose_wall_ms", mean(wall_times_ms));
-  report.set(
-      section, "init_ms",
-      search_ms.empty() ? std::nan("") : *std::max_element(search_ms.begin(), search_ms.end()));
-  // The calibrated height; the default shape is no measure when nobody was tracked.
-  report.set(section, "actor_height_m", tracked > 0 ? tracker.shape().height_m : std::nan(""));
-  // How tall it stands (statureOf), which the truth's is measured against.
-  report.set(section, "actor_stature_m", tracked > 0 ? statureOf(tracker.shape()) : std::nan(""));
+  reportTally(t, rig, cameras, tracker, !truth.empty(), frames, report);
   return result;
 }
 

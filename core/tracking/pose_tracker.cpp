@@ -27,6 +27,29 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   const bool wide = *std::max_element(cell_w.begin(), cell_w.end()) *
                         int64_t(*std::max_element(cell_h.begin(), cell_h.end())) >=
                     kUnseen<uint16_t>;
+  sizeStage(wide);
+  projectVoxels(wide);
+  dt.resize(cameras);
+  for (int c = 0; c < cameras; ++c) dt[c].assign(size_t(cell_w[c]) * cell_h[c], kFarCells);
+  dt_box.assign(cameras, Eigen::Array4i(0, 0, -1, -1));
+  present.assign(cameras, 0);
+  told_empty.assign(cameras, 0);
+  const int longest = std::max(*std::max_element(cell_w.begin(), cell_w.end()),
+                               *std::max_element(cell_h.begin(), cell_h.end()));
+  dt_f.resize(longest);
+  dt_d.resize(longest);
+  dt_z.resize(longest + 1);
+  dt_v.resize(longest);
+  dt_col.resize(longest);
+
+  buildModel(mesh);
+  makeDofs();
+  pose = previous = prior_pose = candidate = predicted = fitted = Pose::rest(generic.jointCount());
+  surface_all.reserve(occupied.size() / 16);
+  hull.reserve(opt.max_hull_points + 1);
+}
+
+void PoseTracker::Impl::sizeStage(bool wide) {
   stage = opt.stage ? *opt.stage : stageVolume(rig);
   const auto tableBytes = [&](const StageBox& box) {
     const Eigen::Vector3i d = (box.size() / opt.voxel_m).array().ceil().cast<int>();
@@ -54,7 +77,6 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   }
   lower = stage.lower;
   dims = (stage.size() / opt.voxel_m).array().ceil().cast<int>();
-  const size_t voxels = size_t(dims.x()) * dims.y() * dims.z();
   const size_t table_bytes = tableBytes(stage);
   if (table_bytes > opt.max_table_bytes) {
     throw std::invalid_argument(fmt::format(
@@ -63,6 +85,11 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
         describeStage(stage), 100 * opt.voxel_m, table_bytes >> 20, cameras,
         opt.max_table_bytes >> 20));
   }
+}
+
+void PoseTracker::Impl::projectVoxels(bool wide) {
+  const size_t voxels = size_t(dims.x()) * dims.y() * dims.z();
+  const int step = opt.silhouette_step;
   if (wide) {
     cell_wide.assign(voxels * cameras, kUnseen<uint32_t>);
   } else {
@@ -102,20 +129,9 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   } else {
     makeBlocks(cell);
   }
-  dt.resize(cameras);
-  for (int c = 0; c < cameras; ++c) dt[c].assign(size_t(cell_w[c]) * cell_h[c], kFarCells);
-  dt_box.assign(cameras, Eigen::Array4i(0, 0, -1, -1));
-  present.assign(cameras, 0);
-  told_empty.assign(cameras, 0);
-  const int longest = std::max(*std::max_element(cell_w.begin(), cell_w.end()),
-                               *std::max_element(cell_h.begin(), cell_h.end()));
-  dt_f.resize(longest);
-  dt_d.resize(longest);
-  dt_z.resize(longest + 1);
-  dt_v.resize(longest);
-  dt_col.resize(longest);
+}
 
-  buildModel(mesh);
+void PoseTracker::Impl::makeDofs() {
   // Degrees of freedom, parents first (so every chain is ascending).
   for (int k = 0; k < 3; ++k) dofs.push_back({Dof::kTranslation, 0, k});
   for (int k = 0; k < 3; ++k) dofs.push_back({Dof::kRootRotation, 0, k});
@@ -148,9 +164,6 @@ PoseTracker::Impl::Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTracker
   dof_spatial.resize(n);
   dof_axis.resize(n);
   dof_centre.resize(n);
-  pose = previous = prior_pose = candidate = predicted = fitted = Pose::rest(generic.jointCount());
-  surface_all.reserve(voxels / 16);
-  hull.reserve(opt.max_hull_points + 1);
 }
 
 namespace {

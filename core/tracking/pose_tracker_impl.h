@@ -241,6 +241,14 @@ struct PoseTracker::Impl {
   double prior_weight = 0;
 
   Impl(const Rig& r, const SkinnedMesh& mesh, const PoseTrackerOptions& o);
+  // The constructor's steps. The stage box (narrowed about its centre where it was worked out
+  // from the cameras and its tables would not fit), its voxels' grid; refused when the tables
+  // still do not fit. `wide`: the cells take 32 bits.
+  void sizeStage(bool wide);
+  // Every voxel's cell in every camera, and the blocks (makeBlocks).
+  void projectVoxels(bool wide);
+  // The degrees of freedom (parents first, so that every chain ascends), and the fit's scratch.
+  void makeDofs();
   void buildModel(const SkinnedMesh& mesh);
   void setShape(const BodyShape& s);
   void prepareSilhouettes(const std::vector<const LowResSilhouette*>& silhouettes);
