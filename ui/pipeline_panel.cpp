@@ -360,8 +360,8 @@ void PipelinePanel::toggleTake() {
     return;
   }
   const QString name = take_name_->text().trimmed();
-  if (const std::string error = takeNameError(name.toStdString()); !error.empty()) {
-    refuseTake(QString::fromStdString(error));  // said at once, no round trip
+  if (const Status named = checkTakeName(name.toStdString()); !named.ok()) {
+    refuseTake(QString::fromStdString(named.error()));  // said at once, no round trip
     return;
   }
   startTake(name);

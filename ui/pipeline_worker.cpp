@@ -66,8 +66,8 @@ void PipelineWorker::finishRecording(LocalPipelineRun& run) {
 void PipelineWorker::startTake(const QString& name) {
   QMutexLocker lock(&mutex_);
   commands_.push_back([this, name](LocalPipelineRun& run) {
-    const std::string error = run.studio().startTake(name.toStdString());
-    if (!error.empty()) emit takeRefused(QString::fromStdString(error));
+    const Status started = run.studio().startTake(name.toStdString());
+    if (!started.ok()) emit takeRefused(QString::fromStdString(started.error()));
   });
 }
 

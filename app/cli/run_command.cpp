@@ -277,8 +277,8 @@ LocalRunOptions runOptions(const RunArgs& a, int width, int height, std::string&
   if (!a.record_take.empty()) {
     const std::filesystem::path dir = std::filesystem::absolute(a.record_take);
     take = dir.filename().string();
-    if (const std::string error = takeNameError(take); !error.empty())
-      throw CLI::ValidationError("--record-take", error);
+    if (const Status named = checkTakeName(take); !named.ok())
+      throw CLI::ValidationError("--record-take", named.error());
     options.takes = dir.parent_path();
   }
   options.coordinator.max_frames_in_flight = a.max_in_flight;
@@ -370,7 +370,8 @@ RunUse runPipeline(LocalPipelineRun& pipeline, const RunArgs& a, const std::stri
     if (!measuring && studio.framesDone() > 0) {
       measuring = true;
       if (!take.empty()) {
-        if (const std::string error = studio.startTake(take); !error.empty()) throw Error(error);
+        if (const Status started = studio.startTake(take); !started.ok())
+          throw Error(started.error());
       }
       cpu_start = processCpuSeconds();
       nodes_cpu_start = nodes_cpu;

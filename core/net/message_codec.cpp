@@ -142,13 +142,10 @@ std::string num(uint64_t v) {
   return std::to_string(v);
 }
 
-// Failures travel as strings; an empty string means "fine".
-using Check = std::string;
-
-Check checkString(const flatbuffers::String* s, const char* what, const MessageLimits& limits) {
+Status checkString(const flatbuffers::String* s, const char* what, const MessageLimits& limits) {
   if (s != nullptr && s->size() > limits.max_string_bytes) {
-    return std::string(what) + ": " + num(s->size()) + " bytes, at most " +
-           num(limits.max_string_bytes) + " allowed";
+    return Status::failure(std::string(what) + ": " + num(s->size()) + " bytes, at most " +
+                           num(limits.max_string_bytes) + " allowed");
   }
   return {};
 }
@@ -173,68 +170,73 @@ size_t sizeOf(const flatbuffers::Vector<T>* v) {
   return v == nullptr ? 0 : v->size();
 }
 
-Check decodeHello(const fb::Hello& in, const MessageLimits& limits, HelloData& out) {
-  if (Check c = checkString(in.node_name(), "hello: node name", limits); !c.empty()) return c;
+Status decodeHello(const fb::Hello& in, const MessageLimits& limits, HelloData& out) {
+  if (Status c = checkString(in.node_name(), "hello: node name", limits); !c.ok()) return c;
   const size_t cameras = sizeOf(in.camera_names());
   if (cameras > static_cast<size_t>(limits.max_cameras)) {
-    return "hello: " + num(cameras) + " cameras, at most " + num(limits.max_cameras) + " allowed";
+    return Status::failure("hello: " + num(cameras) + " cameras, at most " +
+                           num(limits.max_cameras) + " allowed");
   }
   const size_t capabilities = sizeOf(in.capabilities());
-  if (capabilities > 64) return "hello: " + num(capabilities) + " capabilities, at most 64";
+  if (capabilities > 64)
+    return Status::failure("hello: " + num(capabilities) + " capabilities, at most 64");
   out.node_name = copyString(in.node_name());
-  if (out.node_name.empty()) return "hello: the node name is empty";
-  if (!isValidName(out.node_name)) return "hello: the node name is not a valid node name";
+  if (out.node_name.empty()) return Status::failure("hello: the node name is empty");
+  if (!isValidName(out.node_name))
+    return Status::failure("hello: the node name is not a valid node name");
   out.protocol_version = in.protocol_version();
   for (size_t i = 0; i < cameras; ++i) {
     const flatbuffers::String* name =
         in.camera_names()->Get(static_cast<flatbuffers::uoffset_t>(i));
-    if (Check c = checkString(name, "hello: camera name", limits); !c.empty()) return c;
+    if (Status c = checkString(name, "hello: camera name", limits); !c.ok()) return c;
     out.camera_names.push_back(copyString(name));
     if (!isValidName(out.camera_names.back())) {
-      return "hello: camera " + num(i) + ": its name is not a valid camera name";
+      return Status::failure("hello: camera " + num(i) + ": its name is not a valid camera name");
     }
   }
   for (size_t i = 0; i < capabilities; ++i) {
     const flatbuffers::String* name =
         in.capabilities()->Get(static_cast<flatbuffers::uoffset_t>(i));
-    if (Check c = checkString(name, "hello: capability", limits); !c.empty()) return c;
+    if (Status c = checkString(name, "hello: capability", limits); !c.ok()) return c;
     out.capabilities.push_back(copyString(name));
   }
   return {};
 }
 
-Check decodeHeartbeat(const fb::Heartbeat& in, const MessageLimits& limits, HeartbeatData& out) {
+Status decodeHeartbeat(const fb::Heartbeat& in, const MessageLimits& limits, HeartbeatData& out) {
   const size_t cameras = sizeOf(in.cameras());
   if (cameras > static_cast<size_t>(limits.max_cameras)) {
-    return "heartbeat: " + num(cameras) + " cameras, at most " + num(limits.max_cameras) +
-           " allowed";
+    return Status::failure("heartbeat: " + num(cameras) + " cameras, at most " +
+                           num(limits.max_cameras) + " allowed");
   }
   out.bytes_sent = in.bytes_sent();
   out.cpu = in.cpu();
   for (size_t i = 0; i < cameras; ++i) {
     const fb::CameraHealth* c = in.cameras()->Get(static_cast<flatbuffers::uoffset_t>(i));
-    if (c == nullptr) return "heartbeat: camera " + num(i) + " is missing";
-    if (Check e = checkString(c->camera(), "heartbeat: camera name", limits); !e.empty()) return e;
+    if (c == nullptr) return Status::failure("heartbeat: camera " + num(i) + " is missing");
+    if (Status e = checkString(c->camera(), "heartbeat: camera name", limits); !e.ok()) return e;
     // Names reach the studio's log and reports: one that is no camera name (a line break, terminal
     // escapes) is refused here, as a node name is at the endpoint.
     if (!isValidName(copyString(c->camera()))) {
-      return "heartbeat: camera " + num(i) + ": its name is not a valid camera name";
+      return Status::failure("heartbeat: camera " + num(i) +
+                             ": its name is not a valid camera name");
     }
-    if (Check e = checkString(c->last_error(), "heartbeat: last error", limits); !e.empty()) {
+    if (Status e = checkString(c->last_error(), "heartbeat: last error", limits); !e.ok()) {
       return e;
     }
-    if (Check e = checkString(c->key(), "heartbeat: key", limits); !e.empty()) return e;
+    if (Status e = checkString(c->key(), "heartbeat: key", limits); !e.ok()) return e;
     out.cameras.push_back({copyString(c->camera()), c->frames(), c->dropped(), c->frame_rate(),
                            copyString(c->last_error()), copyString(c->key())});
   }
   if (const fb::TakeStatus* t = in.take()) {
-    if (Check e = checkString(t->take(), "heartbeat: take name", limits); !e.empty()) return e;
+    if (Status e = checkString(t->take(), "heartbeat: take name", limits); !e.ok()) return e;
     const std::string take = copyString(t->take());
     if (!take.empty()) {
-      if (std::string e = takeNameError(take); !e.empty()) return "heartbeat: take: " + e;
+      if (Status named = checkTakeName(take); !named.ok())
+        return Status::failure("heartbeat: take: " + named.error());
     }
-    if (Check e = checkString(t->error(), "heartbeat: take error", limits); !e.empty()) return e;
-    if (Check e = checkString(t->disk(), "heartbeat: take disk", limits); !e.empty()) return e;
+    if (Status e = checkString(t->error(), "heartbeat: take error", limits); !e.ok()) return e;
+    if (Status e = checkString(t->disk(), "heartbeat: take disk", limits); !e.ok()) return e;
     out.take = {take,
                 t->first_frame(),
                 t->last_frame(),
@@ -249,46 +251,48 @@ Check decodeHeartbeat(const fb::Heartbeat& in, const MessageLimits& limits, Hear
   return {};
 }
 
-Check decodeSilhouettes(const fb::Silhouettes& in, const MessageLimits& limits,
-                        SilhouettesData& out) {
+Status decodeSilhouettes(const fb::Silhouettes& in, const MessageLimits& limits,
+                         SilhouettesData& out) {
   const size_t masks = sizeOf(in.masks());
   if (masks > static_cast<size_t>(limits.max_cameras)) {
-    return "silhouettes: " + num(masks) + " masks, at most " + num(limits.max_cameras) + " allowed";
+    return Status::failure("silhouettes: " + num(masks) + " masks, at most " +
+                           num(limits.max_cameras) + " allowed");
   }
   for (size_t i = 0; i < masks; ++i) {
     const fb::SilhouetteMask* m = in.masks()->Get(static_cast<flatbuffers::uoffset_t>(i));
-    if (m == nullptr) return "silhouettes: mask " + num(i) + " is missing";
+    if (m == nullptr) return Status::failure("silhouettes: mask " + num(i) + " is missing");
     const std::string where = "silhouettes: mask " + num(i) + " (camera " + num(m->camera()) + ")";
     if (m->camera() >= limits.max_cameras) {
-      return where + ": camera index out of range, the rig has " + num(limits.max_cameras);
+      return Status::failure(where + ": camera index out of range, the rig has " +
+                             num(limits.max_cameras));
     }
     const uint64_t pixels = uint64_t{m->width()} * m->height();
     if (pixels > static_cast<uint64_t>(limits.max_mask_pixels)) {
-      return where + ": " + num(m->width()) + "x" + num(m->height()) + " pixels, at most " +
-             num(limits.max_mask_pixels) + " allowed";
+      return Status::failure(where + ": " + num(m->width()) + "x" + num(m->height()) +
+                             " pixels, at most " + num(limits.max_mask_pixels) + " allowed");
     }
     const uint64_t expected = (pixels + 7) / 8;
     if (sizeOf(m->bits()) != expected) {
-      return where + ": " + num(m->width()) + "x" + num(m->height()) + " needs " + num(expected) +
-             " mask bytes, got " + num(sizeOf(m->bits()));
+      return Status::failure(where + ": " + num(m->width()) + "x" + num(m->height()) + " needs " +
+                             num(expected) + " mask bytes, got " + num(sizeOf(m->bits())));
     }
     out.masks.push_back({m->camera(), m->width(), m->height(), copyVector(m->bits())});
   }
   return {};
 }
 
-Check decodePose(const fb::Pose& in, const MessageLimits& limits, PoseData& out) {
+Status decodePose(const fb::Pose& in, const MessageLimits& limits, PoseData& out) {
   if (in.joint_count() > limits.max_joints) {
-    return "pose: " + num(in.joint_count()) + " joints, at most " + num(limits.max_joints) +
-           " allowed";
+    return Status::failure("pose: " + num(in.joint_count()) + " joints, at most " +
+                           num(limits.max_joints) + " allowed");
   }
   const size_t expected = size_t{in.joint_count()} * 3;
   if (sizeOf(in.angles()) != expected) {
-    return "pose: " + num(in.joint_count()) + " joints need " + num(expected) + " angles, got " +
-           num(sizeOf(in.angles()));
+    return Status::failure("pose: " + num(in.joint_count()) + " joints need " + num(expected) +
+                           " angles, got " + num(sizeOf(in.angles())));
   }
   if (!(in.scale() >= 0.5f && in.scale() <= 2.0f)) {
-    return "pose: scale " + std::to_string(in.scale()) + " outside 0.5..2";
+    return Status::failure("pose: scale " + std::to_string(in.scale()) + " outside 0.5..2");
   }
   out.root[0] = in.root_x();
   out.root[1] = in.root_y();
@@ -298,16 +302,16 @@ Check decodePose(const fb::Pose& in, const MessageLimits& limits, PoseData& out)
   return {};
 }
 
-Check decodeVertexStatistics(const fb::VertexStatistics& in, const MessageLimits& limits,
-                             VertexStatisticsData& out) {
+Status decodeVertexStatistics(const fb::VertexStatistics& in, const MessageLimits& limits,
+                              VertexStatisticsData& out) {
   const uint64_t vertices = in.vertex_count(), offsets = in.offset_count();
   if (vertices > limits.max_vertices) {
-    return "vertex statistics: " + num(vertices) + " vertices, at most " +
-           num(limits.max_vertices) + " allowed";
+    return Status::failure("vertex statistics: " + num(vertices) + " vertices, at most " +
+                           num(limits.max_vertices) + " allowed");
   }
   if (offsets == 0 || offsets > static_cast<uint64_t>(limits.max_offsets)) {
-    return "vertex statistics: " + num(offsets) + " offsets, expected 1 to " +
-           num(limits.max_offsets);
+    return Status::failure("vertex statistics: " + num(offsets) + " offsets, expected 1 to " +
+                           num(limits.max_offsets));
   }
   // The statistics' wire form (core/refine/refinement_statistics.h), packed or compressed: a
   // header that starts with the vertex and offset counts, then at most 12 bytes a sample and a
@@ -321,16 +325,16 @@ Check decodeVertexStatistics(const fb::VertexStatistics& in, const MessageLimits
                  most = compressed ? maxCompressedStatisticsBytes(samples)
                                    : maxPackedStatisticsBytes(samples);
   if (size < least || size > most) {
-    return "vertex statistics: " + num(vertices) + " vertices x " + num(offsets) +
-           " offsets needs " + num(least) + " to " + num(most) +
-           (compressed ? " compressed" : " packed") + " bytes, got " + num(size);
+    return Status::failure("vertex statistics: " + num(vertices) + " vertices x " + num(offsets) +
+                           " offsets needs " + num(least) + " to " + num(most) +
+                           (compressed ? " compressed" : " packed") + " bytes, got " + num(size));
   }
   const auto* p = in.packed()->data();
   const uint32_t packed_vertices =
       uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
   if (packed_vertices != vertices || p[4] != offsets) {
-    return "vertex statistics: the header says " + num(packed_vertices) + " vertices x " +
-           num(p[4]) + " offsets";
+    return Status::failure("vertex statistics: the header says " + num(packed_vertices) +
+                           " vertices x " + num(p[4]) + " offsets");
   }
   out.vertex_count = in.vertex_count();
   out.offset_count = in.offset_count();
@@ -338,38 +342,39 @@ Check decodeVertexStatistics(const fb::VertexStatistics& in, const MessageLimits
   return {};
 }
 
-Check decodeView(const fb::View& in, const MessageLimits& limits, ViewData& out) {
+Status decodeView(const fb::View& in, const MessageLimits& limits, ViewData& out) {
   if (sizeOf(in.rotation()) != 9 || sizeOf(in.translation()) != 3) {
-    return "view: expected a rotation of 9 numbers and a translation of 3, got " +
-           num(sizeOf(in.rotation())) + " and " + num(sizeOf(in.translation()));
+    return Status::failure("view: expected a rotation of 9 numbers and a translation of 3, got " +
+                           num(sizeOf(in.rotation())) + " and " + num(sizeOf(in.translation())));
   }
   const size_t pixels = size_t(in.width()) * in.height();
   if (pixels == 0 || pixels > size_t(limits.max_image_pixels)) {
-    return "view: " + num(in.width()) + "x" + num(in.height()) + " pixels, expected 1 to " +
-           num(limits.max_image_pixels);
+    return Status::failure("view: " + num(in.width()) + "x" + num(in.height()) +
+                           " pixels, expected 1 to " + num(limits.max_image_pixels));
   }
   if (std::max(in.width(), in.height()) > uint32_t(limits.max_view_side)) {
-    return "view: " + num(in.width()) + "x" + num(in.height()) + " pixels, expected at most " +
-           num(limits.max_view_side) + " a side";
+    return Status::failure("view: " + num(in.width()) + "x" + num(in.height()) +
+                           " pixels, expected at most " + num(limits.max_view_side) + " a side");
   }
   const size_t clone_numbers = sizeOf(in.clones());
   if (clone_numbers % 3 != 0 || clone_numbers / 3 > size_t(limits.max_clones)) {
-    return "view: clones take 3 numbers each (offset x, y, yaw), at most " +
-           num(limits.max_clones) + " clones; got " + num(clone_numbers) + " numbers";
+    return Status::failure("view: clones take 3 numbers each (offset x, y, yaw), at most " +
+                           num(limits.max_clones) + " clones; got " + num(clone_numbers) +
+                           " numbers");
   }
   out.rotation = copyVector(in.rotation());
   out.translation = copyVector(in.translation());
   out.clones = copyVector(in.clones());
   for (float v : out.clones) {
     if (!std::isfinite(v) || std::abs(v) > 1000.0f)
-      return "view: a clone's offset or turn is not a finite number within 1000";
+      return Status::failure("view: a clone's offset or turn is not a finite number within 1000");
   }
   bool finite = std::isfinite(in.fx()) && std::isfinite(in.fy()) && std::isfinite(in.cx()) &&
                 std::isfinite(in.cy());
   for (float v : out.rotation) finite = finite && std::isfinite(v);
   for (float v : out.translation) finite = finite && std::isfinite(v);
   if (!finite || !(in.fx() > 0) || !(in.fy() > 0))
-    return "view: expected finite numbers and positive focal lengths";
+    return Status::failure("view: expected finite numbers and positive focal lengths");
   out.view = in.view();
   out.width = in.width();
   out.height = in.height();
@@ -377,52 +382,54 @@ Check decodeView(const fb::View& in, const MessageLimits& limits, ViewData& out)
   return {};
 }
 
-Check decodeRecord(const fb::Record& in, const MessageLimits& limits, RecordData& out) {
-  if (Check e = checkString(in.take(), "record: take name", limits); !e.empty()) return e;
+Status decodeRecord(const fb::Record& in, const MessageLimits& limits, RecordData& out) {
+  if (Status e = checkString(in.take(), "record: take name", limits); !e.ok()) return e;
   out.take = copyString(in.take());
   if (!out.take.empty()) {
-    if (std::string e = takeNameError(out.take); !e.empty()) return "record: " + e;
+    if (Status named = checkTakeName(out.take); !named.ok())
+      return Status::failure("record: " + named.error());
   }
   out.first_frame = in.first_frame();
   out.last_frame = in.last_frame();
   if (out.first_frame < 0 || out.last_frame < out.first_frame) {
-    return "record: frames " + std::to_string(out.first_frame) + " to " +
-           std::to_string(out.last_frame) + ", expected 0 <= first <= last";
+    return Status::failure("record: frames " + std::to_string(out.first_frame) + " to " +
+                           std::to_string(out.last_frame) + ", expected 0 <= first <= last");
   }
   return {};
 }
 
-Check decodeFrameIds(const fb::FrameIds& in, const MessageLimits&, FrameIdsData& out) {
+Status decodeFrameIds(const fb::FrameIds& in, const MessageLimits&, FrameIdsData& out) {
   // Frame ids count from 0 to half the range (StudioCoordinator): a shift beyond it is no shift
   // between cameras of one rig.
   constexpr int64_t kLimit = std::numeric_limits<int64_t>::max() / 2;
   if (in.offset() < -kLimit || in.offset() > kLimit)
-    return "frame ids: offset " + std::to_string(in.offset()) + " beyond half the ids' range";
+    return Status::failure("frame ids: offset " + std::to_string(in.offset()) +
+                           " beyond half the ids' range");
   out.offset = in.offset();
   return {};
 }
 
-Check decodeOffsets(const fb::Offsets& in, const MessageLimits& limits, OffsetsData& out) {
+Status decodeOffsets(const fb::Offsets& in, const MessageLimits& limits, OffsetsData& out) {
   const size_t vertices = sizeOf(in.offsets());
   if (vertices > limits.max_vertices) {
-    return "offsets: " + num(vertices) + " vertices, at most " + num(limits.max_vertices) +
-           " allowed";
+    return Status::failure("offsets: " + num(vertices) + " vertices, at most " +
+                           num(limits.max_vertices) + " allowed");
   }
   if (in.offset_count() == 0 || in.offset_count() > limits.max_offsets) {
-    return "offsets: " + num(in.offset_count()) + " offsets, expected 1 to " +
-           num(limits.max_offsets);
+    return Status::failure("offsets: " + num(in.offset_count()) + " offsets, expected 1 to " +
+                           num(limits.max_offsets));
   }
   for (size_t v = 0; v < vertices; ++v) {
     const uint8_t t = in.offsets()->Get(static_cast<flatbuffers::uoffset_t>(v));
     if (t >= in.offset_count()) {
-      return "offsets: vertex " + num(v) + " has offset " + num(t) + ", expected below " +
-             num(in.offset_count());
+      return Status::failure("offsets: vertex " + num(v) + " has offset " + num(t) +
+                             ", expected below " + num(in.offset_count()));
     }
   }
   const size_t masks = sizeOf(in.visibility());
   if (masks != 0 && masks != vertices) {
-    return "offsets: " + num(masks) + " visibility masks for " + num(vertices) +
-           " vertices, expected none or one a vertex";
+    return Status::failure("offsets: " + num(masks) + " visibility masks for " + num(vertices) +
+                           " vertices, expected none or one a vertex");
   }
   out.offset_count = in.offset_count();
   out.offsets = copyVector(in.offsets());
@@ -430,42 +437,46 @@ Check decodeOffsets(const fb::Offsets& in, const MessageLimits& limits, OffsetsD
   return {};
 }
 
-Check decodePartialImage(const fb::PartialImage& in, const MessageLimits& limits,
-                         PartialImageData& out) {
+Status decodePartialImage(const fb::PartialImage& in, const MessageLimits& limits,
+                          PartialImageData& out) {
   const uint64_t pixels = uint64_t{in.width()} * in.height();
   const std::string where = "partial image " + num(in.width()) + "x" + num(in.height());
   if (pixels > static_cast<uint64_t>(limits.max_image_pixels)) {
-    return where + ": at most " + num(limits.max_image_pixels) + " pixels allowed";
+    return Status::failure(where + ": at most " + num(limits.max_image_pixels) + " pixels allowed");
   }
   const size_t bytes = sizeOf(in.data());
   switch (in.encoding()) {
     case fb::ImageEncoding::raw_rgba:
       if (bytes != pixels * 4) {
-        return where + ": raw RGBA needs " + num(pixels * 4) + " bytes, got " + num(bytes);
+        return Status::failure(where + ": raw RGBA needs " + num(pixels * 4) + " bytes, got " +
+                               num(bytes));
       }
       break;
     case fb::ImageEncoding::rle_rgba: {
       if (bytes % 5 != 0) {
-        return where + ": RLE data of " + num(bytes) + " bytes is not whole 5-byte runs";
+        return Status::failure(where + ": RLE data of " + num(bytes) +
+                               " bytes is not whole 5-byte runs");
       }
       uint64_t covered = 0;
       for (size_t i = 0; i < bytes; i += 5) {
         covered += uint64_t{in.data()->Get(static_cast<flatbuffers::uoffset_t>(i))} + 1;
       }
       if (covered != pixels) {
-        return where + ": RLE runs cover " + num(covered) + " pixels, expected " + num(pixels);
+        return Status::failure(where + ": RLE runs cover " + num(covered) + " pixels, expected " +
+                               num(pixels));
       }
       break;
     }
     case fb::ImageEncoding::alpha_runs:
       if (!validAlphaRuns(std::span<const uint8_t>(in.data() ? in.data()->data() : nullptr, bytes),
                           pixels)) {
-        return where + ": alpha-run data of " + num(bytes) + " bytes does not cover exactly " +
-               num(pixels) + " pixels";
+        return Status::failure(where + ": alpha-run data of " + num(bytes) +
+                               " bytes does not cover exactly " + num(pixels) + " pixels");
       }
       break;
     default:
-      return where + ": unknown encoding " + num(static_cast<uint8_t>(in.encoding()));
+      return Status::failure(where + ": unknown encoding " +
+                             num(static_cast<uint8_t>(in.encoding())));
   }
   out.view = in.view();
   out.width = in.width();
@@ -475,17 +486,17 @@ Check decodePartialImage(const fb::PartialImage& in, const MessageLimits& limits
   return {};
 }
 
-Check decodeFrameTimestamps(const fb::FrameTimestamps& in, const MessageLimits& limits,
-                            FrameTimestampsData& out) {
+Status decodeFrameTimestamps(const fb::FrameTimestamps& in, const MessageLimits& limits,
+                             FrameTimestampsData& out) {
   const size_t stages = sizeOf(in.stages());
   if (stages > static_cast<size_t>(limits.max_stages)) {
-    return "frame timestamps: " + num(stages) + " stages, at most " + num(limits.max_stages) +
-           " allowed";
+    return Status::failure("frame timestamps: " + num(stages) + " stages, at most " +
+                           num(limits.max_stages) + " allowed");
   }
   for (size_t i = 0; i < stages; ++i) {
     const fb::StageTime* s = in.stages()->Get(static_cast<flatbuffers::uoffset_t>(i));
-    if (s == nullptr) return "frame timestamps: stage " + num(i) + " is missing";
-    if (Check c = checkString(s->stage(), "frame timestamps: stage name", limits); !c.empty()) {
+    if (s == nullptr) return Status::failure("frame timestamps: stage " + num(i) + " is missing");
+    if (Status c = checkString(s->stage(), "frame timestamps: stage name", limits); !c.ok()) {
       return c;
     }
     out.stages.push_back({copyString(s->stage()), s->ns()});
@@ -494,12 +505,12 @@ Check decodeFrameTimestamps(const fb::FrameTimestamps& in, const MessageLimits& 
 }
 
 template <typename Table, typename Data, typename Decode>
-Check decodeBody(const Table* table, const char* name, const MessageLimits& limits, Decode decode,
-                 MessageBody& body) {
-  if (table == nullptr) return std::string(name) + ": the body is missing";
+Status decodeBody(const Table* table, const char* name, const MessageLimits& limits, Decode decode,
+                  MessageBody& body) {
+  if (table == nullptr) return Status::failure(std::string(name) + ": the body is missing");
   Data data;
-  Check c = decode(*table, limits, data);
-  if (c.empty()) body = std::move(data);
+  Status c = decode(*table, limits, data);
+  if (c.ok()) body = std::move(data);
   return c;
 }
 
@@ -536,15 +547,15 @@ DecodeResult decodeMessage(const uint8_t* data, size_t size, const MessageLimits
     return failure("protocol version " + num(envelope->version()) + ", expected " +
                    num(kProtocolVersion));
   }
-  if (Check c = checkString(envelope->sender(), "sender", limits); !c.empty()) {
-    return failure(std::move(c));
+  if (Status c = checkString(envelope->sender(), "sender", limits); !c.ok()) {
+    return failure(c.error());
   }
   Message message;
   message.version = envelope->version();
   message.sender = copyString(envelope->sender());
   message.frame_id = envelope->frame_id();
   message.sent_ns = envelope->sent_ns();
-  Check c;
+  Status c;
   switch (envelope->body_type()) {
     case fb::Body::Hello:
       c = decodeBody<fb::Hello, HelloData>(envelope->body_as_Hello(), "hello", limits, decodeHello,
@@ -594,13 +605,14 @@ DecodeResult decodeMessage(const uint8_t* data, size_t size, const MessageLimits
                                                  decodeFrameIds, message.body);
       break;
     case fb::Body::NONE:
-      c = "message without a body";
+      c = Status::failure("message without a body");
       break;
     default:
-      c = "unknown message type " + num(static_cast<uint8_t>(envelope->body_type()));
+      c = Status::failure("unknown message type " +
+                          num(static_cast<uint8_t>(envelope->body_type())));
       break;
   }
-  if (!c.empty()) return failure(std::move(c));
+  if (!c.ok()) return failure(c.error());
   DecodeResult result;
   result.message = std::move(message);
   return result;
@@ -620,16 +632,19 @@ std::span<const uint8_t> MessageEncoder::encode(const Message& message) {
   return {builder_->GetBufferPointer(), builder_->GetSize()};
 }
 
-std::string takeNameError(std::string_view take) {
+Status checkTakeName(std::string_view take) {
   if (isValidName(take)) return {};  // the rule of camera and node names; below, why not
-  if (take.empty() || take.size() > 64)
-    return "take name of " + std::to_string(take.size()) + " characters, expected 1 to 64";
+  if (take.empty() || take.size() > 64) {
+    return Status::failure("take name of " + std::to_string(take.size()) +
+                           " characters, expected 1 to 64");
+  }
   // Quoted in the message with anything unprintable as '?': it goes to logs as it is.
   std::string shown(take);
   for (char& c : shown) c = (c >= 0x20 && c < 0x7f) ? c : '?';
   if (take.front() == '.' || take.front() == '-')
-    return "take name '" + shown + "' starts with '" + take.front() + "'";
-  return "take name '" + shown + "' has a character other than letters, digits, '-', '_' and '.'";
+    return Status::failure("take name '" + shown + "' starts with '" + take.front() + "'");
+  return Status::failure("take name '" + shown +
+                         "' has a character other than letters, digits, '-', '_' and '.'");
 }
 
 size_t largestNodeMessage(const NodeMessageSizes& sizes, const MessageLimits& limits) {

@@ -25,9 +25,9 @@ class FlatBufferBuilder;
 
 namespace lumistage {
 
-// Why `take` cannot name a take (a folder on every node); empty when it can: a valid name as
-// cameras and nodes have (core/base/names.h).
-std::string takeNameError(std::string_view take);
+// Whether `take` can name a take (a folder on every node): a valid name as cameras and nodes have
+// (core/base/names.h); fails saying why not.
+Status checkTakeName(std::string_view take);
 
 // What a node's messages to the studio are sized by: the rig, the refinement and the views.
 struct NodeMessageSizes {

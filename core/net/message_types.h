@@ -13,16 +13,9 @@
 
 namespace lumistage {
 
-// Raised whenever a table changes in a way an older peer would misread.
-// 2: compact refinement statistics; 3: compressed refinement statistics (a version 2 studio would
-// count every node's statistics as a bad message); 4: takes recorded on the nodes (a version 3
-// node would refuse the studio's record command); 5: refinement statistics carry the hull's edges
-// and offsets eighths of a step (a version 4 studio would refuse the statistics and misplace every
-// vertex); 6: refinement statistics' values as differences and the cameras' disagreement (a
-// version 5 studio would read wrong colours); 7: refinement statistics end with the vertices'
-// contour bits (a version 6 studio would refuse every node's statistics); 8: a partial image's
-// alpha is the node's share on a log scale (a version 7 studio would blend the nodes' images in
-// wrong proportions).
+// Raised whenever a table changes in a way an older peer would misread; every message carries it,
+// and one of another version is refused as it is decoded. What each version changed is in
+// docs/figures-history.md ("The wire protocol's versions").
 inline constexpr uint16_t kProtocolVersion = 8;
 
 struct HelloData {

@@ -178,10 +178,12 @@ std::string StudioCoordinator::nodeState(const std::string& node) const {
   return it->second.report.lost ? "lost" : "streaming";
 }
 
-std::string StudioCoordinator::startTake(const std::string& take) {
-  if (std::string error = takeNameError(take); !error.empty()) return error;
-  if (recordingTake()) return "take " + take_.take + " is recording: stop it first";
-  if (take == take_.take) return "take " + take + " was recorded already: give the next a new name";
+Status StudioCoordinator::startTake(const std::string& take) {
+  if (Status named = checkTakeName(take); !named.ok()) return named;
+  if (recordingTake())
+    return Status::failure("take " + take_.take + " is recording: stop it first");
+  if (take == take_.take)
+    return Status::failure("take " + take + " was recorded already: give the next a new name");
   take_ = RecordData{take, std::max<int64_t>(0, newest_seen_ + kTakeLeadFrames)};
   spdlog::info("take {}: recording from frame {}", take_.take, take_.first_frame);
   for (auto& [name, node] : nodes_) sendTake(node);

@@ -228,10 +228,10 @@ class StudioCoordinator {
   // frame ids on every node, from a frame kTakeLeadFrames ahead of the newest the studio has seen
   // (the command reaches every node before its cameras get there). A node that misses the
   // command, or comes back during the take, is told again at its next heartbeat; a node still
-  // recording a take this studio did not ask for (it restarted mid-take) is told to stop. Returns
-  // why the take cannot start (a bad name, one already recording, the name of the last take),
-  // empty when asked.
-  std::string startTake(const std::string& take);
+  // recording a take this studio did not ask for (it restarted mid-take) is told to stop. Fails
+  // saying why the take cannot start (a bad name, one already recording, the name of the last
+  // take).
+  Status startTake(const std::string& take);
   // Ends the take kTakeLeadFrames frames ahead of the newest seen, the same on every node; the
   // nodes close their parts when their cameras pass it (a node already past it when the stop
   // arrives, behind a studio that lags, closes at once; the merge keeps the frames every node

@@ -246,9 +246,9 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
     }
     return studio.framesDone() >= 3;
   }));
-  EXPECT_NE(studio.startTake("../take"), "");  // a folder name, nothing else
-  ASSERT_EQ(studio.startTake("take-1"), "");
-  EXPECT_EQ(studio.startTake("take-2"), "take take-1 is recording: stop it first");
+  EXPECT_NE(studio.startTake("../take").error(), "");  // a folder name, nothing else
+  ASSERT_EQ(studio.startTake("take-1").error(), "");
+  EXPECT_EQ(studio.startTake("take-2").error(), "take take-1 is recording: stop it first");
   EXPECT_TRUE(studio.recordingTake());
   // Every node records its camera, and says so in its heartbeats.
   auto recorded = [&](int sets) {
@@ -315,12 +315,12 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
     for (int c = 0; c < 4; ++c) EXPECT_EQ(frames[c].image.pixels, truth[c].image.pixels) << i;
   }
   // A take's name is its folder on every node: not twice.
-  EXPECT_EQ(studio.startTake("take-1"),
+  EXPECT_EQ(studio.startTake("take-1").error(),
             "take take-1 was recorded already: give the next a new name");
 
   // The studio restarts during a take (a crash): the new one, at the same address, tells the
   // nodes still recording a take it never asked for to stop, rather than fill their disks.
-  ASSERT_EQ(studio.startTake("take-2"), "");
+  ASSERT_EQ(studio.startTake("take-2").error(), "");
   ASSERT_TRUE(runUntil(studio, 30, [&] {
     for (const NodeReport& n : studio.report().nodes)
       if (n.lost || n.take.take != "take-2" || n.take.written < 3) return false;
@@ -344,7 +344,7 @@ TEST(DistributedPipeline, NodesRecordATakeOnTheirOwnDisksThatMergesIntoTheSessio
 
   // The studio goes for good during a take: after --unattended-take-limit (5 s here) without word
   // from it, every node closes its part rather than fill its disk.
-  ASSERT_EQ(restarted->startTake("take-3"), "");
+  ASSERT_EQ(restarted->startTake("take-3").error(), "");
   ASSERT_TRUE(runUntil(*restarted, 30, [&] {
     for (const NodeReport& n : restarted->report().nodes)
       if (n.lost || n.take.take != "take-3" || n.take.written < 3) return false;

@@ -273,7 +273,7 @@ TEST(MessageCodec, TakeNamesThatAreNotAPlainFolderNameAreRefused) {
             "record: frames 10 to 9, expected 0 <= first <= last");
   EXPECT_EQ(decodeError(envelope(RecordData{"t", -1, 9})),
             "record: frames -1 to 9, expected 0 <= first <= last");
-  EXPECT_EQ(takeNameError("Take_2026-12-01.a"), "");
+  EXPECT_EQ(checkTakeName("Take_2026-12-01.a").error(), "");
   // An empty take is "none": the stop of every take.
   const std::vector<uint8_t> bytes = encodeMessage(envelope(RecordData{}));
   EXPECT_TRUE(decodeMessage(bytes.data(), bytes.size()).ok());
