@@ -1,7 +1,10 @@
 #include "core/net/transport.h"
 
+#include <arpa/inet.h>
 #include <fmt/format.h>
+#include <netinet/in.h>
 #include <spdlog/spdlog.h>
+#include <sys/socket.h>
 #include <zmq.h>
 
 #include <array>
@@ -26,6 +29,23 @@ namespace {
 // a thousand.
 bool worthLogging(int64_t count) {
   return count <= 10 || count % 1000 == 0;
+}
+
+// The IP address of the peer of socket `fd`, in words; empty when it cannot be told.
+std::string peerAddress(int fd) {
+  sockaddr_storage peer{};
+  socklen_t length = sizeof peer;
+  if (getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &length) != 0) return {};
+  char text[INET6_ADDRSTRLEN] = {};
+  const void* address = nullptr;
+  if (peer.ss_family == AF_INET) {
+    address = &reinterpret_cast<const sockaddr_in*>(&peer)->sin_addr;
+  } else if (peer.ss_family == AF_INET6) {
+    address = &reinterpret_cast<const sockaddr_in6*>(&peer)->sin6_addr;
+  } else {
+    return {};
+  }
+  return inet_ntop(peer.ss_family, address, text, sizeof text) ? std::string(text) : std::string();
 }
 
 void requireKey(std::string_view key, const char* what) {
@@ -78,7 +98,7 @@ struct StudioEndpoint::State {
   zmq::context_t context;
   zmq::socket_t router;
   zmq::socket_t zap;       // CURVE only: ZeroMQ asks it about every connecting key (RFC 27)
-  zmq::socket_t monitor;   // the router's connection events: handshakes that failed
+  zmq::socket_t monitor;   // the router's connection events: accepts, ends, failed handshakes
   std::thread zap_thread;  // serves zap and reads monitor
   std::atomic<bool> stop{false};
   std::unordered_map<std::string, std::string> node_of_key;  // Z85 public key -> node name
@@ -92,10 +112,21 @@ struct StudioEndpoint::State {
   int64_t handshake_failures_unlogged = 0;
   std::string last_handshake_failure;
   std::chrono::steady_clock::time_point handshake_logged_at{};
+  // The connections open from each address (by the monitor's accept and disconnect events, on the
+  // serving thread), and when those over the cap were closed: each makes libzmq report a failed
+  // handshake too, which is not counted again.
+  std::unordered_map<int, std::string> address_of_fd;
+  std::unordered_map<std::string, int> connections_from;
+  std::deque<std::chrono::steady_clock::time_point> capped;
 
   void serve();
   void answerZap();
   void readMonitor();
+  // A connection accepted on socket `fd`: counted against its address, or closed over the cap.
+  void accepted(int fd);
+  void disconnected(int fd);
+  // Whether a failed handshake is that of a connection closed over the cap (and so counted).
+  bool wasCapped();
   void logHandshakeFailures(bool force);
   void countBad(const std::string& node, const std::string& reason);
 };
@@ -127,6 +158,8 @@ void StudioEndpoint::State::readMonitor() {
   uint32_t value = 0;
   std::memcpy(&id, event[0].data(), sizeof id);
   std::memcpy(&value, event[0].data<uint8_t>() + 2, sizeof value);
+  if (id == ZMQ_EVENT_ACCEPTED) return accepted(int(value));
+  if (id == ZMQ_EVENT_DISCONNECTED) return disconnected(int(value));
   std::string reason;
   if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL) {
     reason = value == ZMQ_PROTOCOL_ERROR_ZMTP_CRYPTOGRAPHIC
@@ -135,6 +168,7 @@ void StudioEndpoint::State::readMonitor() {
                  ? "its security mechanism is not the studio's (plain against CURVE?)"
                  : fmt::format("ZMTP protocol error 0x{:x}", value);
   } else if (id == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL) {
+    if (wasCapped()) return;
     reason = fmt::format("its handshake did not finish ({})", zmq_strerror(int(value)));
   } else {
     return;  // ZMQ_EVENT_HANDSHAKE_FAILED_AUTH: a key refused, counted by answerZap
@@ -143,6 +177,48 @@ void StudioEndpoint::State::readMonitor() {
   ++handshake_failures;
   ++handshake_failures_unlogged;
   last_handshake_failure = std::move(reason);
+}
+
+void StudioEndpoint::State::accepted(int fd) {
+  std::string address = peerAddress(fd);
+  if (address.empty()) return;  // gone already
+  int& open = connections_from[address];
+  if (open < config.max_connections_per_address) {
+    ++open;
+    address_of_fd[fd] = std::move(address);
+    return;
+  }
+  // Shut down, not closed: the descriptor stays libzmq's, whose engine sees the end and closes it.
+  ::shutdown(fd, SHUT_RDWR);
+  capped.push_back(std::chrono::steady_clock::now());
+  std::lock_guard lock(mutex);
+  ++refusal_count;
+  const std::string text = fmt::format("more than {} connections at once from one address",
+                                       config.max_connections_per_address);
+  refusals.push_back({address, "", text});
+  if (refusals.size() > 64) refusals.pop_front();
+  if (worthLogging(refusal_count))
+    spdlog::warn("studio: refused a connection from {}: {}", address, text);
+}
+
+void StudioEndpoint::State::disconnected(int fd) {
+  const auto it = address_of_fd.find(fd);
+  if (it == address_of_fd.end()) return;
+  if (const auto open = connections_from.find(it->second);
+      open != connections_from.end() && --open->second <= 0)
+    connections_from.erase(open);
+  address_of_fd.erase(it);
+}
+
+bool StudioEndpoint::State::wasCapped() {
+  // A capped connection's failure follows its shutdown at once; one older than a handshake's
+  // whole time (it had finished its handshake before the shutdown) reports none.
+  const auto now = std::chrono::steady_clock::now();
+  while (!capped.empty() && now - capped.front() > std::chrono::milliseconds(kHandshakeIntervalMs))
+    capped.pop_front();
+  if (capped.empty()) return false;
+  capped.pop_front();
+  return true;
 }
 
 void StudioEndpoint::State::logHandshakeFailures(bool force) {
@@ -240,14 +316,15 @@ StudioEndpoint::StudioEndpoint(StudioEndpointConfig config) : state_(std::make_u
     s.router.set(zmq::sockopt::curve_secretkey, s.config.studio_key.secret_key);
     s.router.set(zmq::sockopt::zap_domain, "lumistage");
   }
-  // Handshakes that fail (a node trusting another studio key, a plain peer, one that never
-  // finishes) are told by the router's monitor, read on the same thread as the ZAP requests.
+  // Connections accepted and gone, and handshakes that fail (a node trusting another studio key, a
+  // plain peer, one that never finishes), are told by the router's monitor, read on the same
+  // thread as the ZAP requests.
   const std::string monitor_endpoint =
       fmt::format("inproc://lumistage.studio.monitor.{}", monitor_serial++);
-  if (zmq_socket_monitor(s.router.handle(), monitor_endpoint.c_str(),
-                         ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
-                             ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
-                             ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) != 0)
+  if (zmq_socket_monitor(
+          s.router.handle(), monitor_endpoint.c_str(),
+          ZMQ_EVENT_ACCEPTED | ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
+              ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) != 0)
     throw Error(
         fmt::format("studio endpoint: cannot monitor its socket: {}", zmq_strerror(zmq_errno())));
   s.monitor = zmq::socket_t(s.context, zmq::socket_type::pair);

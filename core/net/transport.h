@@ -33,12 +33,17 @@ struct StudioEndpointConfig {
   CurveKeyPair studio_key;                 // kCurve only
   std::vector<AuthorizedNode> authorized;  // kCurve only: the node keys admitted
   MessageLimits limits;
+  // Connections open at once from one IP address, handshaking or not; one more is closed as it is
+  // accepted and counted as a refusal. Every connection may make libzmq buffer a message of
+  // limits.max_bytes, so this bounds what one address can make the studio hold. Nodes on one PC
+  // share its address: the coordinator raises it to fit the rig's nodes.
+  int max_connections_per_address = 16;
 };
 
 // A node turned away at the handshake.
 struct Refusal {
   std::string address;     // the peer's IP address
-  std::string key_prefix;  // first 8 Z85 characters of its public key
+  std::string key_prefix;  // first 8 Z85 characters of its public key; empty before a key
   std::string reason;      // "node key abcdefgh is not authorized"
 };
 
@@ -74,7 +79,8 @@ class StudioEndpoint {
   // that announces a larger one, before its handshake is done too.
   size_t maxMessageBytes() const;
 
-  // The latest refusals (at most 64) and how many there were in all.
+  // The latest refusals (at most 64) and how many there were in all: keys refused, and connections
+  // over max_connections_per_address.
   std::vector<Refusal> refusals() const;
   int64_t refusalCount() const;
   // Connections whose handshake failed before a key was checked: a node that trusts another

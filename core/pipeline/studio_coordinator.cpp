@@ -56,6 +56,10 @@ StudioEndpointConfig limitedToTheRig(const Rig& rig, StudioEndpointConfig endpoi
   const size_t largest = largestNodeMessage(sizes, endpoint.limits);
   endpoint.limits.max_bytes =
       std::min(endpoint.limits.max_bytes, largest + largest / 4 + (size_t{64} << 10));
+  // Every node of the rig may run on one PC, and one coming back may briefly hold two
+  // connections: the cap on an address leaves room for that.
+  endpoint.max_connections_per_address =
+      std::max(endpoint.max_connections_per_address, 2 * rig.nodeCount() + 2);
   return endpoint;
 }
 

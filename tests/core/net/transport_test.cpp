@@ -410,5 +410,58 @@ TEST(Transport, AHandshakeAnnouncingAMessageOverTheLimitIsClosedBeforeItsBody) {
   EXPECT_EQ(in->node, "node1");
 }
 
+// Whether the studio closed connection `fd` within `wait`: reads (its greeting) until the end.
+bool closedWithin(int fd, milliseconds wait) {
+  const auto end = std::chrono::steady_clock::now() + wait;
+  for (;;) {
+    const auto left =
+        std::chrono::duration_cast<milliseconds>(end - std::chrono::steady_clock::now());
+    pollfd in{fd, POLLIN, 0};
+    if (left.count() <= 0 || poll(&in, 1, int(left.count())) <= 0) return false;
+    char bytes[256];
+    const ssize_t n = recv(fd, bytes, sizeof bytes, MSG_DONTWAIT);
+    if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK)) return true;
+  }
+}
+
+// Issue 54: every connection, before its handshake too, may make libzmq buffer a message of the
+// limit; one address opening connection after connection could multiply that without bound. The
+// connections over the cap are closed as they are accepted and counted and named as refusals;
+// those within it and an authorised node are served as before.
+TEST(Transport, ConnectionsFromOneAddressBeyondTheCapAreClosedAndCountedAsRefusals) {
+  const Keys keys;
+  StudioEndpointConfig config = curveStudio(keys);
+  config.max_connections_per_address = 3;
+  StudioEndpoint studio(config);
+  std::vector<int> within;
+  for (int k = 0; k < 3; ++k) {
+    within.push_back(connectRaw(studio.endpoint()));
+    ASSERT_GE(within.back(), 0);
+  }
+  const int over = connectRaw(studio.endpoint());
+  ASSERT_GE(over, 0);
+  EXPECT_TRUE(closedWithin(over, kPatience)) << "the fourth connection was kept";
+  for (int fd : within) EXPECT_FALSE(closedWithin(fd, milliseconds(100)));
+  for (int i = 0; i < 60 && studio.refusalCount() < 1; ++i)
+    std::this_thread::sleep_for(milliseconds(50));
+  EXPECT_EQ(studio.refusalCount(), 1);
+  const std::vector<Refusal> refusals = studio.refusals();
+  ASSERT_EQ(refusals.size(), 1u);
+  EXPECT_EQ(refusals[0].address, "127.0.0.1");
+  EXPECT_EQ(refusals[0].reason, "more than 3 connections at once from one address");
+  // The failed handshake of the closed connection is that refusal, not counted twice.
+  EXPECT_EQ(studio.handshakeFailures(), 0);
+  close(over);
+  // Room again once one goes: an authorised node is served.
+  close(within.back());
+  within.pop_back();
+  NodeEndpoint node(curveNode(studio, "node1", keys.node1, keys.studio.public_key));
+  ASSERT_TRUE(node.send(hello("node1"), kPatience));
+  const std::optional<ReceivedMessage> in = studio.receive(kPatience);
+  ASSERT_TRUE(in.has_value());
+  EXPECT_EQ(in->node, "node1");
+  for (int fd : within) close(fd);
+}
+
 }  // namespace
 }  // namespace lumistage
