@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <zmq.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstring>
@@ -118,6 +119,10 @@ struct StudioEndpoint::State {
   std::unordered_map<int, std::string> address_of_fd;
   std::unordered_map<std::string, int> connections_from;
   std::deque<std::chrono::steady_clock::time_point> capped;
+  // The connections accepted whose handshake has not ended, oldest first. libzmq tells a
+  // handshake's end without its connection: each end is taken as the oldest's (a handshake
+  // takes milliseconds), and one that disconnects still here ended without a word.
+  std::deque<int> handshaking;
 
   void serve();
   void answerZap();
@@ -127,6 +132,8 @@ struct StudioEndpoint::State {
   void disconnected(int fd);
   // Whether a failed handshake is that of a connection closed over the cap (and so counted).
   bool wasCapped();
+  void handshakeEnded();
+  void countHandshakeFailure(std::string reason);
   void logHandshakeFailures(bool force);
   void countBad(const std::string& node, const std::string& reason);
 };
@@ -160,6 +167,7 @@ void StudioEndpoint::State::readMonitor() {
   std::memcpy(&value, event[0].data<uint8_t>() + 2, sizeof value);
   if (id == ZMQ_EVENT_ACCEPTED) return accepted(int(value));
   if (id == ZMQ_EVENT_DISCONNECTED) return disconnected(int(value));
+  if (id == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) return handshakeEnded();
   std::string reason;
   if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL) {
     reason = value == ZMQ_PROTOCOL_ERROR_ZMTP_CRYPTOGRAPHIC
@@ -171,21 +179,37 @@ void StudioEndpoint::State::readMonitor() {
     if (wasCapped()) return;
     reason = fmt::format("its handshake did not finish ({})", zmq_strerror(int(value)));
   } else {
-    return;  // ZMQ_EVENT_HANDSHAKE_FAILED_AUTH: a key refused, counted by answerZap
+    handshakeEnded();  // ZMQ_EVENT_HANDSHAKE_FAILED_AUTH: a key refused, counted by answerZap
+    return;
   }
+  handshakeEnded();
+  countHandshakeFailure(std::move(reason));
+}
+
+void StudioEndpoint::State::countHandshakeFailure(std::string reason) {
   std::lock_guard lock(mutex);
   ++handshake_failures;
   ++handshake_failures_unlogged;
   last_handshake_failure = std::move(reason);
 }
 
+void StudioEndpoint::State::handshakeEnded() {
+  if (!handshaking.empty()) handshaking.pop_front();
+}
+
 void StudioEndpoint::State::accepted(int fd) {
   std::string address = peerAddress(fd);
-  if (address.empty()) return;  // gone already
+  // Gone already (libzmq may drop a connection before this event is read): its handshake still
+  // ends in an event or its disconnect.
+  if (address.empty()) {
+    handshaking.push_back(fd);
+    return;
+  }
   int& open = connections_from[address];
   if (open < config.max_connections_per_address) {
     ++open;
     address_of_fd[fd] = std::move(address);
+    handshaking.push_back(fd);
     return;
   }
   // Shut down, not closed: the descriptor stays libzmq's, whose engine sees the end and closes it.
@@ -202,6 +226,16 @@ void StudioEndpoint::State::accepted(int fd) {
 }
 
 void StudioEndpoint::State::disconnected(int fd) {
+  if (const auto h = std::find(handshaking.begin(), handshaking.end(), fd);
+      h != handshaking.end()) {
+    // Gone while handshaking, and libzmq said nothing of how: it drops a connection that announces
+    // a message over the limit (or breaks the protocol in its framing) without a reason.
+    handshaking.erase(h);
+    countHandshakeFailure(fmt::format(
+        "it was dropped during its handshake without a reason (a message over the {:.1f} MB "
+        "limit, or malformed framing?)",
+        double(config.limits.max_bytes) / 1e6));
+  }
   const auto it = address_of_fd.find(fd);
   if (it == address_of_fd.end()) return;
   if (const auto open = connections_from.find(it->second);
@@ -321,10 +355,11 @@ StudioEndpoint::StudioEndpoint(StudioEndpointConfig config) : state_(std::make_u
   // thread as the ZAP requests.
   const std::string monitor_endpoint =
       fmt::format("inproc://lumistage.studio.monitor.{}", monitor_serial++);
-  if (zmq_socket_monitor(
-          s.router.handle(), monitor_endpoint.c_str(),
-          ZMQ_EVENT_ACCEPTED | ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
-              ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) != 0)
+  if (zmq_socket_monitor(s.router.handle(), monitor_endpoint.c_str(),
+                         ZMQ_EVENT_ACCEPTED | ZMQ_EVENT_DISCONNECTED |
+                             ZMQ_EVENT_HANDSHAKE_SUCCEEDED | ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
+                             ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                             ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) != 0)
     throw Error(
         fmt::format("studio endpoint: cannot monitor its socket: {}", zmq_strerror(zmq_errno())));
   s.monitor = zmq::socket_t(s.context, zmq::socket_type::pair);

@@ -84,9 +84,10 @@ class StudioEndpoint {
   std::vector<Refusal> refusals() const;
   int64_t refusalCount() const;
   // Connections whose handshake failed before a key was checked: a node that trusts another
-  // studio key, a plain peer at a CURVE studio, garbage, a handshake not done in 5 s. Logged at
-  // most once every 5 s, with their count. (Keys refused are refusalCount(); a connection that
-  // announces a message over maxMessageBytes() is dropped by libzmq without a reason it tells.)
+  // studio key, a plain peer at a CURVE studio, garbage, a handshake not done in 5 s, one that
+  // announced a message over maxMessageBytes() (libzmq drops it without a reason: counted as a
+  // connection gone during its handshake). Logged at most once every 5 s, with their count. (Keys
+  // refused, and connections over the cap, are refusalCount().)
   int64_t handshakeFailures() const;
   // Messages dropped as malformed, per node.
   std::map<std::string, int64_t> badMessages() const;
