@@ -16,11 +16,13 @@ LiveTargetRowSpec viewFeedRow() {
   spec.box_name = "live_feed";
   spec.box_tip = QObject::tr(
       "Sends the director's view live as H.264 in MPEG-TS, as lumistage run --feed: OBS (a "
-      "Media Source with the URL), vMix or ffplay take it");
+      "Media Source with the URL), vMix or ffplay take it; or to a v4l2loopback device, which "
+      "OBS and browsers see as a webcam");
   spec.target_name = "live_feed_url";
   spec.target_tip = QObject::tr(
       "udp://HOST:PORT, srt://HOST:PORT (calling a receiver that listens) or "
-      "srt://:PORT?mode=listener (the receiver calls the studio)");
+      "srt://:PORT?mode=listener (the receiver calls the studio), or v4l2:///dev/videoN (a "
+      "v4l2loopback device)");
   spec.default_target = "srt://:9000?mode=listener";
   spec.target_min_width = 190;
   spec.target_max_width = 230;
@@ -34,7 +36,7 @@ LiveTargetRowSpec viewFeedRow() {
 LiveFeedControl::LiveFeedControl(QWidget* parent) : LiveTargetRow(viewFeedRow(), parent) {}
 
 std::optional<FeedTarget> LiveFeedControl::wantedTarget() {
-  return LiveTargetRow::wantedTarget(parseFeedUrl, tr("expected udp:// or srt://"));
+  return LiveTargetRow::wantedTarget(parseFeedUrl, tr("expected udp://, srt:// or v4l2://"));
 }
 
 void LiveFeedControl::showFeed(const QString& url, int64_t sent, int64_t dropped,
@@ -67,7 +69,8 @@ void PipelineWorker::feedView(const FeedTarget& target) {
       emit message(tr("Cannot feed the view: %1").arg(QString::fromStdString(e.what())));
       return;
     }
-    emit message(tr("Feeding the view to %1 (H.264 in MPEG-TS)").arg(where));
+    emit message(
+        tr("Feeding the view to %1 (%2)").arg(where, QString::fromStdString(target.carries())));
   });
 }
 

@@ -313,7 +313,7 @@ void startOutputs(LocalPipelineRun& pipeline, const RunArgs& a, const std::optio
     pipeline.feedView(*feed, [](const std::string& error) {
       fmt::print(stderr, "lumistage run: {}; the run goes on\n", error);
     });
-    fmt::print("feeding the view to {} (H.264 in MPEG-TS, {}x{}){}\n", feed->url,
+    fmt::print("feeding the view to {} ({}, {}x{}){}\n", feed->url, feed->carries(),
                pipeline.viewFeed()->width(), pipeline.viewFeed()->height(),
                feed->listener ? "; waiting for a receiver to call" : "");
   }
@@ -577,7 +577,9 @@ void addRunCommand(CLI::App& app) {
   run->add_option("--feed", a->feed,
                   "send the view live as H.264 in MPEG-TS to this URL, for OBS, vMix, ffplay or a "
                   "vision mixer: udp://HOST:PORT, srt://HOST:PORT (calling a receiver that "
-                  "listens) or srt://:PORT?mode=listener (the receiver calls)");
+                  "listens) or srt://:PORT?mode=listener (the receiver calls); or uncompressed "
+                  "to a v4l2loopback device, v4l2:///dev/videoN, which OBS and browsers see as "
+                  "a webcam");
   run->callback([a] {
     // Ctrl-C (or SIGTERM, SIGHUP) stops the run as its end would: the take closed, the view's
     // recording finished, the figures told, the nodes stopped and the run's key store removed.

@@ -16,6 +16,7 @@ extern "C" {
 #include <vector>
 
 #include "core/base/error.h"
+#include "core/live/v4l2_output.h"
 #include "core/render/video_encoder.h"
 
 namespace lumistage {
@@ -27,10 +28,6 @@ using Clock = std::chrono::steady_clock;
 std::string lowercase(std::string text) {
   for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
   return text;
-}
-
-int bytesPerPixel(PixelOrder order) {
-  return order == PixelOrder::kRgb || order == PixelOrder::kBgr ? 3 : 4;
 }
 
 // An SRT caller's receiver has this long to answer (libsrt's own connection timeout is 3 s; this
@@ -49,10 +46,15 @@ bool ffmpegCanSend(const std::string& protocol) {
   return false;
 }
 
+std::string FeedTarget::carries() const {
+  return protocol == Protocol::kV4l2 ? "uncompressed I420 to a video4linux2 device"
+                                     : "H.264 in MPEG-TS";
+}
+
 FeedTarget parseFeedUrl(const std::string& url) {
   const std::string expected =
-      "expected udp://HOST:PORT or srt://HOST:PORT (srt://:PORT?mode=listener to let the "
-      "receiver call)";
+      "expected udp://HOST:PORT, srt://HOST:PORT (srt://:PORT?mode=listener to let the "
+      "receiver call) or v4l2:///dev/videoN";
   auto fail = [&](const std::string& why) {
     return Error("feed " + quotedInput(url) + ": " + why + "; " + expected);
   };
@@ -65,8 +67,14 @@ FeedTarget parseFeedUrl(const std::string& url) {
     t.protocol = FeedTarget::Protocol::kUdp;
   } else if (scheme == "srt") {
     t.protocol = FeedTarget::Protocol::kSrt;
+  } else if (scheme == "v4l2") {
+    t.protocol = FeedTarget::Protocol::kV4l2;
+    t.device = url.substr(colon + 3);
+    if (t.device.empty() || t.device.front() != '/')
+      throw fail("a v4l2 feed names its device by its whole path (three slashes)");
+    return t;
   } else {
-    throw fail("a feed goes out over udp or srt, not " + quotedInput(scheme));
+    throw fail("a feed goes out over udp, srt or to a v4l2 device, not " + quotedInput(scheme));
   }
   const size_t at = colon + 3;
   const size_t query = url.find('?', at);
@@ -143,8 +151,21 @@ struct VideoFeed::Impl {
   }
   void run();
   // One connection: opened, fed until stopped or it fails. Empty when stopped, else why it ended;
-  // `opened` says whether it got as far as sending.
+  // `opened` says whether it got as far as sending. session() branches to v4l2Session() for a
+  // device.
   std::string session(bool& opened);
+  std::string v4l2Session(bool& opened);
+  // Waits for an offered picture and takes it into `working`; false when stopping.
+  bool takePending();
+  void opened(bool& opened, const std::string& encoder) {
+    {
+      std::lock_guard lock(mutex);
+      encoder_name = encoder;
+    }
+    opened = true;
+    connected = true;
+    ++connections;
+  }
   void fail(const std::string& why) {
     {
       std::lock_guard lock(mutex);
@@ -229,7 +250,45 @@ void VideoFeed::Impl::run() {
   }
 }
 
-std::string VideoFeed::Impl::session(bool& opened) {
+bool VideoFeed::Impl::takePending() {
+  std::unique_lock lock(mutex);
+  wake.wait(lock, [&] { return has_pending || stop; });
+  if (stop) return false;
+  std::swap(pending, working);
+  working_width = pending_width;
+  working_height = pending_height;
+  working_order = pending_order;
+  working_at = pending_at;
+  has_pending = false;
+  return true;
+}
+
+std::string VideoFeed::Impl::v4l2Session(bool& was_opened) {
+  V4l2Output output(width, height);
+  if (const Status open = output.open(target.device); !open.ok()) return open.error();
+  opened(was_opened, "raw");
+  while (takePending()) {
+    const auto began = Clock::now();
+    bool taken = false;
+    try {
+      const Status written =
+          output.write(working.data(), working_order, working_width, working_height, taken);
+      if (!written.ok()) return written.error();
+    } catch (const Error& e) {
+      return e.what();
+    }
+    if (!taken) {
+      ++dropped;  // the device had no room for it
+      continue;
+    }
+    ++sent;
+    send_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - began).count();
+  }
+  return {};
+}
+
+std::string VideoFeed::Impl::session(bool& was_opened) {
+  if (target.protocol == FeedTarget::Protocol::kV4l2) return v4l2Session(was_opened);
   AVFormatContext* format = nullptr;
   struct Close {
     AVFormatContext** format;
@@ -248,10 +307,6 @@ std::string VideoFeed::Impl::session(bool& opened) {
                                              VideoSpeed::kFeed, width, height, fps, false);
   } catch (const Error& e) {
     return e.what();
-  }
-  {
-    std::lock_guard lock(mutex);
-    encoder_name = encoder->encoderName();
   }
   AVStream* stream = avformat_new_stream(format, nullptr);
   if (!stream) return "out of memory for the video stream";
@@ -288,23 +343,11 @@ std::string VideoFeed::Impl::session(bool& opened) {
   code = avformat_write_header(format, &muxing);
   av_dict_free(&muxing);
   if (code < 0) return "cannot send the stream's header (" + ffmpegError(code) + ")";
-  opened = true;
-  connected = true;
-  ++connections;
+  opened(was_opened, encoder->encoderName());
   int64_t last_pts = -1;
   std::string why;
   while (why.empty()) {
-    {
-      std::unique_lock lock(mutex);
-      wake.wait(lock, [&] { return has_pending || stop; });
-      if (stop) break;
-      std::swap(pending, working);
-      working_width = pending_width;
-      working_height = pending_height;
-      working_order = pending_order;
-      working_at = pending_at;
-      has_pending = false;
-    }
+    if (!takePending()) break;
     const auto began = Clock::now();
     // Stamped by the clock when offered, in the encoder's 90 kHz: a receiver shows each picture
     // when it was made, however many were dropped between.

@@ -26,9 +26,7 @@ void quietFfmpeg() {
   std::call_once(once, [] { av_log_set_level(AV_LOG_FATAL); });
 }
 
-namespace {
-
-AVPixelFormat pixelFormatOf(PixelOrder order) {
+int avPixelFormatOf(PixelOrder order) {
   switch (order) {
     case PixelOrder::kRgb:
       return AV_PIX_FMT_RGB24;
@@ -41,12 +39,6 @@ AVPixelFormat pixelFormatOf(PixelOrder order) {
   }
   return AV_PIX_FMT_RGB24;
 }
-
-int bytesPerPixel(PixelOrder order) {
-  return order == PixelOrder::kRgb || order == PixelOrder::kBgr ? 3 : 4;
-}
-
-}  // namespace
 
 VideoEncoder::VideoEncoder(std::string name, VideoCodec codec, VideoSpeed speed, int width,
                            int height, double fps, bool global_header)
@@ -147,7 +139,7 @@ void VideoEncoder::release() {
 
 void VideoEncoder::send(const uint8_t* pixels, PixelOrder order, int source_width,
                         int source_height, int stride, int64_t pts) {
-  const AVPixelFormat input = pixelFormatOf(order);
+  const AVPixelFormat input = AVPixelFormat(avPixelFormatOf(order));
   // The same size: the even part of the image (an odd last column or row is left out), copied;
   // another: scaled.
   const bool same = (source_width & ~1) == width_ && (source_height & ~1) == height_;

@@ -12,6 +12,9 @@ struct SwsContext;
 
 namespace lumistage {
 
+// FFmpeg's pixel format (an AVPixelFormat) of packed pixels in `order`.
+int avPixelFormatOf(PixelOrder order);
+
 // The encoding half of a video: RGB(A) pixels to 4:2:0 YUV (libswscale) to packets (libavcodec),
 // shared by VideoFileWriter (a file) and VideoFeed (a network feed); each muxes the packets its
 // own way. The codec and its settings are those video_file.h describes, per VideoCodec and

@@ -28,6 +28,9 @@ VideoCodec videoCodecFor(const std::filesystem::path& file);
 
 // How the pixels given to VideoFileWriter::write lie in memory: 8 bits a channel.
 enum class PixelOrder { kRgb, kRgba, kBgr, kBgra };
+inline int bytesPerPixel(PixelOrder order) {
+  return order == PixelOrder::kRgb || order == PixelOrder::kBgr ? 3 : 4;
+}
 
 // Writes one video stream at a constant frame rate: frame k is shown at k / fps seconds. Pixels go
 // to 4:2:0 YUV, which needs even sizes: an odd width or height loses its last column or row (the

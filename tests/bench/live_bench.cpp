@@ -14,6 +14,7 @@
 
 #include "core/body/human_skeleton.h"
 #include "core/body/motion_library.h"
+#include "core/live/v4l2_output.h"
 #include "core/live/video_feed.h"
 #include "core/live/vmc_sender.h"
 #include "tests/feed_receiver.h"
@@ -105,6 +106,22 @@ void videoFeedOffer(benchmark::State& state) {
   state.counters["dropped"] = double(feed.framesDropped());
 }
 BENCHMARK(videoFeedOffer)->Unit(benchmark::kMicrosecond)->Iterations(90)->UseRealTime();
+
+// What a feed to a v4l2loopback device does to a picture besides write() (a copy into the
+// device's buffer): a 640x480 RGBA picture to I420 of the device's size, on the feed's thread.
+// Arg: the device's width (640: the same size; 1280: scaled up to 1280x960).
+void v4l2Convert(benchmark::State& state) {
+  constexpr int kWidth = 640, kHeight = 480;
+  const int width = int(state.range(0));
+  lumistage::V4l2Output output(width, width * 3 / 4);
+  std::vector<uint8_t> picture(size_t(kWidth) * kHeight * 4);
+  for (size_t k = 0; k < picture.size(); ++k) picture[k] = uint8_t(k * 7 + k / 2560);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        output.convert(picture.data(), lumistage::PixelOrder::kRgba, kWidth, kHeight).data());
+  }
+}
+BENCHMARK(v4l2Convert)->Arg(640)->Arg(1280)->Unit(benchmark::kMillisecond);
 
 // The feed's latency at a receiver on the same PC: from offer() to the picture out of the
 // receiver's decoder (FFmpeg's, set for latency as `ffplay -fflags nobuffer -flags low_delay` is),

@@ -94,6 +94,13 @@ TEST(FeedUrl, ReadsUdpAndSrtTargets) {
   EXPECT_EQ(listener.port, 9000);
 }
 
+TEST(FeedUrl, ReadsAV4l2DeviceByItsPath) {
+  const FeedTarget device = parseFeedUrl("v4l2:///dev/video10");
+  EXPECT_EQ(device.protocol, FeedTarget::Protocol::kV4l2);
+  EXPECT_EQ(device.device, "/dev/video10");
+  EXPECT_EQ(device.carries(), "uncompressed I420 to a video4linux2 device");
+}
+
 TEST(FeedUrl, RefusesWhatIsNoFeedSayingWhy) {
   const std::map<std::string, std::string> why{
       {"rtmp://host/live", "not 'rtmp'"},
@@ -105,6 +112,8 @@ TEST(FeedUrl, RefusesWhatIsNoFeedSayingWhy) {
       {"udp://host:5000/path", "no path"},
       {"udp://host:5000?mode=listener", "mode= is SRT's"},
       {"srt://host:5000?mode=rendezvous", "caller or listener"},
+      {"v4l2://dev/video0", "whole path"},
+      {"v4l2://", "whole path"},
   };
   for (const auto& [url, reason] : why) {
     try {
