@@ -137,13 +137,14 @@ TEST(LiveOut, RunFeedsTheViewOverUdpToAReceiverThatDecodesIt) {
       << text;
 }
 
-TEST(LiveOut, RunRefusesAFeedThatIsNotUdpOrSrtBeforeStartingNodes) {
+TEST(LiveOut, RunRefusesAFeedThatIsNoFeedBeforeStartingNodes) {
   for (const char* bad :
        {"rtmp://127.0.0.1/live", "udp://127.0.0.1", "view.ts", "udp://127.0.0.1:99999"}) {
     const Result r = run(kCli + " run --session /nonexistent --frames 1 --feed " + bad);
     EXPECT_NE(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("--feed"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("udp://HOST:PORT or srt://HOST:PORT"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("udp://HOST:PORT, srt://HOST:PORT"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("v4l2:///dev/videoN"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("starting"), std::string::npos) << r.output;
   }
 }

@@ -400,7 +400,7 @@ void MainWindowTest::theLiveViewBoxFeedsTheViewToAReceiver() {
   url->setText("rtmp://127.0.0.1/live");
   box->setChecked(true);
   QVERIFY(!box->isChecked());
-  QVERIFY2(status->text().contains("expected udp:// or srt://"), qPrintable(status->text()));
+  QVERIFY2(status->text().contains("expected udp://, srt:// or v4l2://"), qPrintable(status->text()));
   QVERIFY2(status->toolTip().contains("not 'rtmp'"), qPrintable(status->toolTip()));
   const int port = lumistage::testing::freeUdpPort();
   const QString feed = QString("udp://127.0.0.1:%1").arg(port);

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/live/video_feed.h"
+#include "tests/quadrant_picture.h"
 #include "tests/test_util.h"
 
 namespace lumistage {
@@ -23,21 +24,9 @@ namespace {
 using namespace std::chrono_literals;
 using testing::testFolder;
 
-// Four flat quadrants of known colours (RGBA).
-constexpr int kWidth = 320, kHeight = 240;
-constexpr uint8_t kColours[4][3] = {{200, 40, 40}, {40, 190, 60}, {50, 60, 210}, {220, 210, 70}};
-
-std::vector<uint8_t> quadrants() {
-  std::vector<uint8_t> rgba(size_t(kWidth) * kHeight * 4);
-  for (int y = 0; y < kHeight; ++y) {
-    for (int x = 0; x < kWidth; ++x) {
-      const uint8_t* c = kColours[(y >= kHeight / 2) * 2 + (x >= kWidth / 2)];
-      uint8_t* p = &rgba[(size_t(y) * kWidth + x) * 4];
-      p[0] = c[0], p[1] = c[1], p[2] = c[2], p[3] = 255;
-    }
-  }
-  return rgba;
-}
+constexpr int kWidth = testing::kQuadrantsWidth, kHeight = testing::kQuadrantsHeight;
+constexpr auto& kColours = testing::kQuadrantColours;
+using testing::quadrants;
 
 // Each quadrant's middle in an I420 picture of width x height holds its colour in BT.601 limited
 // range (Rec. 601's matrix: Y 16-235, Cb and Cr 16-240).

@@ -14,6 +14,7 @@
 
 #include "core/base/error.h"
 #include "tests/feed_receiver.h"
+#include "tests/quadrant_picture.h"
 
 namespace lumistage {
 namespace {
@@ -24,21 +25,9 @@ using testing::DecodedPicture;
 using testing::FeedReceiver;
 using testing::freeUdpPort;
 
-// The picture sent: four flat quadrants of known colours (RGBA).
-constexpr int kWidth = 320, kHeight = 240;
-constexpr uint8_t kColours[4][3] = {{200, 40, 40}, {40, 190, 60}, {50, 60, 210}, {220, 210, 70}};
-
-std::vector<uint8_t> quadrants() {
-  std::vector<uint8_t> rgba(size_t(kWidth) * kHeight * 4);
-  for (int y = 0; y < kHeight; ++y) {
-    for (int x = 0; x < kWidth; ++x) {
-      const uint8_t* c = kColours[(y >= kHeight / 2) * 2 + (x >= kWidth / 2)];
-      uint8_t* p = &rgba[(size_t(y) * kWidth + x) * 4];
-      p[0] = c[0], p[1] = c[1], p[2] = c[2], p[3] = 255;
-    }
-  }
-  return rgba;
-}
+constexpr int kWidth = testing::kQuadrantsWidth, kHeight = testing::kQuadrantsHeight;
+constexpr auto& kColours = testing::kQuadrantColours;
+using testing::quadrants;
 
 // Offers the picture at 25 a second while `more()` holds; the longest offer() took, ms.
 template <typename More>
