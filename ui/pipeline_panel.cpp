@@ -3,6 +3,7 @@
 #include <QComboBox>
 #include <QDir>
 #include <QFileDialog>
+#include <QFileInfo>
 #include <QHBoxLayout>
 #include <QHeaderView>
 #include <QInputDialog>
@@ -18,6 +19,7 @@
 #include <exception>
 #include <map>
 
+#include "core/base/child_process.h"
 #include "core/base/output_path.h"
 #include "core/body/human_model.h"
 #include "ui/live_table.h"
@@ -77,18 +79,45 @@ PipelinePanel::PipelinePanel(QWidget* parent)
                           "given"),
                        Qt::ToolTipRole);
   body_->setObjectName("pipeline_body");
-  body_->addItem(tr("Standard body"), int(BodyDetail::kStandard));
-  body_->addItem(tr("Fine body"), int(BodyDetail::kFine));
+  body_->addItem(tr("Standard body"), QString(bodyDetailName(BodyDetail::kStandard)));
+  body_->addItem(tr("Fine body"), QString(bodyDetailName(BodyDetail::kFine)));
+  body_->addItem(tr("Body file..."), QString());
+  body_->setItemData(bodyFileItem(),
+                     tr("A rigged human of your own (glTF/GLB, FBX, COLLADA, X), as --body FILE: "
+                        "its joints are mapped onto the generic skeleton's, and the cameras paint "
+                        "it"),
+                     Qt::ToolTipRole);
   body_->setToolTip(
-      tr("The generic human the studio and its nodes pose and refine. Standard (about 2000 "
-         "vertices): four nodes and the studio on one PC keep up. Fine (about 4000): sharper views "
-         "for twice the nodes' work, for nodes on PCs of their own, each started with --body "
-         "fine"));
-  const bool fine = QSettings("Lumistage", "Studio").value("pipeline/body").toString() ==
-                    bodyDetailName(BodyDetail::kFine);
-  setBody(fine ? BodyDetail::kFine : BodyDetail::kStandard);
-  connect(body_, &QComboBox::currentIndexChanged, this, [this] {
-    QSettings("Lumistage", "Studio").setValue("pipeline/body", bodyDetailName(body()));
+      tr("The body the studio and its nodes pose and refine. Standard (about 2000 vertices): "
+         "four nodes and the studio on one PC keep up. Fine (about 4000): sharper views for twice "
+         "the nodes' work, for nodes on PCs of their own, each started with --body fine. Or a "
+         "rigged human from a file"));
+  {
+    const QString remembered = QSettings("Lumistage", "Studio").value("pipeline/body").toString();
+    if (remembered == bodyDetailName(BodyDetail::kFine)) {
+      setBody(BodyChoice{BodyDetail::kFine, {}});
+    } else if (!remembered.isEmpty() && remembered != bodyDetailName(BodyDetail::kStandard) &&
+               QFileInfo::exists(remembered)) {
+      addBodyFile(remembered);  // checked when it was chosen; a file since damaged fails at start
+    } else {
+      setBody(BodyChoice{});
+    }
+  }
+  shown_body_ = body_->currentIndex();
+  connect(body_, &QComboBox::activated, this, [this](int index) {
+    if (index != bodyFileItem()) return;
+    const QString file = QFileDialog::getOpenFileName(
+        this, tr("A rigged human"), QDir::homePath(),
+        tr("Rigged meshes (*.glb *.gltf *.fbx *.dae *.x);;All files (*)"));
+    const Status chosen = file.isEmpty() ? Status() : chooseBodyFile(file);
+    if (!chosen.ok())
+      QMessageBox::warning(this, tr("Body file"), QString::fromStdString(chosen.error()));
+    if (file.isEmpty() || !chosen.ok()) body_->setCurrentIndex(shown_body_);
+  });
+  connect(body_, &QComboBox::currentIndexChanged, this, [this](int index) {
+    if (index == bodyFileItem()) return;  // the dialog's turn: chosen, or back to the last
+    shown_body_ = index;
+    QSettings("Lumistage", "Studio").setValue("pipeline/body", body_->itemData(index).toString());
   });
   table_->setColumnCount(8);
   table_->setHorizontalHeaderLabels({tr("Node"), tr("State"), tr("Camera"), tr("fps"), tr("Frames"),
@@ -162,12 +191,51 @@ PipelinePanel::~PipelinePanel() {
   stop();
 }
 
-void PipelinePanel::setBody(BodyDetail body) {
-  body_->setCurrentIndex(body_->findData(int(body)));
+void PipelinePanel::setBody(const BodyChoice& body) {
+  if (!body.file.empty()) {
+    addBodyFile(QString::fromStdString(body.file.string()));
+    return;
+  }
+  body_->setCurrentIndex(body_->findData(QString(bodyDetailName(body.detail))));
 }
 
-BodyDetail PipelinePanel::body() const {
-  return BodyDetail(body_->currentData().toInt());
+BodyChoice PipelinePanel::body() const {
+  const QString name = body_->itemData(shown_body_).toString();
+  if (name == bodyDetailName(BodyDetail::kFine)) return BodyChoice{BodyDetail::kFine, {}};
+  if (name.isEmpty() || name == bodyDetailName(BodyDetail::kStandard)) return BodyChoice{};
+  return BodyChoice{BodyDetail::kStandard, name.toStdString()};
+}
+
+int PipelinePanel::bodyFileItem() const {
+  return body_->count() - 1;
+}
+
+Status PipelinePanel::chooseBodyFile(const QString& file) {
+  // Read in a child process, as lumistage body show reads it: a file that crashes Assimp (nested
+  // too deep, damaged) costs the child, not the studio.
+  const std::string path = file.toStdString();
+  const Status read = runInChildProcess([&] { loadBody(BodyChoice{BodyDetail::kStandard, path}); });
+  if (!read.ok()) {
+    const std::string& error = read.error();
+    return Status::failure(error.rfind("crashed (", 0) == 0
+                               ? path + ": the import " + error +
+                                     " inside the mesh library: a damaged or hostile file"
+                               : error);
+  }
+  addBodyFile(file);
+  return {};
+}
+
+void PipelinePanel::addBodyFile(const QString& file) {
+  int index = body_->findData(file);
+  if (index < 0) {
+    index = bodyFileItem();  // before "Body file..."
+    body_->insertItem(index, QFileInfo(file).fileName(), file);
+    body_->setItemData(index, file, Qt::ToolTipRole);
+  }
+  body_->setCurrentIndex(index);
+  shown_body_ = index;
+  QSettings("Lumistage", "Studio").setValue("pipeline/body", file);
 }
 
 void PipelinePanel::startChosen() {
@@ -233,7 +301,7 @@ void PipelinePanel::start(LocalRunOptions options) {
     entry =
         QString::fromStdString(options.session) == demo_session_ ? kDemoSession : kRecordedSession;
   source_->setCurrentIndex(entry);
-  options.body = BodyChoice{body(), {}};
+  options.body = body();
   body_->setEnabled(false);  // the nodes pose it until they stop
   // Nodes started here record takes into the studio's folder; nodes on the stage's PCs into
   // their own (lumistage-node --takes).

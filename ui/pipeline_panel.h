@@ -13,6 +13,8 @@
 #include <optional>
 #include <vector>
 
+#include "core/base/status.h"
+#include "core/body/human_model.h"
 #include "core/body/skinned_mesh.h"
 #include "core/pipeline/local_run.h"
 #include "core/render/view_recorder.h"
@@ -136,10 +138,15 @@ class PipelinePanel : public QWidget {
   // from it), stopping any running one.
   void start(LocalRunOptions options);
   void stop();
-  // The generic human the studio and the nodes it starts pose, from the next start on; remembered
-  // between runs (the nodes on the stage's PCs must be started with the same --body).
-  void setBody(BodyDetail body);
-  BodyDetail body() const;
+  // The body the studio and the nodes it starts pose, from the next start on: a generic human or a
+  // rigged human from a file; remembered between runs (the nodes on the stage's PCs must be
+  // started with the same --body). setBody() of a file adds it to the choice unread.
+  void setBody(const BodyChoice& body);
+  BodyChoice body() const;
+  // A rigged human from `file`, read and mapped onto the generic skeleton in a child process (as
+  // the choice's "Body file..." does after its dialog): added to the choice and chosen, or failed
+  // saying why (the file named), the choice left as it was.
+  Status chooseBodyFile(const QString& file);
   bool running() const { return thread_ != nullptr; }
   const RunReport& lastReport() const { return last_.report; }
   const PipelineSnapshot& lastSnapshot() const { return last_; }
@@ -188,6 +195,9 @@ class PipelinePanel : public QWidget {
   QTableWidget* stages_;
   QComboBox* source_;
   QComboBox* body_;
+  int shown_body_ = 0;  // the body's entry chosen (not "Body file...", while its dialog is open)
+  int bodyFileItem() const;  // the last entry, "Body file..."
+  void addBodyFile(const QString& file);
   QPushButton* start_button_;
   QPushButton* stop_button_;
   QLineEdit* take_name_;

@@ -1,15 +1,11 @@
 #include "app/cli/body_commands.h"
 
 #include <fmt/format.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
 #include <memory>
 
 #include "app/cli/checks.h"
+#include "core/base/child_process.h"
 #include "core/base/error.h"
 #include "core/body/body_mapping.h"
 #include "core/body/human_model.h"
@@ -55,57 +51,16 @@ void showBody(const std::string& file) {
 
 // Runs showBody in a child process, so that a crash inside Assimp (a COLLADA file nesting
 // 100,000 nodes overflows its parser's stack; only glTF's depth is checked before Assimp reads
-// it) becomes an error naming the file instead of a dead process. The child prints as the
-// command does; its error text comes back through a pipe.
+// it) becomes an error naming the file instead of a dead process.
 void showBodyInChildProcess(const std::string& file) {
-  int fds[2];
-  if (::pipe(fds) != 0) throw Error(fmt::format("body show: pipe: {}", std::strerror(errno)));
-  std::fflush(stdout);
-  std::fflush(stderr);
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    throw Error(fmt::format("body show: fork: {}", std::strerror(errno)));
-  }
-  if (pid == 0) {
-    ::close(fds[0]);
-    std::string error;
-    try {
-      showBody(file);
-    } catch (const std::exception& e) {
-      error = *e.what() != '\0' ? e.what() : file + ": the import failed";
-    }
-    std::fflush(stdout);
-    for (size_t done = 0; done < error.size();) {
-      const ssize_t n = ::write(fds[1], error.data() + done, error.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;
-      done += size_t(n);
-    }
-    ::_exit(error.empty() ? 0 : 1);
-  }
-  ::close(fds[1]);
-  std::string error;
-  char buffer[4096];
-  for (;;) {
-    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    error.append(buffer, size_t(n));
-  }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (WIFSIGNALED(status)) {
+  const Status shown = runInChildProcess([&] { showBody(file); });
+  if (shown.ok()) return;
+  if (const std::string& error = shown.error(); error.rfind("crashed (", 0) == 0)
     throw Error(fmt::format(
         "{}: the import crashed inside the mesh library ({}): a damaged or hostile file, or one "
         "nested too deep",
-        file, ::strsignal(WTERMSIG(status))));
-  }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw Error(error.empty() ? file + ": the import failed" : error);
+        file, error.substr(9, error.size() - 10)));
+  throw Error(shown.error() == "failed" ? file + ": the import failed" : shown.error());
 }
 
 }  // namespace

@@ -74,10 +74,12 @@ struct CommandLine {
       "only; the nodes must be started with --plain too."};
   QCommandLineOption body{
       "body",
-      "The generic human the pipeline poses and refines: standard (about 2000 vertices: four "
-      "nodes and the studio on one PC) or fine (about 4000: sharper views, twice the nodes' work; "
-      "nodes on PCs of their own, each started with --body fine). Remembered between runs.",
-      "detail"};
+      "The body the pipeline poses and refines: standard (about 2000 vertices: four nodes and "
+      "the studio on one PC), fine (about 4000: sharper views, twice the nodes' work; nodes on "
+      "PCs of their own, each started with --body fine), or a rigged human's file (glTF/GLB, "
+      "FBX, COLLADA, X; nodes on the stage's PCs started with --body FILE). Remembered between "
+      "runs.",
+      "body"};
   QCommandLineOption demo{
       "demo",
       "The demo: film the virtual studio once (a short session, kept in the cache folder), replay "
@@ -146,10 +148,10 @@ int main(int argc, char** argv) {
     }
   }
 
-  std::optional<lumistage::BodyDetail> body;
+  std::optional<lumistage::BodyChoice> body;
   if (line.isSet(line.body)) {
     try {
-      body = lumistage::parseBodyDetail(line.value(line.body).toStdString());
+      body = lumistage::parseBodyChoice(line.value(line.body).toStdString());
     } catch (const std::exception& e) {
       std::fprintf(stderr, "lumistage-studio: --body: %s\n", e.what());
       return 2;
@@ -157,7 +159,17 @@ int main(int argc, char** argv) {
   }
 
   lumistage::MainWindow window;
-  if (body) window.pipeline()->setBody(*body);
+  if (body && !body->file.empty()) {
+    // Read before the window shows, as the choice's "Body file..." reads it.
+    const lumistage::Status chosen =
+        window.pipeline()->chooseBodyFile(QString::fromStdString(body->file.string()));
+    if (!chosen.ok()) {
+      std::fprintf(stderr, "lumistage-studio: --body: %s\n", chosen.error().c_str());
+      return 2;
+    }
+  } else if (body) {
+    window.pipeline()->setBody(*body);
+  }
   window.show();
   // Ctrl-C in its terminal, SIGTERM (a logout, a service manager) or SIGHUP closes the studio as
   // its close button does: a recording of the view finished, the nodes it started stopped after

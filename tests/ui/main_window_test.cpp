@@ -18,6 +18,7 @@
 #include <QtTest>
 
 #include "core/body/human_model.h"
+#include "core/body/mesh_io.h"
 #include "core/capture/session_writer.h"
 #include "core/geometry/ring_rig.h"
 #include "core/render/view_recorder.h"
@@ -221,15 +222,15 @@ void MainWindowTest::bodyChoiceIsRememberedAndHeldWhileThePipelineRuns() {
   };
   {
     MainWindow window;
-    QCOMPARE(window.pipeline()->body(), lumistage::BodyDetail::kStandard);
+    QCOMPARE(window.pipeline()->body().detail, lumistage::BodyDetail::kStandard);
     QCOMPARE(choice(window)->currentText(), QString("Standard body"));
     choice(window)->setCurrentIndex(choice(window)->findText("Fine body"));
-    QCOMPARE(window.pipeline()->body(), lumistage::BodyDetail::kFine);
+    QCOMPARE(window.pipeline()->body().detail, lumistage::BodyDetail::kFine);
   }
   QTemporaryDir dir;
   writeStudioSession(dir.filePath("session"), 4);
   MainWindow window;
-  QCOMPARE(window.pipeline()->body(), lumistage::BodyDetail::kFine);
+  QCOMPARE(window.pipeline()->body().detail, lumistage::BodyDetail::kFine);
   lumistage::LocalRunOptions options;
   options.session = dir.filePath("session").toStdString();
   options.node_binary = LUMISTAGE_NODE;
@@ -242,7 +243,63 @@ void MainWindowTest::bodyChoiceIsRememberedAndHeldWhileThePipelineRuns() {
            lumistage::loadGenericHuman(lumistage::BodyDetail::kFine).rest.vertexCount());
   window.pipeline()->stop();
   QVERIFY(choice(window)->isEnabled());
-  window.pipeline()->setBody(lumistage::BodyDetail::kStandard);
+  window.pipeline()->setBody(lumistage::BodyChoice{});
+  QCOMPARE(QSettings("Lumistage", "Studio").value("pipeline/body").toString(), QString("standard"));
+}
+
+// A rigged human of the user's own is chosen from a file: read in a child process (a file that
+// crashes the mesh library costs the child, not the studio), refused saying why, remembered.
+void MainWindowTest::aBodyFileIsReadApartAndRefusedSayingWhy() {
+  QTemporaryDir dir;
+  lumistage::HumanModelSpec spec;
+  spec.target_vertices = 500;
+  const QString good = dir.filePath("actor.glb");
+  lumistage::saveSkinnedMeshGltf(lumistage::makeHumanModel(spec), good.toStdString());
+  const QString garbage = dir.filePath("broken.fbx");
+  {
+    QFile file(garbage);
+    QVERIFY(file.open(QIODevice::WriteOnly));
+    file.write("garbage\n");
+  }
+  // Assimp's COLLADA parser recurses per nested node: this one overflows its stack.
+  const QString deep = dir.filePath("deep.dae");
+  {
+    QFile file(deep);
+    QVERIFY(file.open(QIODevice::WriteOnly));
+    QByteArray text =
+        "<?xml version=\"1.0\"?>\n<COLLADA xmlns=\"http://www.collada.org/2005/11/"
+        "COLLADASchema\" version=\"1.4.1\">\n<library_visual_scenes><visual_scene id=\"s\">";
+    for (int i = 0; i < 100000; ++i) text += "<node id=\"n\">";
+    for (int i = 0; i < 100000; ++i) text += "</node>";
+    text +=
+        "</visual_scene></library_visual_scenes><scene><instance_visual_scene url=\"#s\"/>"
+        "</scene></COLLADA>\n";
+    file.write(text);
+  }
+  const auto choice = [](MainWindow& w) {
+    return w.pipeline()->findChild<QComboBox*>("pipeline_body");
+  };
+  {
+    MainWindow window;
+    const lumistage::Status chosen = window.pipeline()->chooseBodyFile(good);
+    QVERIFY2(chosen.ok(), chosen.error().c_str());
+    QCOMPARE(QString::fromStdString(window.pipeline()->body().file.string()), good);
+    QCOMPARE(choice(window)->currentText(), QString("actor.glb"));
+    const lumistage::Status refused = window.pipeline()->chooseBodyFile(garbage);
+    QVERIFY(!refused.ok());
+    QVERIFY2(QString::fromStdString(refused.error()).contains(garbage), refused.error().c_str());
+    const lumistage::Status crashed = window.pipeline()->chooseBodyFile(deep);
+    QVERIFY(!crashed.ok());
+    QVERIFY2(QString::fromStdString(crashed.error()).contains(deep + ": the import crashed ("),
+             crashed.error().c_str());
+    // Neither was taken: the good file stays chosen.
+    QCOMPARE(QString::fromStdString(window.pipeline()->body().file.string()), good);
+    QCOMPARE(choice(window)->findData(garbage), -1);
+  }
+  MainWindow window;  // remembered
+  QCOMPARE(QString::fromStdString(window.pipeline()->body().file.string()), good);
+  QCOMPARE(choice(window)->itemText(choice(window)->count() - 1), QString("Body file..."));
+  window.pipeline()->setBody(lumistage::BodyChoice{});
   QCOMPARE(QSettings("Lumistage", "Studio").value("pipeline/body").toString(), QString("standard"));
 }
 

@@ -65,6 +65,7 @@ class MainWindowTest : public QObject {
   void aRecordingLeftOpenIsOfferedForRecovery();
   void closingWhileRecordingAsksFirst();
   void bodyChoiceIsRememberedAndHeldWhileThePipelineRuns();
+  void aBodyFileIsReadApartAndRefusedSayingWhy();
   void layoutIsRememberedBetweenRuns();
   void healthShowsAKilledNodeLostWithinASecond();
   void theLiveSkeletonBoxStreamsEveryFrameShownToItsReceiver();
