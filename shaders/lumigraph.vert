@@ -16,7 +16,7 @@
 // into it (desired_centre), and only the clone's placement moves the vertex on screen.
 // Defined when compiling: kCameras (the rig's), kOwnCameras (the renderer's own cameras, whose
 // images it has) and kOwnCameraList (their rig indices).
-const int kMaxCameras = 16;
+const int kMaxCameras = 32;
 const int kOwn[kOwnCameras] = int[kOwnCameras](kOwnCameraList);
 const int kMaxK = 4;
 
@@ -75,7 +75,7 @@ void main() {
   // through a branch-free insertion network (no dynamic indexing: llvmpipe runs this 8 vertices
   // at a time).
   const float kNone = 1e9;
-  float angle[kMaxCameras], facing[kMaxCameras], weight[kMaxCameras];
+  float angle[kCameras], facing[kCameras], weight[kCameras];
   vec4 smallest = vec4(kNone);  // sorted: the 4 smallest angles
   float fifth = kNone;
   for (int i = 0; i < kCameras; ++i) {

@@ -160,7 +160,8 @@ std::vector<T> copyVector(const flatbuffers::Vector<T>* v) {
   std::vector<T> out(v->size());
   // Scalars are little-endian on the wire, as on every machine we build for.
   static_assert(flatbuffers::is_same<T, uint8_t>::value ||
-                flatbuffers::is_same<T, uint16_t>::value || flatbuffers::is_same<T, float>::value);
+                flatbuffers::is_same<T, uint16_t>::value ||
+                flatbuffers::is_same<T, uint32_t>::value || flatbuffers::is_same<T, float>::value);
   if (!out.empty()) std::memcpy(out.data(), v->Data(), out.size() * sizeof(T));
   return out;
 }

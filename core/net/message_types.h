@@ -16,7 +16,7 @@ namespace lumistage {
 // Raised whenever a table changes in a way an older peer would misread; every message carries it,
 // and one of another version is refused as it is decoded. What each version changed is in
 // docs/figures-history.md ("The wire protocol's versions").
-inline constexpr uint16_t kProtocolVersion = 8;
+inline constexpr uint16_t kProtocolVersion = 9;
 
 struct HelloData {
   std::string node_name;
@@ -98,7 +98,7 @@ struct OffsetsData {
   int offset_count = 0;
   std::vector<uint8_t> offsets;  // one a vertex, each < offset_count
   // Which rig cameras see each vertex (bit c: camera c; VertexVisibility): empty, or one a vertex.
-  std::vector<uint16_t> visibility;
+  std::vector<uint32_t> visibility;
   bool operator==(const OffsetsData&) const = default;
 };
 

@@ -146,7 +146,7 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
 std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_id,
                                                   const std::vector<ViewData>& views,
                                                   const Eigen::Vector3d& pivot,
-                                                  std::span<const uint16_t> visibility) {
+                                                  std::span<const CameraMask> visibility) {
   std::vector<Message> messages;
   if (!renderer_ || views.empty()) return messages;
   // Which cameras see each vertex: the studio's, computed once for every node, or (none from an

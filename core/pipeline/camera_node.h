@@ -183,7 +183,7 @@ class CameraNode {
   std::vector<Message> partialImagesFor(const Set& set, int64_t frame_id,
                                         const std::vector<ViewData>& views,
                                         const Eigen::Vector3d& pivot,
-                                        std::span<const uint16_t> visibility);
+                                        std::span<const CameraMask> visibility);
   bool send(Message message);
   // Queues a message for the main thread to send, and wakes it.
   void post(Message message);

@@ -123,7 +123,7 @@ LumigraphRenderer::LumigraphRenderer(const Rig& rig, std::vector<int> own, Lumig
   glEnableVertexAttribArray(1);
   glEnableVertexAttribArray(2);
   glBindBuffer(GL_ARRAY_BUFFER, visibility_buffer_);
-  glVertexAttribIPointer(3, 1, GL_UNSIGNED_SHORT, sizeof(uint16_t), nullptr);
+  glVertexAttribIPointer(3, 1, GL_UNSIGNED_INT, sizeof(CameraMask), nullptr);
   glEnableVertexAttribArray(3);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_buffer_);
   glBindVertexArray(0);
@@ -141,7 +141,7 @@ LumigraphRenderer::~LumigraphRenderer() {
 
 void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                                 std::span<const Eigen::Vector3i> triangles,
-                                std::span<const uint16_t> visibility) {
+                                std::span<const CameraMask> visibility) {
   const int n = static_cast<int>(positions.cols());
   if (normals.cols() != n) throw Error("LumigraphRenderer::setMesh: one normal per vertex needed");
   if (visibility.empty()) {
@@ -163,7 +163,7 @@ void LumigraphRenderer::setMesh(const Eigen::Matrix3Xf& positions, const Eigen::
 
 void LumigraphRenderer::upload(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                                std::span<const Eigen::Vector3i> triangles,
-                               std::span<const uint16_t> visibility) {
+                               std::span<const CameraMask> visibility) {
   const int n = static_cast<int>(positions.cols());
   mesh_centre_ =
       n > 0 ? Eigen::Vector3f(positions.rowwise().sum() / float(n)) : Eigen::Vector3f::Zero();
@@ -223,7 +223,7 @@ void LumigraphRenderer::upload(const Eigen::Matrix3Xf& positions, const Eigen::M
     glBufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, index_bytes, triangles.data());
   index_count_ = static_cast<GLsizei>(triangles.size() * 3);
   glBindBuffer(GL_ARRAY_BUFFER, visibility_buffer_);
-  const GLsizeiptr visibility_bytes = GLsizeiptr(visibility.size() * sizeof(uint16_t));
+  const GLsizeiptr visibility_bytes = GLsizeiptr(visibility.size() * sizeof(CameraMask));
   if (visibility_bytes > visibility_capacity_) {
     glBufferData(GL_ARRAY_BUFFER, visibility_bytes, nullptr, GL_STREAM_DRAW);
     visibility_capacity_ = visibility_bytes;

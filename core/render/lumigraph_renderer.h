@@ -116,7 +116,7 @@ class LumigraphRenderer {
   // Throws Error for masks of another vertex count.
   void setMesh(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                std::span<const Eigen::Vector3i> triangles,
-               std::span<const uint16_t> visibility = {});
+               std::span<const CameraMask> visibility = {});
   // The image of own camera `own_index` (index into ownCameras()). Bayer images upload their
   // 2x2 cells' colours (R, the mean of the two G, B; as many bytes as the Bayer image), which the
   // shader samples bilinearly, or, with params().bayer_images kFullResolution, the mosaic itself,
@@ -155,7 +155,7 @@ class LumigraphRenderer {
   void useImageFormat(ImageTexture kind);
   // The mesh's vertices (with their rim dilations), triangles and masks into the GL buffers.
   void upload(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
-              std::span<const Eigen::Vector3i> triangles, std::span<const uint16_t> visibility);
+              std::span<const Eigen::Vector3i> triangles, std::span<const CameraMask> visibility);
   // width x height texels (RGBA, or one byte for a mosaic) into the array's layer `own_index`,
   // through the pixel-buffer object.
   void uploadImage(int own_index, int width, int height, const uint8_t* texels);
@@ -180,12 +180,12 @@ class LumigraphRenderer {
   ImageTexture image_texture_ = ImageTexture::kRgba;
   // Per own camera, for a mosaic: where R sits in its 2x2 cell, and its image's size.
   std::vector<Eigen::Vector2i> mosaic_red_, mosaic_sizes_;
-  GLuint visibility_buffer_ = 0;  // one 16-bit camera mask a vertex (vertex attribute 3)
+  GLuint visibility_buffer_ = 0;  // one 32-bit camera mask a vertex (vertex attribute 3)
   GLsizeiptr visibility_capacity_ = 0;
   VertexVisibility visibility_;
   PhongSubdivision subdivision_;
   DrawOrder draw_order_;  // the uploaded mesh's, and its masks in that order
-  std::vector<uint16_t> ordered_visibility_;
+  std::vector<CameraMask> ordered_visibility_;
   RenderTarget target_;
   GLuint upload_buffer_ = 0;      // pixel-buffer object for image uploads
   std::vector<float> vertices_;   // interleaved positions, normals and rim dilations, reused

@@ -29,7 +29,7 @@ void PhongSubdivision::buildTopology(int n, std::span<const Eigen::Vector3i> tri
 
 void PhongSubdivision::subdivide(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
                                  std::span<const Eigen::Vector3i> triangles,
-                                 std::span<const uint16_t> masks) {
+                                 std::span<const CameraMask> masks) {
   const int n = static_cast<int>(positions.cols());
   if (built_for_.changed(n, triangles)) buildTopology(n, triangles);
   const Eigen::Index total = n + static_cast<Eigen::Index>(edges_.size());
@@ -57,7 +57,7 @@ void PhongSubdivision::subdivide(const Eigen::Matrix3Xf& positions, const Eigen:
   std::copy(masks.begin(), masks.begin() + std::min<size_t>(masks.size(), size_t(n)),
             masks_.begin());
   for (size_t k = 0; k < edges_.size(); ++k)
-    masks_[size_t(n) + k] = uint16_t(masks_[size_t(edges_[k][0])] & masks_[size_t(edges_[k][1])]);
+    masks_[size_t(n) + k] = masks_[size_t(edges_[k][0])] & masks_[size_t(edges_[k][1])];
 }
 
 }  // namespace lumistage

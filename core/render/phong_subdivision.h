@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/render/topology_key.h"
+#include "core/render/vertex_visibility.h"
 
 namespace lumistage {
 
@@ -28,12 +29,13 @@ class PhongSubdivision {
   // Triangles with an index outside `positions` are left out. `masks` may be empty (masks() then
   // is).
   void subdivide(const Eigen::Matrix3Xf& positions, const Eigen::Matrix3Xf& normals,
-                 std::span<const Eigen::Vector3i> triangles, std::span<const uint16_t> masks = {});
+                 std::span<const Eigen::Vector3i> triangles,
+                 std::span<const CameraMask> masks = {});
 
   const Eigen::Matrix3Xf& positions() const { return positions_; }
   const Eigen::Matrix3Xf& normals() const { return normals_; }
   const std::vector<Eigen::Vector3i>& triangles() const { return triangles_; }
-  const std::vector<uint16_t>& masks() const { return masks_; }
+  const std::vector<CameraMask>& masks() const { return masks_; }
 
  private:
   void buildTopology(int vertex_count, std::span<const Eigen::Vector3i> triangles);
@@ -42,7 +44,7 @@ class PhongSubdivision {
   std::vector<Eigen::Vector2i> edges_;  // middle k is vertex vertex_count + k
   Eigen::Matrix3Xf positions_, normals_;
   std::vector<Eigen::Vector3i> triangles_;
-  std::vector<uint16_t> masks_;
+  std::vector<CameraMask> masks_;
 };
 
 }  // namespace lumistage

@@ -23,7 +23,7 @@ void VertexVisibility::compute(const Rig& rig, const Eigen::Matrix3Xf& positions
     const Eigen::Matrix2Xf& pixels = map.vertexPixels();
     const Eigen::VectorXf& depths = map.vertexDepths();
     const float right = float(camera.width()) - 0.5f, bottom = float(camera.height()) - 0.5f;
-    const uint16_t bit = uint16_t(1u << c);
+    const CameraMask bit = CameraMask(1u) << c;
     for (int v = 0; v < n; ++v) {
       const float x = pixels(0, v), y = pixels(1, v), z = depths[v];
       if (!(z > 0.05f) || !(x >= -0.5f && x <= right && y >= -0.5f && y <= bottom)) continue;

@@ -16,10 +16,12 @@ namespace lumistage {
 // the mesh (front faces, rasterised on the CPU at 1/`divisor` of the camera's size, looked up at
 // the nearest cell). The lumigraph's weights (docs/lumigraph.md) take these masks; the studio
 // computes them once a frame for the refined mesh and sends them to every node, so that no node
-// renders the rig's depth maps. At most 16 cameras (one 16-bit mask a vertex).
+// renders the rig's depth maps. At most 32 cameras (one 32-bit mask a vertex, CameraMask).
+using CameraMask = uint32_t;
+
 class VertexVisibility {
  public:
-  static constexpr int kMaxCameras = 16;
+  static constexpr int kMaxCameras = 32;
 
   // Reuses its maps and masks: allocates only when the mesh or the rig grows. Throws Error for a
   // rig of more than kMaxCameras cameras.
@@ -27,11 +29,11 @@ class VertexVisibility {
                std::span<const Eigen::Vector3i> triangles, int divisor, float tolerance_m);
 
   // One mask a vertex of the last compute().
-  std::span<const uint16_t> masks() const { return masks_; }
+  std::span<const CameraMask> masks() const { return masks_; }
 
  private:
   std::vector<DepthMap> maps_;
-  std::vector<uint16_t> masks_;
+  std::vector<CameraMask> masks_;
 };
 
 }  // namespace lumistage

@@ -153,7 +153,7 @@ TEST(HotPaths, ANodesFrameAllocatesNothingAfterTheFirst) {
   Eigen::Matrix3Xf positions, normals, refined;
   const std::vector<uint8_t> offsets(f.generic.rest.vertexCount(), uint8_t(refine.zeroLevel()));
   PhongSubdivision phong;
-  std::vector<uint16_t> visible(f.generic.rest.vertexCount(), 0x0fff);
+  std::vector<CameraMask> visible(f.generic.rest.vertexCount(), 0x0fff);
   std::vector<uint8_t> rgba(size_t(640) * 480 * 4, 0);
   for (size_t i = 0; i < rgba.size(); i += 4 * 7) rgba[i + 3] = 255;
   const std::vector<SamplerCamera> cameras = f.camerasOf(0);

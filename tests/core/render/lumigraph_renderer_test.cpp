@@ -202,7 +202,7 @@ TEST_F(LumigraphRendererTest, GivenVisibilityGivesTheImageOfTheRenderersOwn) {
   renderer->render(desiredView(), given);
   ASSERT_GT(covered(own), 5000);
   EXPECT_EQ(given, own);
-  const std::vector<uint16_t> all(visibility.masks().size(), 0xffff);
+  const std::vector<CameraMask> all(visibility.masks().size(), 0xffffffff);
   renderer->setMesh(surface.positions, surface.normals, surface.triangles, all);
   renderer->render(desiredView(), unoccluded);
   const Camera view = desiredView();
@@ -210,7 +210,7 @@ TEST_F(LumigraphRendererTest, GivenVisibilityGivesTheImageOfTheRenderersOwn) {
   const ViewScore score = compareOverMask(unoccluded, own, all_pixels, view.width(), view.height());
   std::printf("  no occlusion against the visibility masks: %.1f dB\n", score.psnr_db);
   EXPECT_LT(score.psnr_db, 50.0);
-  const std::vector<uint16_t> short_masks(10, 0xffff);
+  const std::vector<CameraMask> short_masks(10, 0xffffffff);
   EXPECT_THROW(
       renderer->setMesh(surface.positions, surface.normals, surface.triangles, short_masks), Error);
 }

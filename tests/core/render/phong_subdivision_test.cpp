@@ -54,7 +54,7 @@ TEST(PhongSubdivision, MiddlesAreSeenByTheCamerasThatSeeBothEndsAndFlatStaysFlat
   normals.setZero();
   normals.row(2).setOnes();
   std::vector<Eigen::Vector3i> square = {{0, 1, 2}, {0, 2, 3}};
-  const std::vector<uint16_t> masks = {0b0111, 0b0011, 0b0110, 0b1000};
+  const std::vector<CameraMask> masks = {0b0111, 0b0011, 0b0110, 0b1000};
   PhongSubdivision phong;
   phong.subdivide(positions, normals, square, masks);
   ASSERT_EQ(phong.positions().cols(), 4 + 5);  // 5 edges: four sides and the diagonal

@@ -71,9 +71,23 @@ TEST(VertexVisibility, ASurfaceInFrontHidesWhatIsBehindIt) {
   EXPECT_NE(visibility.masks()[n] & 1u, 0) << "nothing in front of it";
 }
 
+// A rig twice the reference (24 cameras): every camera of the ring sees a point over the stage's
+// centre, those past the sixteenth too.
+TEST(VertexVisibility, ARigOfTwentyFourCamerasHasABitForEachCamera) {
+  RingRigSpec spec;
+  spec.cameras = 24;
+  const Rig rig = makeRingRig(spec);
+  VertexVisibility visibility;
+  Eigen::Matrix3Xf positions(3, 1);
+  positions.col(0) = Eigen::Vector3f(0, 0, 1.0f);
+  visibility.compute(rig, positions, {}, 4, 0.03f);
+  ASSERT_EQ(visibility.masks().size(), 1u);
+  EXPECT_EQ(visibility.masks()[0], (CameraMask(1) << 24) - 1);
+}
+
 TEST(VertexVisibility, MoreCamerasThanMasksHoldAreRefused) {
   RingRigSpec spec;
-  spec.cameras = 17;
+  spec.cameras = VertexVisibility::kMaxCameras + 1;
   spec.cameras_per_node = 1;
   const Rig rig = makeRingRig(spec);
   VertexVisibility visibility;
