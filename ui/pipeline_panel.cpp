@@ -19,7 +19,6 @@
 #include <exception>
 #include <map>
 
-#include "core/base/child_process.h"
 #include "core/base/output_path.h"
 #include "core/body/human_model.h"
 #include "ui/live_table.h"
@@ -213,15 +212,7 @@ int PipelinePanel::bodyFileItem() const {
 Status PipelinePanel::chooseBodyFile(const QString& file) {
   // Read in a child process, as lumistage body show reads it: a file that crashes Assimp (nested
   // too deep, damaged) costs the child, not the studio.
-  const std::string path = file.toStdString();
-  const Status read = runInChildProcess([&] { loadBody(BodyChoice{BodyDetail::kStandard, path}); });
-  if (!read.ok()) {
-    const std::string& error = read.error();
-    return Status::failure(error.rfind("crashed (", 0) == 0
-                               ? path + ": the import " + error +
-                                     " inside the mesh library: a damaged or hostile file"
-                               : error);
-  }
+  if (const Status read = checkBodyFile(file.toStdString()); !read.ok()) return read;
   addBodyFile(file);
   return {};
 }

@@ -5,7 +5,6 @@
 #include <memory>
 
 #include "app/cli/checks.h"
-#include "core/base/child_process.h"
 #include "core/base/error.h"
 #include "core/body/body_mapping.h"
 #include "core/body/human_model.h"
@@ -53,14 +52,8 @@ void showBody(const std::string& file) {
 // 100,000 nodes overflows its parser's stack; only glTF's depth is checked before Assimp reads
 // it) becomes an error naming the file instead of a dead process.
 void showBodyInChildProcess(const std::string& file) {
-  const Status shown = runInChildProcess([&] { showBody(file); });
-  if (shown.ok()) return;
-  if (const std::string& error = shown.error(); error.rfind("crashed (", 0) == 0)
-    throw Error(fmt::format(
-        "{}: the import crashed inside the mesh library ({}): a damaged or hostile file, or one "
-        "nested too deep",
-        file, error.substr(9, error.size() - 10)));
-  throw Error(shown.error() == "failed" ? file + ": the import failed" : shown.error());
+  if (const Status shown = readApart(file, [&] { showBody(file); }); !shown.ok())
+    throw Error(shown.error());
 }
 
 }  // namespace

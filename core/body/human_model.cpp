@@ -6,6 +6,7 @@
 #include <cmath>
 #include <set>
 
+#include "core/base/child_process.h"
 #include "core/base/error.h"
 #include "core/base/resource_path.h"
 #include "core/body/body_mapping.h"
@@ -262,6 +263,22 @@ BodyChoice parseBodyChoice(const std::string& text) {
 
 SkinnedMesh loadBody(const BodyChoice& choice) {
   return choice.file.empty() ? loadGenericHuman(choice.detail) : loadHumanBody(choice.file);
+}
+
+Status readApart(const std::string& file, const std::function<void()>& read) {
+  const Status read_apart = runInChildProcess(read);
+  if (read_apart.ok()) return {};
+  const std::string& error = read_apart.error();
+  if (error.rfind("crashed (", 0) == 0)
+    return Status::failure(fmt::format(
+        "{}: the import crashed inside the mesh library ({}): a damaged or hostile file, or one "
+        "nested too deep",
+        file, error.substr(9, error.size() - 10)));
+  return Status::failure(error == "failed" ? file + ": the import failed" : error);
+}
+
+Status checkBodyFile(const std::filesystem::path& file) {
+  return readApart(file.string(), [&] { loadBody(BodyChoice{BodyDetail::kStandard, file}); });
 }
 
 SkinnedMesh trackingModelFor(const SkinnedMesh& body) {

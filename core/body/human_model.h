@@ -1,8 +1,10 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
+#include "core/base/status.h"
 #include "core/body/human_skeleton.h"
 #include "core/body/skinned_mesh.h"
 
@@ -61,6 +63,13 @@ std::string bodyChoiceName(const BodyChoice& choice);
 BodyChoice parseBodyChoice(const std::string& text);
 // loadGenericHuman, or loadHumanBody for a file.
 SkinnedMesh loadBody(const BodyChoice& choice);
+// Runs `read` (reading `file` through the mesh library) in a child process (runInChildProcess):
+// ok when it read it; failed with its own error, or, when it crashed, saying so naming the file
+// ("FILE: the import crashed inside the mesh library (SIGNAL): ..."). A file nested too deep for
+// Assimp costs the child, not the caller.
+Status readApart(const std::string& file, const std::function<void()>& read);
+// readApart of loadBody on the file: whether --body FILE can pose it.
+Status checkBodyFile(const std::filesystem::path& file);
 
 // The mesh the tracker builds its capsules from when the nodes pose `body`: the body itself when
 // it stands on the generic human's skeleton (its joints within a millimetre of

@@ -290,7 +290,8 @@ void MainWindowTest::aBodyFileIsReadApartAndRefusedSayingWhy() {
     QVERIFY2(QString::fromStdString(refused.error()).contains(garbage), refused.error().c_str());
     const lumistage::Status crashed = window.pipeline()->chooseBodyFile(deep);
     QVERIFY(!crashed.ok());
-    QVERIFY2(QString::fromStdString(crashed.error()).contains(deep + ": the import crashed ("),
+    QVERIFY2(QString::fromStdString(crashed.error())
+                 .contains(deep + ": the import crashed inside the mesh library ("),
              crashed.error().c_str());
     // Neither was taken: the good file stays chosen.
     QCOMPARE(QString::fromStdString(window.pipeline()->body().file.string()), good);
