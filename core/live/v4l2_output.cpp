@@ -2,7 +2,6 @@
 
 extern "C" {
 #include <libavutil/pixfmt.h>
-#include <libswscale/swscale.h>
 }
 
 #include <fcntl.h>
@@ -16,7 +15,6 @@ extern "C" {
 #include <cstring>
 
 #include "core/base/error.h"
-#include "core/render/video_encoder.h"
 
 namespace lumistage {
 
@@ -40,7 +38,6 @@ V4l2Output::V4l2Output(int width, int height)
 
 V4l2Output::~V4l2Output() {
   close();
-  sws_freeContext(scaler_);
 }
 
 void V4l2Output::close() {
@@ -50,17 +47,16 @@ void V4l2Output::close() {
 
 Status V4l2Output::open(const std::string& device) {
   close();
-  device_ = device;
-  const std::string name = quotedInput(device);
+  name_ = "v4l2 output " + quotedInput(device);
   if (width_ < 2 || height_ < 2)
-    return Status::failure("v4l2 output " + name + ": cannot send pictures of " +
-                           std::to_string(width_) + "x" + std::to_string(height_));
+    return Status::failure(name_ + ": cannot send pictures of " + std::to_string(width_) + "x" +
+                           std::to_string(height_));
   // Opened non-blocking before anything is known of it: a FIFO or a device that waits must not
   // hold the caller.
   const int fd = ::open(device.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0)
     return Status::failure(
-        "v4l2 output " + name + ": cannot open it (" + std::strerror(errno) + ")" +
+        name_ + ": cannot open it (" + std::strerror(errno) + ")" +
         (errno == ENOENT ? "; load v4l2loopback (sudo modprobe v4l2loopback) to make one" : ""));
   struct Closer {
     int fd;
@@ -71,10 +67,10 @@ Status V4l2Output::open(const std::string& device) {
   } closer{fd};
   struct stat about {};
   if (fstat(fd, &about) != 0 || !S_ISCHR(about.st_mode))
-    return Status::failure("v4l2 output " + name + ": not a device (expected /dev/videoN)");
+    return Status::failure(name_ + ": not a device (expected /dev/videoN)");
   v4l2_capability capability{};
   if (control(fd, VIDIOC_QUERYCAP, &capability) != 0)
-    return Status::failure("v4l2 output " + name +
+    return Status::failure(name_ +
                            ": not a V4L2 device; load v4l2loopback (sudo modprobe v4l2loopback) "
                            "and name the /dev/videoN it makes");
   const uint32_t caps = (capability.capabilities & V4L2_CAP_DEVICE_CAPS) != 0
@@ -84,10 +80,10 @@ Status V4l2Output::open(const std::string& device) {
       reinterpret_cast<const char*>(capability.card),
       strnlen(reinterpret_cast<const char*>(capability.card), sizeof capability.card));
   if ((caps & V4L2_CAP_VIDEO_OUTPUT) == 0)
-    return Status::failure("v4l2 output " + name + " (" + quotedInput(card) +
+    return Status::failure(name_ + " (" + quotedInput(card) +
                            "): a camera, not an output device; v4l2loopback makes one");
   if ((caps & V4L2_CAP_READWRITE) == 0)
-    return Status::failure("v4l2 output " + name + " (" + quotedInput(card) +
+    return Status::failure(name_ + " (" + quotedInput(card) +
                            "): takes no written pictures (no read/write I/O)");
   v4l2_format format{};
   format.type = V4L2_BUF_TYPE_VIDEO_OUTPUT;
@@ -102,13 +98,12 @@ Status V4l2Output::open(const std::string& device) {
   format.fmt.pix.quantization = V4L2_QUANTIZATION_LIM_RANGE;
   const std::string wanted = std::to_string(width_) + "x" + std::to_string(height_) + " I420";
   if (control(fd, VIDIOC_S_FMT, &format) != 0)
-    return Status::failure("v4l2 output " + name + ": refused " + wanted + " (" +
-                           std::strerror(errno) +
+    return Status::failure(name_ + ": refused " + wanted + " (" + std::strerror(errno) +
                            "); another program may be writing to it, or it is fixed to another "
                            "format (v4l2loopback-ctl set-caps)");
   if (format.fmt.pix.width != uint32_t(width_) || format.fmt.pix.height != uint32_t(height_) ||
       format.fmt.pix.pixelformat != V4L2_PIX_FMT_YUV420)
-    return Status::failure("v4l2 output " + name + ": asked for " + wanted + ", it holds " +
+    return Status::failure(name_ + ": asked for " + wanted + ", it holds " +
                            std::to_string(format.fmt.pix.width) + "x" +
                            std::to_string(format.fmt.pix.height) +
                            " in another format; give it this size (v4l2loopback-ctl set-caps) or "
@@ -120,23 +115,19 @@ Status V4l2Output::open(const std::string& device) {
 
 std::span<const uint8_t> V4l2Output::convert(const uint8_t* pixels, PixelOrder order, int width,
                                              int height, int stride) {
-  const AVPixelFormat input = AVPixelFormat(avPixelFormatOf(order));
-  scaler_ = sws_getCachedContext(scaler_, width, height, input, width_, height_, AV_PIX_FMT_YUV420P,
-                                 SWS_BILINEAR, nullptr, nullptr, nullptr);
-  if (!scaler_) throw Error("v4l2 output: cannot convert the pictures (libswscale)");
-  const uint8_t* source[1] = {pixels};
-  const int source_stride[1] = {stride > 0 ? stride : width * bytesPerPixel(order)};
   const size_t luma = size_t(width_) * height_;
-  uint8_t* planes[3] = {picture_.data(), picture_.data() + luma, picture_.data() + luma * 5 / 4};
+  uint8_t* const planes[3] = {picture_.data(), picture_.data() + luma,
+                              picture_.data() + luma * 5 / 4};
   const int strides[3] = {width_, width_ / 2, width_ / 2};
-  sws_scale(scaler_, source, source_stride, 0, height, planes, strides);
+  converter_.convert(pixels, order, width, height, stride, width_, height_, AV_PIX_FMT_YUV420P,
+                     false, planes, strides, name_);
   return picture_;
 }
 
 Status V4l2Output::write(const uint8_t* pixels, PixelOrder order, int width, int height,
                          bool& taken) {
   taken = false;
-  if (fd_ < 0) return Status::failure("v4l2 output " + quotedInput(device_) + ": not open");
+  if (fd_ < 0) return Status::failure(name_ + ": not open");
   const std::span<const uint8_t> picture = convert(pixels, order, width, height);
   ssize_t written;
   do {
@@ -144,8 +135,7 @@ Status V4l2Output::write(const uint8_t* pixels, PixelOrder order, int width, int
   } while (written < 0 && errno == EINTR);
   if (written < 0) {
     if (errno == EAGAIN || errno == EWOULDBLOCK) return {};
-    return Status::failure("v4l2 output " + quotedInput(device_) + ": cannot write (" +
-                           std::strerror(errno) + ")");
+    return Status::failure(name_ + ": cannot write (" + std::strerror(errno) + ")");
   }
   taken = true;
   return {};

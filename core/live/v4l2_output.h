@@ -6,9 +6,8 @@
 #include <vector>
 
 #include "core/base/status.h"
+#include "core/render/video_encoder.h"
 #include "core/render/video_file.h"
-
-struct SwsContext;
 
 namespace lumistage {
 
@@ -33,9 +32,10 @@ class V4l2Output {
   bool isOpen() const { return fd_ >= 0; }
   void close();
 
-  // One picture, rows top first, packed, `order`'s bytes a pixel (`stride` bytes a row; 0:
-  // packed), as I420 of this output's size: scaled when of another. Valid until the next call.
-  // Nothing is allocated once the first picture of a size and order has been converted.
+  // One picture, rows top first, `order`'s bytes a pixel (`stride` bytes a row; 0: packed), as
+  // I420 of this output's size (YuvConverter: BT.601 limited range; scaled when of another size).
+  // Valid until the next call. Nothing is allocated once the first picture of a size and order has
+  // been converted.
   std::span<const uint8_t> convert(const uint8_t* pixels, PixelOrder order, int width, int height,
                                    int stride = 0);
   // convert(), then written to the device. Ok with `taken` true when written, false when the
@@ -44,13 +44,12 @@ class V4l2Output {
 
   int width() const { return width_; }
   int height() const { return height_; }
-  const std::string& device() const { return device_; }
 
  private:
   int width_, height_;
   int fd_ = -1;
-  std::string device_;
-  SwsContext* scaler_ = nullptr;
+  std::string name_ = "v4l2 output";  // begins the converter's messages
+  YuvConverter converter_;
   std::vector<uint8_t> picture_;  // I420: Y, then U, then V
 };
 

@@ -276,18 +276,17 @@ const char* checkBody(std::span<const uint8_t> data, size_t vertices, size_t n, 
 }
 
 Status decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, int max_samples) {
-  const auto fail = refuse;
-  if (data.size() < kHeaderBytes) return fail("shorter than its header");
+  if (data.size() < kHeaderBytes) return refuse("shorter than its header");
   const uint32_t vertices = get(data.data(), 4);
   const int offsets = data[4], bits = data[5], sum_bytes = data[6], square_bytes = data[7];
-  if (offsets == 0 || bits < 1 || bits > 8) return fail("bad offset count or colour bits");
-  if (!validWidths(sum_bytes, square_bytes)) return fail("bad value widths");
-  if (uint64_t(vertices) * offsets > uint64_t(max_samples)) return fail("too many samples");
+  if (offsets == 0 || bits < 1 || bits > 8) return refuse("bad offset count or colour bits");
+  if (!validWidths(sum_bytes, square_bytes)) return refuse("bad value widths");
+  if (uint64_t(vertices) * offsets > uint64_t(max_samples)) return refuse("too many samples");
   const size_t n = size_t(vertices) * offsets;
   size_t coloured, squared;
   if (const char* why =
           checkBody(data, vertices, n, offsets, sum_bytes, square_bytes, coloured, squared))
-    return fail(why);
+    return refuse(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
   out.reset(int(vertices), offsets, bits);
   PackedValues values(counts + n, coloured, squared, sum_bytes, square_bytes);
@@ -307,18 +306,17 @@ Status decodePacked(std::span<const uint8_t> data, RefinementStatistics& out, in
 }
 
 Status addPacked(std::span<const uint8_t> data, RefinementStatistics& sum) {
-  const auto fail = refuse;
-  if (data.size() < kHeaderBytes) return fail("shorter than its header");
+  if (data.size() < kHeaderBytes) return refuse("shorter than its header");
   const uint32_t vertices = get(data.data(), 4);
   const int offsets = data[4], bits = data[5], sum_bytes = data[6], square_bytes = data[7];
   if (int(vertices) != sum.vertex_count || offsets != sum.offset_count || bits != sum.colour_bits)
-    return fail("sizes differ from the mesh's");
-  if (!validWidths(sum_bytes, square_bytes)) return fail("bad value widths");
+    return refuse("sizes differ from the mesh's");
+  if (!validWidths(sum_bytes, square_bytes)) return refuse("bad value widths");
   const size_t n = size_t(vertices) * offsets;
   size_t coloured, squared;
   if (const char* why =
           checkBody(data, vertices, n, offsets, sum_bytes, square_bytes, coloured, squared))
-    return fail(why);
+    return refuse(why);
   const uint8_t* counts = data.data() + kHeaderBytes;
   PackedValues values(counts + n, coloured, squared, sum_bytes, square_bytes);
   for (size_t s = 0; s < n; ++s) {
@@ -409,51 +407,51 @@ void RefinementStatisticsCodec::encode(const RefinementStatistics& stats,
 
 Status RefinementStatisticsCodec::unpack(std::span<const uint8_t> data, int max_samples,
                                          std::span<const uint8_t>& packed) {
-  const auto fail = refuse;
   if (!isCompressedRefinementStatistics(data)) {
     packed = data;
     return {};
   }
   constexpr size_t h = kCompressedStatisticsHeaderBytes;
-  if (data.size() < h) return fail("shorter than its compressed header");
-  if (data[7] != kZstdCompression) return fail("unknown compression " + std::to_string(data[7]));
+  if (data.size() < h) return refuse("shorter than its compressed header");
+  if (data[7] != kZstdCompression) return refuse("unknown compression " + std::to_string(data[7]));
   const uint64_t points = get(data.data(), 4), n = points * data[4];
-  if (n > uint64_t(max_samples)) return fail("too many samples");
+  if (n > uint64_t(max_samples)) return refuse("too many samples");
   const uint64_t size = get(data.data() + 8, 4), least = kHeaderBytes + n + contourBytes(points);
   if (size < least || size > maxPackedStatisticsBytes(n)) {
-    return fail("compressed form declares " + std::to_string(size) + " packed bytes, " +
-                std::to_string(n) + " samples take " + std::to_string(least) + " to " +
-                std::to_string(maxPackedStatisticsBytes(n)));
+    return refuse("compressed form declares " + std::to_string(size) + " packed bytes, " +
+                  std::to_string(n) + " samples take " + std::to_string(least) + " to " +
+                  std::to_string(maxPackedStatisticsBytes(n)));
   }
   const std::span<const uint8_t> frame = data.subspan(h);
   // Only a plain zstd frame: no skippable or legacy frames, no concatenation.
   if (frame.size() < 4 || get(frame.data(), 4) != ZSTD_MAGICNUMBER)
-    return fail("compressed form does not hold a zstd frame");
+    return refuse("compressed form does not hold a zstd frame");
   const unsigned long long content = ZSTD_getFrameContentSize(frame.data(), frame.size());
-  if (content == ZSTD_CONTENTSIZE_ERROR) return fail("malformed or truncated zstd frame header");
-  if (content == ZSTD_CONTENTSIZE_UNKNOWN) return fail("zstd frame does not declare its size");
+  if (content == ZSTD_CONTENTSIZE_ERROR) return refuse("malformed or truncated zstd frame header");
+  if (content == ZSTD_CONTENTSIZE_UNKNOWN) return refuse("zstd frame does not declare its size");
   if (content != size) {
-    return fail("zstd frame declares " + std::to_string(content) + " bytes, the header " +
-                std::to_string(size));
+    return refuse("zstd frame declares " + std::to_string(content) + " bytes, the header " +
+                  std::to_string(size));
   }
   const size_t frame_size = ZSTD_findFrameCompressedSize(frame.data(), frame.size());
   if (ZSTD_isError(frame_size))
-    return fail("truncated zstd frame: " + std::string(ZSTD_getErrorName(frame_size)));
-  if (frame_size != frame.size()) return fail("bytes after the zstd frame");
+    return refuse("truncated zstd frame: " + std::string(ZSTD_getErrorName(frame_size)));
+  if (frame_size != frame.size()) return refuse("bytes after the zstd frame");
   if (!decompressor_) {
     decompressor_.reset(ZSTD_createDCtx());
-    if (!decompressor_) return fail("out of memory for a zstd context");
+    if (!decompressor_) return refuse("out of memory for a zstd context");
   }
   packed_.resize(size);
   const size_t got = ZSTD_decompressDCtx(decompressor_.get(), packed_.data(), packed_.size(),
                                          frame.data(), frame.size());
-  if (ZSTD_isError(got)) return fail("corrupt zstd frame: " + std::string(ZSTD_getErrorName(got)));
+  if (ZSTD_isError(got))
+    return refuse("corrupt zstd frame: " + std::string(ZSTD_getErrorName(got)));
   if (got != size) {
-    return fail("zstd frame holds " + std::to_string(got) + " bytes, the header says " +
-                std::to_string(size));
+    return refuse("zstd frame holds " + std::to_string(got) + " bytes, the header says " +
+                  std::to_string(size));
   }
   if (!std::equal(data.begin(), data.begin() + 6, packed_.begin()))
-    return fail("the packed header differs from the compressed one");
+    return refuse("the packed header differs from the compressed one");
   packed = packed_;
   return {};
 }

@@ -26,7 +26,10 @@ void quietFfmpeg() {
   std::call_once(once, [] { av_log_set_level(AV_LOG_FATAL); });
 }
 
-int avPixelFormatOf(PixelOrder order) {
+namespace {
+
+// FFmpeg's pixel format of packed pixels in `order`.
+AVPixelFormat avPixelFormatOf(PixelOrder order) {
   switch (order) {
     case PixelOrder::kRgb:
       return AV_PIX_FMT_RGB24;
@@ -39,6 +42,8 @@ int avPixelFormatOf(PixelOrder order) {
   }
   return AV_PIX_FMT_RGB24;
 }
+
+}  // namespace
 
 VideoEncoder::VideoEncoder(std::string name, VideoCodec codec, VideoSpeed speed, int width,
                            int height, double fps, bool global_header)
@@ -129,9 +134,41 @@ VideoEncoder::~VideoEncoder() {
   release();
 }
 
-void VideoEncoder::release() {
+YuvConverter::~YuvConverter() {
   sws_freeContext(scaler_);
-  scaler_ = nullptr;
+}
+
+void YuvConverter::convert(const uint8_t* pixels, PixelOrder order, int source_width,
+                           int source_height, int stride, int width, int height, int yuv_format,
+                           bool full_range, uint8_t* const planes[], const int strides[],
+                           const std::string& name) {
+  const AVPixelFormat input = avPixelFormatOf(order);
+  // The same size: the even part of the image (an odd last column or row is left out), copied;
+  // another: scaled.
+  const bool same = (source_width & ~1) == width && (source_height & ~1) == height;
+  const int from_width = same ? width : source_width, from_height = same ? height : source_height;
+  if (!scaler_ || input != input_ || from_width != from_width_ || from_height != from_height_ ||
+      width != width_ || height != height_) {
+    sws_freeContext(scaler_);
+    scaler_ =
+        sws_getContext(from_width, from_height, input, width, height, AVPixelFormat(yuv_format),
+                       same ? SWS_POINT : SWS_BILINEAR, nullptr, nullptr, nullptr);
+    input_ = -1;
+    if (!scaler_) throw Error(name + ": cannot convert its frames to YUV (libswscale)");
+    const int* bt601 = sws_getCoefficients(SWS_CS_ITU601);
+    sws_setColorspaceDetails(scaler_, bt601, 1, bt601, full_range, 0, 1 << 16, 1 << 16);
+    input_ = input;
+    from_width_ = from_width;
+    from_height_ = from_height;
+    width_ = width;
+    height_ = height;
+  }
+  const uint8_t* source[1] = {pixels};
+  const int source_stride[1] = {stride > 0 ? stride : source_width * bytesPerPixel(order)};
+  sws_scale(scaler_, source, source_stride, 0, from_height, planes, strides);
+}
+
+void VideoEncoder::release() {
   av_packet_free(&packet_);
   av_frame_free(&frame_);
   avcodec_free_context(&encoder_);
@@ -139,31 +176,13 @@ void VideoEncoder::release() {
 
 void VideoEncoder::send(const uint8_t* pixels, PixelOrder order, int source_width,
                         int source_height, int stride, int64_t pts) {
-  const AVPixelFormat input = AVPixelFormat(avPixelFormatOf(order));
-  // The same size: the even part of the image (an odd last column or row is left out), copied;
-  // another: scaled.
-  const bool same = (source_width & ~1) == width_ && (source_height & ~1) == height_;
-  const int from_width = same ? width_ : source_width, from_height = same ? height_ : source_height;
-  if (!scaler_ || input != scaler_input_ || from_width != scaler_width_ ||
-      from_height != scaler_height_) {
-    sws_freeContext(scaler_);
-    scaler_ = sws_getContext(from_width, from_height, input, width_, height_, encoder_->pix_fmt,
-                             same ? SWS_POINT : SWS_BILINEAR, nullptr, nullptr, nullptr);
-    if (!scaler_) throw Error(name_ + ": cannot convert its frames to YUV (libswscale)");
-    const int full = encoder_->color_range == AVCOL_RANGE_JPEG;
-    const int* bt601 = sws_getCoefficients(SWS_CS_ITU601);
-    sws_setColorspaceDetails(scaler_, bt601, 1, bt601, full, 0, 1 << 16, 1 << 16);
-    scaler_input_ = input;
-    scaler_width_ = from_width;
-    scaler_height_ = from_height;
-  }
   // The encoder may still hold the last frame (frame threads): then a new buffer, else this one.
   int code = av_frame_make_writable(frame_);
   if (code < 0)
     throw Error(name_ + ": cannot allocate the video's frame (" + ffmpegError(code) + ")");
-  const uint8_t* planes[1] = {pixels};
-  const int strides[1] = {stride > 0 ? stride : source_width * bytesPerPixel(order)};
-  sws_scale(scaler_, planes, strides, 0, from_height, frame_->data, frame_->linesize);
+  converter_.convert(pixels, order, source_width, source_height, stride, width_, height_,
+                     encoder_->pix_fmt, encoder_->color_range == AVCOL_RANGE_JPEG, frame_->data,
+                     frame_->linesize, name_);
   frame_->pts = pts;
   if (encoder_->flags & AV_CODEC_FLAG_QSCALE) frame_->quality = encoder_->global_quality;
   code = avcodec_send_frame(encoder_, frame_);

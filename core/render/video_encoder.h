@@ -12,8 +12,29 @@ struct SwsContext;
 
 namespace lumistage {
 
-// FFmpeg's pixel format (an AVPixelFormat) of packed pixels in `order`.
-int avPixelFormatOf(PixelOrder order);
+// Packed RGB(A) pictures to 4:2:0 YUV planes (libswscale, BT.601's matrix): a picture of the
+// target's size has its even part copied (an odd last column or row left out), one of another size
+// is scaled (bilinear). The scaler is made once per source order and size: after the first picture
+// of each, convert() allocates nothing. Shared by VideoEncoder and the v4l2 output.
+class YuvConverter {
+ public:
+  YuvConverter() = default;
+  ~YuvConverter();
+  YuvConverter(const YuvConverter&) = delete;
+  YuvConverter& operator=(const YuvConverter&) = delete;
+
+  // `pixels`: rows top first, `stride` bytes apart (0: packed). Into `planes` (Y, U, V, with their
+  // `strides`) of `width` x `height` (even) in `yuv_format` (an AVPixelFormat of 4:2:0 YUV),
+  // `full_range` or limited. Throws Error, naming `name`, when libswscale cannot convert.
+  void convert(const uint8_t* pixels, PixelOrder order, int source_width, int source_height,
+               int stride, int width, int height, int yuv_format, bool full_range,
+               uint8_t* const planes[], const int strides[], const std::string& name);
+
+ private:
+  SwsContext* scaler_ = nullptr;
+  int input_ = -1;  // AVPixelFormat the scaler converts from, and the sizes
+  int from_width_ = 0, from_height_ = 0, width_ = 0, height_ = 0;
+};
 
 // The encoding half of a video: RGB(A) pixels to 4:2:0 YUV (libswscale) to packets (libavcodec),
 // shared by VideoFileWriter (a file) and VideoFeed (a network feed); each muxes the packets its
@@ -57,9 +78,7 @@ class VideoEncoder {
   AVCodecContext* encoder_ = nullptr;
   AVFrame* frame_ = nullptr;
   AVPacket* packet_ = nullptr;
-  SwsContext* scaler_ = nullptr;
-  int scaler_input_ = -1;  // AVPixelFormat the scaler converts from, and the size
-  int scaler_width_ = 0, scaler_height_ = 0;
+  YuvConverter converter_;
   void release();
 };
 
