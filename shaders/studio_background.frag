@@ -1,7 +1,8 @@
 #version 430 core
-// The green screen around the stage: a floor and a cylindrical cyclorama, lit unevenly (folds,
-// hot spots, darker corners) as real ones are, seen through the camera with its vignetting and
-// sensor noise. Alpha 0: not the actor.
+// What stands around the stage, a floor and a cylindrical wall, seen through the camera with its
+// vignetting and sensor noise: a green screen lit unevenly (folds, hot spots, darker corners) as
+// real ones are, or a room (room = 1): a wooden floor, painted walls with posters, a door and a
+// skirting board, in colours a person's clothes and skin also have. Alpha 0: not the actor.
 in vec2 v_ndc;
 uniform mat3 rotation;       // world to camera
 uniform vec3 camera_centre;
@@ -11,6 +12,7 @@ uniform uint noise_seed;
 uniform float noise_sigma;
 uniform vec3 screen_green;
 uniform float unevenness;    // 0: flat; 0.15: a typical studio
+uniform int room;            // 1: a room instead of the green screen
 out vec4 colour;
 
 uint hash(uint x) {
@@ -41,6 +43,39 @@ vec3 sensorNoise() {
   return n * noise_sigma;
 }
 
+// The room's colour at `hit` on the floor (ground) or the wall.
+vec3 roomColour(vec3 hit, bool ground) {
+  if (ground) {
+    // Planks 0.18 m wide along x, each its own shade of oak, grain along them, dark joints.
+    float plank = floor(hit.y / 0.18);
+    float shade = 0.75 + 0.5 * hash3(vec3(plank, 7.0, 3.0));
+    float grain = valueNoise(vec3(hit.x * 3.0, hit.y * 60.0, plank)) * 0.25;
+    float joint = smoothstep(0.0, 0.006, abs(fract(hit.y / 0.18 + 0.5) - 0.5) * 0.18);
+    float end = smoothstep(0.0, 0.004, abs(fract(hit.x / 1.2 + hash3(vec3(plank, 1.0, 1.0))) - 0.5) * 1.2);
+    return vec3(0.52, 0.36, 0.22) * shade * (0.85 + grain) * mix(0.35, 1.0, joint * end);
+  }
+  float angle = atan(hit.y, hit.x);  // around the wall
+  float along = angle * 5.0;         // metres along the wall
+  vec3 paint = vec3(0.78, 0.74, 0.66) * (0.92 + 0.16 * valueNoise(hit * 2.0));
+  if (hit.z < 0.12) return vec3(0.25, 0.22, 0.2);  // skirting board
+  // A poster every 2.2 m, 0.9 m wide, from 1.0 to 2.1 m high, a colour of its own, a picture.
+  float slot = floor(along / 2.2);
+  float u = along - slot * 2.2;
+  if (u > 0.4 && u < 1.3 && hit.z > 1.0 && hit.z < 2.1) {
+    vec3 hue = vec3(hash3(vec3(slot, 1.0, 0.0)), hash3(vec3(slot, 2.0, 0.0)),
+                    hash3(vec3(slot, 3.0, 0.0)));
+    float picture = valueNoise(vec3(u * 6.0, hit.z * 6.0, slot));
+    return mix(hue, vec3(0.9, 0.88, 0.8), 0.3) * (0.55 + 0.5 * picture);
+  }
+  // A door every 7 m: 0.9 m wide, 2.05 m high, dark blue with a frame.
+  float door = along - floor(along / 7.0) * 7.0;
+  if (door > 3.0 && door < 3.9 && hit.z < 2.05) {
+    bool frame = door < 3.06 || door > 3.84 || hit.z > 1.99;
+    return frame ? vec3(0.9, 0.9, 0.88) : vec3(0.16, 0.22, 0.38);
+  }
+  return paint;
+}
+
 void main() {
   vec2 pixel = (v_ndc + 1.0) * 0.5 * image_size - 0.5;
   vec3 ray_camera = vec3((pixel.x - focal_centre.z) / focal_centre.x, (pixel.y - focal_centre.w) / focal_centre.y, 1.0);
@@ -50,11 +85,13 @@ void main() {
   float a = dot(ray.xy, ray.xy), b = dot(camera_centre.xy, ray.xy), c = dot(camera_centre.xy, camera_centre.xy) - 25.0;
   float t_wall = a > 1e-8 ? (-b + sqrt(max(b * b - a * c, 0.0))) / a : 1e9;
   vec3 hit = camera_centre + min(t_floor, t_wall) * ray;
-  float shade = t_floor < t_wall ? 0.88 : 1.0;  // the floor gets less light
+  bool on_floor = t_floor < t_wall;
+  float shade = on_floor ? 0.88 : 1.0;  // the floor gets less light
   float folds = valueNoise(hit * 1.3) * 0.6 + valueNoise(hit * 4.0) * 0.4;
   float hot = exp(-dot(hit.xy, hit.xy) / 30.0) * 0.08;
   float brightness = shade * (1.0 - unevenness + 2.0 * unevenness * folds) + hot;
   vec2 centred = (pixel - focal_centre.zw) / image_size;
   float vignette = 1.0 - 0.35 * dot(centred, centred);
-  colour = vec4(clamp(screen_green * brightness * vignette + sensorNoise(), 0.0, 1.0), 0.0);
+  vec3 surface = room == 1 ? roomColour(hit, on_floor) : screen_green;
+  colour = vec4(clamp(surface * brightness * vignette + sensorNoise(), 0.0, 1.0), 0.0);
 }

@@ -259,9 +259,10 @@ void HealthPanel::refresh() {
     const QColor colour = stateColour(v.state);
     setLiveCell(*table_, r, kState, QString::fromUtf8(healthStateName(v.state)), Qt::white);
     table_->item(r, kState)->setBackground(colour);
-    // A camera keyed from the session's masks (a stage without a green screen) says so.
+    // A camera keyed other than on green (a stage without a green screen: from the session's
+    // masks, or on its clean plate) says so.
     QString words = QString::fromStdString(v.words);
-    if (row.key == QLatin1String(kKeyedFromMasks)) words += "; " + row.key;
+    if (!row.key.isEmpty() && row.key != QLatin1String(kKeyedOnGreen)) words += "; " + row.key;
     setLiveCell(*table_, r, kProblem, words,
                 v.state == HealthState::kStreaming ? palette().text().color() : colour);
     setLiveCell(*table_, r, kFps, QString::number(row.fps, 'f', 1));

@@ -21,6 +21,7 @@
 #include "core/eval/segmentation_eval.h"
 #include "core/eval/surface_metrics.h"
 #include "core/eval/view_metrics.h"
+#include "core/imaging/clean_plate.h"
 #include "core/net/posed_body.h"
 #include "core/refine/frame_refiner.h"
 #include "core/render/egl_context.h"
@@ -188,6 +189,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   std::vector<int> window;
   std::vector<std::vector<CameraFrame>> window_images;
   int window_for = -1;
+  const std::vector<std::shared_ptr<const BackgroundModel>> plates = sessionPlates(session);
   const auto refined_mesh = [&](int i, int left_out) {
     if (window_for != i) {
       window.clear();
@@ -201,6 +203,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
     // As the pipeline refines: frame after frame, each pulled toward the previous one's offsets
     // (the temporal term).
     FrameRefiner refiner(session.rig(), refine, generic.rest.vertexCount(), generic.rest.triangles);
+    refiner.setPlates(plates);
     TriangleMesh mesh;
     mesh.triangles = generic.rest.triangles;
     for (size_t k = 0; k < window.size(); ++k) {

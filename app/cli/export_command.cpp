@@ -16,6 +16,7 @@
 #include "core/capture/session_reader.h"
 #include "core/eval/eval_report.h"
 #include "core/eval/mocap_eval.h"
+#include "core/imaging/clean_plate.h"
 #include "core/net/posed_body.h"
 #include "core/refine/frame_refiner.h"
 
@@ -115,6 +116,7 @@ void addExportCommand(CLI::App& app) {
     std::vector<TriangleMesh> meshes;
     FrameRefiner refiner(session.rig(), RefineConfig{}, generic.rest.vertexCount(),
                          generic.rest.triangles);
+    refiner.setPlates(sessionPlates(session));
     std::vector<CameraFrame> images;
     Pose pose;
     std::vector<Eigen::Affine3f> transforms;

@@ -17,6 +17,7 @@
 #include "core/body/ply_mesh.h"
 #include "core/capture/session_reader.h"
 #include "core/eval/leave_one_out.h"
+#include "core/imaging/clean_plate.h"
 #include "core/render/clone_set.h"
 #include "core/render/egl_context.h"
 #include "core/render/frame_inputs.h"
@@ -123,6 +124,7 @@ void addRenderCommand(CLI::App& app) {
                gl.description());
     std::vector<CameraFrame> images;
     FrameInputs inputs;
+    inputs.setPlates(sessionPlates(session));
     std::vector<uint8_t> rgba;
     double ms = -1;
     // Ctrl-C (SIGTERM, SIGHUP) ends the render between frames: the video begun is removed, and an

@@ -190,7 +190,7 @@ struct RunArgs {
   std::string session, json, keys, replay = "rate", rig, address, image, plot, view_size,
                                    record_view, record_take, listen, osc, feed;
   BodyChoice body;
-  int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight;
+  int nodes = 0, max_in_flight = StudioCoordinatorOptions{}.max_frames_in_flight, plate_frames = 0;
   int64_t frames = 150;
   double seconds = 60;
   bool plain = false;
@@ -272,6 +272,13 @@ LocalRunOptions runOptions(const RunArgs& a, int width, int height, std::string&
   options.plain = a.plain;
   options.keys = a.keys;
   options.listen = a.listen;
+  if (a.plate_frames > 0 && !a.session.empty()) {
+    throw CLI::ValidationError(
+        "--plate-frames",
+        "learns live cameras' plates; a session's is its plate/ folder, which "
+        "its nodes key on by themselves (a replay starts at any of its frames)");
+  }
+  options.plate_frames = a.plate_frames;
   options.body = a.body;
   options.coordinator.max_frames = a.frames;
   if (!a.record_take.empty()) {
@@ -566,6 +573,10 @@ void addRunCommand(CLI::App& app) {
   run->add_option("--record-view", a->record_view,
                   "record every blended view to this video at the cameras' rate (.mp4: H.264; "
                   ".avi: Motion-JPEG)");
+  run->add_option("--plate-frames", a->plate_frames,
+                  "a stage without a green screen: the nodes learn each camera's clean plate from "
+                  "its first N frames, which must film the empty stage (the actor walks in after)")
+      ->check(CLI::Range(0, 10000));
   run->add_option("--record-take", a->record_take,
                   "record the cameras' frames as a take: each node writes its cameras to "
                   "DIR/<node>/ from the first frame done to the end (lumistage session merge "

@@ -30,6 +30,7 @@ void addSynthCommand(CLI::App& app) {
   struct Args {
     std::string config, out, sheet;
     int frames = 120;
+    int plate_frames = -1;
     bool bayer = false;
     int64_t seed = -1;
     StageDrawOptions draw;
@@ -52,6 +53,11 @@ void addSynthCommand(CLI::App& app) {
       ->check(CLI::Range(1, 100000));
   synth->add_option("-o,--out", args->out, "session folder to create (must not exist or be empty)")
       ->required();
+  synth
+      ->add_option("--plate-frames", args->plate_frames,
+                   "frames of the empty stage to write as the session's plate (default: 10 when "
+                   "the look's backdrop is a room, none on a green screen)")
+      ->check(CLI::Range(0, 1000));
   synth->add_flag("--bayer", args->bayer, "store Bayer RGGB8 images, as GigE cameras deliver");
   synth->add_option("--contact-sheet", args->sheet,
                     "also write the middle frame's views, side by side, here (PNG)");
@@ -77,6 +83,12 @@ void addSynthCommand(CLI::App& app) {
     if (args->seed >= 0)
       writeFileAtomically(writer->folder() / "studio.yaml",
                           formatStudioConfig(studio.config(), "rig.yaml"));
+    const bool room = studio.config().look.backdrop == StudioLook::Backdrop::kRoom;
+    const int plate_frames = args->plate_frames >= 0 ? args->plate_frames : room ? 10 : 0;
+    if (plate_frames > 0) {
+      writeStudioPlate(studio, plate_frames, *writer);
+      fmt::print("wrote {} frames of the empty stage as the plate\n", plate_frames);
+    }
     StudioFrame frame;
     std::vector<Image> images;
     double render_ms = 0, write_ms = 0;

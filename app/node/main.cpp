@@ -33,6 +33,7 @@ struct NodeArgs {
   lumistage::BodyChoice body;
   std::string take_files = "pnm";
   double unattended_take_limit_s = 30;
+  int plate_frames = 0;
 };
 
 void addNodeOptions(CLI::App& app, NodeArgs& a) {
@@ -65,6 +66,10 @@ void addNodeOptions(CLI::App& app, NodeArgs& a) {
   app.add_option("--unattended-take-limit", a.unattended_take_limit_s,
                  "close an open take after this many seconds without word from the studio")
       ->capture_default_str();
+  app.add_option("--plate-frames", a.plate_frames,
+                 "a stage without a green screen: learn each camera's clean plate from its first N "
+                 "frames, which must film the empty stage (the actor walks in after)")
+      ->check(CLI::Range(0, 10000));
   app.add_flag("--plain", a.plain, "no encryption or authentication (a closed lab network only)");
   app.add_flag("--monitor", a.monitor,
                "open a small window on this PC: the node's cameras, silhouettes and counters");
@@ -92,6 +97,7 @@ lumistage::CameraNodeOptions nodeOptions(const NodeArgs& a) {
   node_options.unattended_take_limit =
       std::chrono::milliseconds(static_cast<int64_t>(1000 * a.unattended_take_limit_s));
   node_options.fps = a.fps;
+  node_options.plate_frames = a.plate_frames;
   return node_options;
 }
 

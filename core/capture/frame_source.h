@@ -48,6 +48,9 @@ class FrameSource {
   // Whether every frame of the camera carries the actor's mask (CameraFrame::mask), which then
   // stands for the key: a recording without a green screen, segmented by another tool.
   virtual bool hasMasks(int /*camera*/) const { return false; }
+  // Frames of the empty stage that the camera filmed before the take (a clean plate, which a stage
+  // without a green screen is keyed on: BackgroundModel); none when it has none.
+  virtual std::vector<Image> plateImages(int /*camera*/) { return {}; }
   // Whether its frame ids only count instants, so that another count that numbers the same
   // instants may replace it (cameras, live): true. A recording's ids, or the virtual studio's,
   // name their frames' content, which a shifted count would pair with other nodes' frames of other

@@ -222,6 +222,37 @@ Status readPnm(const fs::path& path, int64_t frame_id, const Camera& camera, Pix
                                  camera.height(), pixelFormatName(format))));
 }
 
+// One camera image of the session's format and files (frame `id`, for the message) into `image`.
+Status readImageFile(const fs::path& path, int64_t id, const Camera& camera, PixelFormat format,
+                     ImageFiles files, Image& image) {
+  if (files == ImageFiles::kPnm) return readPnm(path, id, camera, format, image);
+  cv::Mat decoded;
+  if (existsButIsNotARegularFile(path)) {
+    return Status::failure(fmt::format(
+        "{}: frame {}: is not a regular file (a FIFO, a folder or a device?)", path.string(), id));
+  }
+  try {
+    decoded = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    return Status::failure(path.string() + ": cannot decode: " + e.err);
+  }
+  const int type = format == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1;
+  if (decoded.empty() || decoded.type() != type || decoded.cols != camera.width() ||
+      decoded.rows != camera.height()) {
+    return Status::failure(fmt::format(
+        "{}: frame {}: cannot decode a {}x{} {} image from it (damaged since the session "
+        "was opened?)",
+        path.string(), id, camera.width(), camera.height(), pixelFormatName(format)));
+  }
+  image.resize(format, camera.width(), camera.height());
+  cv::Mat target(camera.height(), camera.width(), type, image.pixels.data());
+  if (format == PixelFormat::kRgb8)
+    cv::cvtColor(decoded, target, cv::COLOR_BGR2RGB);  // OpenCV decodes to BGR
+  else
+    decoded.copyTo(target);
+  return {};
+}
+
 }  // namespace
 
 SessionReader::SessionReader(const fs::path& folder) : folder_(folder) {
@@ -470,6 +501,26 @@ std::vector<uint8_t> SessionReader::readMask(int camera, int i) const {
   return readMaskFile(maskPath(camera, i), rig_.camera(camera), "actor's mask");
 }
 
+int SessionReader::plateFrames(int camera) const {
+  int count = 0;
+  std::error_code ec;
+  while (fs::exists(platePath(camera, count), ec)) ++count;
+  return count;
+}
+
+fs::path SessionReader::platePath(int camera, int i) const {
+  return folder_ / "plate" / rig_.camera(camera).name() /
+         fmt::format("{:06}.{}", i, imageFileExtension(files_, format_));
+}
+
+Image SessionReader::readPlate(int camera, int i) const {
+  Image image;
+  const Status read =
+      readImageFile(platePath(camera, i), i, rig_.camera(camera), format_, files_, image);
+  if (!read.ok()) throw Error("the empty stage's " + read.error());
+  return image;
+}
+
 bool SessionReader::hasRepairedMasks() const {
   std::error_code ec;
   return fs::is_directory(folder_ / "masks-given", ec);
@@ -532,38 +583,7 @@ void SessionReader::readFrame(int i, std::vector<CameraFrame>& out,
       frame.camera = c;
       frame.frame_id = id;
       frame.timestamp_ns = timestamp;
-      if (files_ == ImageFiles::kPnm) {
-        errors[k] = readPnm(path, id, camera, format_, frame.image);
-        continue;
-      }
-      cv::Mat decoded;
-      if (existsButIsNotARegularFile(path)) {
-        errors[k] = Status::failure(
-            fmt::format("{}: frame {}: is not a regular file (a FIFO, a folder or a device?)",
-                        path.string(), id));
-        continue;
-      }
-      try {
-        decoded = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-      } catch (const cv::Exception& e) {
-        errors[k] = Status::failure(path.string() + ": cannot decode: " + e.err);
-        continue;
-      }
-      const int type = format_ == PixelFormat::kRgb8 ? CV_8UC3 : CV_8UC1;
-      if (decoded.empty() || decoded.type() != type || decoded.cols != camera.width() ||
-          decoded.rows != camera.height()) {
-        errors[k] = Status::failure(fmt::format(
-            "{}: frame {}: cannot decode a {}x{} {} image from it (damaged since the session "
-            "was opened?)",
-            path.string(), id, camera.width(), camera.height(), pixelFormatName(format_)));
-        continue;
-      }
-      frame.image.resize(format_, camera.width(), camera.height());
-      cv::Mat target(camera.height(), camera.width(), type, frame.image.pixels.data());
-      if (format_ == PixelFormat::kRgb8)
-        cv::cvtColor(decoded, target, cv::COLOR_BGR2RGB);  // OpenCV decodes to BGR
-      else
-        decoded.copyTo(target);
+      errors[k] = readImageFile(path, id, camera, format_, files_, frame.image);
     }
   });
   for (const Status& read : errors) {

@@ -56,6 +56,14 @@ class SessionReader {
   // camera's size. Throws Error naming the file when it is missing or of another size.
   std::vector<uint8_t> readTruthMask(int camera, int i) const;
 
+  // The empty stage, filmed before the take by every camera (a stage without a green screen is
+  // keyed on it: BackgroundModel): plate/<camera>/000000.png ... in the session's format and image
+  // files (SessionWriter::writePlate). The plate's frames of camera `camera`: 0 without.
+  int plateFrames(int camera) const;
+  std::filesystem::path platePath(int camera, int i) const;
+  // Throws Error naming the file when it is missing, unreadable or of another size.
+  Image readPlate(int camera, int i) const;
+
   // Masks another tool made of the actor (a matting tool, a segmenter): masks/<camera>/<frame
   // id>.png, one byte a pixel, non-zero on the actor, of the camera's size. A session carries them
   // when its folder has masks/ (lumistage session import --masks); they then stand for the key.

@@ -204,6 +204,19 @@ bool SessionSource::hasMasks(int camera) const {
   return masks_ && std::find(cameras_.begin(), cameras_.end(), camera) != cameras_.end();
 }
 
+std::vector<Image> SessionSource::plateImages(int camera) {
+  std::vector<Image> plate;
+  const int frames = reader_.plateFrames(camera);
+  for (int i = 0; i < frames; ++i) {
+    try {
+      plate.push_back(reader_.readPlate(camera, i));
+    } catch (const Error& e) {
+      spdlog::warn("{}: left out of the camera's plate", e.what());
+    }
+  }
+  return plate;
+}
+
 bool SessionSource::maskFailed(int c) {
   const std::string& error = maskErrors()[c];
   if (error.empty()) return false;

@@ -70,6 +70,9 @@ class SessionSource : public FrameSource {
   bool idsCountInstants() const override { return false; }
   CameraStats stats(int camera) const override;
   bool hasMasks(int camera) const override;
+  // The session's plate/ frames of the camera (SessionReader::readPlate); a file that cannot be
+  // read is left out, warned of by name.
+  std::vector<Image> plateImages(int camera) override;
 
   const SessionReader& reader() const { return reader_; }
 

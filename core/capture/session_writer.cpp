@@ -109,21 +109,7 @@ SessionWriter::~SessionWriter() = default;
 
 void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
                                const std::vector<ImageView>& images, const FrameTruth* truth) {
-  if (images.size() != static_cast<size_t>(rig_.cameraCount())) {
-    throw Error(fmt::format("{}: frame {} has {} images for {} cameras", folder_.string(), frame_id,
-                            images.size(), rig_.cameraCount()));
-  }
-  for (int c = 0; c < rig_.cameraCount(); ++c) {
-    const Camera& camera = rig_.camera(c);
-    const ImageView& view = images[c];
-    if (view.format != format_ || view.width != camera.width() || view.height != camera.height() ||
-        !view.data) {
-      throw Error(fmt::format(
-          "{}: frame {}, camera {}: got a {}x{} {} image, the session holds {}x{} {}",
-          folder_.string(), frame_id, camera.name(), view.width, view.height,
-          pixelFormatName(view.format), camera.width(), camera.height(), pixelFormatName(format_)));
-    }
-  }
+  checkImages(fmt::format("frame {}", frame_id), images);
   const std::string name = fmt::format("{:06}.{}", frame_id, imageFileExtension(files_, format_));
   const std::string mask_name = fmt::format("{:06}.png", frame_id);
   // PNG encoding dominates a frame's writing: cameras in parallel, errors carried out.
@@ -134,11 +120,7 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
       try {
         const Camera& camera = rig_.camera(c);
         const ImageView& view = images[c];
-        if (files_ == ImageFiles::kPnm) {
-          bytes += int64_t(writePnmAtomically(folder_ / camera.name() / name, view));
-        } else {
-          bytes += int64_t(writePngAtomically(folder_ / camera.name() / name, view));
-        }
+        bytes += int64_t(writeImage(folder_ / camera.name() / name, view));
         if (truth && truth->masks) {
           writePngAtomically(folder_ / "truth" / "masks" / camera.name() / mask_name,
                              maskView(camera, (*truth->masks)[c]));
@@ -153,6 +135,42 @@ void SessionWriter::writeFrame(int64_t frame_id, int64_t timestamp_ns,
   }
   if (truth) writeTruth(frame_id, *truth, false);  // its masks beside the images, above
   appendIndex(frame_id, timestamp_ns, bytes);
+}
+
+void SessionWriter::checkImages(const std::string& what,
+                                const std::vector<ImageView>& images) const {
+  if (images.size() != static_cast<size_t>(rig_.cameraCount())) {
+    throw Error(fmt::format("{}: {} has {} images for {} cameras", folder_.string(), what,
+                            images.size(), rig_.cameraCount()));
+  }
+  for (int c = 0; c < rig_.cameraCount(); ++c) {
+    const Camera& camera = rig_.camera(c);
+    const ImageView& view = images[c];
+    if (view.format != format_ || view.width != camera.width() || view.height != camera.height() ||
+        !view.data) {
+      throw Error(fmt::format("{}: {}, camera {}: got a {}x{} {} image, the session holds {}x{} {}",
+                              folder_.string(), what, camera.name(), view.width, view.height,
+                              pixelFormatName(view.format), camera.width(), camera.height(),
+                              pixelFormatName(format_)));
+    }
+  }
+}
+
+size_t SessionWriter::writeImage(const fs::path& path, const ImageView& view) const {
+  return files_ == ImageFiles::kPnm ? writePnmAtomically(path, view)
+                                    : writePngAtomically(path, view);
+}
+
+void SessionWriter::writePlate(int index, const std::vector<ImageView>& images) {
+  checkImages(fmt::format("plate frame {}", index), images);
+  const std::string name = fmt::format("{:06}.{}", index, imageFileExtension(files_, format_));
+  for (int c = 0; c < rig_.cameraCount(); ++c) {
+    const fs::path folder = folder_ / "plate" / rig_.camera(c).name();
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec) throw Error(folder.string() + ": cannot create the plate's folder: " + ec.message());
+    writeImage(folder / name, images[c]);
+  }
 }
 
 void SessionWriter::writeTruth(int64_t frame_id, const FrameTruth& truth, bool masks) {

@@ -53,12 +53,21 @@ class SessionWriter {
   void copyFrame(int64_t frame_id, int64_t timestamp_ns,
                  const std::vector<std::filesystem::path>& files,
                  const FrameTruth* truth = nullptr);
+  // Frame `index` (from 0) of the empty stage, one image per camera as writeFrame's, into
+  // plate/<camera>/: the clean plate a stage without a green screen is keyed on (SessionReader::
+  // plateFrames). Not a frame of the session: no index line. Throws Error as writeFrame does.
+  void writePlate(int index, const std::vector<ImageView>& images);
   int framesWritten() const { return frames_; }
   int64_t bytesWritten() const { return bytes_; }  // camera images' file bytes of indexed frames
   ImageFiles imageFiles() const { return files_; }
   const std::filesystem::path& folder() const { return folder_; }
 
  private:
+  // Throws Error naming `what` (a frame, a plate frame) unless `images` are one per camera of the
+  // camera's size in the session's format.
+  void checkImages(const std::string& what, const std::vector<ImageView>& images) const;
+  // One image in the session's image files; the bytes written.
+  size_t writeImage(const std::filesystem::path& path, const ImageView& view) const;
   // Last of a frame: its index line (it exists for readers only once this is complete).
   void appendIndex(int64_t frame_id, int64_t timestamp_ns, int64_t bytes);
   // A frame's truth: its masks (unless written already), surface and joints' line.

@@ -7,6 +7,7 @@
 
 #include "core/base/error.h"
 #include "core/body/ply_mesh.h"
+#include "core/imaging/clean_plate.h"
 #include "core/imaging/keyer.h"
 #include "core/render/frame_inputs.h"
 
@@ -91,12 +92,14 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
   LeaveOneOutSummary summary;
   summary.masks = scoreMasksOf(session);
   std::vector<GreenScreenKeyer> keyers(summary.masks == ScoreMasks::kKeyed ? n : 0);
+  const std::vector<std::shared_ptr<const BackgroundModel>> plates = sessionPlates(session);
   bool keyers_learnt = false;
   std::vector<ScoreMean> per_camera(n);
   std::vector<CameraFrame> images;
   std::vector<std::vector<uint8_t>> truth(n), masks(n);
   std::vector<uint8_t> rendered;
   FrameInputs inputs;  // images and foreground masks, as the nodes give theirs
+  inputs.setPlates(plates);
   for (int i : frames) {
     readFrameWithMasks(session, i, images);
     inputs.set(renderer, images);
@@ -115,7 +118,9 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
           masks[c].resize(size_t(image.width) * image.height);
           for (int y = 0; y < image.height; ++y)
             for (int x = 0; x < image.width; ++x)
-              masks[c][size_t(y) * image.width + x] = keyers[c].isForeground(image, x, y);
+              masks[c][size_t(y) * image.width + x] = plates[c]
+                                                          ? plates[c]->isForeground(image, x, y)
+                                                          : keyers[c].isForeground(image, x, y);
           break;
       }
     }

@@ -13,6 +13,7 @@
 #include "core/body/human_skeleton.h"
 #include "core/eval/fit_picture.h"
 #include "core/eval/percentile.h"
+#include "core/imaging/clean_plate.h"
 #include "core/imaging/keyer.h"
 #include "core/imaging/silhouettes.h"
 #include "core/net/posed_body.h"
@@ -139,6 +140,8 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   std::vector<LowResSilhouette> silhouettes(all);
   std::vector<const LowResSilhouette*> pointers;
   const GreenScreenKeyer keyer;
+  // A stage without a green screen is keyed on its clean plate, as the nodes key it.
+  const std::vector<std::shared_ptr<const BackgroundModel>> plates = sessionPlates(session);
   MocapTally t;
   t.joint_error_m.assign(truth_index.size(), 0.0);
   t.joint_height_m.assign(truth_index.size(), 0.0);
@@ -160,6 +163,9 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
         const std::vector<uint8_t> mask = session.readMask(c, f);
         maskSilhouette(mask.data(), rig.camera(c).width(), rig.camera(c).height(), c,
                        options.silhouette_step, silhouettes[c]);
+      } else if (plates[c]) {
+        computeSilhouette(*plates[c], images[c].image.view(), c, options.silhouette_step,
+                          silhouettes[c]);
       } else {
         computeSilhouette(keyer, images[c].image.view(), c, options.silhouette_step,
                           silhouettes[c]);

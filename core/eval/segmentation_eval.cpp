@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/imaging/clean_plate.h"
 #include "core/imaging/keyer.h"
 
 namespace lumistage {
@@ -15,6 +16,7 @@ SegmentationScore evaluateSegmentation(const SessionReader& session,
   std::vector<CameraFrame> images;
   std::vector<GreenScreenKeyer> keyers(n);
   session.readFrame(0, images);
+  const std::vector<std::shared_ptr<const BackgroundModel>> plates = sessionPlates(session);
   for (int c = 0; c < n; ++c) {
     score.threshold += keyers[c].learnScreen(images[c].image.view()) / double(n);
     const int excess = keyers[c].screenExcess();
@@ -29,7 +31,8 @@ SegmentationScore evaluateSegmentation(const SessionReader& session,
       for (int y = 0; y < image.height; ++y) {
         for (int x = 0; x < image.width; ++x) {
           const bool on_actor = truth[size_t(y) * image.width + x] != 0;
-          const bool keyed = keyers[c].isForeground(image, x, y);
+          const bool keyed = plates[c] ? plates[c]->isForeground(image, x, y)
+                                       : keyers[c].isForeground(image, x, y);
           actor += on_actor;
           missed += on_actor && !keyed;
           extra += !on_actor && keyed;

@@ -7,7 +7,8 @@
 namespace lumistage {
 
 // The segmentation as the nodes run it: each camera's GreenScreenKeyer learns its screen from the
-// session's first frame, then keys every pixel of the scored frames, compared with the truth
+// session's first frame (or, where the session filmed the empty stage, its clean plate is learnt
+// from that: sessionPlates), then keys every pixel of the scored frames, compared with the truth
 // masks (truth/masks) of a virtual-studio session.
 struct SegmentationScore {
   double missed_pct = 0;   // the actor's pixels keyed as screen, % of the actor's pixels

@@ -13,6 +13,7 @@
 #include "core/body/ply_mesh.h"
 #include "core/capture/session_reader.h"
 #include "core/eval/percentile.h"
+#include "core/imaging/clean_plate.h"
 #include "core/refine/frame_refiner.h"
 
 namespace lumistage {
@@ -193,6 +194,7 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
   const Rig& rig = session.rig();
   const RefineConfig& config = options.refine;
   FrameRefiner refiner(rig, config, generic.rest.vertexCount(), generic.rest.triangles);
+  refiner.setPlates(sessionPlates(session));
   std::vector<CameraFrame> frames;
   std::vector<uint8_t> previous;
   double change_sum = 0;

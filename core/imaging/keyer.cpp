@@ -44,10 +44,11 @@ int GreenScreenKeyer::learnScreen(const ImageView& screen, int step, int minimum
 
 namespace {
 
-int checkedSize(int width, int height, int block) {
-  if (width <= 0 || height <= 0 || block <= 0) {
-    throw Error(fmt::format("background model: {}x{} pixels in blocks of {}: all must be positive",
-                            width, height, block));
+int checkedSize(int width, int height, float k) {
+  if (width <= 0 || height <= 0 || !(k > 0)) {
+    throw Error(
+        fmt::format("background model: {}x{} pixels, k {}: expected positive sizes and k > 0",
+                    width, height, k));
   }
   return width;
 }
@@ -68,30 +69,28 @@ bool GreenScreenKeyer::follow(const GreenScreenKeyer& measured) {
   return true;
 }
 
-BackgroundModel::BackgroundModel(int width, int height, int block, float k)
-    : width_(checkedSize(width, height, block)),
+BackgroundModel::BackgroundModel(int width, int height, float k)
+    : width_(checkedSize(width, height, k)),
       height_(height),
-      block_(block),
-      columns_((width + block - 1) / block),
-      rows_((height + block - 1) / block),
       k_(k),
-      sum_(size_t(columns_) * rows_ * 3, 0.0),
-      sum2_(size_t(columns_) * rows_ * 3, 0.0) {}
+      sum_(size_t(width) * height * 3, 0.0f),
+      sum2_(size_t(width) * height * 3, 0.0f) {}
 
 void BackgroundModel::add(const ImageView& empty) {
+  if (learnt()) throw Error("background model: a frame added after learning");
   if (empty.width != width_ || empty.height != height_ || empty.data == nullptr) {
     throw Error(fmt::format("background model of {}x{} pixels: an empty stage's frame of {}x{}",
                             width_, height_, empty.width, empty.height));
   }
-  // Sample a few pixels per block: the spread of a block includes its texture and the noise.
-  for (int y = 0; y < height_; y += 2) {
-    for (int x = 0; x < width_; x += 2) {
+  for (int y = 0; y < height_; ++y) {
+    float* sum = &sum_[3 * size_t(y) * width_];
+    float* sum2 = &sum2_[3 * size_t(y) * width_];
+    for (int x = 0; x < width_; ++x) {
       const Rgb c = colourAt(empty, x, y);
-      const size_t b = 3 * (size_t(y / block_) * columns_ + x / block_);
-      const double v[3] = {double(c.r), double(c.g), double(c.b)};
+      const float v[3] = {float(c.r), float(c.g), float(c.b)};
       for (int k = 0; k < 3; ++k) {
-        sum_[b + k] += v[k];
-        sum2_[b + k] += v[k] * v[k];
+        sum[3 * x + k] += v[k];
+        sum2[3 * x + k] += v[k] * v[k];
       }
     }
   }
@@ -100,46 +99,23 @@ void BackgroundModel::add(const ImageView& empty) {
 
 void BackgroundModel::learn() {
   if (frames_ == 0) throw Error("background model: no frame of the empty stage to learn from");
-  const size_t blocks = size_t(columns_) * rows_;
-  mean_.assign(blocks * 3, 0.0f);
-  limit2_.assign(blocks, 0.0f);
-  for (size_t b = 0; b < blocks; ++b) {
-    const int bx = int(b % columns_), by = int(b / columns_);
-    const int w = std::min(block_, width_ - bx * block_),
-              h = std::min(block_, height_ - by * block_);
-    const double n = std::max(1.0, double(frames_) * ((w + 1) / 2) * ((h + 1) / 2));
-    double variance = 0;
+  const size_t pixels = size_t(width_) * height_;
+  plate_.resize(pixels);
+  const float n = float(frames_);
+  for (size_t p = 0; p < pixels; ++p) {
+    float variance = 0;
+    uint8_t mean[3];
     for (int k = 0; k < 3; ++k) {
-      const double mean = sum_[3 * b + k] / n;
-      mean_[3 * b + k] = float(mean);
-      variance += std::max(0.0, sum2_[3 * b + k] / n - mean * mean);
+      const float m = sum_[3 * p + k] / n;
+      mean[k] = uint8_t(std::lround(std::clamp(m, 0.0f, 255.0f)));
+      variance += std::max(0.0f, sum2_[3 * p + k] / n - m * m);
     }
-    const float spread = float(std::sqrt(variance));
-    const float limit = std::max(k_ * spread, 12.0f);
-    limit2_[b] = limit * limit;
+    const float bound = std::max(k_ * std::sqrt(variance), kFloorLevels);
+    plate_[p] = {mean[0], mean[1], mean[2], uint8_t(std::min(255.0f, std::ceil(bound)))};
   }
-}
-
-float BackgroundModel::distance2(const Rgb& c, size_t b) const {
-  const float dr = c.r - mean_[3 * b], dg = c.g - mean_[3 * b + 1], db = c.b - mean_[3 * b + 2];
-  return dr * dr + dg * dg + db * db;
-}
-
-bool BackgroundModel::isForeground(const Rgb& c, int x, int y) const {
-  const size_t b = blockOf(x, y);
-  return distance2(c, b) > limit2_[b];
-}
-
-float BackgroundModel::backgroundLevel(const Rgb& c, int x, int y) const {
-  return -std::sqrt(distance2(c, blockOf(x, y)));
-}
-
-bool BackgroundModel::isForegroundLevel(float level, int x, int y) const {
-  return level < 0 && level * level > limit2_[blockOf(x, y)];
-}
-
-bool BackgroundModel::isPureForegroundLevel(float level, int x, int y, float purity) const {
-  return level < 0 && purity * purity * level * level > limit2_[blockOf(x, y)];
+  // The sums are done with: the plate keeps its means and bounds only.
+  sum_ = {};
+  sum2_ = {};
 }
 
 }  // namespace lumistage

@@ -1,6 +1,7 @@
 #include "core/imaging/silhouettes.h"
 
 #include <algorithm>
+#include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -81,14 +82,16 @@ int bayerSilhouetteRow4(const GreenScreenKeyer& key, const ImageView& image, con
 // 9). Each cell decoded as colourAt decodes it, straight from the mosaic's rows: the same result
 // as keyCell, 122 against 433-565 us a camera at step 4 (235 us through colourAt). At step 4 it
 // keys only the cells bayerSilhouetteRow4 leaves (none at 1024 pixels wide).
-void bayerSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step,
-                     LowResSilhouette& out) {
+template <typename Key>
+void bayerSilhouette(const Key& key, const ImageView& image, int step, LowResSilhouette& out) {
   const BayerLayout l = bayerLayout(image.format);
   const size_t w = size_t(image.width);
   for (int cy = 0; cy < out.height; ++cy) {
     int first = 0;
 #if defined(__SSE2__)
-    if (step == 4) first = bayerSilhouetteRow4(key, image, l, cy, out);
+    if constexpr (std::is_same_v<Key, GreenScreenKeyer>) {
+      if (step == 4) first = bayerSilhouetteRow4(key, image, l, cy, out);
+    }
 #endif
     const int y = cy * step + step / 2;
     // The red and the blue pixel rows of the window's two cell rows (starting at y - 2 and y).
@@ -117,8 +120,8 @@ void bayerSilhouette(const GreenScreenKeyer& key, const ImageView& image, int st
 // image: the window's three rows summed straight from the image, without meanColourAround's
 // bounds and colourAt's format per pixel (a quarter of a node's CPU on an RGB session, 24.8% in
 // perf, before). The same result as keyCell.
-void rgbSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step,
-                   LowResSilhouette& out) {
+template <typename Key>
+void rgbSilhouette(const Key& key, const ImageView& image, int step, LowResSilhouette& out) {
   const size_t row_bytes = 3 * size_t(image.width);
   for (int cy = 0; cy < out.height; ++cy) {
     const int y = cy * step + step / 2;
@@ -138,15 +141,10 @@ void rgbSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step
   }
 }
 
-}  // namespace
-
-void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
-                       LowResSilhouette& out) {
-  out.camera = camera;
-  out.step = step;
-  out.width = image.width / step;
-  out.height = image.height / step;
-  out.bits.assign((size_t(out.width) * out.height + 7) / 8, 0);
+template <typename Key>
+void keySilhouette(const Key& key, const ImageView& image, int camera, int step,
+                   LowResSilhouette& out) {
+  out.reset(camera, step, image.width, image.height);
   if (isBayer(image.format) && step % 4 == 0 && image.width % 2 == 0 && image.height % 2 == 0) {
     bayerSilhouette(key, image, step, out);
     return;
@@ -162,13 +160,76 @@ void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int 
   }
 }
 
+}  // namespace
+
+void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
+                       LowResSilhouette& out) {
+  keySilhouette(key, image, camera, step, out);
+}
+
+void computeSilhouette(const BackgroundModel& key, const ImageView& image, int camera, int step,
+                       LowResSilhouette& out) {
+  out.reset(camera, step, image.width, image.height);
+  CellBox box;
+  for (int cy = 0; cy < out.height; ++cy) {
+    const int y = cy * step + step / 2;
+    for (int cx = 0; cx < out.width; ++cx) {
+      const int x = cx * step + step / 2;
+      if (!key.isForeground(image, x, y)) continue;
+      out.set(cx, cy);
+      box.add(cx, cy);
+    }
+  }
+  fillHoles(out, box);
+}
+
+void fillHoles(LowResSilhouette& silhouette) {
+  CellBox box;
+  for (int y = 0; y < silhouette.height; ++y)
+    for (int x = 0; x < silhouette.width; ++x)
+      if (silhouette.at(x, y)) box.add(x, y);
+  fillHoles(silhouette, box);
+}
+
+void fillHoles(LowResSilhouette& silhouette, const CellBox& box) {
+  // Only the box around the silhouette can hold a hole: every cell beyond it is background
+  // joined to the border, and so is every background cell on the box's edge.
+  const int x0 = box.x0, y0 = box.y0, x1 = box.x1, y1 = box.y1;
+  if (x1 - x0 < 2 || y1 - y0 < 2) return;  // too small to enclose a cell
+  const int bw = x1 - x0 + 1, bh = y1 - y0 + 1;
+  // Per cell of the box: 1 the actor, 2 background reached from the box's edge, 0 not (yet).
+  thread_local std::vector<uint8_t> state;
+  thread_local std::vector<int> stack;
+  state.assign(size_t(bw) * bh, 0);
+  stack.clear();
+  for (int y = 0; y < bh; ++y)
+    for (int x = 0; x < bw; ++x)
+      if (silhouette.at(x0 + x, y0 + y)) state[size_t(y) * bw + x] = 1;
+  const auto push = [&](int x, int y) {
+    uint8_t& s = state[size_t(y) * bw + x];
+    if (s != 0) return;
+    s = 2;
+    stack.push_back(y * bw + x);
+  };
+  for (int x = 0; x < bw; ++x) push(x, 0), push(x, bh - 1);
+  for (int y = 0; y < bh; ++y) push(0, y), push(bw - 1, y);
+  while (!stack.empty()) {
+    const int i = stack.back();
+    stack.pop_back();
+    const int x = i % bw, y = i / bw;
+    if (x > 0) push(x - 1, y);
+    if (x + 1 < bw) push(x + 1, y);
+    if (y > 0) push(x, y - 1);
+    if (y + 1 < bh) push(x, y + 1);
+  }
+  for (int y = 0; y < bh; ++y)
+    for (int x = 0; x < bw; ++x)
+      if (state[size_t(y) * bw + x] == 0) silhouette.set(x0 + x, y0 + y);
+}
+
 void maskSilhouette(const uint8_t* mask, int width, int height, int camera, int step,
                     LowResSilhouette& out) {
-  out.camera = camera;
-  out.step = step;
-  out.width = width / step;
-  out.height = height / step;
-  out.bits.assign((size_t(out.width) * out.height + 7) / 8, 0);
+  out.reset(camera, step, width, height);
   for (int y = 0; y < out.height; ++y) {
     const uint8_t* row = mask + size_t(y * step + step / 2) * width;
     for (int x = 0; x < out.width; ++x)

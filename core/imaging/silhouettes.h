@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -22,6 +23,15 @@ struct LowResSilhouette {
     const size_t i = size_t(y) * width + x;
     return (bits[i / 8] >> (i % 8)) & 1;
   }
+  // Camera `camera`'s empty silhouette of an image of `width` x `height` pixels in cells of `step`
+  // (its buffer reused).
+  void reset(int camera_index, int cell_step, int image_width, int image_height) {
+    camera = camera_index;
+    step = cell_step;
+    width = image_width / step;
+    height = image_height / step;
+    bits.assign((size_t(width) * height + 7) / 8, 0);
+  }
   void set(int x, int y) {
     const size_t i = size_t(y) * width + x;
     bits[i / 8] |= uint8_t(1u << (i % 8));
@@ -32,6 +42,27 @@ struct LowResSilhouette {
 // result. `out`'s buffer is reused.
 void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
                        LowResSilhouette& out);
+// The same keyed on a clean plate (a stage that is not green): each cell by the pixel at its
+// centre (the plate's bound is several times the sensor's noise; a 3x3 mean, which a green key
+// needs, widened the silhouette by a pixel all round), its holes filled (fillHoles).
+void computeSilhouette(const BackgroundModel& key, const ImageView& image, int camera, int step,
+                       LowResSilhouette& out);
+// Sets every cell that the silhouette encloses: the background cells no 4-connected path of
+// background cells joins to the image's border. A room's colours are also the actor's (a white
+// shirt's stripe before a white wall), and a hole keyed in one camera's silhouette carves a tunnel
+// through the visual hull and pushes the bones out of it; a gap the actor encloses (hands on the
+// hips) is filled too, and carved away by the cameras that see through it.
+void fillHoles(LowResSilhouette& silhouette);
+// The cells a silhouette's actor spans, gathered while keying it.
+struct CellBox {
+  int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+  void add(int x, int y) {
+    x0 = std::min(x0, x), x1 = std::max(x1, x);
+    y0 = std::min(y0, y), y1 = std::max(y1, y);
+  }
+};
+// The same when the silhouette's actor lies within `box`.
+void fillHoles(LowResSilhouette& silhouette, const CellBox& box);
 
 // A mask (one byte a pixel, non-zero on the actor: another tool's) as the silhouette a node would
 // key: a cell is set when the pixel at its centre is. `out`'s buffer is reused.

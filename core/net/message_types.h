@@ -32,12 +32,15 @@ struct CameraHealthData {
   int64_t dropped = 0;
   float frame_rate = 0;
   std::string last_error;
-  // How its frames are keyed, in words (kKeyedOnGreen, kKeyedFromMasks); empty from an older node.
+  // How its frames are keyed, in words (kKeyedOnGreen, kKeyedFromMasks, kKeyedOnPlate); empty from
+  // an older node.
   std::string key = {};
   bool operator==(const CameraHealthData&) const = default;
 };
 inline constexpr const char* kKeyedOnGreen = "keyed on its green screen";
 inline constexpr const char* kKeyedFromMasks = "keyed from the session's masks";
+inline constexpr const char* kKeyedOnPlate = "keyed on its clean plate";
+inline constexpr const char* kLearningPlate = "learning its clean plate: keep the stage empty";
 
 // Where a node's recording of a take stands (core/pipeline/take_recorder.h).
 struct TakeStatusData {

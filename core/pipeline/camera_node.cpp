@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "core/base/error.h"
+#include "core/imaging/clean_plate.h"
 #include "core/imaging/partial_image_codec.h"
 #include "core/net/posed_body.h"
 #include "core/pipeline/pipeline.h"
@@ -42,13 +43,55 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
   screen_warnings_.resize(cameras_.size());
   masked_.resize(cameras_.size());
   mask_keys_.resize(cameras_.size());
+  plates_.resize(cameras_.size());
   for (size_t k = 0; k < cameras_.size(); ++k) {
     masked_[k] = source_->hasMasks(cameras_[k]);
     if (masked_[k]) {
       spdlog::info("node {}: camera {}: keyed from the session's masks (no green screen learnt)",
                    name_, rig_.camera(cameras_[k]).name());
+    } else {
+      plates_[k] = learnPlate(*source_, cameras_[k]);
     }
   }
+  published_plates_ =
+      std::make_shared<const std::vector<std::shared_ptr<const BackgroundModel>>>(plates_);
+  plates_learning_.resize(cameras_.size());
+  key_kinds_ = std::make_unique<std::atomic<const char*>[]>(cameras_.size());
+  for (size_t k = 0; k < cameras_.size(); ++k) {
+    if (options_.plate_frames > 0 && !masked_[k] && !plates_[k]) {
+      const Camera& c = rig_.camera(cameras_[k]);
+      plates_learning_[k] = std::make_unique<BackgroundModel>(c.width(), c.height());
+      spdlog::info(
+          "node {}: camera {}: learns its clean plate from the first {} sets (the empty "
+          "stage)",
+          name_, c.name(), options_.plate_frames);
+    }
+    key_kinds_[k] = masked_[k]            ? kKeyedFromMasks
+                    : plates_[k]          ? kKeyedOnPlate
+                    : plates_learning_[k] ? kLearningPlate
+                                          : kKeyedOnGreen;
+  }
+}
+
+std::shared_ptr<const BackgroundModel> CameraNode::learnPlate(FrameSource& source,
+                                                              int camera) const {
+  const std::vector<Image> empty = source.plateImages(camera);
+  if (empty.empty()) return nullptr;
+  const Camera& c = rig_.camera(camera);
+  int skipped = 0;
+  std::shared_ptr<const BackgroundModel> plate =
+      lumistage::learnPlate(empty, c.width(), c.height(), &skipped);
+  if (skipped > 0) {
+    spdlog::warn(
+        "node {}: camera {}: {} frames of the empty stage not of its {}x{} pixels: left "
+        "out of its plate",
+        name_, c.name(), skipped, c.width(), c.height());
+  }
+  if (plate) {
+    spdlog::info("node {}: camera {}: keyed on its clean plate ({} frames of the empty stage)",
+                 name_, c.name(), plate->frames());
+  }
+  return plate;
 }
 
 Message CameraNode::silhouettesOf(const Set& set) const {
@@ -60,6 +103,10 @@ Message CameraNode::silhouettesOf(const Set& set) const {
     if (keyedFromMask(k, frame)) {
       maskSilhouette(frame.mask.data(), frame.image.width, frame.image.height, cameras_[k],
                      options_.silhouette_step, s);
+    } else if (const BackgroundModel* plate = (*set.plates)[k].get()) {
+      computeSilhouette(*plate, frame.image.view(), cameras_[k], options_.silhouette_step, s);
+    } else if (set.empty_stage) {  // its plate still being learnt: nobody
+      s.reset(cameras_[k], options_.silhouette_step, frame.image.width, frame.image.height);
     } else {
       computeSilhouette(silhouette_keyer_, frame.image.view(), cameras_[k],
                         options_.silhouette_step, s);
@@ -96,6 +143,9 @@ std::optional<Message> CameraNode::statisticsFor(const Message& message) {
                               isBayer(frame.image.format));
       camera.green_screen = nullptr;
       camera.mask = &mask_keys_[k];
+    } else if ((*set->plates)[k]) {
+      camera.green_screen = nullptr;
+      camera.background = (*set->plates)[k].get();
     }
     sampler_cameras_.push_back(camera);
     sampler_camera_index_.push_back(static_cast<int>(k));
@@ -170,6 +220,9 @@ std::vector<Message> CameraNode::partialImagesFor(const Set& set, int64_t frame_
     if (keyedFromMask(k, set.frames[k])) {
       setForegroundMask(*renderer_, static_cast<int>(k), set.frames[k].mask, image.width,
                         image.height, mask_silhouette_, mask_);
+    } else if ((*set.plates)[k]) {
+      setForegroundMask(*renderer_, static_cast<int>(k), *(*set.plates)[k], image, mask_silhouette_,
+                        mask_);
     } else {
       setForegroundMask(*renderer_, static_cast<int>(k), (*set.keyers)[k], image, mask_silhouette_,
                         mask_);
@@ -387,6 +440,8 @@ void CameraNode::sendWaitedSets(Capture& capture, std::chrono::steady_clock::tim
     const bool late_only = tellMissingCameras(capture, s, now);
     s.captured_ns = wallNowNs();  // the studio's latency counts from it, maybe on another PC
     const bool whole = present == cameras_.size();
+    if (whole && plate_sets_ < options_.plate_frames) learnPlates(s);
+    s.plates = published_plates_;
     if (whole && screen_sets_learnt_ < kScreenWarmupSets)  // screens are learnt from whole sets
       learnScreens(s);
     else if (whole && s.frame_id % kScreenRetrySets == 0)
@@ -647,10 +702,9 @@ void CameraNode::run(const std::atomic<bool>& stop) {
         for (size_t k = 0; k < cameras_.size(); ++k) {
           const int c = cameras_[k];
           const CameraStats s = source_->stats(c);
-          heartbeat.cameras.push_back({rig_.camera(c).name(), s.frames, s.dropped,
-                                       float(s.frame_rate_hz),
-                                       s.last_error.empty() ? screen_warnings_[k] : s.last_error,
-                                       masked_[k] ? kKeyedFromMasks : kKeyedOnGreen});
+          heartbeat.cameras.push_back(
+              {rig_.camera(c).name(), s.frames, s.dropped, float(s.frame_rate_hz),
+               s.last_error.empty() ? screen_warnings_[k] : s.last_error, key_kinds_[k].load()});
         }
       }
       heartbeat.bytes_sent = bytes_sent_;

@@ -42,6 +42,10 @@ struct CameraNodeOptions {
   // this long; then the node closes it, so that a studio that crashed for good does not fill the
   // node's disk.
   std::chrono::milliseconds unattended_take_limit{30'000};
+  // A stage without a green screen, live: each camera's clean plate is learnt from the first
+  // `plate_frames` whole sets, which must film the empty stage (the actor walks in after); those
+  // sets show nobody. 0: none (cameras keyed on green, from a session's masks, or on its plate/).
+  int plate_frames = 0;
 };
 
 // The node's part of every frame, on the PC that owns the cameras (see DESIGN.md §1):
@@ -96,6 +100,11 @@ class CameraNode {
     // Per own camera, the green-screen key of the refinement's samples and the renderer's masks
     // for this set, as learnt when it was captured (shared by every set since).
     std::shared_ptr<const std::vector<GreenScreenKeyer>> keyers;
+    // Per own camera, its clean plate where it is keyed on one (null: on green or from masks), as
+    // learnt when the set was captured; `empty_stage`: a set the plates are being learnt from,
+    // whose cameras without a plate yet show nobody.
+    std::shared_ptr<const std::vector<std::shared_ptr<const BackgroundModel>>> plates;
+    bool empty_stage = false;
   };
   // Learns the own cameras' green screens from a set (the capture thread's, during warm-up).
   void learnScreens(const Set& set);
@@ -210,6 +219,23 @@ class CameraNode {
   // filmed without a green screen, segmented by another tool): its silhouettes, the refinement's
   // keying and the renderer's masks come from the masks, and no green screen is learnt for it.
   std::vector<uint8_t> masked_;
+  // Per own camera, its clean plate (a stage without a green screen), learnt from the frames of
+  // the empty stage its source filmed (FrameSource::plateImages: a session's plate/) when the node
+  // is made, or from the first CameraNodeOptions::plate_frames sets (live): its silhouettes, the
+  // refinement's keying and the renderer's masks are keyed on it, and no green screen is learnt for
+  // it. The capture thread's; published_plates_ is the copy every set carries.
+  std::vector<std::shared_ptr<const BackgroundModel>> plates_;
+  std::shared_ptr<const std::vector<std::shared_ptr<const BackgroundModel>>> published_plates_;
+  std::shared_ptr<const BackgroundModel> learnPlate(FrameSource& source, int camera) const;
+  // The plates being learnt from the first sets (the capture thread's), and the sets taken so far.
+  std::vector<std::unique_ptr<BackgroundModel>> plates_learning_;
+  int plate_sets_ = 0;
+  void learnPlates(Set& set);
+  bool learningPlate(size_t k) const { return plates_learning_.size() > k && plates_learning_[k]; }
+  bool keyedOnGreen(size_t k) const { return !masked_[k] && !plates_[k] && !learningPlate(k); }
+  // Per own camera, how it is keyed, in words (kKeyedOnGreen...), for the heartbeat: written by
+  // the capture thread once a plate is learnt, read by the network thread.
+  std::unique_ptr<std::atomic<const char*>[]> key_kinds_;
   // Whether own camera k's frame `frame` is keyed from its mask (one of the image's size).
   bool keyedFromMask(size_t k, const CameraFrame& frame) const {
     return masked_[k] && frame.mask.size() == size_t(frame.image.width) * frame.image.height;

@@ -96,7 +96,7 @@ std::string screenWarning(int excess) {
 void CameraNode::checkScreens(const Set& set) {
   bool changed = false;
   for (size_t c = 0; c < cameras_.size(); ++c) {
-    if (masked_[c]) continue;  // keyed from its masks: no screen to follow
+    if (!keyedOnGreen(c)) continue;  // keyed from its masks or its plate: no screen to follow
     GreenScreenKeyer measured;
     measured.learnScreen(set.frames[c].image.view());
     const int was = keyers_[c].screenExcess(), excess = measured.screenExcess();
@@ -133,10 +133,32 @@ void CameraNode::checkScreens(const Set& set) {
   if (changed) published_keyers_ = std::make_shared<const std::vector<GreenScreenKeyer>>(keyers_);
 }
 
+void CameraNode::learnPlates(Set& set) {
+  bool learning = false;
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    if (!learningPlate(c)) continue;
+    plates_learning_[c]->add(set.frames[c].image.view());
+    learning = true;
+  }
+  if (!learning) return;
+  set.empty_stage = true;
+  if (++plate_sets_ < options_.plate_frames) return;
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    if (!learningPlate(c)) continue;
+    plates_learning_[c]->learn();
+    plates_[c] = std::move(plates_learning_[c]);
+    key_kinds_[c] = kKeyedOnPlate;
+    spdlog::info("node {}: camera {}: keyed on its clean plate ({} frames of the empty stage)",
+                 name_, rig_.camera(cameras_[c]).name(), plates_[c]->frames());
+  }
+  published_plates_ =
+      std::make_shared<const std::vector<std::shared_ptr<const BackgroundModel>>>(plates_);
+}
+
 void CameraNode::learnScreens(const Set& set) {
   bool clean = true;
   for (size_t c = 0; c < cameras_.size(); ++c) {
-    if (masked_[c]) continue;  // keyed from its masks (said when the node was made)
+    if (!keyedOnGreen(c)) continue;  // keyed from its masks or its plate (said when made)
     keyers_[c].learnScreen(set.frames[c].image.view());
     clean = clean && keyers_[c].screenExcess() >= GreenScreenKeyer::kDimScreenExcess;
   }
@@ -145,7 +167,7 @@ void CameraNode::learnScreens(const Set& set) {
   if (!clean && screen_sets_learnt_ < kScreenWarmupSets) return;  // settling, perhaps
   screen_sets_learnt_ = kScreenWarmupSets;  // learnt; checked every kScreenRetrySets from now on
   for (size_t c = 0; c < cameras_.size(); ++c) {
-    if (masked_[c]) continue;
+    if (!keyedOnGreen(c)) continue;
     const std::string& camera = rig_.camera(cameras_[c]).name();
     std::string warning = screenWarning(keyers_[c].screenExcess());
     if (warning.empty()) {

@@ -110,6 +110,8 @@ LocalPipelineRun::LocalPipelineRun(LocalRunOptions options) : options_(std::move
                   {"--session", options_.session.string(), "--replay", options_.replay});
     }
     if (!options_.takes.empty()) args.insert(args.end(), {"--takes", options_.takes.string()});
+    if (options_.plate_frames > 0)
+      args.insert(args.end(), {"--plate-frames", std::to_string(options_.plate_frames)});
     args.insert(args.end(), {"--body", bodyArgument(options_.body)});
     if (options_.plain) {
       args.push_back("--plain");

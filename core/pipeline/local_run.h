@@ -29,6 +29,7 @@ struct LocalRunOptions {
   std::filesystem::path keys;         // key store; empty: fresh keys in a temporary folder
   std::filesystem::path node_binary;  // lumistage-node; empty: beside this executable
   std::filesystem::path takes;        // where the nodes record takes; empty: none
+  int plate_frames = 0;  // the nodes learn clean plates from their first N sets (CameraNodeOptions)
   // The human the studio and the nodes it starts pose: the generic human or a file, whose path
   // the nodes are given (nodes on the stage's PCs are given theirs by their own --body); unused
   // when coordinator.body is set.

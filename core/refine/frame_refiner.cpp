@@ -38,6 +38,9 @@ void FrameRefiner::refine(const std::vector<CameraFrame>& frames, const Eigen::M
             MaskKey(frame.mask.data(), image.width, image.height, isBayer(image.format));
         input.green_screen = nullptr;
         input.mask = &mask_keys_[c];
+      } else if (size_t(c) < plates_.size() && plates_[c]) {
+        input.green_screen = nullptr;
+        input.background = plates_[c].get();
       }
       inputs_.push_back(input);
     }

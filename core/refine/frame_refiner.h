@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
 #include <vector>
 
 #include "core/capture/frame_source.h"
@@ -30,6 +31,12 @@ class FrameRefiner {
   void refine(const std::vector<CameraFrame>& frames, const Eigen::Matrix3Xf& positions,
               const Eigen::Matrix3Xf& normals, Eigen::Matrix3Xf& refined, int left_out = -1);
 
+  // Each rig camera's clean plate (sessionPlates), which keys it instead of its green screen where
+  // one is (a stage without a green screen); none: every camera on green.
+  void setPlates(std::vector<std::shared_ptr<const BackgroundModel>> plates) {
+    plates_ = std::move(plates);
+  }
+
   // The last frame's offset levels (RefineConfig::offsetLevels()).
   const std::vector<uint8_t>& offsets() const { return offsets_; }
   // Compressed statistics of the last frame, summed over the nodes.
@@ -43,6 +50,7 @@ class FrameRefiner {
   MeshRefiner refiner_;
   std::vector<GreenScreenKeyer> keyers_;
   std::vector<MaskKey> mask_keys_;
+  std::vector<std::shared_ptr<const BackgroundModel>> plates_;
   bool keyers_learnt_ = false;
   RefinementStatistics node_stats_, combined_;
   RefinementStatisticsCodec codec_;

@@ -114,7 +114,7 @@ constexpr int kWeightBits = 6, kWeightOne = 1 << (2 * kWeightBits);
 // well inside the actor (RefineConfig::colour_purity), or where none is, between those keyed as
 // the actor, their weights renormalised, so that the screen's colour beside a silhouette (and in
 // the pixels it covers in part) does not make the rim's points look inconsistent; the nearest
-// pixel's (ix, iy) where none is either (a background model whose blocks' bounds differ around
+// pixel's (ix, iy) where none is either (a clean plate whose pixels' bounds differ around
 // the point). The nearest pixel alone put a point's projection up to half a pixel off in every
 // camera, a colour error that the variance counts as inconsistency: leave-one-camera-out +0.25 to
 // +0.37 dB (docs/lumigraph.md).

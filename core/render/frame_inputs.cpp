@@ -2,12 +2,28 @@
 
 namespace lumistage {
 
+namespace {
+
+template <typename Key>
+void keyedMask(LumigraphRenderer& renderer, int own_index, const Key& key, const ImageView& image,
+               LowResSilhouette& silhouette, std::vector<uint8_t>& mask) {
+  computeSilhouette(key, image, own_index, kMaskStep, silhouette);
+  silhouetteMask(silhouette, mask);
+  renderer.setMask(own_index, mask, silhouette.width, silhouette.height);
+}
+
+}  // namespace
+
 void setForegroundMask(LumigraphRenderer& renderer, int own_index, const GreenScreenKeyer& keyer,
                        const ImageView& image, LowResSilhouette& silhouette,
                        std::vector<uint8_t>& mask) {
-  computeSilhouette(keyer, image, own_index, kMaskStep, silhouette);
-  silhouetteMask(silhouette, mask);
-  renderer.setMask(own_index, mask, silhouette.width, silhouette.height);
+  keyedMask(renderer, own_index, keyer, image, silhouette, mask);
+}
+
+void setForegroundMask(LumigraphRenderer& renderer, int own_index, const BackgroundModel& plate,
+                       const ImageView& image, LowResSilhouette& silhouette,
+                       std::vector<uint8_t>& mask) {
+  keyedMask(renderer, own_index, plate, image, silhouette, mask);
 }
 
 void setForegroundMask(LumigraphRenderer& renderer, int own_index,
@@ -28,6 +44,8 @@ void FrameInputs::set(LumigraphRenderer& renderer, const std::vector<CameraFrame
     if (!frames[c].mask.empty())
       setForegroundMask(renderer, static_cast<int>(c), frames[c].mask, image.width, image.height,
                         silhouette_, mask_);
+    else if (c < plates_.size() && plates_[c])
+      setForegroundMask(renderer, static_cast<int>(c), *plates_[c], image, silhouette_, mask_);
     else
       setForegroundMask(renderer, static_cast<int>(c), keyers_[c], image, silhouette_, mask_);
   }

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/capture/frame_source.h"
@@ -14,6 +15,10 @@ namespace lumistage {
 // `own_index`'s foreground mask (what a node does for each of its cameras every frame).
 // `silhouette` and `mask` are scratch buffers, reused.
 void setForegroundMask(LumigraphRenderer& renderer, int own_index, const GreenScreenKeyer& keyer,
+                       const ImageView& image, LowResSilhouette& silhouette,
+                       std::vector<uint8_t>& mask);
+// The same keyed on the camera's clean plate.
+void setForegroundMask(LumigraphRenderer& renderer, int own_index, const BackgroundModel& plate,
                        const ImageView& image, LowResSilhouette& silhouette,
                        std::vector<uint8_t>& mask);
 // The same from the frame's mask of the actor (another tool's: one byte a pixel, non-zero on the
@@ -31,8 +36,14 @@ class FrameInputs {
  public:
   // `frames` indexed by the renderer's own cameras (all of the rig's, in order).
   void set(LumigraphRenderer& renderer, const std::vector<CameraFrame>& frames);
+  // Each rig camera's clean plate (sessionPlates), which keys it instead of its green screen where
+  // one is; none: every camera on green.
+  void setPlates(std::vector<std::shared_ptr<const BackgroundModel>> plates) {
+    plates_ = std::move(plates);
+  }
 
  private:
+  std::vector<std::shared_ptr<const BackgroundModel>> plates_;
   std::vector<GreenScreenKeyer> keyers_;
   LowResSilhouette silhouette_;
   std::vector<uint8_t> mask_;

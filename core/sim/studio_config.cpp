@@ -101,8 +101,20 @@ StudioConfig loadStudioConfig(const std::filesystem::path& path) {
   }
   if (const YAML::Node look = root["look"]) {
     in.requireMap(look, "look");
-    in.checkKeys(look, "look",
-                 {"screen_green", "unevenness", "spill", "noise_sigma", "pixel_format"});
+    in.checkKeys(
+        look, "look",
+        {"backdrop", "screen_green", "unevenness", "spill", "noise_sigma", "pixel_format"});
+    if (look["backdrop"]) {
+      const std::string b = in.string(look["backdrop"], "look.backdrop");
+      if (b == "green_screen") {
+        config.look.backdrop = StudioLook::Backdrop::kGreenScreen;
+      } else if (b == "room") {
+        config.look.backdrop = StudioLook::Backdrop::kRoom;
+      } else {
+        in.fail(look["backdrop"], "look.backdrop",
+                "expected green_screen or room, got '" + b + "'");
+      }
+    }
     if (const YAML::Node g = look["screen_green"]) {
       in.requireSequence(g, "look.screen_green", 3);
       for (int i = 0; i < 3; ++i) {
@@ -157,10 +169,11 @@ std::string formatStudioConfig(const StudioConfig& config, const std::string& ri
       config.fps, placement.start_s, placement.centre, placement.heading_deg,
       placement.offset_m.x(), placement.offset_m.y());
   out += fmt::format(
-      "look:\n  screen_green: [{}, {}, {}]\n  unevenness: {}\n  spill: {}\n"
+      "look:\n  backdrop: {}\n  screen_green: [{}, {}, {}]\n  unevenness: {}\n  spill: {}\n"
       "  noise_sigma: {}\n  pixel_format: {}\n",
-      look.screen_green.x(), look.screen_green.y(), look.screen_green.z(), look.unevenness,
-      look.spill, look.noise_sigma * 255.0, pixelFormatName(config.pixel_format));
+      look.backdrop == StudioLook::Backdrop::kRoom ? "room" : "green_screen", look.screen_green.x(),
+      look.screen_green.y(), look.screen_green.z(), look.unevenness, look.spill,
+      look.noise_sigma * 255.0, pixelFormatName(config.pixel_format));
   out += fmt::format("seed: {}\n", config.seed);
   return out;
 }

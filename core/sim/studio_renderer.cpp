@@ -111,6 +111,8 @@ void StudioRenderer::render(const Camera& camera, const StudioLook& look, uint32
   glUniform1f(background.uniform("noise_sigma"), look.noise_sigma);
   glUniform3fv(background.uniform("screen_green"), 1, look.screen_green.data());
   glUniform1f(background.uniform("unevenness"), look.unevenness);
+  const bool room = look.backdrop == StudioLook::Backdrop::kRoom;
+  glUniform1i(background.uniform("room"), room ? 1 : 0);
   glBindVertexArray(background_vao_);
   glDrawArrays(GL_TRIANGLES, 0, 3);
 
@@ -131,7 +133,7 @@ void StudioRenderer::render(const Camera& camera, const StudioLook& look, uint32
   glUniform3fv(actor.uniform("camera_centre"), 1, centre.data());
   glUniform1ui(actor.uniform("noise_seed"), noise_seed);
   glUniform1f(actor.uniform("noise_sigma"), look.noise_sigma);
-  glUniform1f(actor.uniform("spill"), look.spill);
+  glUniform1f(actor.uniform("spill"), room ? 0.0f : look.spill);
   glBindVertexArray(vao_);
   if (with_actor) glDrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);

@@ -14,9 +14,14 @@ namespace lumistage {
 
 // How the virtual studio looks: the screen's colour and unevenness, spill, noise.
 struct StudioLook {
+  // What stands behind the actor: a green screen, or a room (a wooden floor, painted walls with
+  // posters and a door: a stage that must be keyed on its clean plate, without green spill).
+  enum class Backdrop { kGreenScreen, kRoom };
+  Backdrop backdrop = Backdrop::kGreenScreen;
   Eigen::Vector3f screen_green = {0.16f, 0.58f, 0.24f};
   float unevenness = 0.12f;  // relative brightness variation of the screen
-  float spill = 1.0f;        // strength of green spill on the actor's grazing surfaces
+  float spill =
+      1.0f;  // strength of green spill on the actor's grazing surfaces (green screen only)
   float noise_sigma = 2.0f / 255.0f;
 };
 

@@ -87,6 +87,23 @@ std::unique_ptr<SessionWriter> openStudioSession(const VirtualStudio& studio,
                                          studio.config().fps, "virtual-studio", joint_names);
 }
 
+void writeStudioPlate(VirtualStudio& studio, int frames, SessionWriter& writer) {
+  const int n = studio.rig().cameraCount();
+  std::vector<Image> images(n);
+  std::vector<ImageView> views(n);
+  std::vector<uint8_t> rgba;
+  for (int f = 0; f < frames; ++f) {
+    for (int c = 0; c < n; ++c) {
+      const Camera& camera = studio.rig().camera(c);
+      studio.renderEmptyStage(c, f, rgba);
+      rgbaToImage(rgba.data(), camera.width(), camera.height(), studio.config().pixel_format,
+                  images[c]);
+      views[c] = images[c].view();
+    }
+    writer.writePlate(f, views);
+  }
+}
+
 void writeStudioFrame(const VirtualStudio& studio, const StudioFrame& frame, int64_t frame_id,
                       SessionWriter& writer, std::vector<Image>& images) {
   const int n = studio.rig().cameraCount();

@@ -61,6 +61,9 @@ class VirtualStudio {
 // with its truth, at its time in the clip. Throw Error as SessionWriter does.
 std::unique_ptr<SessionWriter> openStudioSession(const VirtualStudio& studio,
                                                  const std::filesystem::path& folder);
+// `frames` frames of the empty stage from every camera, as the session's plate
+// (SessionWriter::writePlate): what nodes key a stage without a green screen on.
+void writeStudioPlate(VirtualStudio& studio, int frames, SessionWriter& writer);
 // `images` is scratch, reused.
 void writeStudioFrame(const VirtualStudio& studio, const StudioFrame& frame, int64_t frame_id,
                       SessionWriter& writer, std::vector<Image>& images);

@@ -69,6 +69,24 @@ void nodeSilhouetteRgb(benchmark::State& state) {
 }
 BENCHMARK(nodeSilhouetteRgb)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
 
+// The same keyed on a clean plate (a stage without a green screen): the plate learnt from the frame
+// with its block of actor painted over with the screen, as the empty stage.
+void nodeSilhouettePlate(benchmark::State& state) {
+  const lumistage::Image image = stageFrame();
+  lumistage::Image empty = image;
+  for (int y = 200; y < 700; ++y)
+    for (int x = 400; x < 600; ++x) empty.pixels[size_t(y) * 1024 + x] = (x + y) % 2 ? 150 : 45;
+  lumistage::BackgroundModel plate(1024, 768);
+  plate.add(empty.view());
+  plate.learn();
+  lumistage::LowResSilhouette silhouette;
+  for (auto _ : state) {
+    lumistage::computeSilhouette(plate, image.view(), 0, int(state.range(0)), silhouette);
+    benchmark::DoNotOptimize(silhouette.bits.data());
+  }
+}
+BENCHMARK(nodeSilhouettePlate)->Arg(4)->Arg(8)->Unit(benchmark::kMicrosecond);
+
 // A camera's screen measured again, as a node does for each camera once every 30 frames
 // (CameraNode::checkScreens).
 void measureScreen(benchmark::State& state) {

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -424,6 +425,59 @@ TEST(SessionReader, ServesTheGivenMasksBesideTheRepairedOnes) {
                                        ": cannot read the given mask (64x48 PNG, camera cam01)"))
         << e.what();
   }
+  fs::remove_all(folder);
+}
+
+// The empty stage filmed before the take (a stage without a green screen is keyed on it): written
+// beside the frames, not in the index, read back bit-exact per camera; a damaged plate file is an
+// error naming it.
+TEST(SessionReader, ReadsBackThePlateOfTheEmptyStage) {
+  const Rig rig = smallRig();
+  for (const ImageFiles files : {ImageFiles::kPng, ImageFiles::kPnm}) {
+    const fs::path folder = freshFolder("plate");
+    {
+      SessionWriter writer(folder, rig, PixelFormat::kBayerRggb8, 30.0, "test", {}, files);
+      for (int f = 0; f < 3; ++f)
+        writer.writePlate(f, views(frameImages(rig, PixelFormat::kBayerRggb8, 10 + f)));
+      for (int f = 0; f < 2; ++f) {
+        writer.writeFrame(f, timestampOf(f), views(frameImages(rig, PixelFormat::kBayerRggb8, f)));
+      }
+      // A plate frame of another size is refused, naming it.
+      std::vector<Image> wrong = frameImages(rig, PixelFormat::kMono8, 0);
+      try {
+        writer.writePlate(3, views(wrong));
+        ADD_FAILURE() << "a plate of another format was written";
+      } catch (const Error& e) {
+        EXPECT_TRUE(contains(e.what(), "plate frame 3, camera cam01: got a 64x48 mono8 image"))
+            << e.what();
+      }
+    }
+    const SessionReader reader(folder);
+    EXPECT_TRUE(reader.warnings().empty()) << allWarnings(reader);
+    EXPECT_EQ(reader.frameCount(), 2);  // the plate is no frame of the session
+    for (int c = 0; c < rig.cameraCount(); ++c) {
+      ASSERT_EQ(reader.plateFrames(c), 3);
+      for (int f = 0; f < 3; ++f) {
+        EXPECT_TRUE(reader.readPlate(c, f).pixels ==
+                    frameImages(rig, PixelFormat::kBayerRggb8, 10 + f)[c].pixels)
+            << "camera " << c << " plate frame " << f;
+      }
+    }
+    // Damaged after the session was written: an error naming the file.
+    const fs::path damaged = reader.platePath(1, 2);
+    std::ofstream(damaged, std::ios::trunc) << "not an image";
+    try {
+      reader.readPlate(1, 2);
+      ADD_FAILURE() << "a damaged plate frame was read";
+    } catch (const Error& e) {
+      EXPECT_TRUE(contains(e.what(), "the empty stage's " + damaged.string())) << e.what();
+    }
+    fs::remove_all(folder);
+  }
+  // A session without a plate: none.
+  const fs::path folder = freshFolder("no_plate");
+  writeSession(folder, rig, PixelFormat::kMono8, 1);
+  EXPECT_EQ(SessionReader(folder).plateFrames(0), 0);
   fs::remove_all(folder);
 }
 

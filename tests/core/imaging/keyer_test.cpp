@@ -8,6 +8,8 @@
 #include <random>
 
 #include "core/base/error.h"
+#include "core/imaging/clean_plate.h"
+#include "core/imaging/silhouettes.h"
 #include "core/sim/virtual_studio.h"
 #include "tests/core/sim/reference_studio.h"
 
@@ -188,6 +190,91 @@ TEST_F(KeyerTest, BackgroundModelLearnedFromTheEmptyStageFindsTheActor) {
   const Agreement a = compare(model, image.view(), frame.masks[1]);
   EXPECT_GT(a.iou(), 0.97);
   EXPECT_LT(a.errorRate(), 0.006);
+}
+
+// A stage without a green screen (the virtual studio's room: a wooden floor, painted walls,
+// posters, a door) keyed on its clean plate, learnt from eight frames of the empty stage: the
+// actor's silhouette, pixel by pixel and in a node's low-resolution cells, against the truth, on
+// RGB and on Bayer images alike.
+TEST(CleanPlate, KeysARoomAsWellAsAGreenScreenIsKeyed) {
+  StudioConfig config = testing::referenceStudioOnRing(4000, 4, 512, 384);
+  config.look.backdrop = StudioLook::Backdrop::kRoom;
+  VirtualStudio studio(config, 30);
+  StudioFrame frame;
+  studio.renderFrame(20, frame);
+  std::vector<uint8_t> empty;
+  for (const PixelFormat format : {PixelFormat::kRgb8, PixelFormat::kBayerGrbg8}) {
+    for (int c = 0; c < studio.rig().cameraCount(); ++c) {
+      SCOPED_TRACE(::testing::Message() << pixelFormatName(format) << ", camera " << c);
+      const Camera& camera = studio.rig().camera(c);
+      std::vector<Image> plate(8);
+      for (int take = 0; take < 8; ++take) {
+        studio.renderEmptyStage(c, take, empty);
+        rgbaToImage(empty.data(), camera.width(), camera.height(), format, plate[take]);
+      }
+      const std::shared_ptr<const BackgroundModel> model =
+          learnPlate(plate, camera.width(), camera.height());
+      ASSERT_TRUE(model);
+      EXPECT_EQ(model->frames(), 8);
+      Image image;
+      rgbaToImage(frame.images[c].data(), camera.width(), camera.height(), format, image);
+      // The room is no green screen: its green key loses the actor in the room.
+      GreenScreenKeyer green;
+      green.learnScreen(image.view());
+      EXPECT_LT(compare(green, image.view(), frame.masks[c]).iou(), 0.5);
+      const Agreement a = compare(*model, image.view(), frame.masks[c]);
+      EXPECT_GT(a.iou(), 0.93);
+      EXPECT_LT(a.errorRate(), 0.01);
+      // A node's cells, as the tracker gets them.
+      LowResSilhouette cells;
+      computeSilhouette(*model, image.view(), c, 4, cells);
+      size_t agree = 0;
+      for (int y = 0; y < cells.height; ++y)
+        for (int x = 0; x < cells.width; ++x)
+          agree += cells.at(x, y) ==
+                   (frame.masks[c][size_t(y * 4 + 2) * camera.width() + x * 4 + 2] > 0);
+      EXPECT_GT(double(agree) / (cells.width * cells.height), 0.985);
+    }
+  }
+  // A frame of another size is left out, and counted.
+  Image small;
+  small.resize(PixelFormat::kRgb8, 16, 16);
+  int skipped = 0;
+  EXPECT_FALSE(learnPlate({small}, 512, 384, &skipped));
+  EXPECT_EQ(skipped, 1);
+}
+
+// A hole a clean plate's key leaves inside the actor (his colour is the room's there) is filled;
+// the background that reaches the image's border stays, however it winds.
+TEST(CleanPlate, HolesInASilhouetteAreFilledAndTheBackgroundKept) {
+  const char* rows[] = {
+      "..........",  //
+      ".####.....",  //
+      ".#..#..##.",  //
+      ".####..#..",  //
+      "#......#.#",  //
+      "#.......#.",  //
+  };
+  LowResSilhouette s;
+  s.width = 10, s.height = 6;
+  s.bits.assign(8, 0);
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 10; ++x)
+      if (rows[y][x] == '#') s.set(x, y);
+  fillHoles(s);
+  for (int y = 0; y < 6; ++y) {
+    for (int x = 0; x < 10; ++x) {
+      const bool hole = y == 2 && (x == 2 || x == 3);
+      EXPECT_EQ(s.at(x, y), rows[y][x] == '#' || hole) << x << ", " << y;
+    }
+  }
+  EXPECT_THROW(BackgroundModel(8, 8, 0.0f), Error);
+  BackgroundModel model(8, 8);
+  Image empty;
+  empty.resize(PixelFormat::kRgb8, 8, 8);
+  model.add(empty.view());
+  model.learn();
+  EXPECT_THROW(model.add(empty.view()), Error);  // learnt already
 }
 
 TEST_F(KeyerTest, LowResolutionSilhouetteSamplesCellCentres) {

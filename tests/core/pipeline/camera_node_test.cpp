@@ -396,6 +396,95 @@ TEST(CameraNode, AScreenThatDimsAfterLearningIsWarnedOf) {
 
 // Told by the studio that its cameras count other ids than the other nodes' for the same instants,
 // a node moves its frame ids by the shift from then on.
+// A stage without a green screen, live: a room of many colours (no green to key), empty for the
+// first 30 frames, then with the actor (a block of another colour) in the middle of every view.
+class RoomSource : public FrameSource {
+ public:
+  RoomSource(Rig rig, std::vector<int> cameras)
+      : rig_(std::move(rig)), cameras_(std::move(cameras)) {}
+  const Rig& rig() const override { return rig_; }
+  bool next(CameraFrame& frame, milliseconds) override {
+    const int camera = cameras_[next_ % cameras_.size()];
+    const int64_t id = int64_t(next_ / cameras_.size());
+    ++next_;
+    if (next_ % cameras_.size() == 0) std::this_thread::sleep_for(milliseconds(5));
+    frame.camera = camera;
+    frame.frame_id = id;
+    frame.timestamp_ns = id * 33'333'333;
+    const Camera& c = rig_.camera(camera);
+    frame.image.resize(PixelFormat::kRgb8, c.width(), c.height());
+    for (int y = 0; y < c.height(); ++y) {
+      for (int x = 0; x < c.width(); ++x) {
+        uint8_t* p = &frame.image.pixels[3 * (size_t(y) * c.width() + x)];
+        const bool actor = id >= kEmptyFrames && isActor(c, x, y);
+        // Wallpaper: stripes of red, grey and blue, with a pixel of noise.
+        const uint8_t noise = uint8_t((x * 7 + y * 13 + id) % 3);
+        const uint8_t wall[3][3] = {{170, 60, 50}, {120, 120, 120}, {50, 70, 160}};
+        const uint8_t* colour = wall[(x / 6 + y / 9) % 3];
+        for (int k = 0; k < 3; ++k)
+          p[k] = actor ? uint8_t(230 - k * 40) : uint8_t(colour[k] + noise);
+      }
+    }
+    return true;
+  }
+  CameraStats stats(int) const override { return {}; }
+  static bool isActor(const Camera& c, int x, int y) {
+    return std::abs(x - c.width() / 2) < c.width() / 8 &&
+           std::abs(y - c.height() / 2) < c.height() / 4;
+  }
+  static constexpr int64_t kEmptyFrames = 30;
+
+ private:
+  Rig rig_;
+  std::vector<int> cameras_;
+  size_t next_ = 0;
+};
+
+// Told to learn its clean plates from its first 20 sets (`lumistage-node --plate-frames 20`), a
+// node shows nobody while it learns, then keys the actor on the plate where no green key could,
+// every cell right, and says in its health that its cameras are keyed on their plates.
+TEST(CameraNode, ALiveRigWithoutAGreenScreenIsKeyedOnThePlateItLearntFirst) {
+  CameraNodeOptions options;
+  options.plate_frames = 20;
+  NodeUnderTest t(
+      [](const Rig& rig, std::vector<int> cameras) {
+        return std::make_unique<RoomSource>(rig, std::move(cameras));
+      },
+      options);
+  int64_t empty_checked = 0, actor_checked = 0;
+  bool said_plate = false;
+  EXPECT_TRUE(t.receiveUntil([&](const Message& m) {
+    if (const auto* h = std::get_if<HeartbeatData>(&m.body)) {
+      said_plate = !h->cameras.empty();
+      for (const CameraHealthData& c : h->cameras)
+        said_plate = said_plate && c.key == kKeyedOnPlate;
+    }
+    const auto* silhouettes = std::get_if<SilhouettesData>(&m.body);
+    if (!silhouettes) return false;
+    for (const SilhouetteMaskData& mask : silhouettes->masks) {
+      const Camera& c = t.rig.camera(mask.camera);
+      const int step = c.width() / mask.width;
+      int wrong = 0, actor = 0;
+      for (int y = 0; y < mask.height; ++y) {
+        for (int x = 0; x < mask.width; ++x) {
+          const size_t i = size_t(y) * mask.width + x;
+          const bool keyed = (mask.bits[i / 8] >> (i % 8)) & 1;
+          const bool truth = m.frame_id >= RoomSource::kEmptyFrames &&
+                             RoomSource::isActor(c, x * step + step / 2, y * step + step / 2);
+          wrong += keyed != truth;
+          actor += truth;
+        }
+      }
+      EXPECT_EQ(wrong, 0) << "frame " << m.frame_id << ", camera " << c.name();
+      if (m.frame_id < RoomSource::kEmptyFrames) ++empty_checked;
+      if (actor > 0) ++actor_checked;
+    }
+    return actor_checked > 20 && said_plate;
+  })) << actor_checked
+      << " silhouettes of the actor checked, keyed on the plate said: " << said_plate;
+  EXPECT_GT(empty_checked, 10);
+}
+
 TEST(CameraNode, ANodeMovesItsFrameIdsWhenTheStudioSaysTheyLieElsewhere) {
   NodeUnderTest t([](const Rig& rig, std::vector<int> cameras) {
     return std::make_unique<ScriptedSource>(rig, std::move(cameras), -1, 0);
