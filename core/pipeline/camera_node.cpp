@@ -13,7 +13,6 @@
 #include <thread>
 
 #include "core/base/error.h"
-#include "core/imaging/clean_plate.h"
 #include "core/imaging/partial_image_codec.h"
 #include "core/net/posed_body.h"
 #include "core/pipeline/pipeline.h"
@@ -41,59 +40,8 @@ CameraNode::CameraNode(const Rig& rig, const std::string& name, std::unique_ptr<
   screen_measured_.resize(cameras_.size());
   published_keyers_ = std::make_shared<const std::vector<GreenScreenKeyer>>(keyers_);
   screen_warnings_.resize(cameras_.size());
-  masked_.resize(cameras_.size());
-  mask_keys_.resize(cameras_.size());
-  plates_.resize(cameras_.size());
-  for (size_t k = 0; k < cameras_.size(); ++k) {
-    masked_[k] = source_->hasMasks(cameras_[k]);
-    if (masked_[k]) {
-      spdlog::info("node {}: camera {}: keyed from the session's masks (no green screen learnt)",
-                   name_, rig_.camera(cameras_[k]).name());
-    } else {
-      plates_[k] = learnPlate(*source_, cameras_[k]);
-    }
-  }
-  published_plates_ =
-      std::make_shared<const std::vector<std::shared_ptr<const BackgroundModel>>>(plates_);
-  plates_learning_.resize(cameras_.size());
-  key_kinds_ = std::make_unique<std::atomic<const char*>[]>(cameras_.size());
-  for (size_t k = 0; k < cameras_.size(); ++k) {
-    if (options_.plate_frames > 0 && !masked_[k] && !plates_[k]) {
-      const Camera& c = rig_.camera(cameras_[k]);
-      plates_learning_[k] = std::make_unique<BackgroundModel>(c.width(), c.height());
-      spdlog::info(
-          "node {}: camera {}: learns its clean plate from the first {} sets (the empty "
-          "stage)",
-          name_, c.name(), options_.plate_frames);
-    }
-    key_kinds_[k] = masked_[k]            ? kKeyedFromMasks
-                    : plates_[k]          ? kKeyedOnPlate
-                    : plates_learning_[k] ? kLearningPlate
-                                          : kKeyedOnGreen;
-  }
+  setUpKeys();
 }
-
-std::shared_ptr<const BackgroundModel> CameraNode::learnPlate(FrameSource& source,
-                                                              int camera) const {
-  const std::vector<Image> empty = source.plateImages(camera);
-  if (empty.empty()) return nullptr;
-  const Camera& c = rig_.camera(camera);
-  int skipped = 0;
-  std::shared_ptr<const BackgroundModel> plate =
-      lumistage::learnPlate(empty, c.width(), c.height(), &skipped);
-  if (skipped > 0) {
-    spdlog::warn(
-        "node {}: camera {}: {} frames of the empty stage not of its {}x{} pixels: left "
-        "out of its plate",
-        name_, c.name(), skipped, c.width(), c.height());
-  }
-  if (plate) {
-    spdlog::info("node {}: camera {}: keyed on its clean plate ({} frames of the empty stage)",
-                 name_, c.name(), plate->frames());
-  }
-  return plate;
-}
-
 Message CameraNode::silhouettesOf(const Set& set) const {
   SilhouettesData silhouettes;
   LowResSilhouette s;

@@ -227,6 +227,9 @@ class CameraNode {
   std::vector<std::shared_ptr<const BackgroundModel>> plates_;
   std::shared_ptr<const std::vector<std::shared_ptr<const BackgroundModel>>> published_plates_;
   std::shared_ptr<const BackgroundModel> learnPlate(FrameSource& source, int camera) const;
+  // Each own camera's key at start: from masks, on a plate its source filmed, on one to learn from
+  // the first sets, or on green (camera_node_keys.cpp).
+  void setUpKeys();
   // The plates being learnt from the first sets (the capture thread's), and the sets taken so far.
   std::vector<std::unique_ptr<BackgroundModel>> plates_learning_;
   int plate_sets_ = 0;
