@@ -19,7 +19,30 @@ void CameraOverlayView::setCamera(const Camera& camera) {
 
 void CameraOverlayView::setImage(const QImage& image) {
   image_ = image;
-  mask_ = silhouette_ ? keySilhouette(image) : QImage();
+  if (!node_silhouette_) mask_ = silhouette_ ? keySilhouette(image) : QImage();
+  update();
+}
+
+namespace {
+
+constexpr QRgb kActorTint = qRgba(255, 60, 200, 110);
+
+}  // namespace
+
+void CameraOverlayView::setNodeSilhouette(const LowResSilhouette* silhouette) {
+  node_silhouette_ = silhouette && silhouette->width > 0 && silhouette->height > 0;
+  if (!node_silhouette_) {
+    mask_ = silhouette_ && !image_.isNull() ? keySilhouette(image_) : QImage();
+    update();
+    return;
+  }
+  const LowResSilhouette& s = *silhouette;
+  mask_ = QImage(s.width, s.height, QImage::Format_ARGB32);
+  for (int y = 0; y < s.height; ++y) {
+    auto* out = reinterpret_cast<QRgb*>(mask_.scanLine(y));
+    for (int x = 0; x < s.width; ++x) out[x] = s.at(x, y) ? kActorTint : qRgba(0, 0, 0, 0);
+  }
+  mask_span_ = QSizeF(s.width * s.step, s.height * s.step);
   update();
 }
 
@@ -46,7 +69,7 @@ QImage CameraOverlayView::keySilhouette(const QImage& image, int threshold) {
     for (int x = 0; x < rgb.width(); ++x) {
       const int r = in[3 * x], g = in[3 * x + 1], b = in[3 * x + 2];
       const bool actor = g - std::max(r, b) < threshold;
-      out[x] = actor ? qRgba(255, 60, 200, 110) : qRgba(0, 0, 0, 0);
+      out[x] = actor ? kActorTint : qRgba(0, 0, 0, 0);
     }
   }
   return mask;
@@ -74,8 +97,18 @@ void CameraOverlayView::paintEvent(QPaintEvent*) {
     painter.drawText(r, Qt::AlignCenter, tr("waiting for frames"));
   }
   if (silhouette_) {
-    if (mask_.isNull() && !image_.isNull()) mask_ = keySilhouette(image_);
-    if (!mask_.isNull()) painter.drawImage(r, mask_);
+    if (mask_.isNull() && !image_.isNull() && !node_silhouette_) mask_ = keySilhouette(image_);
+    if (!mask_.isNull() && node_silhouette_) {
+      // Cells over the camera's pixels they cover, each a sharp square.
+      const QRectF cells(r.topLeft(), QSizeF(r.width() * mask_span_.width() / camera_.width(),
+                                             r.height() * mask_span_.height() / camera_.height()));
+      painter.save();
+      painter.setRenderHint(QPainter::SmoothPixmapTransform, false);
+      painter.drawImage(cells, mask_);
+      painter.restore();
+    } else if (!mask_.isNull()) {
+      painter.drawImage(r, mask_);
+    }
   }
   const double sx = r.width() / camera_.width(), sy = r.height() / camera_.height();
   auto map = [&](const Eigen::Vector2d& p) {

@@ -8,12 +8,13 @@
 
 #include "core/body/skinned_mesh.h"
 #include "core/geometry/camera.h"
+#include "core/imaging/silhouettes.h"
 
 namespace lumistage {
 
-// One camera's image with overlays drawn in its own pixels: the actor's silhouette (keyed from
-// the green screen), the projected skeleton and mesh, epipolar curves and a marked point. Clicks
-// come out in the camera's pixels.
+// One camera's image with overlays drawn in its own pixels: the actor's silhouette (the cells its
+// node keyed, or else keyed from the green screen of the picture), the projected skeleton and
+// mesh, epipolar curves and a marked point. Clicks come out in the camera's pixels.
 class CameraOverlayView : public QWidget {
   Q_OBJECT
 
@@ -23,6 +24,13 @@ class CameraOverlayView : public QWidget {
   void setCamera(const Camera& camera);
   const Camera& camera() const { return camera_; }
   void setImage(const QImage& image);  // any size: stretched over the camera's pixels
+  // The silhouette its node keyed (whatever it keys on: green, a clean plate, a session's masks),
+  // drawn cell by cell instead of the picture's green key; null: the green key again.
+  void setNodeSilhouette(const LowResSilhouette* silhouette);
+  bool showsNodeSilhouette() const { return node_silhouette_; }
+  // The silhouette layer's mask: one pixel a cell of the node's silhouette, or the picture's
+  // green key at its size (transparent where not the actor); null when there is none.
+  const QImage& silhouetteMask() const { return mask_; }
   bool hasImage() const { return !image_.isNull(); }
   const QImage& image() const { return image_; }
   void setCaption(const QString& caption);
@@ -68,6 +76,8 @@ class CameraOverlayView : public QWidget {
   QImage image_, mask_;
   QString caption_;
   bool silhouette_ = false, skeleton_ = false, mesh_on_ = false;
+  bool node_silhouette_ = false;  // mask_ is a node's silhouette (setNodeSilhouette)
+  QSizeF mask_span_;              // the camera pixels mask_ covers (a node's cells may stop short)
   std::vector<Eigen::Vector3d> joints_;
   std::vector<int> parents_;
   std::shared_ptr<const TriangleMesh> mesh_;

@@ -64,6 +64,7 @@ bool OverlayPanel::selectCamera(int camera) {
                         .arg(QString::fromStdString(rig_.camera(camera).name()),
                              QString::fromStdString(rig_.camera(camera).node())));
   showBestPicture();
+  showNodeSilhouette();
   emit cameraSelected(camera);
   return true;
 }
@@ -116,7 +117,18 @@ void OverlayPanel::showFrame(int camera, const QImage& preview, qint64 frame_id)
 void OverlayPanel::showSnapshot(const PipelineSnapshot& s) {
   view_->setBody(s.joints, s.parents, s.mesh);
   pose_frame_ = s.pose_frame;
+  silhouettes_ = s.silhouettes;
   showBestPicture();
+  showNodeSilhouette();
+}
+
+void OverlayPanel::showNodeSilhouette() {
+  const LowResSilhouette* keyed = nullptr;
+  if (silhouettes_) {
+    for (const LowResSilhouette& s : *silhouettes_)
+      if (s.camera == selected_) keyed = &s;
+  }
+  view_->setNodeSilhouette(keyed);
 }
 
 }  // namespace lumistage

@@ -12,8 +12,9 @@ class QListWidget;
 
 namespace lumistage {
 
-// Skeleton overlay: any camera's image with the actor's silhouette, the projected skeleton and
-// the projected mesh of the body the pipeline placed. The camera is picked from a grid of all.
+// Skeleton overlay: any camera's image with the actor's silhouette (as its node keyed it while a
+// pipeline runs, else the picture's green key), the projected skeleton and the projected mesh of
+// the body the pipeline placed. The camera is picked from a grid of all.
 // The picture shown is the camera's preview nearest the frame the body was placed for (the
 // studio's previews and the nodes replay a session in step, with the same frame ids): the chosen
 // camera's every frame comes (watchedFrame), so on a moving actor the body and the picture are of
@@ -52,6 +53,9 @@ class OverlayPanel : public QWidget {
   QVector<QVector<Picture>> recent_;  // per camera, its latest previews
   int selected_ = -1;
   qint64 pose_frame_ = -1;
+  // The silhouettes the nodes keyed for pose_frame_ (null: none, the picture's green key shown).
+  std::shared_ptr<const std::vector<LowResSilhouette>> silhouettes_;
+  void showNodeSilhouette();
 };
 
 }  // namespace lumistage

@@ -38,6 +38,9 @@ struct PipelineView {
   std::vector<Eigen::Vector3d> joints;       // the placed body's joints
   std::vector<int> parents;                  // per joint, -1 for the root
   std::shared_ptr<const TriangleMesh> mesh;  // the placed body's surface
+  // The silhouettes the nodes keyed for pose_frame (StudioCoordinator::silhouettesOf); null when
+  // the studio no longer holds them.
+  std::shared_ptr<const std::vector<LowResSilhouette>> silhouettes;
 };
 
 // What the studio's panels see of the pipeline, five times a second: its figures, the newest view

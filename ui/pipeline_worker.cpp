@@ -140,6 +140,8 @@ void PipelineWorker::run() {
         placeBody(pipeline.studio().lastPose(), pipeline.studio().lastPoseFrame());
       PipelineSnapshot s;
       static_cast<PipelineView&>(s) = shown;
+      if (const auto* keyed = pipeline.studio().silhouettesOf(shown.pose_frame))
+        s.silhouettes = std::make_shared<const std::vector<LowResSilhouette>>(*keyed);
       s.report = pipeline.studio().report();
       s.time_s = std::chrono::duration<double>(now - start).count();
       for (const std::string& name : pipeline.nodeNames()) {

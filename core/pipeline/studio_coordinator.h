@@ -221,6 +221,12 @@ class StudioCoordinator {
   // The body pose the motion capture module sent the nodes last (for overlays); its frame id.
   const PoseData& lastPose() const { return last_pose_; }
   int64_t lastPoseFrame() const { return last_pose_frame_; }
+  // The silhouettes the nodes keyed for frame `frame_id` (one a camera that sent its own;
+  // LowResSilhouette::camera says which), kept for the last kKeptSilhouettes frames motion capture
+  // fitted; null for another. What the technician's silhouette overlay shows over the frame's
+  // picture, however the nodes key (green, a clean plate, a session's masks).
+  static constexpr int kKeptSilhouettes = 8;
+  const std::vector<LowResSilhouette>* silhouettesOf(int64_t frame_id) const;
   // "streaming", "lost" or "unknown" (never heard from).
   std::string nodeState(const std::string& node) const;
 
@@ -469,6 +475,9 @@ class StudioCoordinator {
   std::vector<uint8_t> decoded_;  // a partial image, reused
   PoseData last_pose_;
   int64_t last_pose_frame_ = -1;
+  // silhouettesOf's frames, a ring (frame id -1: none yet), their buffers reused.
+  std::array<std::pair<int64_t, std::vector<LowResSilhouette>>, kKeptSilhouettes> kept_silhouettes_;
+  int next_kept_silhouettes_ = 0;
   // The frames dropped, by cause (RunReport).
   int64_t frames_done_ = 0, frames_refused_ = 0, frames_overtaken_ = 0, frames_unshown_ = 0;
   int64_t frames_incomplete_ = 0, frames_held_ = 0;

@@ -134,6 +134,12 @@ void StudioCoordinator::mocapLoop() {
   }
 }
 
+const std::vector<LowResSilhouette>* StudioCoordinator::silhouettesOf(int64_t frame_id) const {
+  for (const auto& [frame, silhouettes] : kept_silhouettes_)
+    if (frame == frame_id && frame_id >= 0) return &silhouettes;
+  return nullptr;
+}
+
 void StudioCoordinator::takePoses() {
   mocap_ready_.clear();
   while (std::optional<MocapJob> done = mocap_done_.pop(std::chrono::milliseconds(0))) {
@@ -145,6 +151,10 @@ void StudioCoordinator::takePoses() {
     if (it != frames_.end()) {
       FrameState& frame = it->second;
       std::swap(frame.silhouettes, job.silhouettes);
+      auto& kept = kept_silhouettes_[next_kept_silhouettes_];
+      next_kept_silhouettes_ = (next_kept_silhouettes_ + 1) % kKeptSilhouettes;
+      kept.first = job.frame_id;
+      kept.second = frame.silhouettes;
       frame.pose = job.pose;
       frame.tracked = job.tracked;
       frame.mocap_start_ns = job.start_ns;

@@ -153,6 +153,39 @@ void MainWindowTest::overlayShowsTheChosenCamera() {
   QVERIFY(qAlpha(mask.pixel(1, 0)) > 0);
 }
 
+// While a pipeline runs, the silhouette layer is what the chosen camera's node keyed for the
+// frame shown (on a stage with no green screen the picture's green key would take the whole room
+// for the actor); without the nodes' silhouettes, the picture's green key again.
+void MainWindowTest::overlayShowsTheSilhouetteItsNodeKeyed() {
+  MainWindow window;
+  QCOMPARE(window.openRig(reference_), QString());
+  lumistage::OverlayPanel* overlay = window.overlay();
+  QVERIFY(overlay->selectCamera(2));
+  QImage room(8, 6, QImage::Format_RGB888);
+  room.fill(QColor(150, 130, 110));  // a wall: no green, so all of it "actor" to a green key
+  overlay->showWatchedFrame(2, room, 40);
+  lumistage::PipelineSnapshot snapshot;
+  snapshot.pose_frame = 40;
+  auto keyed = std::make_shared<std::vector<lumistage::LowResSilhouette>>(2);
+  for (int k = 0; k < 2; ++k) (*keyed)[k].reset(k == 0 ? 1 : 2, 4, 1024, 768);
+  (*keyed)[1].set(100, 50);
+  snapshot.silhouettes = keyed;
+  overlay->showSnapshot(snapshot);
+  lumistage::CameraOverlayView* view = overlay->view();
+  QVERIFY(view->showsNodeSilhouette());
+  QCOMPARE(view->silhouetteMask().size(), QSize(256, 192));
+  QVERIFY(qAlpha(view->silhouetteMask().pixel(100, 50)) > 0);
+  QCOMPARE(qAlpha(view->silhouetteMask().pixel(10, 10)), 0);
+  // Another camera: its node's own silhouette (empty here), not camera 2's.
+  QVERIFY(overlay->selectCamera(1));
+  QCOMPARE(qAlpha(view->silhouetteMask().pixel(100, 50)), 0);
+  // No silhouettes from the nodes: the picture's green key.
+  QVERIFY(overlay->selectCamera(2));
+  overlay->showSnapshot(lumistage::PipelineSnapshot{});
+  QVERIFY(!view->showsNodeSilhouette());
+  QCOMPARE(view->silhouetteMask().size(), room.size());
+}
+
 // The body placed for a frame is drawn over that frame's own picture: the chosen camera's every
 // frame reaches the overlay, a few a second (4) reach it for the others, and a frame that comes
 // by both ways is kept once.

@@ -61,6 +61,7 @@ class MainWindowTest : public QObject {
   void clonesAreAddedDraggedTurnedAndRemoved();
   void overlayShowsTheChosenCamera();
   void overlayDrawsTheBodyOverThePictureOfItsFrame();
+  void overlayShowsTheSilhouetteItsNodeKeyed();
   void theSourceSendsEveryFrameOfTheWatchedCamera();
   void aRecordingLeftOpenIsOfferedForRecovery();
   void closingWhileRecordingAsksFirst();

@@ -41,6 +41,31 @@ TEST(StudioCoordinator, MasksOfAnotherNodesCameraOrTwiceOfOneAreRefused) {
   EXPECT_EQ(badMessagesOf(two.studio, "node2"), 0);
 }
 
+// The silhouettes each node keyed for a frame are kept with it once fitted, as sent, for the
+// technician's overlay (whatever the nodes key on); a frame never fitted has none.
+TEST(StudioCoordinator, TheSilhouettesOfAFittedFrameAreKeptForTheOverlay) {
+  TwoNodeStudio two(milliseconds(50));
+  const int step = StudioCoordinatorOptions{}.silhouette_step, w = 160 / step, h = 120 / step;
+  const auto mask = [&](int camera, int cell) {
+    SilhouetteMaskData m{camera, w, h, std::vector<uint8_t>(size_t(w * h + 7) / 8, 0)};
+    m.bits[size_t(cell) / 8] |= uint8_t(1u << (cell % 8));
+    return m;
+  };
+  ASSERT_TRUE(two.node1.send(3, SilhouettesData{{mask(0, 7 * w + 5)}}));
+  ASSERT_TRUE(two.node2.send(3, SilhouettesData{{mask(1, 20 * w + 30)}}));
+  ASSERT_EQ(nextPoseFrame(two.node1, two.studio, 3), 3);
+  const std::vector<LowResSilhouette>* kept = two.studio.silhouettesOf(3);
+  ASSERT_NE(kept, nullptr);
+  ASSERT_EQ(kept->size(), 2u);
+  for (const LowResSilhouette& s : *kept) {
+    ASSERT_TRUE(s.camera == 0 || s.camera == 1);
+    ASSERT_EQ(s.width, w);
+    EXPECT_EQ(s.at(5, 7), s.camera == 0);
+    EXPECT_EQ(s.at(30, 20), s.camera == 1);
+  }
+  EXPECT_EQ(two.studio.silhouettesOf(4), nullptr);
+}
+
 // Frame 10 waits for a late node while frame 11 comes whole and begins: at 10's deadline it is
 // dropped, not fitted after 11 (the tracker's prediction run backwards, or 11 pushed out of its
 // queue).
