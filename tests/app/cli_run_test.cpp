@@ -1,6 +1,7 @@
 // lumistage run, run as a user runs it: real node processes, real files; and the options every
 // command refuses before any work.
 #include <gtest/gtest.h>
+#include <sched.h>
 
 #include <cmath>
 #include <cstring>
@@ -258,6 +259,37 @@ TEST(Cli, RunWritesTheFiguresAsJson) {
     fs::remove(json);
   }
   fs::remove_all(folder);
+}
+
+// The whole pipeline, the studio and its node processes confined to one core and to two (as
+// `taskset` confines them, and they inherit it), completes its frames: no hand-off waits on a
+// thread that cannot run, no pool sized for cores it does not have starves the frame path.
+// Whether frames complete, not how fast (speed is the benchmark's).
+TEST(Cli, RunCompletesFramesConfinedToOneCoreAndToTwo) {
+  cpu_set_t allowed;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(allowed), &allowed), 0);
+  std::vector<int> cores;
+  for (int c = 0; c < CPU_SETSIZE && cores.size() < 2; ++c)
+    if (CPU_ISSET(c, &allowed)) cores.push_back(c);
+  const fs::path folder = tempPath("cores");
+  ASSERT_TRUE(synthRingSession(folder, "--cameras 4 --width 320 --height 240 --cameras-per-node 2",
+                               "actor:\n  vertices: 2000\n", "--frames 6 --bayer"));
+  for (size_t n = 1; n <= cores.size(); ++n) {
+    std::string list = std::to_string(cores[0]);
+    if (n == 2) list += "," + std::to_string(cores[1]);
+    const fs::path json = folder / ("run-" + std::to_string(n) + ".json");
+    const Result r =
+        run("taskset -c " + list + " " + kCli + " run --session " + (folder / "session").string() +
+            " --frames 12 --seconds 120 --json " + json.string());
+    ASSERT_EQ(r.exit_code, 0) << "on " << n << " core(s): " << r.output;
+    EXPECT_NE(r.output.find("12 frames in all"), std::string::npos) << r.output;
+    const std::string text = readFile(json);
+    const size_t fps = text.find("\"fps\": ");
+    ASSERT_NE(fps, std::string::npos) << text;
+    EXPECT_GT(std::stod(text.substr(fps + 7)), 0.0) << "on " << n << " core(s): " << text;
+  }
+  fs::remove_all(folder);
+  if (cores.size() < 2) GTEST_SKIP() << "one core here: the two-core run left out";
 }
 
 // A real stage: the nodes run on their own PCs (here: processes started apart, as systemd would)
