@@ -17,22 +17,36 @@ void CameraOverlayView::setCamera(const Camera& camera) {
   update();
 }
 
-void CameraOverlayView::setImage(const QImage& image) {
-  image_ = image;
-  if (!node_silhouette_) mask_ = silhouette_ ? keySilhouette(image) : QImage();
-  update();
-}
-
 namespace {
 
 constexpr QRgb kActorTint = qRgba(255, 60, 200, 110);
 
 }  // namespace
 
+void CameraOverlayView::setImage(const QImage& image, const QImage& mask) {
+  image_ = image;
+  picture_mask_ = mask;
+  if (!node_silhouette_) mask_ = silhouette_ ? pictureSilhouette() : QImage();
+  update();
+}
+
+QImage CameraOverlayView::pictureSilhouette() const {
+  if (image_.isNull()) return {};
+  if (picture_mask_.isNull()) return keySilhouette(image_);
+  const QImage grey = picture_mask_.convertToFormat(QImage::Format_Grayscale8);
+  QImage tinted(grey.size(), QImage::Format_ARGB32);
+  for (int y = 0; y < grey.height(); ++y) {
+    const uchar* in = grey.constScanLine(y);
+    auto* out = reinterpret_cast<QRgb*>(tinted.scanLine(y));
+    for (int x = 0; x < grey.width(); ++x) out[x] = in[x] ? kActorTint : qRgba(0, 0, 0, 0);
+  }
+  return tinted;
+}
+
 void CameraOverlayView::setNodeSilhouette(const LowResSilhouette* silhouette) {
   node_silhouette_ = silhouette && silhouette->width > 0 && silhouette->height > 0;
   if (!node_silhouette_) {
-    mask_ = silhouette_ && !image_.isNull() ? keySilhouette(image_) : QImage();
+    mask_ = silhouette_ ? pictureSilhouette() : QImage();
     update();
     return;
   }
@@ -97,7 +111,7 @@ void CameraOverlayView::paintEvent(QPaintEvent*) {
     painter.drawText(r, Qt::AlignCenter, tr("waiting for frames"));
   }
   if (silhouette_) {
-    if (mask_.isNull() && !image_.isNull() && !node_silhouette_) mask_ = keySilhouette(image_);
+    if (mask_.isNull() && !node_silhouette_) mask_ = pictureSilhouette();
     if (!mask_.isNull() && node_silhouette_) {
       // Cells over the camera's pixels they cover, each a sharp square.
       const QRectF cells(r.topLeft(), QSizeF(r.width() * mask_span_.width() / camera_.width(),

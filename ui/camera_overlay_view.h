@@ -13,8 +13,9 @@
 namespace lumistage {
 
 // One camera's image with overlays drawn in its own pixels: the actor's silhouette (the cells its
-// node keyed, or else keyed from the green screen of the picture), the projected skeleton and
-// mesh, epipolar curves and a marked point. Clicks come out in the camera's pixels.
+// node keyed, or else the source's mask of the picture, or else the picture's green key), the
+// projected skeleton and mesh, epipolar curves and a marked point. Clicks come out in the camera's
+// pixels.
 class CameraOverlayView : public QWidget {
   Q_OBJECT
 
@@ -23,13 +24,16 @@ class CameraOverlayView : public QWidget {
 
   void setCamera(const Camera& camera);
   const Camera& camera() const { return camera_; }
-  void setImage(const QImage& image);  // any size: stretched over the camera's pixels
+  // Any size: stretched over the camera's pixels. `mask` (8 bits, 255 on the actor; null: the
+  // picture's green key): the source's mask of the actor in it, from another tool or a plate.
+  void setImage(const QImage& image, const QImage& mask = {});
   // The silhouette its node keyed (whatever it keys on: green, a clean plate, a session's masks),
   // drawn cell by cell instead of the picture's green key; null: the green key again.
   void setNodeSilhouette(const LowResSilhouette* silhouette);
   bool showsNodeSilhouette() const { return node_silhouette_; }
-  // The silhouette layer's mask: one pixel a cell of the node's silhouette, or the picture's
-  // green key at its size (transparent where not the actor); null when there is none.
+  // The silhouette layer's mask: one pixel a cell of the node's silhouette, or the picture's (its
+  // source's mask, else its green key) at its size (transparent where not the actor); null when
+  // there is none.
   const QImage& silhouetteMask() const { return mask_; }
   bool hasImage() const { return !image_.isNull(); }
   const QImage& image() const { return image_; }
@@ -74,6 +78,8 @@ class CameraOverlayView : public QWidget {
 
   Camera camera_;
   QImage image_, mask_;
+  QImage picture_mask_;              // setImage's mask
+  QImage pictureSilhouette() const;  // the tinted picture_mask_, else the picture's green key
   QString caption_;
   bool silhouette_ = false, skeleton_ = false, mesh_on_ = false;
   bool node_silhouette_ = false;  // mask_ is a node's silhouette (setNodeSilhouette)

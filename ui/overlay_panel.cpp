@@ -81,29 +81,32 @@ void OverlayPanel::showBestPicture() {
       if (std::abs(p.frame_id - pose_frame_) < std::abs(best->frame_id - pose_frame_)) best = &p;
     }
   }
-  view_->setImage(best->image);
+  view_->setImage(best->image, best->mask);
 }
 
 // A second of the watched camera's frames at 30 Hz: more than the pipeline's latency, so that the
 // frame the latest body was placed for is among them.
 constexpr int kRecentPictures = 32;
 
-void OverlayPanel::keepPicture(int camera, const QImage& preview, qint64 frame_id) {
+void OverlayPanel::keepPicture(int camera, const QImage& preview, qint64 frame_id,
+                               const QImage& mask) {
   QVector<Picture>& pictures = recent_[camera];
   if (!pictures.isEmpty() && pictures.back().frame_id == frame_id) return;  // came by both signals
-  pictures.push_back({frame_id, preview});
+  pictures.push_back({frame_id, preview, mask});
   while (pictures.size() > kRecentPictures) pictures.removeFirst();
 }
 
-void OverlayPanel::showWatchedFrame(int camera, const QImage& preview, qint64 frame_id) {
+void OverlayPanel::showWatchedFrame(int camera, const QImage& preview, qint64 frame_id,
+                                    const QImage& mask) {
   if (camera < 0 || camera >= recent_.size()) return;
-  keepPicture(camera, preview, frame_id);
+  keepPicture(camera, preview, frame_id, mask);
   if (camera == selected_ && pose_frame_ < 0) showBestPicture();
 }
 
-void OverlayPanel::showFrame(int camera, const QImage& preview, qint64 frame_id) {
+void OverlayPanel::showFrame(int camera, const QImage& preview, qint64 frame_id,
+                             const QImage& mask) {
   if (camera < 0 || camera >= recent_.size()) return;
-  keepPicture(camera, preview, frame_id);
+  keepPicture(camera, preview, frame_id, mask);
   // The grid's thumbnails once a second are plenty.
   QListWidgetItem* item = grid_->item(camera);
   if (item && (item->data(Qt::UserRole).toLongLong() == 0 ||

@@ -13,7 +13,7 @@ class QListWidget;
 namespace lumistage {
 
 // Skeleton overlay: any camera's image with the actor's silhouette (as its node keyed it while a
-// pipeline runs, else the picture's green key), the projected skeleton and the projected mesh of
+// pipeline runs, else as the source keyed the picture), the projected skeleton and the mesh of
 // the body the pipeline placed. The camera is picked from a grid of all.
 // The picture shown is the camera's preview nearest the frame the body was placed for (the
 // studio's previews and the nodes replay a session in step, with the same frame ids): the chosen
@@ -34,9 +34,12 @@ class OverlayPanel : public QWidget {
   void cameraSelected(int camera);
 
  public slots:
-  void showFrame(int camera, const QImage& preview, qint64 frame_id);
+  // `mask`: the source's mask of the actor in the preview (SourceWorker::previewMask; null: the
+  // picture is keyed green).
+  void showFrame(int camera, const QImage& preview, qint64 frame_id, const QImage& mask = {});
   // The chosen camera's every frame (SourceWorker::watchedFrame).
-  void showWatchedFrame(int camera, const QImage& preview, qint64 frame_id);
+  void showWatchedFrame(int camera, const QImage& preview, qint64 frame_id,
+                        const QImage& mask = {});
   void showSnapshot(const lumistage::PipelineSnapshot& snapshot);
 
  private:
@@ -44,11 +47,11 @@ class OverlayPanel : public QWidget {
   QListWidget* grid_;
   CameraOverlayView* view_;
   void showBestPicture();
-  void keepPicture(int camera, const QImage& preview, qint64 frame_id);
+  void keepPicture(int camera, const QImage& preview, qint64 frame_id, const QImage& mask);
 
   struct Picture {
     qint64 frame_id;
-    QImage image;
+    QImage image, mask;
   };
   QVector<QVector<Picture>> recent_;  // per camera, its latest previews
   int selected_ = -1;

@@ -8,6 +8,7 @@
 #include "core/capture/session_source.h"
 #include "core/capture/virtual_gige_cameras.h"
 #include "core/geometry/rig_file.h"
+#include "core/imaging/clean_plate.h"
 #include "core/imaging/keyer.h"
 #include "core/sim/virtual_studio_source.h"
 
@@ -61,6 +62,24 @@ QImage SourceWorker::preview(const Image& image) {
   return out;
 }
 
+QImage SourceWorker::previewMask(const CameraFrame& frame, const BackgroundModel* plate) {
+  const Image& image = frame.image;
+  const bool masked = frame.mask.size() == size_t(image.width) * image.height;
+  if (!masked && !plate) return {};
+  const int w = image.width / 4, h = image.height / 4;
+  QImage out(w, h, QImage::Format_Grayscale8);
+  for (int y = 0; y < h; ++y) {
+    uchar* row = out.scanLine(y);
+    for (int x = 0; x < w; ++x) {
+      const int sx = 4 * x, sy = 4 * y;
+      const bool actor = masked ? frame.mask[size_t(sy) * image.width + sx] != 0
+                                : plate->isForeground(image.view(), sx, sy);
+      row[x] = actor ? 255 : 0;
+    }
+  }
+  return out;
+}
+
 void SourceWorker::run() {
   using Clock = std::chrono::steady_clock;
   try {
@@ -95,6 +114,15 @@ void SourceWorker::run() {
       source = std::make_unique<AravisSource>(rig, configs);
     }
     const int cameras = source->rig().cameraCount();
+    // The clean plates of a stage filmed empty before the take: the previews' silhouettes are
+    // keyed on them, as the nodes key the frames.
+    std::vector<std::shared_ptr<const BackgroundModel>> plates(cameras);
+    for (int c = 0; c < cameras && !stop_; ++c) {
+      if (source->hasMasks(c)) continue;
+      const std::vector<Image> empty = source->plateImages(c);
+      const Camera& camera = source->rig().camera(c);
+      if (!empty.empty()) plates[c] = learnPlate(empty, camera.width(), camera.height());
+    }
     emit opened(std::make_shared<const Rig>(source->rig()), description);
     std::vector<Clock::time_point> last_preview(cameras);
     auto last_status = Clock::now();
@@ -111,10 +139,11 @@ void SourceWorker::run() {
         const bool watched = frame.camera == watched_, previewed = due(frame.camera);
         if (wanted && (watched || previewed)) {
           const QImage picture = preview(frame.image);
-          if (watched) emit watchedFrame(frame.camera, picture, frame.frame_id);
+          const QImage mask = previewMask(frame, plates[frame.camera].get());
+          if (watched) emit watchedFrame(frame.camera, picture, frame.frame_id, mask);
           if (previewed) {
             last_preview[frame.camera] = Clock::now();
-            emit this->frame(frame.camera, picture, frame.frame_id);
+            emit this->frame(frame.camera, picture, frame.frame_id, mask);
           }
         }
       }

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "core/capture/frame_source.h"
+#include "core/imaging/keyer.h"
 
 namespace lumistage {
 
@@ -49,6 +50,10 @@ class SourceWorker : public QObject {
 
   // A quarter-size RGB preview of a camera image (Bayer: one colour per 2x2 cell, decimated).
   static QImage preview(const Image& image);
+  // The actor's mask at the preview's pixels (8 bits, 255 on the actor) where the source says
+  // better than the picture's green: the frame's own mask from another tool (`frame.mask`), else
+  // the camera's clean plate (`plate`); null when it has neither (the picture is keyed green).
+  static QImage previewMask(const CameraFrame& frame, const BackgroundModel* plate);
 
  public slots:
   void run();
@@ -57,9 +62,10 @@ class SourceWorker : public QObject {
   void opened(std::shared_ptr<const lumistage::Rig> rig, QString description);
   void failed(QString error);
   // A few previews a second a camera (4), for every panel.
-  void frame(int camera, QImage preview, qint64 frame_id);
+  // `mask`: previewMask (null: key the picture's green).
+  void frame(int camera, QImage preview, qint64 frame_id, QImage mask);
   // Every frame of the watched camera.
-  void watchedFrame(int camera, QImage preview, qint64 frame_id);
+  void watchedFrame(int camera, QImage preview, qint64 frame_id, QImage mask);
   void status(QVector<lumistage::CameraStatus> cameras);
   void finished();
 

@@ -80,6 +80,30 @@ void MainWindowTest::previewsDecimateBayerIntoColour() {
   QCOMPARE(preview.pixelColor(1, 1), QColor(200, 100, 50));
 }
 
+// The previews' silhouettes where the source says better than the picture's green: a frame's own
+// mask from another tool, else the camera's clean plate; neither, no mask (keyed green).
+void MainWindowTest::previewMasksComeFromTheFramesMaskOrItsPlate() {
+  lumistage::CameraFrame frame;
+  frame.image.resize(lumistage::PixelFormat::kRgb8, 16, 8);
+  std::fill(frame.image.pixels.begin(), frame.image.pixels.end(), uint8_t(120));  // a grey wall
+  QVERIFY(lumistage::SourceWorker::previewMask(frame, nullptr).isNull());
+  lumistage::BackgroundModel plate(16, 8);
+  plate.add(frame.image.view());
+  plate.learn();
+  uint8_t* actor = &frame.image.pixels[3 * (4 * 16 + 8)];  // pixel (8, 4): preview pixel (2, 1)
+  actor[0] = 200, actor[1] = 40, actor[2] = 40;
+  const QImage keyed = lumistage::SourceWorker::previewMask(frame, &plate);
+  QCOMPARE(keyed.size(), QSize(4, 2));
+  QCOMPARE(qGray(keyed.pixel(2, 1)), 255);
+  QCOMPARE(qGray(keyed.pixel(1, 1)), 0);
+  // The frame's own mask wins over the plate.
+  frame.mask.assign(16 * 8, 0);
+  frame.mask[0] = 255;  // pixel (0, 0): preview pixel (0, 0)
+  const QImage masked = lumistage::SourceWorker::previewMask(frame, &plate);
+  QCOMPARE(qGray(masked.pixel(0, 0)), 255);
+  QCOMPARE(qGray(masked.pixel(2, 1)), 0);
+}
+
 void MainWindowTest::liveSessionShowsEveryCameraAndNoticesWhenFramesStop() {
   // A small recorded session of two cameras, replayed as the studio's source.
   QTemporaryDir dir;
@@ -179,11 +203,22 @@ void MainWindowTest::overlayShowsTheSilhouetteItsNodeKeyed() {
   // Another camera: its node's own silhouette (empty here), not camera 2's.
   QVERIFY(overlay->selectCamera(1));
   QCOMPARE(qAlpha(view->silhouetteMask().pixel(100, 50)), 0);
-  // No silhouettes from the nodes: the picture's green key.
+  // No silhouettes from the nodes: the picture's green key, which takes all of the room.
   QVERIFY(overlay->selectCamera(2));
   overlay->showSnapshot(lumistage::PipelineSnapshot{});
   QVERIFY(!view->showsNodeSilhouette());
   QCOMPARE(view->silhouetteMask().size(), room.size());
+  QVERIFY(qAlpha(view->silhouetteMask().pixel(0, 0)) > 0);
+  // ...unless the source keyed the picture itself (its masks, its plate).
+  QImage mask(room.size(), QImage::Format_Grayscale8);
+  mask.fill(0);
+  mask.setPixel(3, 2, 255);
+  overlay->showWatchedFrame(2, room, 41, mask);
+  lumistage::PipelineSnapshot later;
+  later.pose_frame = 41;
+  overlay->showSnapshot(later);
+  QCOMPARE(qAlpha(view->silhouetteMask().pixel(0, 0)), 0);
+  QVERIFY(qAlpha(view->silhouetteMask().pixel(3, 2)) > 0);
 }
 
 // The body placed for a frame is drawn over that frame's own picture: the chosen camera's every

@@ -62,6 +62,7 @@ class MainWindowTest : public QObject {
   void overlayShowsTheChosenCamera();
   void overlayDrawsTheBodyOverThePictureOfItsFrame();
   void overlayShowsTheSilhouetteItsNodeKeyed();
+  void previewMasksComeFromTheFramesMaskOrItsPlate();
   void theSourceSendsEveryFrameOfTheWatchedCamera();
   void aRecordingLeftOpenIsOfferedForRecovery();
   void closingWhileRecordingAsksFirst();
