@@ -125,9 +125,10 @@ void reportLeaveOneOut(const SessionReader& session, const std::vector<int>& fra
 // their error map (comparisonPicture), as <frame id>_<camera>.png. On a session without truth
 // (a real take) the views are scored over the masks it carries, or keyed (ScoreMasks), and the
 // variants that need the true surface (best offsets, the true surface) are left out.
-void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
-                    const MocapEvalResult& tracked, const RefineConfig& refine, int frame_count,
-                    const fs::path& pictures, EvalReport& report) {
+void addLeaveOneOut(const SessionReader& session, const CameraPlates& plates,
+                    const SkinnedMesh& generic, const MocapEvalResult& tracked,
+                    const RefineConfig& refine, int frame_count, const fs::path& pictures,
+                    EvalReport& report) {
   const int total = std::min<int>(session.frameCount(), static_cast<int>(tracked.poses.size()));
   // Spread over the tracked frames (a real take may hold the actor in a few of them only).
   std::vector<int> tracked_frames, frames;
@@ -144,7 +145,7 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   if (has_truth)
     truth = evaluateLeaveOneOut(
         session, frames, [&](int i, int) { return truthSurface(session, i); },
-        LeaveOneOutMeshes::kOnePerFrame, fine);
+        LeaveOneOutMeshes::kOnePerFrame, fine, {}, &plates);
   Pose pose;
   std::vector<Eigen::Affine3f> transforms;
   Eigen::Matrix3Xf positions, normals;
@@ -156,11 +157,14 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
           poseMessageFor(generic.skeleton, tracked.skeleton, tracked.poses[i], tracked.joints[i]);
     posedBodyMesh(generic, *messages[i], pose, transforms, positions, normals);
   };
-  const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(session, frames, [&](int i, int) {
-    posed(i);
-    TriangleMesh mesh{positions, normals, generic.rest.triangles};
-    return mesh;
-  });
+  const LeaveOneOutSummary unrefined = evaluateLeaveOneOut(
+      session, frames,
+      [&](int i, int) {
+        posed(i);
+        TriangleMesh mesh{positions, normals, generic.rest.triangles};
+        return mesh;
+      },
+      LeaveOneOutMeshes::kOnePerFrame, {}, {}, &plates);
   // Every vertex at the offset along its normal nearest the true surface, in the refinement's
   // range, at 0.5 mm steps: the choice a refinement that knew the truth would make (not a bound:
   // where the pose is off, the nearest point may lie on another limb). Each frame's are kept (m
@@ -168,19 +172,22 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   std::map<int, std::vector<float>> best_offset_m;
   LeaveOneOutSummary best_offsets;
   if (has_truth)
-    best_offsets = evaluateLeaveOneOut(session, frames, [&](int i, int) {
-      posed(i);
-      TriangleMesh mesh;
-      mesh.triangles = generic.rest.triangles;
-      nearestOffsetsAlongNormals(positions, normals, SurfaceDistance(truthSurface(session, i)),
-                                 refine.t_inward_m, refine.t_max_m, 0.0005, mesh.positions);
-      std::vector<float>& t = best_offset_m[i];
-      t.resize(positions.cols());
-      for (Eigen::Index v = 0; v < positions.cols(); ++v)
-        t[v] = (mesh.positions.col(v) - positions.col(v)).dot(normals.col(v));
-      mesh.computeNormals();
-      return mesh;
-    });
+    best_offsets = evaluateLeaveOneOut(
+        session, frames,
+        [&](int i, int) {
+          posed(i);
+          TriangleMesh mesh;
+          mesh.triangles = generic.rest.triangles;
+          nearestOffsetsAlongNormals(positions, normals, SurfaceDistance(truthSurface(session, i)),
+                                     refine.t_inward_m, refine.t_max_m, 0.0005, mesh.positions);
+          std::vector<float>& t = best_offset_m[i];
+          t.resize(positions.cols());
+          for (Eigen::Index v = 0; v < positions.cols(); ++v)
+            t[v] = (mesh.positions.col(v) - positions.col(v)).dot(normals.col(v));
+          mesh.computeNormals();
+          return mesh;
+        },
+        LeaveOneOutMeshes::kOnePerFrame, {}, {}, &plates);
   // The refinement's offsets less the best ones (mm, outward positive), every vertex of every
   // scored frame.
   std::vector<double> offset_error_mm;
@@ -189,7 +196,6 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   std::vector<int> window;
   std::vector<std::vector<CameraFrame>> window_images;
   int window_for = -1;
-  const std::vector<std::shared_ptr<const BackgroundModel>> plates = sessionPlates(session);
   const auto refined_mesh = [&](int i, int left_out) {
     if (window_for != i) {
       window.clear();
@@ -230,10 +236,10 @@ void addLeaveOneOut(const SessionReader& session, const SkinnedMesh& generic,
   };
   const LeaveOneOutSummary refined =
       evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerFrame, {},
-                          pictures.empty() ? LeaveOneOutViewSink() : write_picture);
+                          pictures.empty() ? LeaveOneOutViewSink() : write_picture, &plates);
   // Strict: camera c's view rendered on a mesh refined without camera c's image.
-  const LeaveOneOutSummary strict =
-      evaluateLeaveOneOut(session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerLeftOutCamera);
+  const LeaveOneOutSummary strict = evaluateLeaveOneOut(
+      session, frames, refined_mesh, LeaveOneOutMeshes::kOnePerLeftOutCamera, {}, {}, &plates);
   report.set("render", "loo_frames", double(frames.size()));
   if (has_truth) addOffsetErrors(offset_error_mm, report);
   reportLeaveOneOut(session, frames, {refined, unrefined, strict, best_offsets, truth}, report);
@@ -257,11 +263,15 @@ void evaluateTake(const EvalArgs& args, const SessionReader& session, EvalReport
   mocap.pictures = args.fit_pictures;
   mocap.picture_every = args.fit_every;
   const SkinnedMesh body = loadBody(args.body);
+  // The clean plates, learnt once for every part.
+  const CameraPlates plates = sessionPlates(session);
+  mocap.plates = &plates;
   const MocapEvalResult tracked = evaluateMocap(session, body, mocap, report);
   if (!args.mocap_only && args.loo_frames > 0) {
     RefineConfig refine;
     if (!args.config.empty()) refine = loadStudioConfig(args.config).refine;
-    addLeaveOneOut(session, body, tracked, refine, args.loo_frames, args.loo_pictures, report);
+    addLeaveOneOut(session, plates, body, tracked, refine, args.loo_frames, args.loo_pictures,
+                   report);
   }
 }
 
@@ -272,7 +282,9 @@ void evaluateAgainstTruth(const EvalArgs& args, const SessionReader& session, Ev
   // learn it, against the truth masks of four frames spread over the session.
   const int last =
       args.frames > 0 ? std::min(args.frames, session.frameCount()) : session.frameCount();
-  const SegmentationScore key = evaluateSegmentation(session, spreadFrames(last, 4));
+  // The clean plates, learnt once for every part.
+  const CameraPlates plates = sessionPlates(session);
+  const SegmentationScore key = evaluateSegmentation(session, spreadFrames(last, 4), &plates);
   report.set("segment", "key_frames", key.frames);
   report.set("segment", "key_missed_pct", key.missed_pct);
   report.set("segment", "key_extra_pct", key.extra_pct);
@@ -287,14 +299,16 @@ void evaluateAgainstTruth(const EvalArgs& args, const SessionReader& session, Ev
   mocap.max_frames = args.frames;
   mocap.pictures = args.fit_pictures;
   mocap.picture_every = args.fit_every;
+  mocap.plates = &plates;
   const SkinnedMesh generic = loadBody(args.body);
   report.set("mocap", "body_vertices", double(generic.rest.vertexCount()));
   const MocapEvalResult tracked = evaluateMocap(session, generic, mocap, report);
   SurfaceEvaluationOptions surface;
+  surface.plates = &plates;
   if (!args.config.empty()) surface.refine = loadStudioConfig(args.config).refine;
   if (args.loo_frames > 0)
-    addLeaveOneOut(session, generic, tracked, surface.refine, args.loo_frames, args.loo_pictures,
-                   report);
+    addLeaveOneOut(session, plates, generic, tracked, surface.refine, args.loo_frames,
+                   args.loo_pictures, report);
 
   // Refinement: the generic human posed by a fit to the true joints, refined from the images,
   // both measured against the true surface.

@@ -83,7 +83,8 @@ TriangleMesh truthSurface(const SessionReader& session, int i) {
 LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::vector<int>& frames,
                                        const std::function<TriangleMesh(int, int)>& mesh_for,
                                        LeaveOneOutMeshes meshes, const LumigraphParams& params,
-                                       const LeaveOneOutViewSink& views) {
+                                       const LeaveOneOutViewSink& views,
+                                       const CameraPlates* given_plates) {
   const Rig& rig = session.rig();
   const int n = rig.cameraCount();
   std::vector<int> all(n);
@@ -92,7 +93,7 @@ LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::
   LeaveOneOutSummary summary;
   summary.masks = scoreMasksOf(session);
   std::vector<GreenScreenKeyer> keyers(summary.masks == ScoreMasks::kKeyed ? n : 0);
-  const std::vector<std::shared_ptr<const BackgroundModel>> plates = sessionPlates(session);
+  const CameraPlates plates = platesOf(session, given_plates);
   bool keyers_learnt = false;
   std::vector<ScoreMean> per_camera(n);
   std::vector<CameraFrame> images;

@@ -8,6 +8,7 @@
 #include "core/body/skinned_mesh.h"
 #include "core/capture/session_reader.h"
 #include "core/eval/view_metrics.h"
+#include "core/imaging/clean_plate.h"
 
 namespace lumistage {
 
@@ -45,14 +46,15 @@ using LeaveOneOutViewSink =
 
 // For each frame index in `frames`, renders every camera's view from the other cameras on the
 // mesh `mesh_for` gives (the truth surface, the posed or the refined mesh; normals set) and
-// compares it with the camera's image over the actor's mask (scoreMasksOf); `views`, when given,
-// sees every view. Needs a current OpenGL context (EglContext). Throws Error naming the file when a
-// mask cannot be read.
+// compares it with the camera's image over the actor's mask (scoreMasksOf, keyed on `plates` where
+// a camera has one; null: sessionPlates); `views`, when given, sees every view. Needs a current
+// OpenGL context (EglContext). Throws Error naming the file when a mask cannot be read.
 LeaveOneOutSummary evaluateLeaveOneOut(const SessionReader& session, const std::vector<int>& frames,
                                        const std::function<TriangleMesh(int, int)>& mesh_for,
                                        LeaveOneOutMeshes meshes = LeaveOneOutMeshes::kOnePerFrame,
                                        const LumigraphParams& params = {},
-                                       const LeaveOneOutViewSink& views = {});
+                                       const LeaveOneOutViewSink& views = {},
+                                       const CameraPlates* plates = nullptr);
 
 // The truth surface of frame index i (truth/surface/NNNNNN.ply, normals computed).
 TriangleMesh truthSurface(const SessionReader& session, int i);

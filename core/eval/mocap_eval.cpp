@@ -141,7 +141,7 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   std::vector<const LowResSilhouette*> pointers;
   const GreenScreenKeyer keyer;
   // A stage without a green screen is keyed on its clean plate, as the nodes key it.
-  const std::vector<std::shared_ptr<const BackgroundModel>> plates = sessionPlates(session);
+  const CameraPlates plates = platesOf(session, options.plates);
   MocapTally t;
   t.joint_error_m.assign(truth_index.size(), 0.0);
   t.joint_height_m.assign(truth_index.size(), 0.0);

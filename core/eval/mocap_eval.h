@@ -7,6 +7,7 @@
 #include "core/body/skinned_mesh.h"
 #include "core/capture/session_reader.h"
 #include "core/eval/eval_report.h"
+#include "core/imaging/clean_plate.h"
 #include "core/tracking/pose_tracker.h"
 
 namespace lumistage {
@@ -20,6 +21,8 @@ struct MocapEvalOptions {
   std::filesystem::path pictures;
   int picture_every = 1;
   PoseTrackerOptions tracker;
+  // The cameras' clean plates (null: sessionPlates), which key a stage without a green screen.
+  const CameraPlates* plates = nullptr;
 };
 
 // The tracked motion of a session, frame by frame (what later stages of the evaluation use).

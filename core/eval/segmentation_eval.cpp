@@ -8,15 +8,15 @@
 
 namespace lumistage {
 
-SegmentationScore evaluateSegmentation(const SessionReader& session,
-                                       const std::vector<int>& frames) {
+SegmentationScore evaluateSegmentation(const SessionReader& session, const std::vector<int>& frames,
+                                       const CameraPlates* given_plates) {
   const int n = session.rig().cameraCount();
   SegmentationScore score;
   if (session.frameCount() == 0 || n == 0) return score;
   std::vector<CameraFrame> images;
   std::vector<GreenScreenKeyer> keyers(n);
   session.readFrame(0, images);
-  const std::vector<std::shared_ptr<const BackgroundModel>> plates = sessionPlates(session);
+  const CameraPlates plates = platesOf(session, given_plates);
   for (int c = 0; c < n; ++c) {
     score.threshold += keyers[c].learnScreen(images[c].image.view()) / double(n);
     const int excess = keyers[c].screenExcess();

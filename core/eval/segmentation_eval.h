@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "core/capture/session_reader.h"
+#include "core/imaging/clean_plate.h"
 
 namespace lumistage {
 
@@ -20,7 +21,8 @@ struct SegmentationScore {
 
 // Scores `frames` (indices into the session). Throws Error naming the file when a truth mask
 // cannot be read.
-SegmentationScore evaluateSegmentation(const SessionReader& session,
-                                       const std::vector<int>& frames);
+// `plates`: the cameras' clean plates (null: sessionPlates).
+SegmentationScore evaluateSegmentation(const SessionReader& session, const std::vector<int>& frames,
+                                       const CameraPlates* plates = nullptr);
 
 }  // namespace lumistage

@@ -194,7 +194,7 @@ SurfaceEvaluation evaluateSurface(const std::filesystem::path& folder, const Ski
   const Rig& rig = session.rig();
   const RefineConfig& config = options.refine;
   FrameRefiner refiner(rig, config, generic.rest.vertexCount(), generic.rest.triangles);
-  refiner.setPlates(sessionPlates(session));
+  refiner.setPlates(platesOf(session, options.plates));
   std::vector<CameraFrame> frames;
   std::vector<uint8_t> previous;
   double change_sum = 0;

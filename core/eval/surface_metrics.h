@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/body/skinned_mesh.h"
+#include "core/imaging/clean_plate.h"
 #include "core/refine/refine_config.h"
 
 namespace lumistage {
@@ -72,6 +73,7 @@ struct SurfaceEvaluationOptions {
   int first_frame = 0;
   int max_frames = 0;  // 0: all
   int frame_step = 1;
+  const CameraPlates* plates = nullptr;  // the cameras' clean plates; null: sessionPlates
 };
 
 // Throws Error when the session has no truth or the files are malformed.

@@ -19,9 +19,9 @@ std::shared_ptr<const BackgroundModel> learnPlate(const std::vector<Image>& empt
   return model;
 }
 
-std::vector<std::shared_ptr<const BackgroundModel>> sessionPlates(const SessionReader& session) {
+CameraPlates sessionPlates(const SessionReader& session) {
   const Rig& rig = session.rig();
-  std::vector<std::shared_ptr<const BackgroundModel>> plates(rig.cameraCount());
+  CameraPlates plates(rig.cameraCount());
   for (int c = 0; c < rig.cameraCount(); ++c) {
     const int frames = session.plateFrames(c);
     if (frames == 0) continue;
@@ -30,6 +30,10 @@ std::vector<std::shared_ptr<const BackgroundModel>> sessionPlates(const SessionR
     plates[c] = learnPlate(empty, rig.camera(c).width(), rig.camera(c).height());
   }
   return plates;
+}
+
+CameraPlates platesOf(const SessionReader& session, const CameraPlates* given) {
+  return given ? *given : sessionPlates(session);
 }
 
 }  // namespace lumistage

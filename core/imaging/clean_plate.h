@@ -14,9 +14,14 @@ namespace lumistage {
 std::shared_ptr<const BackgroundModel> learnPlate(const std::vector<Image>& empty, int width,
                                                   int height, int* skipped = nullptr);
 
-// Every camera's clean plate from a session's plate/ frames (SessionReader::plateFrames), indexed
-// by rig camera: nullptr for a camera without (keyed on its green screen, or from masks). Throws
+// Every rig camera's clean plate, nullptr for a camera without one (keyed on its green screen, or
+// from masks).
+using CameraPlates = std::vector<std::shared_ptr<const BackgroundModel>>;
+
+// Every camera's clean plate from a session's plate/ frames (SessionReader::plateFrames). Throws
 // Error naming the file for a plate frame that cannot be read.
-std::vector<std::shared_ptr<const BackgroundModel>> sessionPlates(const SessionReader& session);
+CameraPlates sessionPlates(const SessionReader& session);
+// `given` where there is one (learnt once for the evaluation's many parts), else sessionPlates.
+CameraPlates platesOf(const SessionReader& session, const CameraPlates* given);
 
 }  // namespace lumistage
