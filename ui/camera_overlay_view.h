@@ -28,7 +28,8 @@ class CameraOverlayView : public QWidget {
   // picture's green key): the source's mask of the actor in it, from another tool or a plate.
   void setImage(const QImage& image, const QImage& mask = {});
   // The silhouette its node keyed (whatever it keys on: green, a clean plate, a session's masks),
-  // drawn cell by cell instead of the picture's green key; null: the green key again.
+  // drawn cell by cell instead of the picture's; null: the picture's again (setImage's mask, else
+  // its green key).
   void setNodeSilhouette(const LowResSilhouette* silhouette);
   bool showsNodeSilhouette() const { return node_silhouette_; }
   // The silhouette layer's mask: one pixel a cell of the node's silhouette, or the picture's (its

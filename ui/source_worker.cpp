@@ -116,7 +116,7 @@ void SourceWorker::run() {
     const int cameras = source->rig().cameraCount();
     // The clean plates of a stage filmed empty before the take: the previews' silhouettes are
     // keyed on them, as the nodes key the frames.
-    std::vector<std::shared_ptr<const BackgroundModel>> plates(cameras);
+    CameraPlates plates(cameras);
     for (int c = 0; c < cameras && !stop_; ++c) {
       if (source->hasMasks(c)) continue;
       const std::vector<Image> empty = source->plateImages(c);
