@@ -117,12 +117,8 @@ void SourceWorker::run() {
     // The clean plates of a stage filmed empty before the take: the previews' silhouettes are
     // keyed on them, as the nodes key the frames.
     CameraPlates plates(cameras);
-    for (int c = 0; c < cameras && !stop_; ++c) {
-      if (source->hasMasks(c)) continue;
-      const std::vector<Image> empty = source->plateImages(c);
-      const Camera& camera = source->rig().camera(c);
-      if (!empty.empty()) plates[c] = learnPlate(empty, camera.width(), camera.height());
-    }
+    for (int c = 0; c < cameras && !stop_; ++c)
+      if (!source->hasMasks(c)) plates[c] = sourcePlate(*source, c);
     emit opened(std::make_shared<const Rig>(source->rig()), description);
     std::vector<Clock::time_point> last_preview(cameras);
     auto last_status = Clock::now();

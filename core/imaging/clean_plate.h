@@ -3,6 +3,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/capture/frame_source.h"
 #include "core/capture/image.h"
 #include "core/capture/session_reader.h"
 #include "core/imaging/keyer.h"
@@ -13,10 +14,10 @@ namespace lumistage {
 // size than width x height left out and counted in `skipped`; nullptr when no frame is left.
 std::shared_ptr<const BackgroundModel> learnPlate(const std::vector<Image>& empty, int width,
                                                   int height, int* skipped = nullptr);
-
-// Every rig camera's clean plate, nullptr for a camera without one (keyed on its green screen, or
-// from masks).
-using CameraPlates = std::vector<std::shared_ptr<const BackgroundModel>>;
+// Rig camera `camera`'s clean plate from the frames of the empty stage its source filmed
+// (FrameSource::plateImages), as learnPlate; nullptr when it filmed none.
+std::shared_ptr<const BackgroundModel> sourcePlate(FrameSource& source, int camera,
+                                                   int* skipped = nullptr);
 
 // Every camera's clean plate from a session's plate/ frames (SessionReader::plateFrames). Throws
 // Error naming the file for a plate frame that cannot be read.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/capture/image.h"
@@ -185,6 +186,10 @@ class BackgroundModel {
   std::vector<float> sum_, sum2_;  // per pixel and channel, while adding
   std::vector<Texel> plate_;
 };
+
+// Every rig camera's clean plate, nullptr for a camera without one (keyed on its green screen, or
+// from masks).
+using CameraPlates = std::vector<std::shared_ptr<const BackgroundModel>>;
 
 // For footage without a screen to key, segmented by another tool (a matting tool, a segmenter):
 // the frame's mask of the actor (one byte a pixel, non-zero on the actor, the image's size) as a

@@ -1,7 +1,6 @@
 #include "core/imaging/silhouettes.h"
 
 #include <algorithm>
-#include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -82,16 +81,14 @@ int bayerSilhouetteRow4(const GreenScreenKeyer& key, const ImageView& image, con
 // 9). Each cell decoded as colourAt decodes it, straight from the mosaic's rows: the same result
 // as keyCell, 122 against 433-565 us a camera at step 4 (235 us through colourAt). At step 4 it
 // keys only the cells bayerSilhouetteRow4 leaves (none at 1024 pixels wide).
-template <typename Key>
-void bayerSilhouette(const Key& key, const ImageView& image, int step, LowResSilhouette& out) {
+void bayerSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step,
+                     LowResSilhouette& out) {
   const BayerLayout l = bayerLayout(image.format);
   const size_t w = size_t(image.width);
   for (int cy = 0; cy < out.height; ++cy) {
     int first = 0;
 #if defined(__SSE2__)
-    if constexpr (std::is_same_v<Key, GreenScreenKeyer>) {
-      if (step == 4) first = bayerSilhouetteRow4(key, image, l, cy, out);
-    }
+    if (step == 4) first = bayerSilhouetteRow4(key, image, l, cy, out);
 #endif
     const int y = cy * step + step / 2;
     // The red and the blue pixel rows of the window's two cell rows (starting at y - 2 and y).
@@ -120,8 +117,8 @@ void bayerSilhouette(const Key& key, const ImageView& image, int step, LowResSil
 // image: the window's three rows summed straight from the image, without meanColourAround's
 // bounds and colourAt's format per pixel (a quarter of a node's CPU on an RGB session, 24.8% in
 // perf, before). The same result as keyCell.
-template <typename Key>
-void rgbSilhouette(const Key& key, const ImageView& image, int step, LowResSilhouette& out) {
+void rgbSilhouette(const GreenScreenKeyer& key, const ImageView& image, int step,
+                   LowResSilhouette& out) {
   const size_t row_bytes = 3 * size_t(image.width);
   for (int cy = 0; cy < out.height; ++cy) {
     const int y = cy * step + step / 2;
@@ -141,9 +138,10 @@ void rgbSilhouette(const Key& key, const ImageView& image, int step, LowResSilho
   }
 }
 
-template <typename Key>
-void keySilhouette(const Key& key, const ImageView& image, int camera, int step,
-                   LowResSilhouette& out) {
+}  // namespace
+
+void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
+                       LowResSilhouette& out) {
   out.reset(camera, step, image.width, image.height);
   if (isBayer(image.format) && step % 4 == 0 && image.width % 2 == 0 && image.height % 2 == 0) {
     bayerSilhouette(key, image, step, out);
@@ -158,13 +156,6 @@ void keySilhouette(const Key& key, const ImageView& image, int camera, int step,
       if (keyCell(key, image, x, y, step)) out.set(x, y);
     }
   }
-}
-
-}  // namespace
-
-void computeSilhouette(const GreenScreenKeyer& key, const ImageView& image, int camera, int step,
-                       LowResSilhouette& out) {
-  keySilhouette(key, image, camera, step, out);
 }
 
 void computeSilhouette(const BackgroundModel& key, const ImageView& image, int camera, int step,

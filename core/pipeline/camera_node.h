@@ -103,7 +103,7 @@ class CameraNode {
     // Per own camera, its clean plate where it is keyed on one (null: on green or from masks), as
     // learnt when the set was captured; `empty_stage`: a set the plates are being learnt from,
     // whose cameras without a plate yet show nobody.
-    std::shared_ptr<const std::vector<std::shared_ptr<const BackgroundModel>>> plates;
+    std::shared_ptr<const CameraPlates> plates;
     bool empty_stage = false;
   };
   // Learns the own cameras' green screens from a set (the capture thread's, during warm-up).
@@ -224,8 +224,8 @@ class CameraNode {
   // is made, or from the first CameraNodeOptions::plate_frames sets (live): its silhouettes, the
   // refinement's keying and the renderer's masks are keyed on it, and no green screen is learnt for
   // it. The capture thread's; published_plates_ is the copy every set carries.
-  std::vector<std::shared_ptr<const BackgroundModel>> plates_;
-  std::shared_ptr<const std::vector<std::shared_ptr<const BackgroundModel>>> published_plates_;
+  CameraPlates plates_;
+  std::shared_ptr<const CameraPlates> published_plates_;
   std::shared_ptr<const BackgroundModel> learnPlate(FrameSource& source, int camera) const;
   // Each own camera's key at start: from masks, on a plate its source filmed, on one to learn from
   // the first sets, or on green (camera_node_keys.cpp).

@@ -22,8 +22,7 @@ void CameraNode::setUpKeys() {
       plates_[k] = learnPlate(*source_, cameras_[k]);
     }
   }
-  published_plates_ =
-      std::make_shared<const std::vector<std::shared_ptr<const BackgroundModel>>>(plates_);
+  published_plates_ = std::make_shared<const CameraPlates>(plates_);
   plates_learning_.resize(cameras_.size());
   key_kinds_ = std::make_unique<std::atomic<const char*>[]>(cameras_.size());
   for (size_t k = 0; k < cameras_.size(); ++k) {
@@ -44,12 +43,9 @@ void CameraNode::setUpKeys() {
 
 std::shared_ptr<const BackgroundModel> CameraNode::learnPlate(FrameSource& source,
                                                               int camera) const {
-  const std::vector<Image> empty = source.plateImages(camera);
-  if (empty.empty()) return nullptr;
   const Camera& c = rig_.camera(camera);
   int skipped = 0;
-  std::shared_ptr<const BackgroundModel> plate =
-      lumistage::learnPlate(empty, c.width(), c.height(), &skipped);
+  std::shared_ptr<const BackgroundModel> plate = sourcePlate(source, camera, &skipped);
   if (skipped > 0) {
     spdlog::warn(
         "node {}: camera {}: {} frames of the empty stage not of its {}x{} pixels: left "
@@ -138,8 +134,7 @@ void CameraNode::learnPlates(Set& set) {
     spdlog::info("node {}: camera {}: keyed on its clean plate ({} frames of the empty stage)",
                  name_, rig_.camera(cameras_[c]).name(), plates_[c]->frames());
   }
-  published_plates_ =
-      std::make_shared<const std::vector<std::shared_ptr<const BackgroundModel>>>(plates_);
+  published_plates_ = std::make_shared<const CameraPlates>(plates_);
 }
 
 void CameraNode::learnScreens(const Set& set) {

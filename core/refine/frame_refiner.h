@@ -33,9 +33,7 @@ class FrameRefiner {
 
   // Each rig camera's clean plate (sessionPlates), which keys it instead of its green screen where
   // one is (a stage without a green screen); none: every camera on green.
-  void setPlates(std::vector<std::shared_ptr<const BackgroundModel>> plates) {
-    plates_ = std::move(plates);
-  }
+  void setPlates(CameraPlates plates) { plates_ = std::move(plates); }
 
   // The last frame's offset levels (RefineConfig::offsetLevels()).
   const std::vector<uint8_t>& offsets() const { return offsets_; }
@@ -50,7 +48,7 @@ class FrameRefiner {
   MeshRefiner refiner_;
   std::vector<GreenScreenKeyer> keyers_;
   std::vector<MaskKey> mask_keys_;
-  std::vector<std::shared_ptr<const BackgroundModel>> plates_;
+  CameraPlates plates_;
   bool keyers_learnt_ = false;
   RefinementStatistics node_stats_, combined_;
   RefinementStatisticsCodec codec_;

@@ -38,12 +38,10 @@ class FrameInputs {
   void set(LumigraphRenderer& renderer, const std::vector<CameraFrame>& frames);
   // Each rig camera's clean plate (sessionPlates), which keys it instead of its green screen where
   // one is; none: every camera on green.
-  void setPlates(std::vector<std::shared_ptr<const BackgroundModel>> plates) {
-    plates_ = std::move(plates);
-  }
+  void setPlates(CameraPlates plates) { plates_ = std::move(plates); }
 
  private:
-  std::vector<std::shared_ptr<const BackgroundModel>> plates_;
+  CameraPlates plates_;
   std::vector<GreenScreenKeyer> keyers_;
   LowResSilhouette silhouette_;
   std::vector<uint8_t> mask_;
