@@ -13,6 +13,7 @@
 #include "core/body/human_skeleton.h"
 #include "core/eval/fit_picture.h"
 #include "core/eval/percentile.h"
+#include "core/imaging/cell_colours.h"
 #include "core/imaging/clean_plate.h"
 #include "core/imaging/keyer.h"
 #include "core/imaging/silhouettes.h"
@@ -139,6 +140,9 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   std::vector<CameraFrame> images;
   std::vector<LowResSilhouette> silhouettes(all);
   std::vector<const LowResSilhouette*> pointers;
+  // The actor's colours, as a node samples them with its silhouettes.
+  std::vector<CellColours> colours(all);
+  std::vector<const CellColours*> colour_pointers;
   const GreenScreenKeyer keyer;
   // A stage without a green screen is keyed on its clean plate, as the nodes key it.
   const CameraPlates plates = platesOf(session, options.plates);
@@ -156,8 +160,11 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   Eigen::Matrix3Xf positions, normals;
   for (int f = 0; f < frames; ++f) {
     const bool picture = !options.pictures.empty() && f % options.picture_every == 0;
-    if (!masks || picture) session.readFrame(f, images, cameras);
+    // The actor's colours on the frames a node sends them (kColourEveryFrames), for the arms.
+    const bool coloured = tracker_options.arm_appearance && f % kColourEveryFrames == 0;
+    if (!masks || picture || coloured) session.readFrame(f, images, cameras);
     pointers.clear();
+    colour_pointers.clear();
     for (int c : cameras) {
       if (masks) {
         const std::vector<uint8_t> mask = session.readMask(c, f);
@@ -171,10 +178,14 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
                           silhouettes[c]);
       }
       pointers.push_back(&silhouettes[c]);
+      if (coloured) {
+        sampleCellColours(images[c].image.view(), silhouettes[c], colours[c]);
+        colour_pointers.push_back(&colours[c]);
+      }
     }
     const auto start = std::chrono::steady_clock::now();
     const double cpu_start = threadCpuMs();
-    const TrackResult& r = tracker.track(pointers);
+    const TrackResult& r = tracker.track(pointers, colour_pointers);
     const double ms = threadCpuMs() - cpu_start;
     const double wall_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

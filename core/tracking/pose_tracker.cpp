@@ -379,6 +379,11 @@ void PoseTracker::setShape(const BodyShape& shape) {
   impl_->tracking = false;
 }
 
+bool PoseTracker::wantsColours() const {
+  // Not tracking: the next frame initialises, and places the arms by them.
+  return impl_->opt.arm_appearance && (!impl_->tracking || impl_->arms_pending);
+}
+
 void PoseTracker::reset() {
   impl_->tracking = false;
   impl_->forgetShape();
@@ -388,9 +393,15 @@ void PoseTracker::reset() {
   result_.state = TrackState::kNoActor;
 }
 
-const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>& silhouettes) {
+const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>& silhouettes,
+                                      const std::vector<const CellColours*>& colours) {
   Impl& m = *impl_;
   m.prepareSilhouettes(silhouettes);
+  m.colours.assign(size_t(m.cameras), nullptr);
+  for (const CellColours* c : colours)
+    if (c && !c->rgb.empty() && c->camera >= 0 && c->camera < m.cameras &&
+        m.present[size_t(c->camera)])
+      m.colours[size_t(c->camera)] = c;
   result_.hull_points = 0;
   result_.left_out_camera = -1;
   double volume = 0;  // of the hull carved this frame, m³
@@ -450,6 +461,10 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
         if (!recovered) m.recovery_wait = kRecoveryWait;
       }
       m.use_prior = false;
+      // Arms not yet placed by the cameras' colours since the actor was found (this frame is the
+      // first with colours, or the turned twin took the pose's place): placed now.
+      double arms_cost = 0;
+      if (m.arms_pending && m.placeArmsWhenColoured(p, arms_cost)) recovered = true;
       result_.fit_rms_m = m.fitRms(p);
       result_.rim_rms_m = m.rimRms(p);
       // A recovered limb jumped: no velocity from it.
@@ -458,6 +473,7 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
       m.has_previous = true;
       // In the first frames after an initialisation, its twin turned half round is tracked too.
       if (m.twin_frames > 0 && m.trackTwin(m.evaluate(m.pose, false, m.H, m.g))) {
+        m.arms_pending = m.opt.arm_appearance;
         result_.fit_rms_m = m.fitRms(m.pose);
         result_.rim_rms_m = m.rimRms(m.pose);
       }

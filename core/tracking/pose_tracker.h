@@ -8,6 +8,7 @@
 #include "core/body/human_skeleton.h"
 #include "core/body/skinned_mesh.h"
 #include "core/geometry/rig.h"
+#include "core/imaging/cell_colours.h"
 #include "core/imaging/silhouettes.h"
 
 namespace lumistage {
@@ -93,6 +94,11 @@ struct PoseTrackerOptions {
   // next one who walks on is calibrated anew instead of keeping the first one's proportions.
   int forget_shape_after_empty_frames = 60;
   bool track_clavicles = false;  // fit the clavicles' angles too (else they stay at rest)
+  // With the cameras' colours (track's `colours`): at initialisation, each arm tried elsewhere
+  // (its shoulder and elbow turned, then fitted) and moved where the body's surface looks the
+  // same from every camera that sees it, among the placements the silhouettes allow. Silhouettes
+  // cannot tell a forearm held before the chest from one across the belly; colours can.
+  bool arm_appearance = true;
 };
 
 enum class TrackState { kNoActor, kInitialised, kTracking, kLost };
@@ -129,7 +135,10 @@ struct TrackResult {
 // of those edges (at initialisation, and in tracking at most every tenth frame after a try that
 // found nothing). Silhouettes barely tell an actor's front from his back: for eight frames after
 // each initialisation the pose turned half round is tracked too, and replaces the pose when it
-// fitted better over them.
+// fitted better over them. Silhouettes cannot tell a forearm held before the chest from one
+// across the belly either: with the cameras' colours (every few frames, from the nodes), each arm
+// of the pose just found is tried elsewhere and kept where the cameras see the body's surface
+// most alike (arm_appearance.cpp).
 //
 // Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
 // is tried against every pose of a library (makeInitialisationPoses: the built-in clips' poses,
@@ -163,7 +172,13 @@ class PoseTracker {
   PoseTracker& operator=(const PoseTracker&) = delete;
 
   // One frame. `silhouettes`: any subset of the rig's cameras (null entries are skipped).
-  const TrackResult& track(const std::vector<const LowResSilhouette*>& silhouettes);
+  // `colours`: the actor's colours in some of those cameras (sampleCellColours; none: the fit
+  // goes by the silhouettes alone).
+  const TrackResult& track(const std::vector<const LowResSilhouette*>& silhouettes,
+                           const std::vector<const CellColours*>& colours = {});
+  // Whether the next frame's colours would be used (the arms not yet placed by them since the
+  // actor was found): a caller may lay them out only then.
+  bool wantsColours() const;
   // Forget the actor (and the calibrated shape): the next frame initialises.
   void reset();
   // Use a known body shape (from an earlier session): no calibration at the next initialisation.

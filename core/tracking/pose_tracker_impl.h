@@ -363,6 +363,29 @@ struct PoseTracker::Impl {
   double twin_cost = 0, pose_cost_sum = 0;
   // `volume`: the stage's hull carved for it, m³.
   bool initialise(TrackResult& out, double& volume);
+  // The arms placed by appearance (arm_appearance.cpp). This frame's colours, per camera (null:
+  // none).
+  std::vector<const CellColours*> colours;
+  // How differently the cameras that see the body's surface in pose `p` see its colour there
+  // (the mean squared spread of its chromaticity about each point's mean, over the points seen
+  // by two cameras or more), or -1 without colours in two cameras.
+  double colourSpread(const Pose& p);
+  // Each arm tried elsewhere (shoulder and elbow turned, the arm then fitted alone, `iterations`,
+  // on every `stride`-th sample) and the pose `p` moved to the placement whose surface the
+  // cameras see alike, among those that fit the silhouettes nearly as well; `cost` set to its
+  // fit's cost. Returns whether it moved.
+  bool placeArmsByAppearance(Pose& p, double& cost, int iterations, int stride);
+  // placeArmsByAppearance in a frame with colours in two cameras or more (else the arms stay
+  // pending), clearing arms_pending; `cost` set to the pose's fit's cost when it ran. Returns
+  // whether an arm moved.
+  bool placeArmsWhenColoured(Pose& p, double& cost);
+  int colouredCameras() const;
+  bool arms_pending = false;  // the arms not placed by colours since the actor was found
+  // Each arm's trials: fitted this many iterations on every kArmStride-th hull sample and rim ray.
+  // 5 on every 8th against 10 on every 4th: the same arms on the development boxers, in half the
+  // time; on every 16th, the trials' costs misjudged an arm (docs/figures-history.md).
+  static constexpr int kArmIterations = 5, kArmStride = 8;
+  Pose arm_trial, arm_best, arm_start;
   // Initialisation (tracker_initialisation.cpp). The poses it starts from (makeInitialisationPoses
   // on the generic skeleton), each one's lowest point (the capsules', at the generic shape) and
   // uprightness, and the scratch of its search.

@@ -225,6 +225,10 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
       rms = fitRms(best_pose);
     }
   }
+  // An arm the silhouettes place in two ways (before the chest or across the belly) placed where
+  // the cameras' colours agree; without colours this frame, in the first tracked frame with them.
+  arms_pending = opt.arm_appearance;
+  if (arms_pending && placeArmsWhenColoured(best_pose, best)) rms = fitRms(best_pose);
   out.fit_rms_m = rms;
   out.rim_rms_m = rimRms(best_pose);
   if (!fitHolds(rms, out.rim_rms_m)) {
