@@ -3,6 +3,7 @@
 #include <flatbuffers/flatbuffers.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <type_traits>
@@ -69,9 +70,10 @@ struct BodyEncoder {
     std::vector<flatbuffers::Offset<fb::SilhouetteMask>> masks;
     for (const SilhouetteMaskData& s : m.masks) {
       const auto bits = b.CreateVector(s.bits);
+      const auto colours = s.colours.empty() ? 0 : b.CreateVector(s.colours);
       masks.push_back(fb::CreateSilhouetteMask(b, static_cast<uint16_t>(s.camera),
                                                static_cast<uint16_t>(s.width),
-                                               static_cast<uint16_t>(s.height), bits));
+                                               static_cast<uint16_t>(s.height), bits, colours));
     }
     const auto vector = b.CreateVector(masks);
     return {fb::Body::Silhouettes, fb::CreateSilhouettes(b, vector).Union()};
@@ -277,7 +279,23 @@ Status decodeSilhouettes(const fb::Silhouettes& in, const MessageLimits& limits,
       return Status::failure(where + ": " + num(m->width()) + "x" + num(m->height()) + " needs " +
                              num(expected) + " mask bytes, got " + num(sizeOf(m->bits())));
     }
-    out.masks.push_back({m->camera(), m->width(), m->height(), copyVector(m->bits())});
+    // Colours, where sent: three bytes a set cell (bits past the last cell never set).
+    size_t set = 0;
+    if (m->bits()) {
+      const uint64_t cells = pixels;
+      for (flatbuffers::uoffset_t k = 0; k < m->bits()->size(); ++k) {
+        uint8_t byte = m->bits()->Get(k);
+        if (uint64_t{k} * 8 + 8 > cells) byte &= uint8_t((1u << (cells - uint64_t{k} * 8)) - 1);
+        set += size_t(std::popcount(byte));
+      }
+    }
+    const size_t colours = sizeOf(m->colours());
+    if (colours != 0 && colours != 3 * set) {
+      return Status::failure(where + ": " + num(set) + " cells of the actor need " + num(3 * set) +
+                             " colour bytes, got " + num(colours));
+    }
+    out.masks.push_back(
+        {m->camera(), m->width(), m->height(), copyVector(m->bits()), copyVector(m->colours())});
   }
   return {};
 }
@@ -655,7 +673,8 @@ size_t largestNodeMessage(const NodeMessageSizes& sizes, const MessageLimits& li
   const uint64_t cameras = uint64_t(std::max(sizes.cameras, 0));
   const uint64_t step = uint64_t(std::max(sizes.silhouette_step, 1));
   const uint64_t cells = uint64_t(std::max<int64_t>(sizes.camera_pixels, 0)) / (step * step);
-  const uint64_t silhouettes = table + cameras * (table + (cells + 7) / 8);
+  // Each mask's bits and, on a frame that carries them, three colour bytes a cell of the actor.
+  const uint64_t silhouettes = table + cameras * (2 * table + (cells + 7) / 8 + 3 * cells);
   const uint64_t statistics = table + maxCompressedStatisticsBytes(
                                           uint64_t(std::max<int64_t>(sizes.statistics_samples, 0)));
   const uint64_t image = table + 5 * uint64_t(std::max<int64_t>(sizes.view_pixels, 0));

@@ -39,10 +39,10 @@ struct NodeMessageSizes {
 };
 
 // The largest message a node may legitimately send for those sizes, in bytes on the wire: its
-// silhouettes, its refinement statistics (zstd's bound of their largest packed form, which bounds
-// the packed form too), a partial image of the largest view in any encoding (5 bytes a pixel at
-// worst, RLE of no two equal pixels), a heartbeat or frame timestamps with every string at
-// `limits`' longest; each with the FlatBuffers tables around it.
+// silhouettes (with the actor's colours in every cell), its refinement statistics (zstd's bound of
+// their largest packed form, which bounds the packed form too), a partial image of the largest view
+// in any encoding (5 bytes a pixel at worst, RLE of no two equal pixels), a heartbeat or frame
+// timestamps with every string at `limits`' longest; each with the FlatBuffers tables around it.
 size_t largestNodeMessage(const NodeMessageSizes& sizes, const MessageLimits& limits = {});
 
 // Either a message or why the bytes were refused.

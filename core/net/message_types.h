@@ -72,6 +72,9 @@ struct SilhouetteMaskData {
   int width = 0;
   int height = 0;
   std::vector<uint8_t> bits;  // (width * height + 7) / 8 bytes
+  // The actor's colours, three bytes a set bit in the bits' order (sampleSilhouetteColours); empty
+  // on most frames.
+  std::vector<uint8_t> colours;
   bool operator==(const SilhouetteMaskData&) const = default;
 };
 

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "core/base/error.h"
+#include "core/imaging/cell_colours.h"
 #include "core/imaging/partial_image_codec.h"
 #include "core/net/posed_body.h"
 #include "core/pipeline/pipeline.h"
@@ -59,7 +60,11 @@ Message CameraNode::silhouettesOf(const Set& set) const {
       computeSilhouette(silhouette_keyer_, frame.image.view(), cameras_[k],
                         options_.silhouette_step, s);
     }
-    silhouettes.masks.push_back({s.camera, s.width, s.height, std::move(s.bits)});
+    std::vector<uint8_t> colours;
+    if (options_.colour_every > 0 && set.frame_id % options_.colour_every == 0 && !set.empty_stage)
+      sampleSilhouetteColours(frame.image.view(), s, colours);
+    silhouettes.masks.push_back(
+        {s.camera, s.width, s.height, std::move(s.bits), std::move(colours)});
   }
   Message message;
   message.frame_id = set.frame_id;

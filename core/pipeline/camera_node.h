@@ -15,6 +15,7 @@
 
 #include "core/body/skinned_mesh.h"
 #include "core/capture/frame_source.h"
+#include "core/imaging/cell_colours.h"
 #include "core/imaging/keyer.h"
 #include "core/imaging/silhouettes.h"
 #include "core/net/transport.h"
@@ -30,6 +31,10 @@ namespace lumistage {
 
 struct CameraNodeOptions {
   int silhouette_step = 4;
+  // Every this many frames (by frame id) the silhouettes carry the actor's colours, three bytes a
+  // cell of the actor (sampleSilhouetteColours): what motion capture places the arms by when it
+  // finds the actor. 0: never.
+  int colour_every = kColourEveryFrames;
   std::chrono::milliseconds heartbeat{250};
   int frames_kept = 8;  // frame sets kept for the statistics (poses arrive a few frames later)
   RefineConfig refine;  // the mesh refinement's parameters (offsets, depth maps, colour bits)

@@ -362,6 +362,7 @@ void StudioCoordinator::onSilhouettes(NodeState& node, int64_t frame_id, int64_t
     s.height = mask.height;
     s.bits = mask.bits;  // the same packing on the wire and in memory
     frame.silhouettes.push_back(std::move(s));
+    frame.colours.push_back(mask.colours);  // the actor's, on the frames a node samples them
   }
   frame.silhouette_nodes.insert(node.report.name);
   int live = 0;

@@ -259,6 +259,9 @@ class StudioCoordinator {
     int64_t mocap_start_ns = 0, mocap_end_ns = 0;  // the fit
     int64_t captured_ns = 0;  // the earliest node capture time (wall clock: wallNowNs)
     std::vector<LowResSilhouette> silhouettes;
+    // The actor's colours in each of those cameras, as sent (SilhouetteMaskData::colours): empty
+    // on most frames; laid on the cells' grid only when the tracker asks for them.
+    std::vector<std::vector<uint8_t>> colours;
     std::set<std::string> silhouette_nodes, pose_nodes, statistics_nodes;
     bool mocap_begun = false;  // handed to the motion capture thread
     int64_t pose_sent_ns = 0;
@@ -353,6 +356,7 @@ class StudioCoordinator {
   struct MocapJob {
     int64_t frame_id = 0;
     std::vector<LowResSilhouette> silhouettes;
+    std::vector<std::vector<uint8_t>> colours;  // FrameState::colours
     PoseData pose;
     bool tracked = false;  // the tracker found the actor (else: placed at rest)
     double ms = 0;         // how long the fit took

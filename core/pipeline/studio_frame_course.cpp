@@ -18,6 +18,7 @@ void StudioCoordinator::FrameState::clearForReuse() {
   views.clear();
   mocap_begun = false;
   silhouettes.clear();
+  colours.clear();
   silhouette_nodes.clear();
   pose_nodes.clear();
   statistics_nodes.clear();
@@ -77,6 +78,7 @@ void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
   }
   job.frame_id = frame_id;
   std::swap(job.silhouettes, frame.silhouettes);  // the frame keeps the job's buffers meanwhile
+  std::swap(job.colours, frame.colours);
   // A frame still waiting for the tracker is pushed out by this one, and dropped.
   if (std::optional<MocapJob> stale = mocap_jobs_.push(std::move(job))) {
     if (const auto it = frames_.find(stale->frame_id); it != frames_.end()) {
@@ -85,12 +87,17 @@ void StudioCoordinator::beginMocap(int64_t frame_id, FrameState& frame) {
       refused_[next_refused_++ % refused_.size()] = stale->frame_id;  // late silhouettes too
     }
     stale->silhouettes.clear();
+    stale->colours.clear();
     spare_jobs_.push_back(std::move(*stale));
   }
 }
 
 void StudioCoordinator::mocapLoop() {
   std::vector<const LowResSilhouette*> all;
+  // The cameras' colours on the cells' grid, for the tracker when it asks (kept from frame to
+  // frame: a frame that carries colours allocates nothing once they have grown).
+  std::vector<CellColours> dense;
+  std::vector<const CellColours*> colours;
   while (!mocap_jobs_.closed()) {
     std::optional<MocapJob> next = mocap_jobs_.pop(std::chrono::milliseconds(100));
     if (!next || mocap_jobs_.closed()) continue;
@@ -98,13 +105,23 @@ void StudioCoordinator::mocapLoop() {
     const int64_t start = steadyNowNs();
     all.clear();
     for (const LowResSilhouette& s : job.silhouettes) all.push_back(&s);
+    colours.clear();
+    if (tracker_ && tracker_->wantsColours()) {
+      dense.resize(std::max(dense.size(), job.silhouettes.size()));
+      for (size_t k = 0; k < job.silhouettes.size() && k < job.colours.size(); ++k) {
+        const std::vector<uint8_t>& sent = job.colours[k];
+        if (!sent.empty() &&
+            expandSilhouetteColours(job.silhouettes[k], sent.data(), sent.size(), dense[k]))
+          colours.push_back(&dense[k]);
+      }
+    }
     const TrackResult* tracked = nullptr;
     if (tracker_) {
       // A fit that throws (a body model it cannot use, numbers gone bad) must not end the thread,
       // and with it the studio: the frame goes on with the placed generic human, the tracker
       // starts again, and the log says why (once for each new reason).
       try {
-        tracked = &tracker_->track(all);
+        tracked = &tracker_->track(all, colours);
       } catch (const std::exception& e) {
         if (mocap_error_ != e.what()) {
           mocap_error_ = e.what();
@@ -162,6 +179,7 @@ void StudioCoordinator::takePoses() {
       sendPose(job.frame_id, frame);
     }
     job.silhouettes.clear();
+    job.colours.clear();
     spare_jobs_.push_back(std::move(job));
   }
 }

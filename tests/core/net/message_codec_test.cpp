@@ -30,8 +30,11 @@ std::vector<Message> oneOfEach() {
       {"take-7", 120, 480, 300, 2, 123456, false, "disk full", 987654321, "node2-pc:5f3a"}};
   RecordData record{"take-7", 120, 480};
   SilhouettesData silhouettes;
-  silhouettes.masks.push_back({4, 13, 7, std::vector<uint8_t>((13 * 7 + 7) / 8, 0x5a)});
-  silhouettes.masks.push_back({5, 8, 8, std::vector<uint8_t>(8, 0xff)});
+  // 0x5a: 4 cells of each byte; of the last byte's 3 cells, 1: 45 cells, 135 colour bytes.
+  std::vector<uint8_t> colours(135);
+  for (size_t i = 0; i < colours.size(); ++i) colours[i] = uint8_t(i * 11 + 3);
+  silhouettes.masks.push_back({4, 13, 7, std::vector<uint8_t>((13 * 7 + 7) / 8, 0x5a), colours});
+  silhouettes.masks.push_back({5, 8, 8, std::vector<uint8_t>(8, 0xff), {}});
   PoseData pose;
   pose.root[0] = 0.1f;
   pose.root[1] = -0.2f;
@@ -169,7 +172,7 @@ TEST(MessageCodec, CountsOverTheLimitsAreRefused) {
   heartbeat.cameras.resize(3);
   EXPECT_EQ(decodeError(envelope(heartbeat), limits), "heartbeat: 3 cameras, at most 2 allowed");
   SilhouettesData silhouettes;
-  silhouettes.masks.push_back({7, 8, 1, {0}});
+  silhouettes.masks.push_back({7, 8, 1, {0}, {}});
   EXPECT_EQ(decodeError(envelope(silhouettes), limits),
             "silhouettes: mask 0 (camera 7): camera index out of range, the rig has 2");
 
@@ -213,9 +216,19 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
             "vertex statistics: the header says 4 vertices x 3 offsets");
 
   SilhouettesData silhouettes;
-  silhouettes.masks.push_back({0, 13, 7, std::vector<uint8_t>(11, 0)});
+  silhouettes.masks.push_back({0, 13, 7, std::vector<uint8_t>(11, 0), {}});
   EXPECT_EQ(decodeError(envelope(silhouettes)),
             "silhouettes: mask 0 (camera 0): 13x7 needs 12 mask bytes, got 11");
+  // Colours for each cell of the actor, counted without the last byte's padding bits.
+  silhouettes.masks[0].bits.assign(12, 0);
+  silhouettes.masks[0].bits[0] = 0x03;
+  silhouettes.masks[0].bits[11] = 0xf8;  // cells 88-90 are 0; bits 3-7 are no cells
+  silhouettes.masks[0].colours.assign(9, 7);
+  EXPECT_EQ(decodeError(envelope(silhouettes)),
+            "silhouettes: mask 0 (camera 0): 2 cells of the actor need 6 colour bytes, got 9");
+  silhouettes.masks[0].colours.resize(6);
+  const std::vector<uint8_t> coloured = encodeMessage(envelope(silhouettes));
+  EXPECT_TRUE(decodeMessage(coloured.data(), coloured.size()).ok());
 
   PoseData pose;
   pose.angles.resize(7);  // the encoder writes 2 joints
@@ -397,7 +410,8 @@ TEST(MessageCodec, TheLargestNodeMessageHoldsWhatANodeSendsAtItsWorst) {
 
   SilhouettesData masks;
   for (int c = 0; c < sizes.cameras; ++c)
-    masks.masks.push_back({c, 160, 120, std::vector<uint8_t>(160 * 120 / 8, 0xa5)});
+    masks.masks.push_back({c, 160, 120, std::vector<uint8_t>(160 * 120 / 8, 0xff),
+                           std::vector<uint8_t>(160 * 120 * 3, 0xa5)});
   EXPECT_LE(wire(masks), largest);
 
   HeartbeatData heartbeat;
@@ -408,7 +422,10 @@ TEST(MessageCodec, TheLargestNodeMessageHoldsWhatANodeSendsAtItsWorst) {
   EXPECT_LE(wire(heartbeat), largest);
 
   // And no more than a margin above the largest of them: the limit is the rig's, not 64 MB.
-  EXPECT_LT(largest, size_t(sizes.view_pixels) * 5 + 4096);
+  EXPECT_LT(largest, std::max(wire(masks),
+                              wire(PartialImageData{0, 200, 150, ImageEncoding::kRawRgba, noise})) *
+                             5 / 4 +
+                         4096);
 }
 
 }  // namespace

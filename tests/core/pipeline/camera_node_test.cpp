@@ -442,7 +442,8 @@ class RoomSource : public FrameSource {
 
 // Told to learn its clean plates from its first 20 sets (`lumistage-node --plate-frames 20`), a
 // node shows nobody while it learns, then keys the actor on the plate where no green key could,
-// every cell right, and says in its health that its cameras are keyed on their plates.
+// every cell right, and says in its health that its cameras are keyed on their plates. Every
+// fourth frame the silhouettes carry the actor's colour in each of his cells.
 TEST(CameraNode, ALiveRigWithoutAGreenScreenIsKeyedOnThePlateItLearntFirst) {
   CameraNodeOptions options;
   options.plate_frames = 20;
@@ -451,7 +452,7 @@ TEST(CameraNode, ALiveRigWithoutAGreenScreenIsKeyedOnThePlateItLearntFirst) {
         return std::make_unique<RoomSource>(rig, std::move(cameras));
       },
       options);
-  int64_t empty_checked = 0, actor_checked = 0;
+  int64_t empty_checked = 0, actor_checked = 0, coloured_checked = 0;
   bool said_plate = false;
   EXPECT_TRUE(t.receiveUntil([&](const Message& m) {
     if (const auto* h = std::get_if<HeartbeatData>(&m.body)) {
@@ -478,11 +479,34 @@ TEST(CameraNode, ALiveRigWithoutAGreenScreenIsKeyedOnThePlateItLearntFirst) {
       EXPECT_EQ(wrong, 0) << "frame " << m.frame_id << ", camera " << c.name();
       if (m.frame_id < RoomSource::kEmptyFrames) ++empty_checked;
       if (actor > 0) ++actor_checked;
+      // The actor's colour in each of his cells, every kColourEveryFrames-th frame.
+      if (wrong == 0 && actor > 0 && m.frame_id % kColourEveryFrames == 0) {
+        ++coloured_checked;
+        EXPECT_EQ(mask.colours.size(), size_t(3 * actor)) << "frame " << m.frame_id;
+        // A cell wholly on the actor has his colour (one on his edge, a mean with the wall's).
+        int off = 0;
+        size_t k = 0;
+        for (int y = 0; y < mask.height; ++y) {
+          for (int x = 0; x < mask.width; ++x) {
+            const size_t i = size_t(y) * mask.width + x;
+            if (!((mask.bits[i / 8] >> (i % 8)) & 1) || k + 2 >= mask.colours.size()) continue;
+            const uint8_t* rgb = &mask.colours[k];
+            k += 3;
+            const bool inside = RoomSource::isActor(c, x * step, y * step) &&
+                                RoomSource::isActor(c, x * step + step - 1, y * step + step - 1);
+            off += inside && (rgb[0] != 230 || rgb[1] != 190 || rgb[2] != 150);
+          }
+        }
+        EXPECT_EQ(off, 0) << "frame " << m.frame_id;
+      } else if (m.frame_id % kColourEveryFrames != 0) {
+        EXPECT_TRUE(mask.colours.empty()) << "frame " << m.frame_id;
+      }
     }
     return actor_checked > 20 && said_plate;
   })) << actor_checked
       << " silhouettes of the actor checked, keyed on the plate said: " << said_plate;
   EXPECT_GT(empty_checked, 10);
+  EXPECT_GT(coloured_checked, 2);
 }
 
 TEST(CameraNode, ANodeMovesItsFrameIdsWhenTheStudioSaysTheyLieElsewhere) {

@@ -32,7 +32,7 @@ TEST(StudioCoordinator, MasksOfAnotherNodesCameraOrTwiceOfOneAreRefused) {
   TwoNodeStudio two(milliseconds(50));
   const int step = StudioCoordinatorOptions{}.silhouette_step, w = 160 / step, h = 120 / step;
   const auto mask = [&](int camera) {
-    return SilhouetteMaskData{camera, w, h, std::vector<uint8_t>(size_t(w * h + 7) / 8, 0)};
+    return SilhouetteMaskData{camera, w, h, std::vector<uint8_t>(size_t(w * h + 7) / 8, 0), {}};
   };
   ASSERT_TRUE(two.node1.send(2, SilhouettesData{{mask(0), mask(1), mask(0)}}));
   ASSERT_TRUE(two.node2.send(2, SilhouettesData{{mask(1)}}));
@@ -47,7 +47,7 @@ TEST(StudioCoordinator, TheSilhouettesOfAFittedFrameAreKeptForTheOverlay) {
   TwoNodeStudio two(milliseconds(50));
   const int step = StudioCoordinatorOptions{}.silhouette_step, w = 160 / step, h = 120 / step;
   const auto mask = [&](int camera, int cell) {
-    SilhouetteMaskData m{camera, w, h, std::vector<uint8_t>(size_t(w * h + 7) / 8, 0)};
+    SilhouetteMaskData m{camera, w, h, std::vector<uint8_t>(size_t(w * h + 7) / 8, 0), {}};
     m.bits[size_t(cell) / 8] |= uint8_t(1u << (cell % 8));
     return m;
   };

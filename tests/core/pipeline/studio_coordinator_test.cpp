@@ -121,7 +121,7 @@ TEST(StudioCoordinator, SilhouettesOfAnotherStepAreRefusedAndCounted) {
   ScriptedNode node(studio.endpoint());
   const auto mask = [](int step) {
     const int w = 160 / step, h = 120 / step;
-    return SilhouetteMaskData{0, w, h, std::vector<uint8_t>(size_t(w * h + 7) / 8, 0)};
+    return SilhouetteMaskData{0, w, h, std::vector<uint8_t>(size_t(w * h + 7) / 8, 0), {}};
   };
   const auto badMessages = [&] {
     for (const NodeReport& n : studio.report().nodes)
