@@ -160,8 +160,9 @@ MocapEvalResult evaluateMocap(const SessionReader& session, const SkinnedMesh& g
   Eigen::Matrix3Xf positions, normals;
   for (int f = 0; f < frames; ++f) {
     const bool picture = !options.pictures.empty() && f % options.picture_every == 0;
-    // The actor's colours on the frames a node sends them (kColourEveryFrames), for the arms.
-    const bool coloured = tracker_options.arm_appearance && f % kColourEveryFrames == 0;
+    // The actor's colours on the frames a node sends them (kColourEveryFrames), read only when the
+    // tracker would use them (its arms not yet placed by them).
+    const bool coloured = f % kColourEveryFrames == 0 && tracker.wantsColours();
     if (!masks || picture || coloured) session.readFrame(f, images, cameras);
     pointers.clear();
     colour_pointers.clear();

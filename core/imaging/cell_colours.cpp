@@ -26,6 +26,16 @@ void forEachSetCell(const LowResSilhouette& s, F&& f) {
 
 }  // namespace
 
+size_t countActorCells(const uint8_t* bits, size_t bytes, size_t cells) {
+  size_t set = 0;
+  for (size_t k = 0; k < bytes && k * 8 < cells; ++k) {
+    unsigned byte = bits[k];
+    if (k * 8 + 8 > cells) byte &= (1u << (cells - k * 8)) - 1;
+    set += size_t(std::popcount(byte));
+  }
+  return set;
+}
+
 void sampleSilhouetteColours(const ImageView& image, const LowResSilhouette& silhouette,
                              std::vector<uint8_t>& out) {
   out.clear();
@@ -58,8 +68,8 @@ bool expandSilhouetteColours(const LowResSilhouette& silhouette, const uint8_t* 
   out.width = silhouette.width;
   out.height = silhouette.height;
   out.rgb.clear();
-  size_t set = 0;  // the cells' bits only (a hostile sender's padding bits are not cells)
-  forEachSetCell(silhouette, [&](int, int) { ++set; });
+  const size_t set = countActorCells(silhouette.bits.data(), silhouette.bits.size(),
+                                     size_t(silhouette.width) * silhouette.height);
   if (count != 3 * set) return false;
   out.rgb.assign(size_t(out.width) * out.height * 3, 0);
   size_t k = 0;

@@ -26,6 +26,11 @@ struct CellColours {
   const uint8_t* at(int x, int y) const { return rgb.data() + 3 * (size_t(y) * width + x); }
 };
 
+// How many of the first `cells` bits of `bits` (`bytes` long, least significant bit first) are
+// set: a silhouette's cells of the actor, its last byte's padding bits left out (a hostile
+// sender's are no cells).
+size_t countActorCells(const uint8_t* bits, size_t bytes, size_t cells);
+
 // The colours of `silhouette`'s set cells, in its bits' order, three bytes (RGB) each: each cell's
 // mean over the 2x2 Bayer cells (or pixels) that tile it, read from the camera's own pixels (RGB8,
 // or Bayer in its 2x2 cells, never demosaiced as a whole). What a node sends with its silhouettes.

@@ -3,12 +3,12 @@
 #include <flatbuffers/flatbuffers.h>
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <type_traits>
 
 #include "core/base/names.h"
+#include "core/imaging/cell_colours.h"
 #include "core/imaging/partial_image_codec.h"
 #include "core/refine/refinement_statistics.h"
 #include "messages_generated.h"
@@ -279,16 +279,9 @@ Status decodeSilhouettes(const fb::Silhouettes& in, const MessageLimits& limits,
       return Status::failure(where + ": " + num(m->width()) + "x" + num(m->height()) + " needs " +
                              num(expected) + " mask bytes, got " + num(sizeOf(m->bits())));
     }
-    // Colours, where sent: three bytes a set cell (bits past the last cell never set).
-    size_t set = 0;
-    if (m->bits()) {
-      const uint64_t cells = pixels;
-      for (flatbuffers::uoffset_t k = 0; k < m->bits()->size(); ++k) {
-        uint8_t byte = m->bits()->Get(k);
-        if (uint64_t{k} * 8 + 8 > cells) byte &= uint8_t((1u << (cells - uint64_t{k} * 8)) - 1);
-        set += size_t(std::popcount(byte));
-      }
-    }
+    // Colours, where sent: three bytes a cell of the actor.
+    const size_t set =
+        m->bits() ? countActorCells(m->bits()->data(), m->bits()->size(), size_t(pixels)) : 0;
     const size_t colours = sizeOf(m->colours());
     if (colours != 0 && colours != 3 * set) {
       return Status::failure(where + ": " + num(set) + " cells of the actor need " + num(3 * set) +

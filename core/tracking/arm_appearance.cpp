@@ -10,7 +10,6 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -33,12 +32,6 @@ constexpr double kMinSpreadGain = 0.10;
 // How far the shoulder's and the elbow's angles are turned for a trial, radians.
 constexpr double kTurn = 0.8;
 
-struct Arm {
-  int shoulder, elbow, wrist, hand;
-};
-constexpr Arm kArms[] = {{kRightShoulder, kRightElbow, kRightWrist, kRightHand},
-                         {kLeftShoulder, kLeftElbow, kLeftWrist, kLeftHand}};
-
 bool isLeg(int joint) {
   return (joint >= kRightHip && joint <= kRightFoot) || (joint >= kLeftHip && joint <= kLeftFoot);
 }
@@ -60,14 +53,9 @@ bool PoseTracker::Impl::placeArmsWhenColoured(Pose& p, double& cost) {
 double PoseTracker::Impl::colourSpread(const Pose& p) {
   if (colouredCameras() < 2) return -1;
   skeleton.forwardKinematics(p, global);
-  const size_t n = capsules.size();
-  std::array<Eigen::Vector3d, 64> a, b;
-  const size_t count = std::min(n, a.size());
-  for (size_t k = 0; k < count; ++k) {
-    const Eigen::Isometry3d& t = global[capsules[k].joint];
-    a[k] = t * capsules[k].a;
-    b[k] = t * capsules[k].b;
-  }
+  capsuleEnds(spread_a, spread_b);
+  const std::vector<Eigen::Vector3d>&a = spread_a, &b = spread_b;
+  const size_t count = capsules.size();
   double spread = 0, degrees = 0;
   Eigen::Vector3d on_ray, on_segment;
   for (size_t k = 0; k < count; ++k) {
@@ -137,24 +125,20 @@ bool PoseTracker::Impl::placeArmsByAppearance(Pose& p, double& cost, int iterati
   cost = evaluate(p, false, H, g);
   double spread = base_spread;
   bool moved = false;
-  for (const Arm& arm : kArms) {
+  for (const Limb& arm : {kLimbs[0], kLimbs[1]}) {
     // The elbow's bending axis: the one its limits open most.
-    const JointLimits& elbow_limits = skeleton.joint(arm.elbow).limits;
+    const JointLimits& elbow_limits = skeleton.joint(arm.middle).limits;
     int bend = 0;
     (elbow_limits.upper_rad - elbow_limits.lower_rad).maxCoeff(&bend);
-    dof_held.assign(dofs.size(), 1);
-    for (size_t d = 0; d < dofs.size(); ++d) {
-      const int j = dofs[d].joint;
-      if (j == arm.shoulder || j == arm.elbow || j == arm.wrist || j == arm.hand) dof_held[d] = 0;
-    }
+    holdAllBut(arm);
     arm_best = p;
     double best_spread = spread, best_cost = cost;
     for (int axis = 0; axis < 3; ++axis) {
       for (double turn : {kTurn, -kTurn}) {
         for (double elbow : {0.0, kTurn, -kTurn}) {
           arm_trial = p;
-          arm_trial.angles_rad[size_t(arm.shoulder)][axis] += turn;
-          arm_trial.angles_rad[size_t(arm.elbow)][bend] += elbow;
+          arm_trial.angles_rad[size_t(arm.root)][axis] += turn;
+          arm_trial.angles_rad[size_t(arm.middle)][bend] += elbow;
           skeleton.clampToLimits(arm_trial);
           const double c = fit(arm_trial, iterations);
           if (c > (1 + kCostSlack) * cost) continue;

@@ -33,15 +33,15 @@ constexpr double kKeptRays = 0.5;
 // A limb whose end lies this near the unexplained hull it reaches for is where it should be.
 constexpr double kNearM = 0.10;
 
-struct Limb {
-  int root, middle, end, tip;  // shoulder, elbow, wrist, hand (hip, knee, ankle, foot)
-};
-constexpr Limb kLimbs[] = {{kRightShoulder, kRightElbow, kRightWrist, kRightHand},
-                           {kLeftShoulder, kLeftElbow, kLeftWrist, kLeftHand},
-                           {kRightHip, kRightKnee, kRightAnkle, kRightFoot},
-                           {kLeftHip, kLeftKnee, kLeftAnkle, kLeftFoot}};
-
 }  // namespace
+
+void PoseTracker::Impl::holdAllBut(const Limb& limb) {
+  dof_held.assign(dofs.size(), 1);
+  for (size_t d = 0; d < dofs.size(); ++d) {
+    const int j = dofs[d].joint;
+    if (j == limb.root || j == limb.middle || j == limb.end || j == limb.tip) dof_held[d] = 0;
+  }
+}
 
 int PoseTracker::Impl::unexplainedRays() const {
   int count = 0;
@@ -124,11 +124,7 @@ bool PoseTracker::Impl::recoverLimbs(Pose& p, int rays, int iterations) {
     // Only the limb moves: fitted whole from a limb pointed elsewhere, the body could turn round
     // to face the other way, which the silhouettes cannot tell (six cameras: a turning actor's
     // MPJPE 46 -> 309 mm).
-    dof_held.assign(dofs.size(), 1);
-    for (size_t d = 0; d < dofs.size(); ++d) {
-      const int j = dofs[d].joint;
-      if (j == limb.root || j == limb.middle || j == limb.end || j == limb.tip) dof_held[d] = 0;
-    }
+    holdAllBut(limb);
     const double c = fit(q, iterations);
     dof_held.clear();
     if (c < best_cost) best_cost = c, best = q;

@@ -41,6 +41,16 @@ struct Capsule {
   double radius_m = 0;
 };
 
+// An arm or a leg, root to tip: shoulder, elbow, wrist, hand (hip, knee, ankle, foot). The arms
+// first.
+struct Limb {
+  int root, middle, end, tip;
+};
+inline constexpr Limb kLimbs[] = {{kRightShoulder, kRightElbow, kRightWrist, kRightHand},
+                                  {kLeftShoulder, kLeftElbow, kLeftWrist, kLeftHand},
+                                  {kRightHip, kRightKnee, kRightAnkle, kRightFoot},
+                                  {kLeftHip, kLeftKnee, kLeftAnkle, kLeftFoot}};
+
 struct Sample {  // an axis sample that must project inside every silhouette
   int joint;
   Eigen::Vector3d local;
@@ -306,6 +316,8 @@ struct PoseTracker::Impl {
   // Places the capsules for the pose in `global` (cap_a, cap_b) and remakes the hull samples'
   // candidate capsules when they no longer hold.
   void placeCapsules();
+  // The capsules' axes' ends for the pose in `global`, into `a` and `b` (resized).
+  void capsuleEnds(std::vector<Eigen::Vector3d>& a, std::vector<Eigen::Vector3d>& b) const;
   // The nearest capsule to hull sample i (its index, the signed distance to its surface, the
   // closest point on its axis).
   int nearestCapsule(size_t i, double& distance, Eigen::Vector3d& closest) const;
@@ -317,6 +329,8 @@ struct PoseTracker::Impl {
   // held); returns the cost.
   double fit(Pose& p, int iterations);
   std::vector<uint8_t> dof_held;
+  // dof_held set so that only `limb`'s joints move.
+  void holdAllBut(const tracker_detail::Limb& limb);
   double fitRms(const Pose& p);
   // The rays through the silhouettes' edges to the body's surface (those beyond rim_outlier_m
   // counted at it), RMS over the nearest four fifths, metres: how well the body explains the
@@ -386,6 +400,7 @@ struct PoseTracker::Impl {
   // time; on every 16th, the trials' costs misjudged an arm (docs/figures-history.md).
   static constexpr int kArmIterations = 5, kArmStride = 8;
   Pose arm_trial, arm_best, arm_start;
+  std::vector<Eigen::Vector3d> spread_a, spread_b;  // colourSpread's capsule ends
   // Initialisation (tracker_initialisation.cpp). The poses it starts from (makeInitialisationPoses
   // on the generic skeleton), each one's lowest point (the capsules', at the generic shape) and
   // uprightness, and the scratch of its search.

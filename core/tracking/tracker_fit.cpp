@@ -286,13 +286,21 @@ double PoseTracker::Impl::fit(Pose& p, int iterations) {
   return cost;
 }
 
-void PoseTracker::Impl::placeCapsules() {
+void PoseTracker::Impl::capsuleEnds(std::vector<Eigen::Vector3d>& a,
+                                    std::vector<Eigen::Vector3d>& b) const {
   const size_t n = capsules.size();
+  a.resize(n);
+  b.resize(n);
   for (size_t c = 0; c < n; ++c) {
     const Eigen::Isometry3d& t = global[capsules[c].joint];
-    cap_a[c] = t * capsules[c].a;
-    cap_b[c] = t * capsules[c].b;
+    a[c] = t * capsules[c].a;
+    b[c] = t * capsules[c].b;
   }
+}
+
+void PoseTracker::Impl::placeCapsules() {
+  const size_t n = capsules.size();
+  capsuleEnds(cap_a, cap_b);
   double moved = 0;
   if (candidates_valid) {
     for (size_t c = 0; c < n; ++c) {
