@@ -20,12 +20,15 @@ if [[ ! -x "$binary" || "$src/core/net/message_codec.cpp" -nt "$binary" ||
       "$src/core/net/message_codec.h" -nt "$binary" || "$generated/messages_generated.h" -nt "$binary" ||
       "$src/core/imaging/partial_image_codec.cpp" -nt "$binary" ||
       "$src/core/imaging/partial_image_codec.h" -nt "$binary" ||
+      "$src/core/imaging/cell_colours.cpp" -nt "$binary" ||
+      "$src/core/imaging/cell_colours.h" -nt "$binary" ||
       "$src/core/refine/refinement_statistics.cpp" -nt "$binary" ||
       "$src/core/refine/refinement_statistics.h" -nt "$binary" ||
       "$src/core/base/names.cpp" -nt "$binary" ||
       "$src/tests/fuzz/message_decoder_fuzz.cpp" -nt "$binary" ]]; then
   "$clang" -std=c++20 -O1 -g -fsanitize=fuzzer,address -I"$src" -isystem "$generated" \
     "$src/core/net/message_codec.cpp" "$src/core/imaging/partial_image_codec.cpp" \
+    "$src/core/imaging/cell_colours.cpp" \
     "$src/core/refine/refinement_statistics.cpp" "$src/core/base/names.cpp" \
     "$src/tests/fuzz/message_decoder_fuzz.cpp" \
     -lzstd -o "$binary.tmp"
