@@ -189,8 +189,11 @@ class PoseTracker {
   const BodyShape& shape() const;
   const PoseTrackerOptions& options() const { return options_; }
 
- private:
+  // The tracker's workings (core/tracking/pose_tracker_impl.h): named here so that the tests of
+  // its parts can build one; nothing outside core/tracking uses it.
   struct Impl;
+
+ private:
   PoseTrackerOptions options_;
   Impl* impl_;
   TrackResult result_;

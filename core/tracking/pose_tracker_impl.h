@@ -222,6 +222,17 @@ struct PoseTracker::Impl {
   std::vector<uint8_t> candidates, rim_candidates;  // and those of each rim ray
   std::vector<int> candidate_begin, rim_candidate_begin;
   std::vector<double> capsule_distance;  // of one sample to every capsule, while making them
+  // The capsules at cap_a, cap_b in bounding spheres: their axes' middles and how far their
+  // surfaces reach from them (half the axis and the radius).
+  std::vector<Eigen::Vector3d> cap_mid;
+  std::vector<double> cap_reach;
+  void capsuleSpheres();
+  // The distance from `x` to the nearest capsule's surface (cap_a, cap_b, after capsuleSpheres),
+  // and into capsule_distance every capsule's within `margin` of it (the others': infinity, or
+  // their distance). `hint`: a capsule likely near `x` (the previous sample's nearest), then the
+  // nearest. The capsules whose bounding spheres lie further away are never measured: a hull
+  // sample lies near 3 or 4 of the body's 28.
+  double hullDistances(const Eigen::Vector3d& x, int& hint, double margin);
   std::vector<Eigen::Vector3d> candidate_a, candidate_b;
   bool candidates_valid = false;
   Eigen::MatrixXd H, H_new;
@@ -287,6 +298,11 @@ struct PoseTracker::Impl {
   // The fit's cost of pose `p`, and with `jacobian` its normal equations (h = J^T J, grad =
   // J^T r, over the degrees of freedom).
   double evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd& h, Eigen::VectorXd& grad);
+  // evaluate(p, false)'s cost, for a pose seen once (a hypothesis of the initialisation's search):
+  // each sample's nearest capsule found among all of them (no candidate lists, which pay only
+  // over a fit's iterations), and given up as soon as the cost passes `bound` (what it has summed
+  // so far returned: more than `bound`, less than the whole).
+  double score(const Pose& p, double bound);
   // evaluate's parts (tracker_fit.cpp). Each degree of freedom's axis and spatial terms for `p`,
   // the joints' sums cleared.
   void prepareJacobian(const Pose& p);
@@ -295,6 +311,15 @@ struct PoseTracker::Impl {
   // silhouettes' edges touching it, the bones' axes inside every silhouette, the parts of the body
   // kept apart.
   void addHullCost(bool jacobian, double& cost);
+  // The hull's and the rim's costs' robust terms for a residual `r` (metres).
+  double hullTerm(double r) const {
+    const double delta = r < 0 ? 4 * opt.huber_m : opt.huber_m, ar = std::abs(r);
+    return ar <= delta ? 0.5 * r * r : delta * (ar - 0.5 * delta);
+  }
+  double rimTerm(double r) const {
+    const double delta = opt.rim_huber_m, ar = std::abs(r);
+    return opt.rim_weight * (ar <= delta ? 0.5 * r * r : delta * (ar - 0.5 * delta));
+  }
   void addRimCost(bool jacobian, double& cost);
   void addSilhouetteCost(bool jacobian, double& cost);
   void addApartCost(bool jacobian, double& cost);

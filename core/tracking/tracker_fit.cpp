@@ -35,6 +35,38 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
   return cost;
 }
 
+double PoseTracker::Impl::score(const Pose& p, double bound) {
+  skeleton.forwardKinematics(p, global);
+  capsuleEnds(cap_a, cap_b);
+  const size_t n = capsules.size();
+  double cost = 0;
+  // Checked every kChunk samples (on the reference walk about half the hypotheses are given up,
+  // after two thirds of the hull on average).
+  constexpr size_t kChunk = 32;
+  capsuleSpheres();
+  int hint = 0;
+  for (size_t i = 0; i < hull.size(); ++i) {
+    cost += hullTerm(hullDistances(hull[i], hint, 0));
+    if (i % kChunk == kChunk - 1 && cost > bound) return cost;
+  }
+  Eigen::Vector3d point, on_ray;
+  if (opt.rim_weight > 0) {
+    for (const RimRay& ray : rim) {
+      if (!present[ray.camera]) continue;
+      double best = 1e9;
+      for (size_t c = 0; c < n; ++c)
+        best = std::min(
+            best, raySegmentDistance(ray.origin, ray.direction, cap_a[c], cap_b[c], on_ray, point) -
+                      capsules[c].radius_m);
+      if (best <= opt.rim_outlier_m) cost += rimTerm(best);
+    }
+  }
+  if (cost > bound) return cost;
+  addSilhouetteCost(false, cost);
+  addApartCost(false, cost);
+  return cost;
+}
+
 void PoseTracker::Impl::prepareJacobian(const Pose& p) {
   const int n = int(dofs.size());
   for (int d = 0; d < n; ++d) {
@@ -83,7 +115,7 @@ void PoseTracker::Impl::addHullCost(bool jacobian, double& cost) {
     // the model (r > 0) may be a phantom of the carving (between the legs, under the arms).
     const double r = best, ar = std::abs(r);
     const double delta = r < 0 ? delta_in : delta_out;
-    cost += ar <= delta ? 0.5 * r * r : delta * (ar - 0.5 * delta);
+    cost += hullTerm(r);
     if (jacobian) {
       const Eigen::Vector3d diff = v - best_closest;
       const double len = diff.norm();
@@ -106,7 +138,7 @@ void PoseTracker::Impl::addRimCost(bool jacobian, double& cost) {
       const int best_c = nearestRimCapsule(i, best, on_ray, on_segment);
       if (best_c < 0 || best > opt.rim_outlier_m) continue;  // no body part near: not the actor's
       const double ar = std::abs(best);
-      cost += wr * (ar <= delta ? 0.5 * best * best : delta * (ar - 0.5 * delta));
+      cost += rimTerm(best);
       if (!jacobian) continue;
       const Eigen::Vector3d diff = on_segment - on_ray;
       const double len = diff.norm();
@@ -298,6 +330,40 @@ void PoseTracker::Impl::capsuleEnds(std::vector<Eigen::Vector3d>& a,
   }
 }
 
+void PoseTracker::Impl::capsuleSpheres() {
+  const size_t n = capsules.size();
+  cap_mid.resize(n);
+  cap_reach.resize(n);
+  for (size_t c = 0; c < n; ++c) {
+    cap_mid[c] = 0.5 * (cap_a[c] + cap_b[c]);
+    cap_reach[c] = 0.5 * (cap_b[c] - cap_a[c]).norm() + capsules[c].radius_m;
+  }
+}
+
+double PoseTracker::Impl::hullDistances(const Eigen::Vector3d& x, int& hint, double margin) {
+  const size_t n = capsules.size();
+  capsule_distance.resize(n);
+  Eigen::Vector3d point;
+  // Beyond its sphere by more than the nearest so far and the margin: a capsule's surface is at
+  // least that far (its axis lies within half its length of the middle).
+  double best = segmentDistance(x, cap_a[hint], cap_b[hint], point) - capsules[hint].radius_m;
+  capsule_distance[hint] = best;
+  int nearest = hint;
+  for (size_t c = 0; c < n; ++c) {
+    if (int(c) == hint) continue;
+    const double reach = best + margin + cap_reach[c];
+    if (reach < 0 || (x - cap_mid[c]).squaredNorm() > reach * reach) {
+      capsule_distance[c] = std::numeric_limits<double>::infinity();
+      continue;
+    }
+    const double d = segmentDistance(x, cap_a[c], cap_b[c], point) - capsules[c].radius_m;
+    capsule_distance[c] = d;
+    if (d < best) best = d, nearest = int(c);
+  }
+  hint = nearest;
+  return best;
+}
+
 void PoseTracker::Impl::placeCapsules() {
   const size_t n = capsules.size();
   capsuleEnds(cap_a, cap_b);
@@ -330,11 +396,18 @@ void PoseTracker::Impl::placeCapsules() {
     }
     begin[count] = int(list.size());
   };
+  capsuleSpheres();
+  candidates.clear();
+  candidate_begin.resize(hull.size() + 1);
+  int hint = 0;
+  for (size_t i = 0; i < hull.size(); ++i) {
+    candidate_begin[i] = int(candidates.size());
+    const double best = hullDistances(hull[i], hint, kCandidateMargin);
+    for (size_t c = 0; c < n; ++c)
+      if (capsule_distance[c] <= best + kCandidateMargin) candidates.push_back(uint8_t(c));
+  }
+  candidate_begin[hull.size()] = int(candidates.size());
   Eigen::Vector3d closest, on_ray;
-  makeCandidates(
-      hull.size(),
-      [&](size_t i, size_t c) { return segmentDistance(hull[i], cap_a[c], cap_b[c], closest); },
-      candidates, candidate_begin);
   makeCandidates(
       rim.size(),
       [&](size_t i, size_t c) {
