@@ -124,6 +124,12 @@ inline double segmentSegmentDistance(const Eigen::Vector3d& a0, const Eigen::Vec
   return (on_a - on_b).norm();
 }
 
+// Huber's robust cost of a residual `r`: quadratic within `delta`, linear beyond.
+inline double huber(double r, double delta) {
+  const double ar = std::abs(r);
+  return ar <= delta ? 0.5 * r * r : delta * (ar - 0.5 * delta);
+}
+
 inline double segmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                               const Eigen::Vector3d& b, Eigen::Vector3d& closest) {
   const Eigen::Vector3d ab = b - a;
@@ -313,12 +319,10 @@ struct PoseTracker::Impl {
   void addHullCost(bool jacobian, double& cost);
   // The hull's and the rim's costs' robust terms for a residual `r` (metres).
   double hullTerm(double r) const {
-    const double delta = r < 0 ? 4 * opt.huber_m : opt.huber_m, ar = std::abs(r);
-    return ar <= delta ? 0.5 * r * r : delta * (ar - 0.5 * delta);
+    return tracker_detail::huber(r, r < 0 ? 4 * opt.huber_m : opt.huber_m);
   }
   double rimTerm(double r) const {
-    const double delta = opt.rim_huber_m, ar = std::abs(r);
-    return opt.rim_weight * (ar <= delta ? 0.5 * r * r : delta * (ar - 0.5 * delta));
+    return opt.rim_weight * tracker_detail::huber(r, opt.rim_huber_m);
   }
   void addRimCost(bool jacobian, double& cost);
   void addSilhouetteCost(bool jacobian, double& cost);

@@ -166,31 +166,25 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   // Every library pose at every heading, over the hull's centroid, standing on its lowest point,
   // scaled (until calibrated) to the hull's height in that pose; scored on a thinned hull and rim.
   // Only the best kFittedHypotheses are fitted: a hypothesis is given up as soon as its cost
-  // passes theirs so far (`kept`, a max-heap of their costs).
+  // passes theirs so far (`kept`, a max-heap of the best costs, infinite until that many are in).
   thinSamples(kScoreStride);
   hypotheses.clear();
   std::array<double, kFittedHypotheses> kept;
-  size_t kept_count = 0;
+  kept.fill(std::numeric_limits<double>::infinity());
   for (int i = 0; i < int(library.size()); ++i) {
     if (calibrating) setShape(shapeSpanning(i, extent));
     for (int h = 0; h < kHeadings; ++h) {
       const double heading = 2 * std::numbers::pi * h / kHeadings;
       const Pose p = placedLibraryPose(i, heading, centroid, bottom_z);
-      const double bound =
-          kept_count < kept.size() ? std::numeric_limits<double>::infinity() : kept.front();
-      const double cost = score(p, bound);
+      const double cost = score(p, kept.front());
       hypotheses.push_back({cost, i, heading, shape.height_m});
-      if (kept_count < kept.size()) {
-        kept[kept_count++] = cost;
-        std::push_heap(kept.begin(), kept.begin() + kept_count);
-      } else if (cost < kept.front()) {
+      if (cost < kept.front()) {
         std::pop_heap(kept.begin(), kept.end());
         kept.back() = cost;
         std::push_heap(kept.begin(), kept.end());
       }
     }
   }
-  candidates_valid = false;  // score() moved the capsules without them
   // The best fitted on a thinned hull and rim, the winner then on all of them.
   thinSamples(kFitStride);
   const int fitted_count = std::min<int>(kFittedHypotheses, int(hypotheses.size()));
