@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <numbers>
 #include <utility>
 
 #include "core/body/human_skeleton.h"
@@ -82,6 +83,48 @@ Pose bentAtTheHips(const Skeleton& skeleton, const Pose& pose, double angle_rad)
   return best;
 }
 
+Pose sittingOnTheFloor(const Skeleton& skeleton, const Pose& arms, double lean_rad,
+                       double knee_rad) {
+  std::vector<Eigen::Vector3d> joints;
+  Pose p = arms;
+  p.angles_rad[0] = Eigen::Vector3d::Zero();
+  p.root_translation_m.x() = p.root_translation_m.y() = 0;
+  for (const int j : {int(kSpine1), int(kSpine2), int(kSpine3), int(kNeck), int(kHead)})
+    p.angles_rad[size_t(j)].setZero();
+  // The torso leaned back about the body's left-right axis (whichever sign brings the head back).
+  skeleton.jointPositions(p, joints);
+  const double head_y = joints[kHead].y();
+  Pose leaned = p;
+  for (const double sign : {1.0, -1.0}) {
+    Pose q = p;
+    q.angles_rad[0] = rotationVectorOf(
+        Eigen::AngleAxisd(sign * lean_rad, Eigen::Vector3d::UnitX()).toRotationMatrix());
+    skeleton.jointPositions(q, joints);
+    if (joints[kHead].y() <= head_y) leaned = q;
+  }
+  p = leaned;
+  // Each thigh raised forward (whichever way brings the knee forward, as far as its limit allows),
+  // above level by half the knee's bend so that the shin, bent down by knee_rad, brings the ankle
+  // back to the hip's height: heels and seat on the floor.
+  for (const int hip : {int(kRightHip), int(kLeftHip)}) {
+    Pose best = p;
+    double best_forward = -1e9;
+    for (const double sign : {1.0, -1.0}) {
+      Pose q = p;
+      q.angles_rad[size_t(hip)].setZero();
+      q.angles_rad[size_t(hip)].x() = sign * (0.5 * std::numbers::pi - lean_rad + 0.5 * knee_rad);
+      q.angles_rad[size_t(hip + 1)] = Eigen::Vector3d(-knee_rad, 0, 0);
+      q.angles_rad[size_t(hip + 2)].setZero();
+      skeleton.clampToLimits(q);
+      skeleton.jointPositions(q, joints);
+      const double forward = joints[size_t(hip + 1)].y() - joints[size_t(hip)].y();
+      if (forward > best_forward) best_forward = forward, best = q;
+    }
+    p = best;
+  }
+  return p;
+}
+
 std::vector<Pose> makeInitialisationPoses(const Skeleton& skeleton, double min_spacing_m) {
   constexpr double kFps = 10, kSeconds = 4;
   std::vector<Pose> candidates = {Pose::rest(skeleton.jointCount())};
@@ -97,6 +140,16 @@ std::vector<Pose> makeInitialisationPoses(const Skeleton& skeleton, double min_s
       }
     }
   }
+  // Sitting on the floor, legs out or knees up, upright or leaning back on the hands: no clip
+  // sits, and a body that sat down is found again only from a pose like his.
+  const Pose arms[] = {Pose::rest(skeleton.jointCount()),
+                       makeBuiltinClip("a_pose_hold", skeleton, kFps, kSeconds).frames.back()};
+  for (const Pose& a : arms)
+    for (const double lean : {0.0, 0.4})
+      for (const double knee : {0.0, 1.2, 2.2}) {
+        candidates.push_back(sittingOnTheFloor(skeleton, a, lean, knee));
+        candidates.push_back(mirroredPose(candidates.back()));
+      }
   std::vector<Pose> kept;
   std::vector<std::vector<Eigen::Vector3d>> kept_joints;
   std::vector<Eigen::Vector3d> joints;

@@ -143,19 +143,19 @@ struct TrackResult {
 // Initialisation: when nobody is tracked, the whole stage is carved; a hull tall and large enough
 // is tried against every pose of a library (makeInitialisationPoses: the built-in clips' poses,
 // their mirror images and each bent forward at the hips: crouching, walking, waving, turning,
-// bending over, T- and A-pose) at eight headings, over the hull's centroid and standing on its
-// lowest point, the body scaled (until calibrated) so that it spans the hull's height in that
-// pose; the hypotheses are scored on an eighth of the hull and of the rim, the best six fitted in
-// full, and the best fit wins. No T-pose is needed. Once per actor (again after the stage stood
-// empty for forget_shape_after_empty_frames) the body shape is calibrated: the generic skeleton's
-// bones scaled to the hull's extent less hair_m in the pose found (as upright as that pose, or as
-// the hull's shortest path from the soles to the crown says where that is less: a boxer's bent
-// knees found in a standing pose), then the legs' length (the
-// extent held), the capsules' girth and the feet's radius (shoes) by a coordinate search that
-// refits the pose for each trial; a heavy actor whose fit that leaves above lost_rms_m gets a
-// second search (the girth further, and the belly). An actor found crouching or bent is measured
-// again when he stands straighter (his height from the hull's extent in that frame), until he
-// stands straight.
+// bending over, T- and A-pose; and sitting on the floor) at eight headings, over the hull's
+// centroid and standing on its lowest point (a hull under 0.6 m high is no one), the body scaled
+// (until calibrated) so that it spans the hull's height in that pose; the hypotheses are scored on
+// an eighth of the hull and of the rim, the best six fitted in full, and the best fit wins. No
+// T-pose is needed. Once per actor (again after the stage stood empty for
+// forget_shape_after_empty_frames) the body shape is calibrated: the generic skeleton's bones
+// scaled to the hull's extent less hair_m in the pose found (as upright as that pose, or as the
+// hull's shortest path from the soles to the crown says where that is less: a boxer's bent knees
+// found in a standing pose), then the legs' length (the extent held), the capsules' girth and the
+// feet's radius (shoes) by a coordinate search that refits the pose for each trial; a heavy actor
+// whose fit that leaves above lost_rms_m gets a second search (the girth further, and the belly).
+// An actor found crouching or bent is measured again when he stands straighter (his height from the
+// hull's extent in that frame), until he stands straight.
 // The arms keep the generic proportions: searching them too lowered the fit's cost but not the
 // joints' error. The clavicles stay at rest (track_clavicles). A fit error above lost_rms_m (the
 // hull) or lost_rim_m (the rim) for lost_frames frames, or an empty stage, loses the actor; the

@@ -31,8 +31,9 @@ constexpr int kScoreStride = 8;
 // captures), initialisation 490 -> 305 ms on an 11-camera stage (2 gave two stages turned round).
 constexpr int kFitStride = 4;
 constexpr int kFittedHypotheses = 6;
-// A hull whose top is lower than this is nobody standing, crouching or sitting up (a bag, a box).
-constexpr double kLowestTopM = 0.8;
+// A hull whose top is lower than this is nobody standing, crouching or sitting (a bag, a box): a
+// short actor sitting on the floor, hunched, stands 0.68 m high.
+constexpr double kLowestTopM = 0.6;
 
 }  // namespace
 
