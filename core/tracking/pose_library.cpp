@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <utility>
 
 #include "core/body/human_skeleton.h"
@@ -50,59 +51,63 @@ Pose uprightFacingForward(const Pose& pose) {
   return out;
 }
 
-Pose bentAtTheHips(const Skeleton& skeleton, const Pose& pose, double angle_rad) {
+namespace {
+
+// `pose` with its root pitched by angle_rad about the body's left-right axis, whichever way brings
+// the head forward (`forward`; else whichever does not); none when neither way does.
+std::optional<Pose> pitched(const Skeleton& skeleton, const Pose& pose, double angle_rad,
+                            bool forward) {
   std::vector<Eigen::Vector3d> joints;
   skeleton.jointPositions(pose, joints);
   const double head_y = joints[kHead].y();
-  Pose best = pose;
-  // The torso pitched forward about the body's left-right axis (whichever sign brings the head
-  // forward), each thigh turned back by as much so that the legs stand where they stood.
+  std::optional<Pose> out;
   for (const double sign : {1.0, -1.0}) {
     Pose p = pose;
     const Eigen::Matrix3d pitch =
         Eigen::AngleAxisd(sign * angle_rad, Eigen::Vector3d::UnitX()).toRotationMatrix();
     p.angles_rad[0] = rotationVectorOf(rotationFromVector(pose.angles_rad[0]) * pitch);
     skeleton.jointPositions(p, joints);
-    if (joints[kHead].y() <= head_y) continue;
-    for (const int hip : {int(kRightHip), int(kLeftHip)}) {
-      const int ankle = hip + 2;
-      double best_drift = 1e9;
-      Pose chosen = p;
-      for (const double turn : {1.0, -1.0}) {
-        Pose q = p;
-        q.angles_rad[size_t(hip)].x() += turn * angle_rad;
-        skeleton.clampToLimits(q);
-        skeleton.jointPositions(q, joints);
-        const double drift = (joints[size_t(ankle)] - joints[size_t(hip)]).head<2>().norm();
-        if (drift < best_drift) best_drift = drift, chosen = q;
-      }
-      p = chosen;
-    }
-    best = p;
+    if ((joints[kHead].y() > head_y) == forward) out = p;
   }
-  return best;
+  return out;
+}
+
+}  // namespace
+
+Pose bentAtTheHips(const Skeleton& skeleton, const Pose& pose, double angle_rad) {
+  // The torso pitched forward, each thigh turned back by as much so that the legs stand where
+  // they stood.
+  std::optional<Pose> bent = pitched(skeleton, pose, angle_rad, true);
+  if (!bent) return pose;
+  Pose& p = *bent;
+  std::vector<Eigen::Vector3d> joints;
+  for (const int hip : {int(kRightHip), int(kLeftHip)}) {
+    const int ankle = hip + 2;
+    double best_drift = 1e9;
+    Pose chosen = p;
+    for (const double turn : {1.0, -1.0}) {
+      Pose q = p;
+      q.angles_rad[size_t(hip)].x() += turn * angle_rad;
+      skeleton.clampToLimits(q);
+      skeleton.jointPositions(q, joints);
+      const double drift = (joints[size_t(ankle)] - joints[size_t(hip)]).head<2>().norm();
+      if (drift < best_drift) best_drift = drift, chosen = q;
+    }
+    p = chosen;
+  }
+  return p;
 }
 
 Pose sittingOnTheFloor(const Skeleton& skeleton, const Pose& arms, double lean_rad,
                        double knee_rad) {
-  std::vector<Eigen::Vector3d> joints;
   Pose p = arms;
   p.angles_rad[0] = Eigen::Vector3d::Zero();
   p.root_translation_m.x() = p.root_translation_m.y() = 0;
   for (const int j : {int(kSpine1), int(kSpine2), int(kSpine3), int(kNeck), int(kHead)})
     p.angles_rad[size_t(j)].setZero();
-  // The torso leaned back about the body's left-right axis (whichever sign brings the head back).
-  skeleton.jointPositions(p, joints);
-  const double head_y = joints[kHead].y();
-  Pose leaned = p;
-  for (const double sign : {1.0, -1.0}) {
-    Pose q = p;
-    q.angles_rad[0] = rotationVectorOf(
-        Eigen::AngleAxisd(sign * lean_rad, Eigen::Vector3d::UnitX()).toRotationMatrix());
-    skeleton.jointPositions(q, joints);
-    if (joints[kHead].y() <= head_y) leaned = q;
-  }
-  p = leaned;
+  // The torso leaned back (the root level: pitching it is leaning it).
+  p = pitched(skeleton, p, lean_rad, false).value_or(p);
+  std::vector<Eigen::Vector3d> joints;
   // Each thigh raised forward (whichever way brings the knee forward, as far as its limit allows),
   // above level by half the knee's bend so that the shin, bent down by knee_rad, brings the ankle
   // back to the hip's height: heels and seat on the floor.
@@ -128,8 +133,10 @@ Pose sittingOnTheFloor(const Skeleton& skeleton, const Pose& arms, double lean_r
 std::vector<Pose> makeInitialisationPoses(const Skeleton& skeleton, double min_spacing_m) {
   constexpr double kFps = 10, kSeconds = 4;
   std::vector<Pose> candidates = {Pose::rest(skeleton.jointCount())};
+  Pose a_pose = candidates[0];  // the A-pose clip's last frame: arms for the sitting poses
   for (const std::string& name : builtinClipNames()) {
     const MotionClip clip = makeBuiltinClip(name, skeleton, kFps, kSeconds);
+    if (name == "a_pose_hold") a_pose = clip.frames.back();
     for (const Pose& p : clip.frames) {
       const Pose facing = uprightFacingForward(p);
       // Bent forward at the hips, as a body picking something up or leaning on a rail: the
@@ -141,15 +148,12 @@ std::vector<Pose> makeInitialisationPoses(const Skeleton& skeleton, double min_s
     }
   }
   // Sitting on the floor, legs out or knees up, upright or leaning back on the hands: no clip
-  // sits, and a body that sat down is found again only from a pose like his.
-  const Pose arms[] = {Pose::rest(skeleton.jointCount()),
-                       makeBuiltinClip("a_pose_hold", skeleton, kFps, kSeconds).frames.back()};
-  for (const Pose& a : arms)
+  // sits, and a body that sat down is found again only from a pose like his. (Each is its own
+  // mirror image.)
+  for (const Pose& arms : {candidates[0], a_pose})
     for (const double lean : {0.0, 0.4})
-      for (const double knee : {0.0, 1.2, 2.2}) {
-        candidates.push_back(sittingOnTheFloor(skeleton, a, lean, knee));
-        candidates.push_back(mirroredPose(candidates.back()));
-      }
+      for (const double knee : {0.0, 1.2, 2.2})
+        candidates.push_back(sittingOnTheFloor(skeleton, arms, lean, knee));
   std::vector<Pose> kept;
   std::vector<std::vector<Eigen::Vector3d>> kept_joints;
   std::vector<Eigen::Vector3d> joints;

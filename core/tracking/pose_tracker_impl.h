@@ -239,6 +239,9 @@ struct PoseTracker::Impl {
   // nearest. The capsules whose bounding spheres lie further away are never measured: a hull
   // sample lies near 3 or 4 of the body's 28.
   double hullDistances(const Eigen::Vector3d& x, int& hint, double margin);
+  // The distance from `ray` to the nearest capsule's surface (cap_a, cap_b), and into
+  // capsule_distance every capsule's.
+  double rimDistances(const RimRay& ray);
   std::vector<Eigen::Vector3d> candidate_a, candidate_b;
   bool candidates_valid = false;
   Eigen::MatrixXd H, H_new;

@@ -38,7 +38,6 @@ double PoseTracker::Impl::evaluate(const Pose& p, bool jacobian, Eigen::MatrixXd
 double PoseTracker::Impl::score(const Pose& p, double bound) {
   skeleton.forwardKinematics(p, global);
   capsuleEnds(cap_a, cap_b);
-  const size_t n = capsules.size();
   double cost = 0;
   // Checked every kChunk samples (on the reference walk about half the hypotheses are given up,
   // after two thirds of the hull on average).
@@ -49,15 +48,10 @@ double PoseTracker::Impl::score(const Pose& p, double bound) {
     cost += hullTerm(hullDistances(hull[i], hint, 0));
     if (i % kChunk == kChunk - 1 && cost > bound) return cost;
   }
-  Eigen::Vector3d point, on_ray;
   if (opt.rim_weight > 0) {
     for (const RimRay& ray : rim) {
       if (!present[ray.camera]) continue;
-      double best = 1e9;
-      for (size_t c = 0; c < n; ++c)
-        best = std::min(
-            best, raySegmentDistance(ray.origin, ray.direction, cap_a[c], cap_b[c], on_ray, point) -
-                      capsules[c].radius_m);
+      const double best = rimDistances(ray);
       if (best <= opt.rim_outlier_m) cost += rimTerm(best);
     }
   }
@@ -364,6 +358,20 @@ double PoseTracker::Impl::hullDistances(const Eigen::Vector3d& x, int& hint, dou
   return best;
 }
 
+double PoseTracker::Impl::rimDistances(const RimRay& ray) {
+  const size_t n = capsules.size();
+  capsule_distance.resize(n);
+  Eigen::Vector3d on_ray, on_segment;
+  double best = 1e9;
+  for (size_t c = 0; c < n; ++c) {
+    capsule_distance[c] =
+        raySegmentDistance(ray.origin, ray.direction, cap_a[c], cap_b[c], on_ray, on_segment) -
+        capsules[c].radius_m;
+    best = std::min(best, capsule_distance[c]);
+  }
+  return best;
+}
+
 void PoseTracker::Impl::placeCapsules() {
   const size_t n = capsules.size();
   capsuleEnds(cap_a, cap_b);
@@ -377,25 +385,7 @@ void PoseTracker::Impl::placeCapsules() {
   if (candidates_valid && std::sqrt(moved) <= 0.5 * kCandidateMargin) return;
   candidate_a = cap_a;
   candidate_b = cap_b;
-  capsule_distance.resize(n);
-  // For each of `count` items, the capsules within kCandidateMargin of its nearest (distance(i, c):
-  // to capsule c's surface), into `list` from `begin[i]`.
-  const auto makeCandidates = [&](size_t count, const auto& distance, std::vector<uint8_t>& list,
-                                  std::vector<int>& begin) {
-    list.clear();
-    begin.resize(count + 1);
-    for (size_t i = 0; i < count; ++i) {
-      begin[i] = int(list.size());
-      double best = 1e9;
-      for (size_t c = 0; c < n; ++c) {
-        capsule_distance[c] = distance(i, c) - capsules[c].radius_m;
-        best = std::min(best, capsule_distance[c]);
-      }
-      for (size_t c = 0; c < n; ++c)
-        if (capsule_distance[c] <= best + kCandidateMargin) list.push_back(uint8_t(c));
-    }
-    begin[count] = int(list.size());
-  };
+  // Each hull sample's and rim ray's capsules within kCandidateMargin of its nearest.
   capsuleSpheres();
   candidates.clear();
   candidate_begin.resize(hull.size() + 1);
@@ -407,14 +397,15 @@ void PoseTracker::Impl::placeCapsules() {
       if (capsule_distance[c] <= best + kCandidateMargin) candidates.push_back(uint8_t(c));
   }
   candidate_begin[hull.size()] = int(candidates.size());
-  Eigen::Vector3d closest, on_ray;
-  makeCandidates(
-      rim.size(),
-      [&](size_t i, size_t c) {
-        return raySegmentDistance(rim[i].origin, rim[i].direction, cap_a[c], cap_b[c], on_ray,
-                                  closest);
-      },
-      rim_candidates, rim_candidate_begin);
+  rim_candidates.clear();
+  rim_candidate_begin.resize(rim.size() + 1);
+  for (size_t i = 0; i < rim.size(); ++i) {
+    rim_candidate_begin[i] = int(rim_candidates.size());
+    const double best = rimDistances(rim[i]);
+    for (size_t c = 0; c < n; ++c)
+      if (capsule_distance[c] <= best + kCandidateMargin) rim_candidates.push_back(uint8_t(c));
+  }
+  rim_candidate_begin[rim.size()] = int(rim_candidates.size());
   candidates_valid = true;
 }
 
