@@ -389,21 +389,22 @@ void PoseTracker::Impl::placeCapsules() {
   capsuleSpheres();
   candidates.clear();
   candidate_begin.resize(hull.size() + 1);
+  // The capsules in capsule_distance within kCandidateMargin of `best`, onto `list`.
+  const auto appendNear = [&](double best, std::vector<uint8_t>& list) {
+    for (size_t c = 0; c < n; ++c)
+      if (capsule_distance[c] <= best + kCandidateMargin) list.push_back(uint8_t(c));
+  };
   int hint = 0;
   for (size_t i = 0; i < hull.size(); ++i) {
     candidate_begin[i] = int(candidates.size());
-    const double best = hullDistances(hull[i], hint, kCandidateMargin);
-    for (size_t c = 0; c < n; ++c)
-      if (capsule_distance[c] <= best + kCandidateMargin) candidates.push_back(uint8_t(c));
+    appendNear(hullDistances(hull[i], hint, kCandidateMargin), candidates);
   }
   candidate_begin[hull.size()] = int(candidates.size());
   rim_candidates.clear();
   rim_candidate_begin.resize(rim.size() + 1);
   for (size_t i = 0; i < rim.size(); ++i) {
     rim_candidate_begin[i] = int(rim_candidates.size());
-    const double best = rimDistances(rim[i]);
-    for (size_t c = 0; c < n; ++c)
-      if (capsule_distance[c] <= best + kCandidateMargin) rim_candidates.push_back(uint8_t(c));
+    appendNear(rimDistances(rim[i]), rim_candidates);
   }
   rim_candidate_begin[rim.size()] = int(rim_candidates.size());
   candidates_valid = true;
