@@ -179,6 +179,13 @@ struct PoseTracker::Impl {
   // its posture, a crouch's bent knees and hips followed instead of cut short. 0 where the hull
   // holds no crown near the head's or no sole.
   double crownToSole(const Pose& p);
+  // The height (m) of a head's crown below two hands raised over it: the highest top of the last
+  // carve's voxels under which the hull is as wide as a head, 0.08-0.5 m below the hull's top and
+  // below two tops as narrow as forearms (hull_crown.cpp). 0 where the hull's top is a head's,
+  // one hand at most is raised over it (the library's waves), or no head is found.
+  double crownBelowRaisedHands();
+  std::vector<int> crown_label;  // its scratch: a layer's sections
+  std::vector<std::pair<int, int>> crown_stack;
   std::vector<float> geodesic;  // its scratch, over the occupied box and a border
   std::vector<uint8_t> geodesic_inside;
   std::vector<std::pair<float, int>> geodesic_heap;
@@ -409,6 +416,14 @@ struct PoseTracker::Impl {
   double twin_cost = 0, pose_cost_sum = 0;
   // `volume`: the stage's hull carved for it, m³.
   bool initialise(TrackResult& out, double& volume);
+  // The search from the library (initialise's): each pose scaled so that the body spans
+  // `top_extent` (the hull's, less the hair) and, where `crown_extent` > 0, its head's top spans
+  // that (a crown below raised hands), as upright as the pose or as `fixed_upright` where given;
+  // the hypotheses scored, the best fitted, the shape calibrated. Returns whether a body holds;
+  // `straighter`: where the hull's length from soles to crown makes the body found clearly
+  // straighter than its pose (0 otherwise), that uprightness.
+  bool findActor(TrackResult& out, const Eigen::Vector3d& centroid, double bottom_z,
+                 double top_extent, double crown_extent, double fixed_upright, double& straighter);
   // The arms placed by appearance (arm_appearance.cpp). This frame's colours, per camera (null:
   // none).
   std::vector<const CellColours*> colours;
@@ -440,9 +455,12 @@ struct PoseTracker::Impl {
     double cost;
     int pose;
     double heading_rad, height_m;
+    double upright;  // the body's in that pose, which height_m was scaled by
+    bool crown;      // scaled to the crown below raised hands, not the hull's top
   };
   std::vector<Pose> library;
-  std::vector<double> library_bottom, library_upright;
+  // library_crown_upright: the poses' uprightness to their heads' tops.
+  std::vector<double> library_bottom, library_upright, library_crown_upright;
   std::vector<Hypothesis> hypotheses;
   // The hull's samples and the rim thinned to every `stride`-th (the full sets kept in full_hull
   // and full_rim), until fullSamples() puts them back.
@@ -453,13 +471,15 @@ struct PoseTracker::Impl {
   bool thinned = false;
   void makeLibrary();
   // The body model's lowest and highest point (capsules) in pose `p` of the current skeleton.
-  void modelExtent(const Pose& p, double& bottom, double& top);
+  // `crown`, where given: its head's highest point.
+  void modelExtent(const Pose& p, double& bottom, double& top, double* crown = nullptr);
   // The library pose `i` turned to `heading_rad`, its centre over `centroid` (x, y) and its lowest
   // point at `bottom_z`, for the current skeleton.
   Pose placedLibraryPose(int i, double heading_rad, const Eigen::Vector3d& centroid,
                          double bottom_z);
-  // The generic shape scaled so that the body in library pose `i` spans `extent_m` vertically.
-  BodyShape shapeSpanning(int i, double extent_m) const;
+  // The generic shape scaled so that its body, as upright as `upright`, spans `extent_m`
+  // vertically.
+  BodyShape shapeSpanning(double extent_m, double upright) const;
   // The coordinate search over the body's proportions from `best_pose` (its cost `best`), for a
   // hull `extent` tall with the body as upright as `upright` (its library pose's); both updated,
   // the shape set.
@@ -471,7 +491,10 @@ struct PoseTracker::Impl {
   // the previous one) so that its lowest point stays where it was.
   void remeasureHeight(double hull_bottom, double hull_top);
   // How straight the body stands in `p`: its extent over its extent at rest (1 standing).
-  double uprightness(const Pose& p);
+  // `to_crown`: to its head's top, whatever a raised hand reaches.
+  double uprightness(const Pose& p, bool to_crown = false);
+  // Whether a limb of the body in pose `p` reaches higher than its head's top (a hand raised).
+  bool limbAboveHead(const Pose& p);
   double height_uprightness = 0;  // of the frame the height was last taken from
   double rest_extent_m = 1;       // the body's extent at rest, for the current shape (setShape)
   // The height of a shape whose body spans `extent` (crown above its lowest point) standing as

@@ -58,24 +58,34 @@ void PoseTracker::Impl::fullSamples() {
   candidates_valid = false;
 }
 
-void PoseTracker::Impl::modelExtent(const Pose& p, double& bottom, double& top) {
+void PoseTracker::Impl::modelExtent(const Pose& p, double& bottom, double& top, double* crown) {
   skeleton.forwardKinematics(p, global);
   bottom = std::numeric_limits<double>::infinity();
   top = -bottom;
+  if (crown) *crown = top;
   for (const Capsule& c : capsules) {
     const Eigen::Isometry3d& t = global[c.joint];
     for (const Eigen::Vector3d& end : {c.a, c.b}) {
       const double z = (t * end).z();
       bottom = std::min(bottom, z - c.radius_m);
       top = std::max(top, z + c.radius_m);
+      if (crown && c.joint == kHead) *crown = std::max(*crown, z + c.radius_m);
     }
   }
 }
 
-double PoseTracker::Impl::uprightness(const Pose& p) {
-  double bottom, top;
-  modelExtent(p, bottom, top);
-  return (top - bottom) / rest_extent_m;
+bool PoseTracker::Impl::limbAboveHead(const Pose& p) {
+  // Higher than the head's top by this much: a hand's, not the hair's, or a capsule's rounding.
+  constexpr double kAbove = 0.05;
+  double bottom, top, crown;
+  modelExtent(p, bottom, top, &crown);
+  return top > crown + kAbove;
+}
+
+double PoseTracker::Impl::uprightness(const Pose& p, bool to_crown) {
+  double bottom, top, crown;
+  modelExtent(p, bottom, top, &crown);
+  return ((to_crown ? crown : top) - bottom) / rest_extent_m;
 }
 
 void PoseTracker::Impl::remeasureHeight(double hull_bottom, double hull_top) {
@@ -87,6 +97,8 @@ void PoseTracker::Impl::remeasureHeight(double hull_bottom, double hull_top) {
   // more or less, is no measure of a standing actor's: it made the height and the legs trade.)
   constexpr double kStanding = 0.97;
   if (height_uprightness >= kStanding) return;
+  // A hand over the head: the hull's top is no crown to measure to.
+  if (limbAboveHead(pose)) return;
   const double u = std::min(1.0, uprightness(pose));
   if (u < height_uprightness + kStraighter) return;
   const double height =
@@ -110,13 +122,15 @@ void PoseTracker::Impl::makeLibrary() {
   library = makeInitialisationPoses(generic);
   library_bottom.resize(library.size());
   library_upright.resize(library.size());
+  library_crown_upright.resize(library.size());
   for (size_t i = 0; i < library.size(); ++i) {
     double bottom, top;
     modelExtent(library[i], bottom, top);
     library_bottom[i] = bottom;
     library_upright[i] = uprightness(library[i]);
+    library_crown_upright[i] = uprightness(library[i], true);
   }
-  hypotheses.reserve(library.size() * kHeadings);
+  hypotheses.reserve(2 * library.size() * kHeadings);  // at the hull's top and at a crown
 }
 
 double PoseTracker::Impl::heightSpanning(double extent, double upright, double legs) const {
@@ -125,9 +139,9 @@ double PoseTracker::Impl::heightSpanning(double extent, double upright, double l
   return std::clamp(BodyShape{}.height_m * extent / (crown * upright), 1.3, 2.3);
 }
 
-BodyShape PoseTracker::Impl::shapeSpanning(int i, double extent_m) const {
+BodyShape PoseTracker::Impl::shapeSpanning(double extent_m, double upright) const {
   BodyShape s;
-  s.height_m = heightSpanning(extent_m, library_upright[i], 1.0);
+  s.height_m = heightSpanning(extent_m, upright, 1.0);
   return s;
 }
 
@@ -158,14 +172,37 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z, &bottom_z);
   out.hull_points = int(hull.size());
   if (volume < opt.min_volume_m3 || volume > opt.max_volume_m3 || top_z < kLowestTopM) return false;
-  // The body's vertical extent: the hull's less the hair above the crown.
+  const bool calibrating = opt.calibrate_shape && !shape_calibrated;
+  use_prior = false;
+  // The body's vertical extent: the hull's less the hair above the crown. Both hands raised over
+  // the head make the hull's top theirs, and a body scaled to it too tall, its head at the hands
+  // (no library pose raises both): every pose is then also scaled from its head's top to the
+  // crown found below them (its arms then found by recoverLimbs), and the search chooses.
+  const double crown_z = calibrating ? crownBelowRaisedHands() : 0;
   const double extent = top_z - bottom_z - opt.hair_m;
+  const double crown_extent = crown_z > 0 ? crown_z - bottom_z - opt.hair_m : 0;
+  double straighter = 0;
+  if (findActor(out, centroid, bottom_z, extent, crown_extent, 0, straighter)) return true;
+  // Found as bent as a crouching library pose (a heavy boxer, whose girth a crouch's bent legs
+  // fit best at the generic build), where the hull's own length from soles to crown says he
+  // stands nearly straight, and no body of that height held: searched again, every pose as tall
+  // as that length makes him.
+  return calibrating && straighter > 0 &&
+         findActor(out, centroid, bottom_z, extent, crown_extent, straighter, straighter);
+}
+
+bool PoseTracker::Impl::findActor(TrackResult& out, const Eigen::Vector3d& centroid,
+                                  double bottom_z, double top_extent, double crown_extent,
+                                  double fixed_upright, double& straighter) {
+  // A hull whose length from soles to crown makes the body this much straighter than the pose
+  // it was found in did: `straighter` set for a search again.
+  constexpr double kStraighterBy = 0.1;
   const bool calibrating = opt.calibrate_shape && !shape_calibrated;
   const BodyShape known = shape;
-  use_prior = false;
-
+  straighter = 0;
   // Every library pose at every heading, over the hull's centroid, standing on its lowest point,
-  // scaled (until calibrated) to the hull's height in that pose; scored on a thinned hull and rim.
+  // scaled (until calibrated) to the hull's height in that pose, and to the crown's (or as
+  // upright as `fixed_upright`, where given); scored on a thinned hull and rim.
   // Only the best kFittedHypotheses are fitted: a hypothesis is given up as soon as its cost
   // passes theirs so far (`kept`, a max-heap of the best costs, infinite until that many are in).
   thinSamples(kScoreStride);
@@ -173,16 +210,22 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   std::array<double, kFittedHypotheses> kept;
   kept.fill(std::numeric_limits<double>::infinity());
   for (int i = 0; i < int(library.size()); ++i) {
-    if (calibrating) setShape(shapeSpanning(i, extent));
-    for (int h = 0; h < kHeadings; ++h) {
-      const double heading = 2 * std::numbers::pi * h / kHeadings;
-      const Pose p = placedLibraryPose(i, heading, centroid, bottom_z);
-      const double cost = score(p, kept.front());
-      hypotheses.push_back({cost, i, heading, shape.height_m});
-      if (cost < kept.front()) {
-        std::pop_heap(kept.begin(), kept.end());
-        kept.back() = cost;
-        std::push_heap(kept.begin(), kept.end());
+    for (const bool crown : {false, true}) {
+      if (crown && crown_extent <= 0) continue;
+      const double upright = fixed_upright > 0 ? fixed_upright
+                             : crown           ? library_crown_upright[i]
+                                               : library_upright[i];
+      if (calibrating) setShape(shapeSpanning(crown ? crown_extent : top_extent, upright));
+      for (int h = 0; h < kHeadings; ++h) {
+        const double heading = 2 * std::numbers::pi * h / kHeadings;
+        const Pose p = placedLibraryPose(i, heading, centroid, bottom_z);
+        const double cost = score(p, kept.front());
+        hypotheses.push_back({cost, i, heading, shape.height_m, upright, crown});
+        if (cost < kept.front()) {
+          std::pop_heap(kept.begin(), kept.end());
+          kept.back() = cost;
+          std::push_heap(kept.begin(), kept.end());
+        }
       }
     }
   }
@@ -194,6 +237,7 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   Pose best_pose;
   BodyShape best_shape = known;
   double best = std::numeric_limits<double>::infinity(), best_upright = 1;
+  bool to_crown = false;
   for (int k = 0; k < fitted_count; ++k) {
     const Hypothesis& h = hypotheses[k];
     if (calibrating) {
@@ -204,7 +248,7 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
     Pose p = placedLibraryPose(h.pose, h.heading_rad, centroid, bottom_z);
     const double c = fit(p, opt.init_iterations);
     if (c < best)
-      best = c, best_pose = p, best_shape = shape, best_upright = library_upright[h.pose];
+      best = c, best_pose = p, best_shape = shape, best_upright = h.upright, to_crown = h.crown;
   }
   fullSamples();
   setShape(best_shape);
@@ -214,8 +258,9 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   const int rays = countUnexplained(best_pose);
   if (rays > 0 && recoverLimbs(best_pose, rays, opt.init_iterations)) {
     best = evaluate(best_pose, false, H, g);
-    best_upright = uprightness(best_pose);
+    best_upright = uprightness(best_pose, to_crown);
   }
+  const double extent = to_crown ? crown_extent : top_extent;
   // A hull that no hypothesis fits within twice the lost threshold (two people, a prop, a hull
   // carved by two cameras) is no body whose proportions a search could find: failed at once.
   double rms = fitRms(best_pose);
@@ -229,7 +274,11 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
     // Where the pose is the more bent, the pose holds: a deep crouch's hull fills the space
     // between the thighs and the body, and the path cuts across it.
     const double length = crownToSole(best_pose) - opt.hair_m;
-    if (length > 0.5 * extent) best_upright = std::min(best_upright, extent / length);
+    if (length > 0.5 * extent) {
+      if (extent / length > best_upright + kStraighterBy)
+        straighter = std::min(1.0, extent / length);
+      best_upright = std::min(best_upright, extent / length);
+    }
     calibrateShape(best_pose, extent, best_upright, best, false);
     rms = fitRms(best_pose);
     if (rms > opt.lost_rms_m) {

@@ -5,12 +5,14 @@
 // first frames after each initialisation; as the actor moves (a knee bends, an elbow bends: each
 // only one way) the wrong one fits worse, and the better of the two is kept. An actor who holds
 // still gives the fit nothing to tell them by: the feet, whose toes reach ahead of the ankles,
-// decide.
+// decide. A body that leans (hanging from a bar) whose turned twin is no rival is also reflected
+// through its frontal plane, and the twin that fits better is tracked.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
 
 #include "core/body/human_skeleton.h"
+#include "core/tracking/pose_library.h"
 #include "core/tracking/pose_tracker_impl.h"
 
 namespace lumistage {
@@ -27,6 +29,14 @@ constexpr int kTwinFrames = 8;
 constexpr double kTwinWins = 0.9;
 // A twin that fits this much worse than the pose at once is no rival: silhouettes told them apart.
 constexpr double kTwinRival = 1.5;
+// A twin whose cost summed over kTwinEarlyFrames frames or more is below this share of the pose's
+// takes over at once: the silhouettes told them apart (an actor found facing the wrong way in a
+// pose that is not symmetric).
+constexpr int kTwinEarlyFrames = 2;
+constexpr double kTwinClearlyWins = 0.6;
+// A body whose length (ankles to head) leans more than this off the vertical is also reflected
+// through its frontal plane.
+constexpr double kLeaningRad = 0.17;
 // Between kTwinWins and as good as the pose, the cost cannot tell them (a still, symmetric pose:
 // an A-pose held, on few cameras): the feet do. The twin then takes over when its toes reach this
 // much further into the hull's feet than the pose's (each foot's low hull lies mostly ahead of its
@@ -65,11 +75,30 @@ void PoseTracker::Impl::makeTwin(double pose_cost, int iterations) {
   const Eigen::Vector3d root = global[0].translation();
   const Eigen::Vector3d turned = mean + half * (root - mean);
   twin.root_translation_m += turned - root;
+  // A body that leans (hanging from a bar, leaning on a wall) is seen alike from the front and
+  // the back through its frontal plane, which holds its length (ankles to head) and not the
+  // vertical: where the turned twin is no rival, it is reflected through that plane instead (its
+  // left side where its right was, mirroredPose), and the twin that fits better kept.
+  const Eigen::Vector3d ankles =
+      0.5 * (global[kRightAnkle].translation() + global[kLeftAnkle].translation());
+  const Eigen::Vector3d length = (global[kHead].translation() - ankles).normalized();
+  Eigen::Vector3d front = global[0].linear() * Eigen::Vector3d::UnitY();
+  front = (front - front.dot(length) * length).normalized();
   double cost = fit(twin, iterations);
+  if (!(cost < kTwinRival * pose_cost) && length.z() < std::cos(kLeaningRad)) {
+    const Eigen::Matrix3d reflect = Eigen::Matrix3d::Identity() - 2 * front * front.transpose();
+    Pose mirror = mirroredPose(pose);
+    mirror.angles_rad[0] = rotationVectorOf(reflect * Eigen::Vector3d(-1, 1, 1).asDiagonal() *
+                                            rotationFromVector(mirror.angles_rad[0]));
+    mirror.root_translation_m = pose.root_translation_m + reflect * (root - mean) + mean - root;
+    const double c = fit(mirror, iterations);
+    if (c < cost) twin = mirror, cost = c;
+  }
   if (!(cost < kTwinRival * pose_cost)) return;
-  // As close in cost as the fit cannot tell apart: the one whose toes point into the hull's feet
-  // is tracked from now on, the other as its twin (which motion may still bring back).
-  if (cost < pose_cost / kTwinWins && feetFavourTwin()) {
+  // Clearly better at once, or as close in cost as the fit cannot tell apart and its toes point
+  // into the hull's feet: the twin is tracked from now on, the pose as its twin (which motion may
+  // still bring back).
+  if (cost < kTwinWins * pose_cost || (cost < pose_cost / kTwinWins && feetFavourTwin())) {
     std::swap(pose, twin);
     std::swap(cost, pose_cost);
     previous = pose;
@@ -127,7 +156,10 @@ bool PoseTracker::Impl::trackTwin(double pose_cost) {
     twin_frames = 0;
     return false;
   }
-  if (--twin_frames > 0) return false;
+  --twin_frames;
+  if (kTwinFrames - twin_frames >= kTwinEarlyFrames && twin_cost < kTwinClearlyWins * pose_cost_sum)
+    twin_frames = 0;  // clearly better already
+  if (twin_frames > 0) return false;
   if (!(twin_cost < kTwinWins * pose_cost_sum) && !(twin_cost < pose_cost_sum && feetFavourTwin()))
     return false;
   previous = twin_previous;
