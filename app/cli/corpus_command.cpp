@@ -75,15 +75,11 @@ void addStageDrawOptions(CLI::App& command, StageDrawOptions& options) {
   command.add_option_function<std::string>(
       "--motions",
       [&options](const std::string& folder) {
-        std::error_code ec;
-        if (!fs::is_directory(folder, ec)) throw Error("--motions " + folder + ": not a folder");
-        for (const fs::directory_entry& entry : fs::directory_iterator(folder, ec)) {
-          std::string ext = entry.path().extension().string();
-          std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-          if (ext == ".bvh") options.bvh_files.push_back(entry.path());
+        try {
+          options.bvh_files = bvhFilesIn(folder);
+        } catch (const Error& e) {
+          throw Error(std::string("--motions ") + e.what());
         }
-        if (ec) throw Error("--motions " + folder + ": " + ec.message());
-        std::sort(options.bvh_files.begin(), options.bvh_files.end());
       },
       "also draw the motion from the BVH files in this folder (e.g. "
       "../shared/realdata/motions); the built-in clips are always drawn from");

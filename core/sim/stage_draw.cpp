@@ -192,6 +192,21 @@ StudioLook drawLook(Dice& dice, PixelFormat& format) {
 
 }  // namespace
 
+std::vector<std::filesystem::path> bvhFilesIn(const std::filesystem::path& folder) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(folder, ec)) throw Error(folder.string() + ": not a folder");
+  std::vector<std::filesystem::path> files;
+  for (const std::filesystem::directory_entry& entry :
+       std::filesystem::directory_iterator(folder, ec)) {
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (ext == ".bvh") files.push_back(entry.path());
+  }
+  if (ec) throw Error(folder.string() + ": " + ec.message());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
 StudioConfig drawStage(uint32_t seed, const StageDrawOptions& options) {
   if (options.min_cameras < 2 || options.max_cameras < options.min_cameras ||
       options.max_cameras > 64)

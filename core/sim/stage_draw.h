@@ -42,6 +42,11 @@ struct StageDrawOptions {
 // (a BVH file that does not read, a clip shorter than the session).
 StudioConfig drawStage(uint32_t seed, const StageDrawOptions& options = {});
 
+// The BVH files (.bvh, any case) directly in `folder`, sorted: what StageDrawOptions::bvh_files
+// draws from for `lumistage corpus --motions`. Throws Error naming the folder when it is none or
+// cannot be read.
+std::vector<std::filesystem::path> bvhFilesIn(const std::filesystem::path& folder);
+
 // One line: cameras and layout, size, actor, motion, look.
 std::string describeStage(const StudioConfig& config);
 

@@ -493,8 +493,6 @@ struct PoseTracker::Impl {
   // How straight the body stands in `p`: its extent over its extent at rest (1 standing).
   // `to_crown`: to its head's top, whatever a raised hand reaches.
   double uprightness(const Pose& p, bool to_crown = false);
-  // Whether a limb of the body in pose `p` reaches higher than its head's top (a hand raised).
-  bool limbAboveHead(const Pose& p);
   double height_uprightness = 0;  // of the frame the height was last taken from
   double rest_extent_m = 1;       // the body's extent at rest, for the current shape (setShape)
   // The height of a shape whose body spans `extent` (crown above its lowest point) standing as

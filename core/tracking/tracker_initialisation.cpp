@@ -74,14 +74,6 @@ void PoseTracker::Impl::modelExtent(const Pose& p, double& bottom, double& top, 
   }
 }
 
-bool PoseTracker::Impl::limbAboveHead(const Pose& p) {
-  // Higher than the head's top by this much: a hand's, not the hair's, or a capsule's rounding.
-  constexpr double kAbove = 0.05;
-  double bottom, top, crown;
-  modelExtent(p, bottom, top, &crown);
-  return top > crown + kAbove;
-}
-
 double PoseTracker::Impl::uprightness(const Pose& p, bool to_crown) {
   double bottom, top, crown;
   modelExtent(p, bottom, top, &crown);
@@ -96,16 +88,18 @@ void PoseTracker::Impl::remeasureHeight(double hull_bottom, double hull_top) {
   // Standing straight: the height holds. (The fitted pose's own uprightness, a knee bent a little
   // more or less, is no measure of a standing actor's: it made the height and the legs trade.)
   constexpr double kStanding = 0.97;
+  // A limb higher than the head's top by this much (a hand's, not a capsule's rounding): the
+  // hull's top is no crown to measure to.
+  constexpr double kAboveHeadM = 0.05;
   if (height_uprightness >= kStanding) return;
-  // A hand over the head: the hull's top is no crown to measure to.
-  if (limbAboveHead(pose)) return;
-  const double u = std::min(1.0, uprightness(pose));
+  double bottom, top, crown;
+  modelExtent(pose, bottom, top, &crown);
+  if (top > crown + kAboveHeadM) return;
+  const double u = std::min(1.0, (top - bottom) / rest_extent_m);  // uprightness(pose)
   if (u < height_uprightness + kStraighter) return;
   const double height =
       heightSpanning(hull_top - hull_bottom - opt.hair_m, u, shape.leg_length_scale);
   height_uprightness = u;
-  double bottom, top;
-  modelExtent(pose, bottom, top);
   if (std::abs(height - shape.height_m) < 0.002) return;
   spdlog::debug("tracker: the actor stands straighter ({:.2f}): height {:.3f} -> {:.3f} m", u,
                 shape.height_m, height);

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -71,9 +70,7 @@ TEST(CorpusEval, AHeavyBoxerNeverHeldIsFoundAtTheHeightHisHullsLengthGives) {
   fs::remove_all(folder);
   StageDrawOptions draw;  // as `lumistage corpus --cameras 8-16 --motions DIR` draws it
   draw.min_cameras = 8;
-  for (const fs::directory_entry& entry : fs::directory_iterator(motions))
-    if (entry.path().extension() == ".bvh") draw.bvh_files.push_back(entry.path());
-  std::sort(draw.bvh_files.begin(), draw.bvh_files.end());
+  draw.bvh_files = bvhFilesIn(motions);
   const SkinnedMesh generic = loadGenericHuman();
   const CorpusStageResult r = evaluateCorpusStage(53, draw, folder, generic, {}, {});
   fs::remove_all(folder);

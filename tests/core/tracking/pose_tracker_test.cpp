@@ -391,13 +391,9 @@ TEST(PoseTracker, AnActorFoundWithBothHandsOverHisHeadIsFoundWithThem) {
 TEST(PoseTracker, AnActorHangingFromABarIsMeasuredToHisCrownNotHisHands) {
   const std::filesystem::path bvh = testing::realData() / "motions" / "cmu-01_03.bvh";
   if (!std::filesystem::exists(bvh)) GTEST_SKIP() << bvh << " is not here";
-  SyntheticStage stage(kStudio);
   StageDrawOptions draw;
   draw.min_cameras = 8;
-  stage.config = drawStage(58, draw);  // its rig and actor, drawn before the motion
-  stage.config.actor.target_vertices = 3000;
-  stage.actor = makeHumanModel(stage.config.actor);
-  stage.silhouettes.resize(stage.config.rig.cameraCount());
+  SyntheticStage stage(drawStage(58, draw));  // its rig and actor, drawn before the motion
   PoseTracker tracker(stage.config.rig, generic());
   const MotionClip clip = placedMotion(bvh, stage.actor.skeleton, 16.2, 152, 20);
   const int first = int(std::lround(16.2 * 30));

@@ -5,6 +5,7 @@
 // the tracker's tests and benchmark.
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/body/human_model.h"
@@ -17,9 +18,11 @@ namespace lumistage::testing {
 struct SyntheticStage {
   explicit SyntheticStage(const std::string& studio_yaml, double height_scale = 0.0,
                           int actor_vertices = 3000)
-      : config(loadStudioConfig(studio_yaml)) {
+      : SyntheticStage(scaled(loadStudioConfig(studio_yaml), height_scale), actor_vertices) {}
+  // A studio config already made (a drawn stage's: drawStage).
+  explicit SyntheticStage(StudioConfig studio, int actor_vertices = 3000)
+      : config(std::move(studio)) {
     config.actor.target_vertices = actor_vertices;
-    if (height_scale > 0) config.actor.shape.height_m = 1.75 * height_scale;
     actor = makeHumanModel(config.actor);
     silhouettes.resize(config.rig.cameraCount());
   }
@@ -47,6 +50,12 @@ struct SyntheticStage {
       pointers.push_back(&silhouettes[c]);
     }
     return pointers;
+  }
+
+  // `studio` with its actor `height_scale` times 1.75 m tall (> 0), or as it is.
+  static StudioConfig scaled(StudioConfig studio, double height_scale) {
+    if (height_scale > 0) studio.actor.shape.height_m = 1.75 * height_scale;
+    return studio;
   }
 
   int step = PoseTrackerOptions{}.silhouette_step;  // as the nodes send them
