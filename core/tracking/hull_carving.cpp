@@ -55,6 +55,7 @@ using namespace tracker_detail;
 void PoseTracker::Impl::prepareSilhouettes(
     const std::vector<const LowResSilhouette*>& silhouettes) {
   std::fill(present.begin(), present.end(), 0);
+  frame_silhouettes.assign(size_t(cameras), nullptr);
   rim.clear();
   candidates_valid = false;  // the rim's candidates with it
   int given_count = 0;
@@ -70,6 +71,7 @@ void PoseTracker::Impl::prepareSilhouettes(
     }
     const int c = s->camera, w = s->width, h = s->height;
     present[c] = 1;
+    frame_silhouettes[size_t(c)] = s;
     std::vector<float>& d = dt[c];
     Eigen::Array4i& box = dt_box[c];
     for (int y = box[1]; y <= box[3]; ++y)
@@ -262,13 +264,27 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
       }
     }
   }
+  if (count == 0) kept_lo = hi + Eigen::Vector3i::Ones(), kept_hi = hi;  // nothing to scan
+  occupied_lo = kept_lo, occupied_hi = kept_hi;  // cleared by the next carve
+  sampleSurface(lo, hi);
+  if (centroid && count > 0)
+    *centroid = lower + opt.voxel_m * (sum / count + Eigen::Vector3d::Constant(0.5));
+  if (top_z) *top_z = lower.z() + opt.voxel_m * (top + 1.0);
+  if (bottom_z) *bottom_z = lower.z() + opt.voxel_m * (count > 0 ? bottom : 0.0);
+  return count * std::pow(opt.voxel_m, 3);
+}
+
+void PoseTracker::Impl::sampleSurface(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) {
+  surface_all.clear();
+  hull.clear();
+  candidates_valid = false;
+  const size_t sy = size_t(dims.x()), sz = size_t(dims.x()) * dims.y();
   // Surface voxels: kept, with a 6-neighbour that is not (the region's border and the floor
   // count as empty). The sample moves half a voxel toward its empty neighbours: onto the hull's
   // boundary, on average, rather than inside it.
-  if (count == 0) kept_lo = hi + Eigen::Vector3i::Ones(), kept_hi = hi;  // nothing to scan
-  for (int z = kept_lo.z(); z <= kept_hi.z(); ++z) {
-    for (int y = kept_lo.y(); y <= kept_hi.y(); ++y) {
-      for (int x = kept_lo.x(); x <= kept_hi.x(); ++x) {
+  for (int z = occupied_lo.z(); z <= occupied_hi.z(); ++z) {
+    for (int y = occupied_lo.y(); y <= occupied_hi.y(); ++y) {
+      for (int x = occupied_lo.x(); x <= occupied_hi.x(); ++x) {
         const size_t v = z * sz + y * sy + x;
         if (!occupied[v]) continue;
         Eigen::Vector3d n = Eigen::Vector3d::Zero();
@@ -285,18 +301,12 @@ double PoseTracker::Impl::carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::V
       }
     }
   }
-  occupied_lo = kept_lo, occupied_hi = kept_hi;  // cleared by the next carve
   const size_t n = surface_all.size(), m = size_t(opt.max_hull_points);
   if (n <= m) {
     hull = surface_all;
   } else {
     for (size_t i = 0; i < m; ++i) hull.push_back(surface_all[i * n / m]);
   }
-  if (centroid && count > 0)
-    *centroid = lower + opt.voxel_m * (sum / count + Eigen::Vector3d::Constant(0.5));
-  if (top_z) *top_z = lower.z() + opt.voxel_m * (top + 1.0);
-  if (bottom_z) *bottom_z = lower.z() + opt.voxel_m * (count > 0 ? bottom : 0.0);
-  return count * std::pow(opt.voxel_m, 3);
 }
 
 void PoseTracker::Impl::clearOccupied() {

@@ -437,6 +437,9 @@ const TrackResult& PoseTracker::track(const std::vector<const LowResSilhouette*>
     const Eigen::Vector3i vhi = ((hi - m.lower) / m.opt.voxel_m).array().floor().cast<int>();
     double hull_top = 0, hull_bottom = 0;
     volume = m.carve(vlo, vhi, nullptr, &hull_top, &hull_bottom);
+    // The rays through silhouettes' parts no voxel of this hull agrees with (a key's blotches)
+    // are left out of the rim: no body explains them.
+    m.dropRimRaysOffHull();
     result_.hull_points = int(m.hull.size());
     if (volume < m.opt.min_volume_m3 || volume > m.opt.max_volume_m3) {
       // No hull to fit (the actor gone, or one frame's keys broken: a light flickered, every mask

@@ -69,6 +69,7 @@ struct Dof {
 struct RimRay {
   Eigen::Vector3d origin, direction;
   int camera;
+  int cell;  // the edge's cell in the camera's silhouette (y * width + x)
 };
 
 // The distance between a ray (origin o, unit direction d, s >= 0) and segment a-b, with the
@@ -186,6 +187,27 @@ struct PoseTracker::Impl {
   double crownBelowRaisedHands();
   std::vector<int> crown_label;  // its scratch: a layer's sections
   std::vector<std::pair<int, int>> crown_stack;
+  // Leaves out of the last carve the pieces of the hull (26-connected) that lie apart from the
+  // largest, the actor's (further than hull_pieces.cpp's kNearActorM): the carving's phantoms of
+  // a key's blotches on the floor, a prop across the stage. Where it drops any, the hull's surface
+  // is sampled again and its centroid, top and bottom (m) set; returns the volume kept, or 0 where
+  // it drops nothing.
+  double dropStrayPieces(Eigen::Vector3d& centroid, double& top_z, double& bottom_z);
+  // Leaves out of the rim the rays through the edges of a silhouette's parts (8-connected cells)
+  // none of whose rays passes a voxel of the last carve (or its face neighbours): a key's blotches
+  // on the floor, which no other camera agrees with and no body could explain
+  // (silhouette_rim.cpp).
+  void dropRimRaysOffHull();
+  std::vector<uint8_t> rim_on_hull, rim_part;  // its scratch
+  std::vector<int> rim_flood, rim_touched;
+  struct Piece {
+    int voxels;
+    Eigen::Vector3i lo, hi;
+    bool kept = true;
+  };
+  std::vector<Piece> pieces;  // its scratch
+  std::vector<int> piece_label;
+  std::vector<Eigen::Vector3i> piece_stack;
   std::vector<float> geodesic;  // its scratch, over the occupied box and a border
   std::vector<uint8_t> geodesic_inside;
   std::vector<std::pair<float, int>> geodesic_heap;
@@ -200,6 +222,8 @@ struct PoseTracker::Impl {
   std::vector<Eigen::Array4i> dt_box;
   std::vector<uint8_t> present;
   std::vector<uint8_t> told_empty;  // per camera: said that its silhouette is left out
+  // This frame's silhouettes by camera (null where none), while it is tracked.
+  std::vector<const LowResSilhouette*> frame_silhouettes;
   // This frame's rays through the silhouettes' edges (sampleRim), every camera's.
   std::vector<RimRay> rim;
   std::vector<double> rim_residuals;  // rimRms's scratch
@@ -301,6 +325,9 @@ struct PoseTracker::Impl {
   // `bottom_z`: the lowest occupied voxel's floor (the floor itself where the actor stands).
   double carve(Eigen::Vector3i lo, Eigen::Vector3i hi, Eigen::Vector3d* centroid, double* top_z,
                double* bottom_z = nullptr);
+  // Samples the surface of the occupied voxels (occupied_lo..occupied_hi) into surface_all and
+  // hull; voxels lo..hi are the carved region (its border counts as empty).
+  void sampleSurface(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi);
   template <typename T>
   void makeBlocks(const std::vector<T>& table);
   // The largest squared distance, in cells of camera c, of the cells of voxels first .. last from

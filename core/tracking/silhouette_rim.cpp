@@ -2,7 +2,9 @@
 // the rays through its edges that the fit's rim term holds the body to, and the camera whose
 // silhouette disagrees with every other's, left out of a frame.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "core/tracking/pose_tracker_impl.h"
 
@@ -42,9 +44,109 @@ void PoseTracker::Impl::sampleRim(const LowResSilhouette& s, int count) {
           Eigen::Vector2d((x + 0.5) * step - 0.5, (y + 0.5) * step - 0.5) +
           0.5 * step * n.normalized();
       if (const std::optional<Ray> ray = cam.unproject(pixel))
-        rim.push_back({ray->origin, ray->direction, s.camera});
+        rim.push_back({ray->origin, ray->direction, s.camera, y * w + x});
     }
   }
+}
+
+void PoseTracker::Impl::dropRimRaysOffHull() {
+  const Eigen::Vector3i lo = occupied_lo, hi = occupied_hi;
+  if (rim.empty() || (hi.array() < lo.array()).any()) return;
+  const size_t gy = size_t(dims.x()), gz = size_t(dims.x()) * dims.y();
+  // Whether voxel v, or one of its six face neighbours, is occupied.
+  const auto nearHull = [&](const Eigen::Vector3i& v) {
+    const auto at = [&](int x, int y, int z) {
+      return x >= lo.x() && y >= lo.y() && z >= lo.z() && x <= hi.x() && y <= hi.y() &&
+             z <= hi.z() && occupied[size_t(z) * gz + size_t(y) * gy + size_t(x)];
+    };
+    const int x = v.x(), y = v.y(), z = v.z();
+    return at(x, y, z) || at(x - 1, y, z) || at(x + 1, y, z) || at(x, y - 1, z) ||
+           at(x, y + 1, z) || at(x, y, z - 1) || at(x, y, z + 1);
+  };
+  // The occupied box grown by a voxel, metres; each ray's stretch inside it (slabs) walked a
+  // voxel at a time.
+  const Eigen::Vector3d box_lo = lower + opt.voxel_m * (lo.cast<double>().array() - 1).matrix();
+  const Eigen::Vector3d box_hi = lower + opt.voxel_m * (hi.cast<double>().array() + 2).matrix();
+  const auto meetsHull = [&](const RimRay& r) {
+    double t0 = 0, t1 = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+      if (std::abs(r.direction[a]) < 1e-12) {
+        if (r.origin[a] < box_lo[a] || r.origin[a] > box_hi[a]) return false;
+        continue;
+      }
+      double ta = (box_lo[a] - r.origin[a]) / r.direction[a];
+      double tb = (box_hi[a] - r.origin[a]) / r.direction[a];
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+    }
+    for (double t = t0; t <= t1; t += opt.voxel_m)
+      if (nearHull(
+              ((r.origin + t * r.direction - lower) / opt.voxel_m).array().floor().cast<int>()))
+        return true;
+    return false;
+  };
+  rim_on_hull.resize(rim.size());
+  bool any_off = false;
+  for (size_t i = 0; i < rim.size(); ++i) {
+    rim_on_hull[i] = meetsHull(rim[i]);
+    any_off |= !rim_on_hull[i];
+  }
+  if (!any_off) return;
+  // A ray that misses the hull is kept where its edge belongs to a part of the silhouette (its
+  // 8-connected cells) through whose edge another ray meets it: the body's own edge, where the
+  // hull lies a little inside it or lost a limb another camera's key missed. Each such part is
+  // walked from a missing ray's cell until a meeting ray's is reached (its cells then marked
+  // kept) or the part ends (marked dropped).
+  constexpr uint8_t kKept = 1, kDropped = 2, kWalked = 3;
+  for (int c = 0; c < cameras; ++c) {
+    const LowResSilhouette* s = frame_silhouettes[size_t(c)];
+    if (!s) continue;
+    bool off = false;
+    for (size_t i = 0; i < rim.size(); ++i) off |= rim[i].camera == c && !rim_on_hull[i];
+    if (!off) continue;
+    const int w = s->width, h = s->height;
+    if (rim_part.size() < size_t(w) * h) rim_part.assign(size_t(w) * h, 0);
+    rim_touched.clear();
+    const auto mark = [&](int cell, uint8_t m) {
+      if (!rim_part[size_t(cell)]) rim_touched.push_back(cell);
+      rim_part[size_t(cell)] = m;
+    };
+    for (size_t i = 0; i < rim.size(); ++i)
+      if (rim[i].camera == c && rim_on_hull[i]) mark(rim[i].cell, kKept);
+    for (size_t i = 0; i < rim.size(); ++i) {
+      if (rim[i].camera != c || rim_on_hull[i]) continue;
+      uint8_t fate = rim_part[size_t(rim[i].cell)];
+      if (fate != kKept && fate != kDropped) {
+        // Breadth first, so that the body's nearest meeting ray ends the walk soon.
+        const size_t walk_begin = rim_touched.size();
+        rim_flood.assign(1, rim[i].cell);
+        mark(rim[i].cell, kWalked);
+        fate = kDropped;
+        for (size_t q = 0; q < rim_flood.size() && fate == kDropped; ++q) {
+          const int x = rim_flood[q] % w, y = rim_flood[q] / w;
+          for (int ny = std::max(0, y - 1); ny <= std::min(h - 1, y + 1); ++ny)
+            for (int nx = std::max(0, x - 1); nx <= std::min(w - 1, x + 1); ++nx) {
+              const int n = ny * w + nx;
+              const uint8_t m = rim_part[size_t(n)];
+              if (m == kKept) fate = kKept;
+              if (m || !s->at(nx, ny)) continue;
+              mark(n, kWalked);
+              rim_flood.push_back(n);
+            }
+        }
+        for (size_t k = walk_begin; k < rim_touched.size(); ++k)
+          rim_part[size_t(rim_touched[k])] = fate;
+      }
+      rim_on_hull[i] = fate == kKept;
+    }
+    for (int cell : rim_touched) rim_part[size_t(cell)] = 0;
+  }
+  size_t kept = 0;
+  for (size_t i = 0; i < rim.size(); ++i)
+    if (rim_on_hull[i]) rim[kept++] = rim[i];
+  rim.resize(kept);
+  candidates_valid = false;
 }
 
 int PoseTracker::Impl::leaveOutDisagreeingCamera() {

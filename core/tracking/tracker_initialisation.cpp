@@ -164,6 +164,11 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   Eigen::Vector3d centroid;
   double top_z = 0, bottom_z = 0;
   volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z, &bottom_z);
+  // The actor's piece of the hull, not the phantoms of a key's blotches or a bag across the stage
+  // (an actor on a box the key takes for the screen would otherwise stand on their floor), and
+  // the rim's rays that meet it.
+  if (const double kept = dropStrayPieces(centroid, top_z, bottom_z); kept > 0) volume = kept;
+  dropRimRaysOffHull();
   out.hull_points = int(hull.size());
   if (volume < opt.min_volume_m3 || volume > opt.max_volume_m3 || top_z < kLowestTopM) return false;
   const bool calibrating = opt.calibrate_shape && !shape_calibrated;

@@ -406,6 +406,66 @@ TEST(PoseTracker, AnActorHangingFromABarIsMeasuredToHisCrownNotHisHands) {
   EXPECT_LT(e.mean_m, 0.05);
 }
 
+// A real CMU capture (subject 1, playground) found bent over on a climbing frame the virtual studio
+// does not draw, his feet 0.9 m above the floor, on a randomised corpus's stage (seed 99: eight
+// cameras, a 1.65 m actor), with a bag on the floor across the stage and the screen keyed in
+// blotches near the floor in six cameras: the bag's hull made the body stand on the floor, 2.1 m
+// tall, and the blotches' edges three quarters of the rim, which no body explains. The pieces of
+// the hull apart from the actor's, and the rays through silhouettes' parts no voxel agrees with,
+// are left out.
+TEST(PoseTracker, AnActorAboveTheFloorIsFoundBesideABagAndTheKeysBlotches) {
+  const std::filesystem::path bvh = testing::realData() / "motions" / "cmu-01_03.bvh";
+  if (!std::filesystem::exists(bvh)) GTEST_SKIP() << bvh << " is not here";
+  StageDrawOptions draw;
+  draw.min_cameras = 8;
+  SyntheticStage stage(drawStage(99, draw));
+  PoseTracker tracker(stage.config.rig, generic());
+  const MotionClip clip = placedMotion(bvh, stage.actor.skeleton, 6.6, 136, 20);
+  const int first = int(std::lround(6.6 * 30));
+  stage.actor.skeleton.jointPositions(clip.sample(first / 30.0), stage.joints);
+  for (int ankle : {kRightAnkle, kLeftAnkle})
+    ASSERT_GT(stage.joints[ankle].z(), 0.5) << "feet on the floor";
+  // Every camera's cells that a box of the bag's size, 1.3 m from the actor, covers.
+  const Eigen::Vector3d bag = stage.joints[kPelvis] + Eigen::Vector3d(-1.0, 0.8, 0);
+  const auto addBag = [&](LowResSilhouette& s) {
+    const Camera& camera = stage.config.rig.camera(s.camera);
+    for (double z = 0; z <= 0.3; z += 0.02)
+      for (double y = -0.2; y <= 0.2; y += 0.02)
+        for (double x = -0.25; x <= 0.25; x += 0.02)
+          if (const auto p = camera.project(Eigen::Vector3d(bag.x() + x, bag.y() + y, z))) {
+            const int cx = int(p->x() / s.step), cy = int(p->y() / s.step);
+            if (cx >= 0 && cy >= 0 && cx < s.width && cy < s.height) s.set(cx, cy);
+          }
+  };
+  // A blotch near the image's bottom corner, a camera's own (the floor's shading keyed).
+  const auto addBlotch = [](LowResSilhouette& s) {
+    const double cx = (s.camera % 2 ? 0.85 : 0.15) * s.width, cy = 0.9 * s.height;
+    const double rx = 0.12 * s.width, ry = 0.06 * s.height;
+    for (int y = 0; y < s.height; ++y)
+      for (int x = 0; x < s.width; ++x)
+        if (std::pow((x - cx) / rx, 2) + std::pow((y - cy) / ry, 2) <= 1) s.set(x, y);
+  };
+  ClipErrors e;
+  for (int f = first; f < first + 20; ++f) {
+    const std::vector<const LowResSilhouette*>& silhouettes = stage.render(clip.sample(f / 30.0));
+    for (LowResSilhouette& s : stage.silhouettes) {
+      addBag(s);
+      if (s.camera != 1 && s.camera != 4) addBlotch(s);
+    }
+    const TrackResult& r = tracker.track(silhouettes);
+    ++e.frames;
+    if (!r.valid()) continue;
+    ++e.tracked;
+    if (f > first) e.mean_m += mpjpe(r.joints, stage.joints);
+  }
+  if (e.tracked > 1) e.mean_m /= e.tracked - 1;
+  EXPECT_EQ(e.tracked, e.frames);
+  // Bent over, he is measured 15 cm short, as on the same stage without the bag and the blotches
+  // (with them, before: 2.3 m, never held).
+  EXPECT_NEAR(statureOf(tracker.shape()), statureOf(stage.config.actor.shape), 0.2);
+  EXPECT_LT(e.mean_m, 0.05);
+}
+
 // An actor found standing straight, arms at his sides, whom silhouettes barely tell from the
 // same actor turned round, then walks: at every heading his left side is on his left half a second
 // in (the twin turned round, tracked beside him for the first frames, must not take over from the
