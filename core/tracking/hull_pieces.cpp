@@ -39,13 +39,14 @@ double PoseTracker::Impl::dropStrayPieces(Eigen::Vector3d& centroid, double& top
         const Eigen::Vector3i seed(x, y, z);
         if (!occupied[grid(seed)] || piece_label[local(seed)]) continue;
         const int label = int(pieces.size()) + 1;
-        Piece piece{0, seed, seed};
+        Piece piece{0, Eigen::Vector3d::Zero(), seed, seed};
         piece_label[local(seed)] = label;
         piece_stack.assign(1, seed);
         while (!piece_stack.empty()) {
           const Eigen::Vector3i v = piece_stack.back();
           piece_stack.pop_back();
           ++piece.voxels;
+          piece.sum += v.cast<double>();
           piece.lo = piece.lo.cwiseMin(v);
           piece.hi = piece.hi.cwiseMax(v);
           for (int dz = -1; dz <= 1; ++dz)
@@ -68,27 +69,27 @@ double PoseTracker::Impl::dropStrayPieces(Eigen::Vector3d& centroid, double& top
   const Eigen::Array3i near_lo = largest->lo.array() - near, near_hi = largest->hi.array() + near;
   for (Piece& p : pieces)
     p.kept = (p.hi.array() >= near_lo).all() && (p.lo.array() <= near_hi).all();
-  int dropped = 0;
-  for (const Piece& p : pieces) dropped += p.kept ? 0 : p.voxels;
-  if (dropped == 0) return 0;
-  // The kept pieces' voxels, their box, centroid, top and bottom; the others cleared.
-  int count = 0;
+  // The kept pieces' box, centroid, top and bottom; the others' voxels cleared.
+  int count = 0, dropped = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   Eigen::Vector3i kept_lo = hi, kept_hi = lo;
+  for (const Piece& p : pieces) {
+    if (!p.kept) {
+      dropped += p.voxels;
+      continue;
+    }
+    count += p.voxels;
+    sum += p.sum;
+    kept_lo = kept_lo.cwiseMin(p.lo);
+    kept_hi = kept_hi.cwiseMax(p.hi);
+  }
+  if (dropped == 0) return 0;
   for (int z = lo.z(); z <= hi.z(); ++z)
     for (int y = lo.y(); y <= hi.y(); ++y)
       for (int x = lo.x(); x <= hi.x(); ++x) {
         const Eigen::Vector3i v(x, y, z);
         const int label = piece_label[local(v)];
-        if (!label) continue;
-        if (!pieces[size_t(label - 1)].kept) {
-          occupied[grid(v)] = 0;
-          continue;
-        }
-        ++count;
-        sum += v.cast<double>();
-        kept_lo = kept_lo.cwiseMin(v);
-        kept_hi = kept_hi.cwiseMax(v);
+        if (label && !pieces[size_t(label - 1)].kept) occupied[grid(v)] = 0;
       }
   spdlog::debug("tracker: {} voxels of the hull apart from the actor's left out", dropped);
   occupied_lo = kept_lo, occupied_hi = kept_hi;

@@ -202,6 +202,7 @@ struct PoseTracker::Impl {
   std::vector<int> rim_flood, rim_touched;
   struct Piece {
     int voxels;
+    Eigen::Vector3d sum;  // of its voxels' indices
     Eigen::Vector3i lo, hi;
     bool kept = true;
   };

@@ -99,12 +99,13 @@ void PoseTracker::Impl::dropRimRaysOffHull() {
   // walked from a missing ray's cell until a meeting ray's is reached (its cells then marked
   // kept) or the part ends (marked dropped).
   constexpr uint8_t kKept = 1, kDropped = 2, kWalked = 3;
-  for (int c = 0; c < cameras; ++c) {
-    const LowResSilhouette* s = frame_silhouettes[size_t(c)];
-    if (!s) continue;
+  // Each camera's rays lie together in the rim (sampleRim): a run at a time.
+  for (size_t begin = 0, end = 0; begin < rim.size(); begin = end) {
+    const int c = rim[begin].camera;
     bool off = false;
-    for (size_t i = 0; i < rim.size(); ++i) off |= rim[i].camera == c && !rim_on_hull[i];
-    if (!off) continue;
+    for (end = begin; end < rim.size() && rim[end].camera == c; ++end) off |= !rim_on_hull[end];
+    const LowResSilhouette* s = frame_silhouettes[size_t(c)];
+    if (!off || !s) continue;
     const int w = s->width, h = s->height;
     if (rim_part.size() < size_t(w) * h) rim_part.assign(size_t(w) * h, 0);
     rim_touched.clear();
@@ -112,10 +113,10 @@ void PoseTracker::Impl::dropRimRaysOffHull() {
       if (!rim_part[size_t(cell)]) rim_touched.push_back(cell);
       rim_part[size_t(cell)] = m;
     };
-    for (size_t i = 0; i < rim.size(); ++i)
-      if (rim[i].camera == c && rim_on_hull[i]) mark(rim[i].cell, kKept);
-    for (size_t i = 0; i < rim.size(); ++i) {
-      if (rim[i].camera != c || rim_on_hull[i]) continue;
+    for (size_t i = begin; i < end; ++i)
+      if (rim_on_hull[i]) mark(rim[i].cell, kKept);
+    for (size_t i = begin; i < end; ++i) {
+      if (rim_on_hull[i]) continue;
       uint8_t fate = rim_part[size_t(rim[i].cell)];
       if (fate != kKept && fate != kDropped) {
         // Breadth first, so that the body's nearest meeting ray ends the walk soon.
