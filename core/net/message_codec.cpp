@@ -30,6 +30,35 @@ flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<flatbuffers::String>
   return b.CreateVector(offsets);
 }
 
+// A mask's `runs` (messages.fbs): the lengths of alternating runs of `cells` pixels off and on
+// the actor in `bits` ((cells + 7) / 8 bytes), as LEB128 varints, into `out` (reused).
+void encodeMaskRuns(const std::vector<uint8_t>& bits, size_t cells, std::vector<uint8_t>& out) {
+  out.clear();
+  const auto put = [&](size_t run) {
+    do {
+      const uint8_t low = uint8_t(run & 0x7f);
+      run >>= 7;
+      out.push_back(run ? uint8_t(low | 0x80) : low);
+    } while (run);
+  };
+  bool on = false;
+  size_t start = 0, i = 0;
+  while (i < cells) {
+    // Whole bytes of the run's kind at once (most of a mask is off the actor).
+    if ((i & 7) == 0 && i + 8 <= cells && bits[i >> 3] == (on ? 0xff : 0x00)) {
+      i += 8;
+      continue;
+    }
+    if (((bits[i >> 3] >> (i & 7)) & 1u) != unsigned(on)) {
+      put(i - start);
+      start = i;
+      on = !on;
+    }
+    ++i;
+  }
+  put(cells - start);
+}
+
 struct BodyEncoder {
   flatbuffers::FlatBufferBuilder& b;
 
@@ -68,12 +97,19 @@ struct BodyEncoder {
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const SilhouettesData& m) const {
     std::vector<flatbuffers::Offset<fb::SilhouetteMask>> masks;
+    thread_local std::vector<uint8_t> runs;  // reused: no allocation a message once grown
     for (const SilhouetteMaskData& s : m.masks) {
-      const auto bits = b.CreateVector(s.bits);
+      const size_t cells = size_t(s.width) * size_t(s.height);
+      // Bits of another size than the mask's are sent as they are, for the reader to refuse.
+      const bool sized = s.bits.size() == (cells + 7) / 8;
+      if (sized) encodeMaskRuns(s.bits, cells, runs);
+      const bool as_runs = sized && runs.size() < s.bits.size();
+      const auto bits = as_runs ? 0 : b.CreateVector(s.bits);
+      const auto run_bytes = as_runs ? b.CreateVector(runs) : 0;
       const auto colours = s.colours.empty() ? 0 : b.CreateVector(s.colours);
-      masks.push_back(fb::CreateSilhouetteMask(b, static_cast<uint16_t>(s.camera),
-                                               static_cast<uint16_t>(s.width),
-                                               static_cast<uint16_t>(s.height), bits, colours));
+      masks.push_back(fb::CreateSilhouetteMask(
+          b, static_cast<uint16_t>(s.camera), static_cast<uint16_t>(s.width),
+          static_cast<uint16_t>(s.height), bits, colours, run_bytes));
     }
     const auto vector = b.CreateVector(masks);
     return {fb::Body::Silhouettes, fb::CreateSilhouettes(b, vector).Union()};
@@ -149,6 +185,40 @@ Status checkString(const flatbuffers::String* s, const char* what, const Message
     return Status::failure(std::string(what) + ": " + num(s->size()) + " bytes, at most " +
                            num(limits.max_string_bytes) + " allowed");
   }
+  return {};
+}
+
+// `runs` decoded into `bits` ((cells + 7) / 8 bytes); fails, saying where, unless the runs are
+// well-formed varints that cover exactly `cells` pixels.
+Status decodeMaskRuns(const flatbuffers::Vector<uint8_t>& runs, size_t cells,
+                      std::vector<uint8_t>& bits, const std::string& where) {
+  bits.assign((cells + 7) / 8, 0);
+  size_t covered = 0, k = 0;
+  bool on = false;
+  while (k < runs.size()) {
+    const size_t first = k;
+    uint64_t run = 0;
+    int shift = 0;
+    uint8_t byte;
+    do {
+      if (k == runs.size() || shift > 28)
+        return Status::failure(where + ": runs: the length at byte " + num(first) +
+                               (k == runs.size() ? " is cut short" : " is too long"));
+      byte = runs.Get(flatbuffers::uoffset_t(k++));
+      run |= uint64_t(byte & 0x7f) << shift;
+      shift += 7;
+    } while (byte & 0x80);
+    if (run > cells - covered)
+      return Status::failure(where + ": runs: the run at byte " + num(first) + " reaches pixel " +
+                             num(covered + run) + ", the mask has " + num(cells));
+    if (on)
+      for (size_t i = covered; i < covered + run; ++i) bits[i >> 3] |= uint8_t(1u << (i & 7));
+    covered += run;
+    on = !on;
+  }
+  if (covered != cells)
+    return Status::failure(where + ": runs cover " + num(covered) + " of the mask's " + num(cells) +
+                           " pixels");
   return {};
 }
 
@@ -274,21 +344,28 @@ Status decodeSilhouettes(const fb::Silhouettes& in, const MessageLimits& limits,
       return Status::failure(where + ": " + num(m->width()) + "x" + num(m->height()) +
                              " pixels, at most " + num(limits.max_mask_pixels) + " allowed");
     }
-    const uint64_t expected = (pixels + 7) / 8;
-    if (sizeOf(m->bits()) != expected) {
-      return Status::failure(where + ": " + num(m->width()) + "x" + num(m->height()) + " needs " +
-                             num(expected) + " mask bytes, got " + num(sizeOf(m->bits())));
+    std::vector<uint8_t> bits;
+    if (sizeOf(m->runs()) > 0) {
+      if (sizeOf(m->bits()) > 0)
+        return Status::failure(where + ": both bits and runs, one of them expected");
+      if (Status s = decodeMaskRuns(*m->runs(), size_t(pixels), bits, where); !s.ok()) return s;
+    } else {
+      const uint64_t expected = (pixels + 7) / 8;
+      if (sizeOf(m->bits()) != expected) {
+        return Status::failure(where + ": " + num(m->width()) + "x" + num(m->height()) + " needs " +
+                               num(expected) + " mask bytes, got " + num(sizeOf(m->bits())));
+      }
+      bits = copyVector(m->bits());
     }
     // Colours, where sent: three bytes a cell of the actor.
-    const size_t set =
-        m->bits() ? countActorCells(m->bits()->data(), m->bits()->size(), size_t(pixels)) : 0;
+    const size_t set = countActorCells(bits.data(), bits.size(), size_t(pixels));
     const size_t colours = sizeOf(m->colours());
     if (colours != 0 && colours != 3 * set) {
       return Status::failure(where + ": " + num(set) + " cells of the actor need " + num(3 * set) +
                              " colour bytes, got " + num(colours));
     }
     out.masks.push_back(
-        {m->camera(), m->width(), m->height(), copyVector(m->bits()), copyVector(m->colours())});
+        {m->camera(), m->width(), m->height(), std::move(bits), copyVector(m->colours())});
   }
   return {};
 }

@@ -16,7 +16,7 @@ namespace lumistage {
 // Raised whenever a table changes in a way an older peer would misread; every message carries it,
 // and one of another version is refused as it is decoded. What each version changed is in
 // docs/figures-history.md ("The wire protocol's versions").
-inline constexpr uint16_t kProtocolVersion = 9;
+inline constexpr uint16_t kProtocolVersion = 10;
 
 struct HelloData {
   std::string node_name;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -229,6 +230,33 @@ TEST(MessageCodec, InconsistentSizesSayWhatWasExpected) {
   silhouettes.masks[0].colours.resize(6);
   const std::vector<uint8_t> coloured = encodeMessage(envelope(silhouettes));
   EXPECT_TRUE(decodeMessage(coloured.data(), coloured.size()).ok());
+
+  // A mask sent as runs (smaller than its bits) reads back bit for bit; runs that are cut short,
+  // run past the mask or stop short of it are refused, saying where.
+  SilhouettesData runs;
+  runs.masks.push_back({3, 20, 10, std::vector<uint8_t>(25, 0), {}});
+  for (int i = 77; i < 80; ++i) runs.masks[0].bits[size_t(i / 8)] |= uint8_t(1u << (i % 8));
+  const std::vector<uint8_t> sent = encodeMessage(envelope(runs));
+  const DecodeResult read = decodeMessage(sent.data(), sent.size());
+  ASSERT_TRUE(read.ok()) << read.error();
+  EXPECT_EQ(std::get<SilhouettesData>(read.message->body), runs);
+  // Off 77, on 3, off 120: three bytes on the wire where the bits take 25.
+  const uint8_t wire[] = {77, 3, 120};
+  const auto at = std::search(sent.begin(), sent.end(), std::begin(wire), std::end(wire));
+  ASSERT_NE(at, sent.end());
+  const auto refused = [&](uint8_t last) {
+    std::vector<uint8_t> bytes = sent;
+    bytes[size_t(at - sent.begin()) + 2] = last;
+    const DecodeResult r = decodeMessage(bytes.data(), bytes.size());
+    return r.ok() ? std::string("accepted") : r.error();
+  };
+  EXPECT_EQ(refused(121),
+            "silhouettes: mask 0 (camera 3): runs: the run at byte 2 reaches "
+            "pixel 201, the mask has 200");
+  EXPECT_EQ(refused(119),
+            "silhouettes: mask 0 (camera 3): runs cover 199 of the mask's 200 pixels");
+  EXPECT_EQ(refused(0x80 | 120),
+            "silhouettes: mask 0 (camera 3): runs: the length at byte 2 is cut short");
 
   PoseData pose;
   pose.angles.resize(7);  // the encoder writes 2 joints
