@@ -1,6 +1,7 @@
 #include "core/net/message_codec.h"
 
 #include <flatbuffers/flatbuffers.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -57,6 +58,66 @@ void encodeMaskRuns(const std::vector<uint8_t>& bits, size_t cells, std::vector<
     ++i;
   }
   put(cells - start);
+}
+
+// Alpha runs (partial_image_codec.h) whose literal bytes become their differences from the byte
+// 4 before them in the same run (`delta`), or back (!`delta`), in place. False when `data` is not
+// made of whole runs (a varint cut short, a literal run past the end).
+bool differenceLiterals(std::span<uint8_t> data, bool delta) {
+  size_t k = 0;
+  const auto varint = [&](uint64_t& v) {
+    v = 0;
+    for (int shift = 0; shift <= 56; shift += 7) {
+      if (k == data.size()) return false;
+      const uint8_t byte = data[k++];
+      v |= uint64_t(byte & 0x7f) << shift;
+      if (!(byte & 0x80)) return true;
+    }
+    return false;
+  };
+  while (k < data.size()) {
+    uint64_t empty, literal;
+    if (!varint(empty) || !varint(literal) || literal > (data.size() - k) / 4) return false;
+    uint8_t* p = data.data() + k;
+    const size_t bytes = size_t(literal) * 4;
+    if (delta) {
+      for (size_t t = bytes; t-- > 4;) p[t] = uint8_t(p[t] - p[t - 4]);
+    } else {
+      for (size_t t = 4; t < bytes; ++t) p[t] = uint8_t(p[t] + p[t - 4]);
+    }
+    k += bytes;
+  }
+  return true;
+}
+
+// A thread's zstd contexts for the partial images (made on first use, kept until it ends).
+struct ImageZstd {
+  ZSTD_CCtx* c = nullptr;
+  ZSTD_DCtx* d = nullptr;
+  ~ImageZstd() {
+    ZSTD_freeCCtx(c);
+    ZSTD_freeDCtx(d);
+  }
+};
+thread_local ImageZstd image_zstd;
+
+// `alpha_runs` as the alpha_runs_zstd form into `out` (reused); false when that is no smaller.
+bool compressAlphaRuns(const std::vector<uint8_t>& alpha_runs, std::vector<uint8_t>& differences,
+                       std::vector<uint8_t>& out) {
+  differences = alpha_runs;
+  if (!differenceLiterals(differences, true)) return false;
+  if (!image_zstd.c) {
+    image_zstd.c = ZSTD_createCCtx();
+    if (!image_zstd.c) return false;
+    ZSTD_CCtx_setParameter(image_zstd.c, ZSTD_c_compressionLevel, 1);
+    ZSTD_CCtx_setParameter(image_zstd.c, ZSTD_c_checksumFlag, 1);
+  }
+  out.resize(ZSTD_compressBound(differences.size()));
+  const size_t n =
+      ZSTD_compress2(image_zstd.c, out.data(), out.size(), differences.data(), differences.size());
+  if (ZSTD_isError(n) || n >= alpha_runs.size()) return false;
+  out.resize(n);
+  return true;
 }
 
 struct BodyEncoder {
@@ -135,11 +196,17 @@ struct BodyEncoder {
         fb::CreateOffsets(b, static_cast<uint8_t>(m.offset_count), offsets, visibility).Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const PartialImageData& m) const {
-    const auto data = b.CreateVector(m.data);
+    // Alpha runs go compressed where that is smaller (the scratch reused: no allocation once
+    // grown).
+    thread_local std::vector<uint8_t> differences, compressed;
+    const bool zstd = m.encoding == ImageEncoding::kAlphaRuns &&
+                      compressAlphaRuns(m.data, differences, compressed);
+    const auto data = b.CreateVector(zstd ? compressed : m.data);
+    const auto encoding =
+        zstd ? fb::ImageEncoding::alpha_runs_zstd : static_cast<fb::ImageEncoding>(m.encoding);
     return {fb::Body::PartialImage,
             fb::CreatePartialImage(b, static_cast<uint16_t>(m.view), static_cast<uint16_t>(m.width),
-                                   static_cast<uint16_t>(m.height),
-                                   static_cast<fb::ImageEncoding>(m.encoding), data)
+                                   static_cast<uint16_t>(m.height), encoding, data)
                 .Union()};
   }
   std::pair<fb::Body, flatbuffers::Offset<void>> operator()(const ViewData& m) const {
@@ -563,6 +630,34 @@ Status decodePartialImage(const fb::PartialImage& in, const MessageLimits& limit
                                " bytes does not cover exactly " + num(pixels) + " pixels");
       }
       break;
+    case fb::ImageEncoding::alpha_runs_zstd: {
+      // Handed on as alpha runs. Their largest form: a varint pair (at most 3 bytes each below
+      // 2^21 pixels) before every literal pixel.
+      const uint8_t* wire = in.data() ? in.data()->data() : nullptr;
+      const unsigned long long size = ZSTD_getFrameContentSize(wire, bytes);
+      const uint64_t largest = pixels * 10 + 20;
+      if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size > largest)
+        return Status::failure(where + ": compressed alpha-run data of " + num(bytes) +
+                               " bytes is not one zstd frame of at most " + num(largest) +
+                               " bytes");
+      if (!image_zstd.d && !(image_zstd.d = ZSTD_createDCtx()))
+        return Status::failure(where + ": no memory to decompress it");
+      out.data.resize(size_t(size));
+      const size_t n =
+          ZSTD_decompressDCtx(image_zstd.d, out.data.data(), out.data.size(), wire, bytes);
+      if (ZSTD_isError(n) || n != size)
+        return Status::failure(
+            where + ": compressed alpha-run data of " + num(bytes) + " bytes is corrupt" +
+            (ZSTD_isError(n) ? std::string(" (") + ZSTD_getErrorName(n) + ")" : std::string()));
+      if (!differenceLiterals(out.data, false) || !validAlphaRuns(out.data, pixels))
+        return Status::failure(where + ": compressed alpha-run data of " + num(bytes) +
+                               " bytes does not cover exactly " + num(pixels) + " pixels");
+      out.view = in.view();
+      out.width = in.width();
+      out.height = in.height();
+      out.encoding = ImageEncoding::kAlphaRuns;
+      return {};
+    }
     default:
       return Status::failure(where + ": unknown encoding " +
                              num(static_cast<uint8_t>(in.encoding())));

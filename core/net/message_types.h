@@ -16,7 +16,7 @@ namespace lumistage {
 // Raised whenever a table changes in a way an older peer would misread; every message carries it,
 // and one of another version is refused as it is decoded. What each version changed is in
 // docs/figures-history.md ("The wire protocol's versions").
-inline constexpr uint16_t kProtocolVersion = 10;
+inline constexpr uint16_t kProtocolVersion = 11;
 
 struct HelloData {
   std::string node_name;
@@ -108,6 +108,8 @@ struct OffsetsData {
   bool operator==(const OffsetsData&) const = default;
 };
 
+// On the wire alpha runs travel zstd-compressed where that is smaller (messages.fbs); decoded,
+// they are alpha runs again.
 enum class ImageEncoding : uint8_t { kRawRgba = 0, kRleRgba = 1, kAlphaRuns = 2 };
 
 struct PartialImageData {

@@ -111,6 +111,38 @@ TEST(MessageCodec, AlphaRunPartialImagesAreCheckedOnDecoding) {
   EXPECT_NE(bad.error().find("alpha-run data"), std::string::npos) << bad.error();
 }
 
+// A node's image of the actor (its colours vary smoothly across him) travels compressed, a
+// third of its alpha runs or less, and reads back as exactly those runs; a compressed frame with
+// a byte changed is refused as corrupt, not blended.
+TEST(MessageCodec, PartialImagesTravelCompressedAndCorruptOnesAreRefused) {
+  constexpr int kWidth = 160, kHeight = 120;
+  std::vector<uint8_t> rgba(size_t(kWidth) * kHeight * 4, 0), runs;
+  std::mt19937 random(3);
+  for (int y = 30; y < 100; ++y)
+    for (int x = 50 + y % 7; x < 110 - y % 5; ++x) {
+      uint8_t* p = &rgba[(size_t(y) * kWidth + x) * 4];
+      p[0] = uint8_t(80 + x / 2 + random() % 3), p[1] = uint8_t(60 + y / 3 + random() % 3);
+      p[2] = uint8_t(40 + (x + y) / 4), p[3] = uint8_t(200 + random() % 4);
+    }
+  encodeAlphaRuns(rgba, runs);
+  Message m = envelope(PartialImageData{0, kWidth, kHeight, ImageEncoding::kAlphaRuns, runs});
+  const std::vector<uint8_t> bytes = encodeMessage(m);
+  EXPECT_LT(bytes.size(), runs.size() * 2 / 3);
+  const DecodeResult ok = decodeMessage(bytes.data(), bytes.size());
+  ASSERT_TRUE(ok.ok()) << ok.error();
+  EXPECT_EQ(*ok.message, m);
+  const uint8_t magic[] = {0x28, 0xb5, 0x2f, 0xfd};  // a zstd frame's first bytes
+  const auto frame = std::search(bytes.begin(), bytes.end(), std::begin(magic), std::end(magic));
+  ASSERT_NE(frame, bytes.end());
+  std::vector<uint8_t> corrupt = bytes;
+  corrupt[size_t(frame - bytes.begin()) + 40] ^= 0x10;
+  const DecodeResult bad = decodeMessage(corrupt.data(), corrupt.size());
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().find("partial image 160x120: compressed alpha-run data of"),
+            std::string::npos)
+      << bad.error();
+}
+
 TEST(MessageCodec, EmptyTruncatedAndRandomBuffersAreRefused) {
   EXPECT_EQ(decodeMessage(nullptr, 0, {}).error(), "empty message");
   const uint8_t one = 0;
@@ -418,8 +450,10 @@ TEST(MessageCodec, TheLargestNodeMessageHoldsWhatANodeSendsAtItsWorst) {
     return encodeMessage(envelope(std::move(body))).size();
   };
 
+  // Noise that neither runs nor the literals' differences compress; no pixel empty (alpha odd).
   std::vector<uint8_t> noise(size_t(sizes.view_pixels) * 4);
-  for (size_t i = 0; i < noise.size(); ++i) noise[i] = uint8_t(i * 7 + i / 4 * 13 + 1);
+  std::mt19937 random(7);
+  for (size_t i = 0; i < noise.size(); ++i) noise[i] = uint8_t(random() | (i % 4 == 3));
   std::vector<uint8_t> runs;
   encodeAlphaRuns(noise, runs);
   // Every other pixel empty: a pair of run lengths for each literal pixel.
@@ -433,7 +467,8 @@ TEST(MessageCodec, TheLargestNodeMessageHoldsWhatANodeSendsAtItsWorst) {
                                        std::pair{ImageEncoding::kAlphaRuns, sparse_runs}}) {
     const size_t bytes = wire(PartialImageData{0, 200, 150, encoding, data});
     EXPECT_LE(bytes, largest) << int(encoding);
-    EXPECT_TRUE(bytes > size_t(sizes.view_pixels) * 3);  // the pixels are in it
+    // The literal pixels are in it (half of them in the sparse image).
+    EXPECT_GT(bytes, size_t(sizes.view_pixels) * (data == sparse_runs ? 2 : 3)) << int(encoding);
   }
 
   SilhouettesData masks;
