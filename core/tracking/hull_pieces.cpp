@@ -30,37 +30,61 @@ double PoseTracker::Impl::dropStrayPieces(Eigen::Vector3d& centroid, double& top
     const Eigen::Vector3i l = v - lo;
     return (size_t(l.z()) * n.y() + l.y()) * n.x() + l.x();
   };
-  // The occupied box's voxels labelled by their 26-connected piece (1, 2, ...).
-  piece_label.assign(size_t(n.x()) * n.y() * n.z(), 0);
+  // The occupied box's voxels labelled by their 26-connected piece (1, 2, ...), a flood from each
+  // unlabelled voxel over index steps (a junk hull of a grey stage keyed green fills the stage's
+  // box: millions of voxels, each step's neighbours tested by their indices alone).
+  const size_t nx = size_t(n.x()), nxy = nx * size_t(n.y());
+  struct Step {
+    ptrdiff_t local, grid;
+    int dx, dy, dz;
+  };
+  Step steps[26];
+  int k = 0;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx)
+        if (dx || dy || dz)
+          steps[k++] = {ptrdiff_t(dz) * ptrdiff_t(nxy) + ptrdiff_t(dy) * ptrdiff_t(nx) + dx,
+                        ptrdiff_t(dz) * ptrdiff_t(gz) + ptrdiff_t(dy) * ptrdiff_t(gy) + dx, dx, dy,
+                        dz};
+  piece_label.assign(nxy * size_t(n.z()), 0);
   pieces.clear();
+  size_t seed = 0;
   for (int z = lo.z(); z <= hi.z(); ++z)
-    for (int y = lo.y(); y <= hi.y(); ++y)
-      for (int x = lo.x(); x <= hi.x(); ++x) {
-        const Eigen::Vector3i seed(x, y, z);
-        if (!occupied[grid(seed)] || piece_label[local(seed)]) continue;
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      size_t g = grid(Eigen::Vector3i(lo.x(), y, z));
+      for (int x = lo.x(); x <= hi.x(); ++x, ++seed, ++g) {
+        if (!occupied[g] || piece_label[seed]) continue;
         const int label = int(pieces.size()) + 1;
-        Piece piece{0, Eigen::Vector3d::Zero(), seed, seed};
-        piece_label[local(seed)] = label;
+        const Eigen::Vector3i first(x, y, z);
+        Piece piece{0, Eigen::Vector3d::Zero(), first, first};
+        piece_label[seed] = label;
         piece_stack.assign(1, seed);
         while (!piece_stack.empty()) {
-          const Eigen::Vector3i v = piece_stack.back();
+          const size_t l = piece_stack.back();
           piece_stack.pop_back();
+          const int lx = int(l % nx), ly = int(l / nx % size_t(n.y())), lz = int(l / nxy);
+          const Eigen::Vector3i v = lo + Eigen::Vector3i(lx, ly, lz);
           ++piece.voxels;
           piece.sum += v.cast<double>();
           piece.lo = piece.lo.cwiseMin(v);
           piece.hi = piece.hi.cwiseMax(v);
-          for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-              for (int dx = -1; dx <= 1; ++dx) {
-                const Eigen::Vector3i w = v + Eigen::Vector3i(dx, dy, dz);
-                if ((w.array() < lo.array()).any() || (w.array() > hi.array()).any()) continue;
-                if (!occupied[grid(w)] || piece_label[local(w)]) continue;
-                piece_label[local(w)] = label;
-                piece_stack.push_back(w);
-              }
+          const size_t gv = grid(v);
+          const bool inside =
+              lx > 0 && ly > 0 && lz > 0 && lx < n.x() - 1 && ly < n.y() - 1 && lz < n.z() - 1;
+          for (const Step& s : steps) {
+            if (!inside && (lx + s.dx < 0 || ly + s.dy < 0 || lz + s.dz < 0 || lx + s.dx >= n.x() ||
+                            ly + s.dy >= n.y() || lz + s.dz >= n.z()))
+              continue;
+            const size_t w = size_t(ptrdiff_t(l) + s.local);
+            if (piece_label[w] || !occupied[size_t(ptrdiff_t(gv) + s.grid)]) continue;
+            piece_label[w] = label;
+            piece_stack.push_back(w);
+          }
         }
         pieces.push_back(piece);
       }
+    }
   if (pieces.size() < 2) return 0;
   const auto largest =
       std::max_element(pieces.begin(), pieces.end(),

@@ -208,8 +208,8 @@ struct PoseTracker::Impl {
   };
   std::vector<Piece> pieces;  // its scratch
   std::vector<int> piece_label;
-  std::vector<Eigen::Vector3i> piece_stack;
-  std::vector<float> geodesic;  // its scratch, over the occupied box and a border
+  std::vector<size_t> piece_stack;  // voxels' indices in the occupied box
+  std::vector<float> geodesic;      // its scratch, over the occupied box and a border
   std::vector<uint8_t> geodesic_inside;
   std::vector<std::pair<float, int>> geodesic_heap;
   std::vector<Eigen::Vector3d> surface_all, hull;

@@ -166,8 +166,11 @@ bool PoseTracker::Impl::initialise(TrackResult& out, double& volume) {
   volume = carve(Eigen::Vector3i::Zero(), dims, &centroid, &top_z, &bottom_z);
   // The actor's piece of the hull, not the phantoms of a key's blotches or a bag across the stage
   // (an actor on a box the key takes for the screen would otherwise stand on their floor), and
-  // the rim's rays that meet it.
-  if (const double kept = dropStrayPieces(centroid, top_z, bottom_z); kept > 0) volume = kept;
+  // the rim's rays that meet it. A hull of more than twice max_volume_m3 is a broken key, not an
+  // actor beside a few phantoms, and is not searched for pieces (a grey stage keyed as green
+  // fills the stage's box: 2.7 million voxels, 100 ms a frame).
+  if (volume <= 2 * opt.max_volume_m3)
+    if (const double kept = dropStrayPieces(centroid, top_z, bottom_z); kept > 0) volume = kept;
   dropRimRaysOffHull();
   out.hull_points = int(hull.size());
   if (volume < opt.min_volume_m3 || volume > opt.max_volume_m3 || top_z < kLowestTopM) return false;
