@@ -2,28 +2,11 @@
 
 #include <cstring>
 
+#include "core/base/leb128.h"
+
 namespace lumistage {
 
 namespace {
-
-void putVarint(uint64_t v, std::vector<uint8_t>& out) {
-  while (v >= 0x80) {
-    out.push_back(static_cast<uint8_t>(v | 0x80));
-    v >>= 7;
-  }
-  out.push_back(static_cast<uint8_t>(v));
-}
-
-bool getVarint(std::span<const uint8_t> data, size_t& at, uint64_t& v) {
-  v = 0;
-  for (int shift = 0; shift < 64; shift += 7) {
-    if (at >= data.size()) return false;
-    const uint8_t b = data[at++];
-    v |= uint64_t(b & 0x7f) << shift;
-    if (!(b & 0x80)) return true;
-  }
-  return false;
-}
 
 bool empty(const uint8_t* p) {
   uint32_t v;
@@ -43,8 +26,8 @@ void encodeAlphaRuns(std::span<const uint8_t> rgba, std::vector<uint8_t>& out) {
     while (e < n && empty(p + 4 * e)) ++e;
     size_t l = e;
     while (l < n && !empty(p + 4 * l)) ++l;
-    putVarint(e - i, out);
-    putVarint(l - e, out);
+    appendLeb128(e - i, out);
+    appendLeb128(l - e, out);
     out.insert(out.end(), p + 4 * e, p + 4 * l);
     i = l;
   }
@@ -60,7 +43,7 @@ bool walkAlphaRuns(std::span<const uint8_t> data, size_t pixel_count, Run&& run)
   size_t at = 0, i = 0;
   while (i < pixel_count) {
     uint64_t empty_run = 0, literal_run = 0;
-    if (!getVarint(data, at, empty_run) || !getVarint(data, at, literal_run)) return false;
+    if (!readLeb128(data, at, empty_run) || !readLeb128(data, at, literal_run)) return false;
     if (empty_run > pixel_count - i || literal_run > pixel_count - i - empty_run) return false;
     if (empty_run + literal_run == 0) return false;  // no progress: not an encoding of ours
     i += empty_run;
@@ -84,6 +67,19 @@ bool decodeAlphaRuns(std::span<const uint8_t> data, size_t pixel_count,
 
 bool validAlphaRuns(std::span<const uint8_t> data, size_t pixel_count) {
   return walkAlphaRuns(data, pixel_count, [](size_t, const uint8_t*, size_t) {});
+}
+
+bool differenceAlphaRunLiterals(std::span<uint8_t> data, size_t pixel_count, bool undo) {
+  uint8_t* const base = data.data();
+  return walkAlphaRuns(data, pixel_count, [&](size_t, const uint8_t* run, size_t count) {
+    uint8_t* p = base + (run - base);  // the walk reads `data`, which is ours to change
+    const size_t bytes = count * 4;
+    if (undo) {
+      for (size_t t = 4; t < bytes; ++t) p[t] = uint8_t(p[t] + p[t - 4]);
+    } else {
+      for (size_t t = bytes; t-- > 4;) p[t] = uint8_t(p[t] - p[t - 4]);
+    }
+  });
 }
 
 bool forEachLiteralRun(std::span<const uint8_t> data, size_t pixel_count,

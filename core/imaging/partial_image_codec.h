@@ -28,6 +28,13 @@ bool decodeAlphaRuns(std::span<const uint8_t> data, size_t pixel_count, std::vec
 // Whether `data` is a valid encoding of exactly pixel_count pixels (no decoding, no allocation).
 bool validAlphaRuns(std::span<const uint8_t> data, size_t pixel_count);
 
+// In place, each literal byte of a valid encoding made its difference from the byte 4 before it
+// in the same run (the run's first pixel as it is), or, with `undo`, made back: neighbouring
+// pixels differ little, and the differences compress (the wire's alpha_runs_zstd). False, with
+// `data` changed up to where it stopped being one, when it is not a valid encoding of exactly
+// pixel_count pixels (the run lengths are not changed, so either way round checks the same).
+bool differenceAlphaRunLiterals(std::span<uint8_t> data, size_t pixel_count, bool undo);
+
 // Calls run(first_pixel, rgba, count) for every run of literal pixels (`rgba` points at its
 // count*4 bytes in `data`), in order, without touching the empty pixels: the studio blends the
 // nodes' images straight from the wire. Returns false, having called nothing, when `data` is not

@@ -1,7 +1,6 @@
 #include "core/net/message_codec.h"
 
 #include <flatbuffers/flatbuffers.h>
-#include <zstd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +10,7 @@
 #include "core/base/names.h"
 #include "core/imaging/cell_colours.h"
 #include "core/imaging/partial_image_codec.h"
+#include "core/net/compact_forms.h"
 #include "core/refine/refinement_statistics.h"
 #include "messages_generated.h"
 
@@ -29,95 +29,6 @@ flatbuffers::Offset<flatbuffers::Vector<flatbuffers::Offset<flatbuffers::String>
   offsets.reserve(strings.size());
   for (const std::string& s : strings) offsets.push_back(b.CreateString(s));
   return b.CreateVector(offsets);
-}
-
-// A mask's `runs` (messages.fbs): the lengths of alternating runs of `cells` pixels off and on
-// the actor in `bits` ((cells + 7) / 8 bytes), as LEB128 varints, into `out` (reused).
-void encodeMaskRuns(const std::vector<uint8_t>& bits, size_t cells, std::vector<uint8_t>& out) {
-  out.clear();
-  const auto put = [&](size_t run) {
-    do {
-      const uint8_t low = uint8_t(run & 0x7f);
-      run >>= 7;
-      out.push_back(run ? uint8_t(low | 0x80) : low);
-    } while (run);
-  };
-  bool on = false;
-  size_t start = 0, i = 0;
-  while (i < cells) {
-    // Whole bytes of the run's kind at once (most of a mask is off the actor).
-    if ((i & 7) == 0 && i + 8 <= cells && bits[i >> 3] == (on ? 0xff : 0x00)) {
-      i += 8;
-      continue;
-    }
-    if (((bits[i >> 3] >> (i & 7)) & 1u) != unsigned(on)) {
-      put(i - start);
-      start = i;
-      on = !on;
-    }
-    ++i;
-  }
-  put(cells - start);
-}
-
-// Alpha runs (partial_image_codec.h) whose literal bytes become their differences from the byte
-// 4 before them in the same run (`delta`), or back (!`delta`), in place. False when `data` is not
-// made of whole runs (a varint cut short, a literal run past the end).
-bool differenceLiterals(std::span<uint8_t> data, bool delta) {
-  size_t k = 0;
-  const auto varint = [&](uint64_t& v) {
-    v = 0;
-    for (int shift = 0; shift <= 56; shift += 7) {
-      if (k == data.size()) return false;
-      const uint8_t byte = data[k++];
-      v |= uint64_t(byte & 0x7f) << shift;
-      if (!(byte & 0x80)) return true;
-    }
-    return false;
-  };
-  while (k < data.size()) {
-    uint64_t empty, literal;
-    if (!varint(empty) || !varint(literal) || literal > (data.size() - k) / 4) return false;
-    uint8_t* p = data.data() + k;
-    const size_t bytes = size_t(literal) * 4;
-    if (delta) {
-      for (size_t t = bytes; t-- > 4;) p[t] = uint8_t(p[t] - p[t - 4]);
-    } else {
-      for (size_t t = 4; t < bytes; ++t) p[t] = uint8_t(p[t] + p[t - 4]);
-    }
-    k += bytes;
-  }
-  return true;
-}
-
-// A thread's zstd contexts for the partial images (made on first use, kept until it ends).
-struct ImageZstd {
-  ZSTD_CCtx* c = nullptr;
-  ZSTD_DCtx* d = nullptr;
-  ~ImageZstd() {
-    ZSTD_freeCCtx(c);
-    ZSTD_freeDCtx(d);
-  }
-};
-thread_local ImageZstd image_zstd;
-
-// `alpha_runs` as the alpha_runs_zstd form into `out` (reused); false when that is no smaller.
-bool compressAlphaRuns(const std::vector<uint8_t>& alpha_runs, std::vector<uint8_t>& differences,
-                       std::vector<uint8_t>& out) {
-  differences = alpha_runs;
-  if (!differenceLiterals(differences, true)) return false;
-  if (!image_zstd.c) {
-    image_zstd.c = ZSTD_createCCtx();
-    if (!image_zstd.c) return false;
-    ZSTD_CCtx_setParameter(image_zstd.c, ZSTD_c_compressionLevel, 1);
-    ZSTD_CCtx_setParameter(image_zstd.c, ZSTD_c_checksumFlag, 1);
-  }
-  out.resize(ZSTD_compressBound(differences.size()));
-  const size_t n =
-      ZSTD_compress2(image_zstd.c, out.data(), out.size(), differences.data(), differences.size());
-  if (ZSTD_isError(n) || n >= alpha_runs.size()) return false;
-  out.resize(n);
-  return true;
 }
 
 struct BodyEncoder {
@@ -199,8 +110,9 @@ struct BodyEncoder {
     // Alpha runs go compressed where that is smaller (the scratch reused: no allocation once
     // grown).
     thread_local std::vector<uint8_t> differences, compressed;
-    const bool zstd = m.encoding == ImageEncoding::kAlphaRuns &&
-                      compressAlphaRuns(m.data, differences, compressed);
+    const bool zstd =
+        m.encoding == ImageEncoding::kAlphaRuns &&
+        compressAlphaRuns(m.data, size_t(m.width) * size_t(m.height), differences, compressed);
     const auto data = b.CreateVector(zstd ? compressed : m.data);
     const auto encoding =
         zstd ? fb::ImageEncoding::alpha_runs_zstd : static_cast<fb::ImageEncoding>(m.encoding);
@@ -252,40 +164,6 @@ Status checkString(const flatbuffers::String* s, const char* what, const Message
     return Status::failure(std::string(what) + ": " + num(s->size()) + " bytes, at most " +
                            num(limits.max_string_bytes) + " allowed");
   }
-  return {};
-}
-
-// `runs` decoded into `bits` ((cells + 7) / 8 bytes); fails, saying where, unless the runs are
-// well-formed varints that cover exactly `cells` pixels.
-Status decodeMaskRuns(const flatbuffers::Vector<uint8_t>& runs, size_t cells,
-                      std::vector<uint8_t>& bits, const std::string& where) {
-  bits.assign((cells + 7) / 8, 0);
-  size_t covered = 0, k = 0;
-  bool on = false;
-  while (k < runs.size()) {
-    const size_t first = k;
-    uint64_t run = 0;
-    int shift = 0;
-    uint8_t byte;
-    do {
-      if (k == runs.size() || shift > 28)
-        return Status::failure(where + ": runs: the length at byte " + num(first) +
-                               (k == runs.size() ? " is cut short" : " is too long"));
-      byte = runs.Get(flatbuffers::uoffset_t(k++));
-      run |= uint64_t(byte & 0x7f) << shift;
-      shift += 7;
-    } while (byte & 0x80);
-    if (run > cells - covered)
-      return Status::failure(where + ": runs: the run at byte " + num(first) + " reaches pixel " +
-                             num(covered + run) + ", the mask has " + num(cells));
-    if (on)
-      for (size_t i = covered; i < covered + run; ++i) bits[i >> 3] |= uint8_t(1u << (i & 7));
-    covered += run;
-    on = !on;
-  }
-  if (covered != cells)
-    return Status::failure(where + ": runs cover " + num(covered) + " of the mask's " + num(cells) +
-                           " pixels");
   return {};
 }
 
@@ -415,7 +293,9 @@ Status decodeSilhouettes(const fb::Silhouettes& in, const MessageLimits& limits,
     if (sizeOf(m->runs()) > 0) {
       if (sizeOf(m->bits()) > 0)
         return Status::failure(where + ": both bits and runs, one of them expected");
-      if (Status s = decodeMaskRuns(*m->runs(), size_t(pixels), bits, where); !s.ok()) return s;
+      std::string why;
+      if (!decodeMaskRuns({m->runs()->data(), m->runs()->size()}, size_t(pixels), bits, why))
+        return Status::failure(where + ": " + why);
     } else {
       const uint64_t expected = (pixels + 7) / 8;
       if (sizeOf(m->bits()) != expected) {
@@ -631,27 +511,11 @@ Status decodePartialImage(const fb::PartialImage& in, const MessageLimits& limit
       }
       break;
     case fb::ImageEncoding::alpha_runs_zstd: {
-      // Handed on as alpha runs. Their largest form: a varint pair (at most 3 bytes each below
-      // 2^21 pixels) before every literal pixel.
-      const uint8_t* wire = in.data() ? in.data()->data() : nullptr;
-      const unsigned long long size = ZSTD_getFrameContentSize(wire, bytes);
-      const uint64_t largest = pixels * 10 + 20;
-      if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size > largest)
-        return Status::failure(where + ": compressed alpha-run data of " + num(bytes) +
-                               " bytes is not one zstd frame of at most " + num(largest) +
-                               " bytes");
-      if (!image_zstd.d && !(image_zstd.d = ZSTD_createDCtx()))
-        return Status::failure(where + ": no memory to decompress it");
-      out.data.resize(size_t(size));
-      const size_t n =
-          ZSTD_decompressDCtx(image_zstd.d, out.data.data(), out.data.size(), wire, bytes);
-      if (ZSTD_isError(n) || n != size)
-        return Status::failure(
-            where + ": compressed alpha-run data of " + num(bytes) + " bytes is corrupt" +
-            (ZSTD_isError(n) ? std::string(" (") + ZSTD_getErrorName(n) + ")" : std::string()));
-      if (!differenceLiterals(out.data, false) || !validAlphaRuns(out.data, pixels))
-        return Status::failure(where + ": compressed alpha-run data of " + num(bytes) +
-                               " bytes does not cover exactly " + num(pixels) + " pixels");
+      // Handed on as the alpha runs it holds.
+      std::string why;
+      if (!decompressAlphaRuns({in.data() ? in.data()->data() : nullptr, bytes}, pixels, out.data,
+                               why))
+        return Status::failure(where + ": " + why);
       out.view = in.view();
       out.width = in.width();
       out.height = in.height();
@@ -814,47 +678,6 @@ MessageEncoder::~MessageEncoder() = default;
 std::span<const uint8_t> MessageEncoder::encode(const Message& message) {
   encodeInto(*builder_, message);
   return {builder_->GetBufferPointer(), builder_->GetSize()};
-}
-
-Status checkTakeName(std::string_view take) {
-  if (isValidName(take)) return {};  // the rule of camera and node names; below, why not
-  if (take.empty() || take.size() > 64) {
-    return Status::failure("take name of " + std::to_string(take.size()) +
-                           " characters, expected 1 to 64");
-  }
-  // Quoted in the message with anything unprintable as '?': it goes to logs as it is.
-  std::string shown(take);
-  for (char& c : shown) c = (c >= 0x20 && c < 0x7f) ? c : '?';
-  if (take.front() == '.' || take.front() == '-')
-    return Status::failure("take name '" + shown + "' starts with '" + take.front() + "'");
-  return Status::failure("take name '" + shown +
-                         "' has a character other than letters, digits, '-', '_' and '.'");
-}
-
-size_t largestNodeMessage(const NodeMessageSizes& sizes, const MessageLimits& limits) {
-  // An envelope, a body table and a vector's length and padding: a few hundred bytes; a string is
-  // its length, its bytes, its terminator and padding.
-  const uint64_t table = 256, text = limits.max_string_bytes + 8;
-  const uint64_t cameras = uint64_t(std::max(sizes.cameras, 0));
-  const uint64_t step = uint64_t(std::max(sizes.silhouette_step, 1));
-  const uint64_t cells = uint64_t(std::max<int64_t>(sizes.camera_pixels, 0)) / (step * step);
-  // Each mask's bits and, on a frame that carries them, three colour bytes a cell of the actor.
-  const uint64_t silhouettes = table + cameras * (2 * table + (cells + 7) / 8 + 3 * cells);
-  const uint64_t statistics = table + maxCompressedStatisticsBytes(
-                                          uint64_t(std::max<int64_t>(sizes.statistics_samples, 0)));
-  const uint64_t image = table + 5 * uint64_t(std::max<int64_t>(sizes.view_pixels, 0));
-  const uint64_t heartbeat = table + cameras * (table + 2 * text) + table + 3 * text;
-  const uint64_t timestamps = table + uint64_t(std::max(limits.max_stages, 0)) * (table + text);
-  const uint64_t hello = table + text + (cameras + 64) * text;
-  return size_t(std::max({silhouettes, statistics, image, heartbeat, timestamps, hello}));
-}
-
-const char* messageTypeName(const MessageBody& body) {
-  static constexpr const char* kNames[] = {
-      "hello",         "heartbeat",        "silhouettes", "pose",   "vertex statistics", "offsets",
-      "partial image", "frame timestamps", "view",        "record", "frame ids"};
-  static_assert(std::size(kNames) == std::variant_size_v<MessageBody>);
-  return kNames[body.index()];
 }
 
 }  // namespace lumistage
