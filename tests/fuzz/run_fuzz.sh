@@ -15,23 +15,24 @@ if [[ -z "$clang" ]]; then
 fi
 mkdir -p "$out/corpus"
 binary="$out/message_decoder_fuzz"
+# The decoder's sources (tests/CMakeLists.txt's message_decoder_fuzz lists the same), and what
+# they include that changes.
+sources=(core/net/message_codec.cpp core/net/message_rules.cpp core/net/compact_forms.cpp
+         core/imaging/partial_image_codec.cpp core/imaging/cell_colours.cpp
+         core/refine/refinement_statistics.cpp core/base/names.cpp
+         tests/fuzz/message_decoder_fuzz.cpp)
+headers=(core/net/message_codec.h core/net/compact_forms.h core/base/leb128.h
+         core/imaging/partial_image_codec.h core/imaging/cell_colours.h
+         core/refine/refinement_statistics.h)
 # Rebuilt only when a source is newer than the binary: a repeated ctest run fuzzes at once.
-if [[ ! -x "$binary" || "$src/core/net/message_codec.cpp" -nt "$binary" ||
-      "$src/core/net/message_codec.h" -nt "$binary" || "$generated/messages_generated.h" -nt "$binary" ||
-      "$src/core/imaging/partial_image_codec.cpp" -nt "$binary" ||
-      "$src/core/imaging/partial_image_codec.h" -nt "$binary" ||
-      "$src/core/imaging/cell_colours.cpp" -nt "$binary" ||
-      "$src/core/imaging/cell_colours.h" -nt "$binary" ||
-      "$src/core/refine/refinement_statistics.cpp" -nt "$binary" ||
-      "$src/core/refine/refinement_statistics.h" -nt "$binary" ||
-      "$src/core/base/names.cpp" -nt "$binary" ||
-      "$src/tests/fuzz/message_decoder_fuzz.cpp" -nt "$binary" ]]; then
+stale=0
+[[ -x "$binary" && ! "$generated/messages_generated.h" -nt "$binary" ]] || stale=1
+for f in "${sources[@]}" "${headers[@]}"; do
+  if [[ "$src/$f" -nt "$binary" ]]; then stale=1; fi
+done
+if [[ $stale == 1 ]]; then
   "$clang" -std=c++20 -O1 -g -fsanitize=fuzzer,address -I"$src" -isystem "$generated" \
-    "$src/core/net/message_codec.cpp" "$src/core/imaging/partial_image_codec.cpp" \
-    "$src/core/imaging/cell_colours.cpp" \
-    "$src/core/refine/refinement_statistics.cpp" "$src/core/base/names.cpp" \
-    "$src/tests/fuzz/message_decoder_fuzz.cpp" \
-    -lzstd -o "$binary.tmp"
+    "${sources[@]/#/$src/}" -lzstd -o "$binary.tmp"
   mv "$binary.tmp" "$binary"
 fi
 cd "$out"
